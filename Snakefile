@@ -1,0 +1,22 @@
+# roughcontact: the study of Kumar, Sadeghi & Krousgrill (2006) as a workflow.
+# Data flows surfaces -> influence -> contact -> aggregate -> figures.
+from snakemake.utils import min_version, validate
+
+min_version("8.0")
+
+
+configfile: "config/config.yaml"
+
+
+validate(config, "config/schema.yaml")
+
+
+include: "rules/common.smk"
+include: "rules/surfaces.smk"
+include: "rules/figures.smk"
+
+
+rule all:
+    default_target: True
+    input:
+        get_final_outputs(),

@@ -1,0 +1,12 @@
+"""Snakemake entry point of rule `surfaces`: generate and store one surface cell."""
+
+from roughcontact.logs import route_logging
+from roughcontact.study import build_surface_cell
+
+route_logging(snakemake.log[0])
+build_surface_cell(
+    snakemake.params.cell,
+    snakemake.params.study_seed,
+    snakemake.output[0],
+    config=snakemake.config,
+)
