@@ -303,6 +303,13 @@ def input_moments(spec: SurfaceSpec) -> tuple[float, float]:
     Inverts Eq 12-13. Raises :class:`InfeasibleMoments` when the target lies
     below :func:`kurt_min` for this grid and ACF.
     """
+    absolute = spec.skew**2 + 1.0
+    if spec.kurt < absolute:
+        raise InfeasibleMoments(
+            f"kurtosis {spec.kurt:g} at skewness {spec.skew:g} is below the absolute limit "
+            f"Ku >= Sk^2 + 1 = {absolute:g} (Eq 14): no distribution has these moments. "
+            f"Raise kurt above {absolute:g}."
+        )
     s3, s4 = moment_transfer(spec)
     skew_x, kurt_x = _transfer_to_input(spec.skew, spec.kurt, s3, s4)
     limit = skew_x**2 + 1.0
