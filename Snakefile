@@ -1,5 +1,7 @@
 # roughcontact: the study of Kumar, Sadeghi & Krousgrill (2006) as a workflow.
 # Data flows surfaces -> influence -> contact -> aggregate -> figures.
+import os
+
 from snakemake.utils import min_version, validate
 
 min_version("8.0")
@@ -8,7 +10,7 @@ min_version("8.0")
 # The default study; `--configfile other.yaml` replaces it (not merged).
 if not config:
 
-    configfile: "config/config.yaml"
+    configfile: os.path.join(workflow.basedir, "config", "config.yaml")
 
 
 validate(config, "config/schema.yaml")

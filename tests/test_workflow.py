@@ -87,7 +87,9 @@ def test_figures_are_written_by_this_run(quick_run):
         png = (workdir / "results" / "figures" / f"{fig}.png").read_bytes()
         assert png[:8] == b"\x89PNG\r\n\x1a\n"
         nb = json.loads((workdir / "results" / "figures" / f"{fig}.ipynb").read_text())
-        injected = [c for c in nb["cells"] if "injected-parameters" in c["metadata"].get("tags", [])]
+        injected = [
+            c for c in nb["cells"] if "injected-parameters" in c["metadata"].get("tags", [])
+        ]
         assert injected, f"{fig}: papermill did not inject parameters"
 
 
