@@ -18,6 +18,7 @@ validate(config, "config/schema.yaml")
 
 include: "rules/common.smk"
 include: "rules/surfaces.smk"
+include: "rules/influence.smk"
 include: "rules/figures.smk"
 
 

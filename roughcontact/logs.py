@@ -21,3 +21,5 @@ def route_logging(path: str | os.PathLike, level: int = logging.INFO) -> None:
         root.addHandler(h)
     root.setLevel(level)
     logging.captureWarnings(True)
+    # scikit-fem reports every assembly at INFO; keep job logs to our own progress
+    logging.getLogger("skfem").setLevel(logging.WARNING)

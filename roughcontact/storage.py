@@ -77,3 +77,14 @@ def read_surfaces(path: str | os.PathLike, count: int | None = None) -> dict:
         }
     out["spec"] = json.loads(out["attrs"]["spec"])
     return out
+
+
+def read_influence(path: str | os.PathLike) -> tuple[np.ndarray, dict]:
+    """Read an influence file written by the ``influence`` rule.
+
+    Returns ``(E * C [m], attributes)``; divide by Young's modulus for C [m/Pa].
+    """
+    with h5py.File(path, "r") as f:
+        unit = f["unit_influence"][...]
+        attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    return unit, attrs

@@ -10,6 +10,7 @@ at use (Eq 28-32 of Kumar et al. 2006).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 
@@ -204,6 +205,134 @@ def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict
         "params": canonical_json(params),
         **{f"spec_{k}": v for k, v in spec.as_dict().items()},
         **provenance(config),
+    }
+    write_h5(path, datasets, attrs)
+    return attrs
+
+
+# ---------------------------------------------------------------------------
+# Influence geometries: the elastic body a contact cell is solved on
+
+
+def geometry_params(body: dict, surfaces: dict, **overrides) -> dict:
+    """Complete, canonical parameters of one influence geometry.
+
+    ``body`` is the config's ``body`` section, ``surfaces`` its ``surfaces``
+    section (the contact grid and plan size are the surfaces'); ``overrides``
+    may set ``nu``, ``mesh``, ``size_mm``, ``grid`` and any body key. Young's
+    modulus is not part of a geometry: matrices are stored as E * C.
+    """
+    merged = {**body, "grid": surfaces["grid"], "size_mm": surfaces["size_mm"], **overrides}
+    return {
+        "nu": float(merged["nu"]),
+        "size_mm": [float(v) for v in _pair(merged["size_mm"])],
+        "thickness_mm": float(merged["thickness_mm"]),
+        "grid": [int(v) for v in _pair(merged["grid"])],
+        "base": str(merged.get("base", "clamped")),
+        "mesh": str(merged.get("mesh", "paper")),
+    }
+
+
+def geometry_key(params: dict) -> str:
+    """File key of an influence geometry (every parameter that changes E * C)."""
+    lx, ly = params["size_mm"]
+    nx, ny = params["grid"]
+    return (
+        f"nu{params['nu']:g}_L{lx:g}x{ly:g}mm_t{params['thickness_mm']:g}mm"
+        f"_g{nx}x{ny}_{params['base']}_{params['mesh']}"
+    )
+
+
+def block_geometry(params: dict, E: float = 1.0):
+    """The :class:`~roughcontact.influence.BlockGeometry` of a geometry (mm to m)."""
+    from .influence import BlockGeometry
+
+    return BlockGeometry(
+        size=tuple(v * MM for v in params["size_mm"]),
+        thickness=params["thickness_mm"] * MM,
+        grid=tuple(params["grid"]),
+        E=E,
+        nu=params["nu"],
+        base=params["base"],
+        mesh=params["mesh"],
+    )
+
+
+def influence_geometries(config: dict) -> dict[str, dict]:
+    """Every influence geometry the configuration asks for, keyed by :func:`geometry_key`.
+
+    The body of the config is always included (``make run`` builds it once);
+    study figures add the variants they need (another nu, mesh or area).
+    """
+    geoms = {}
+    if "body" in config:
+        params = geometry_params(config["body"], config["surfaces"])
+        geoms[geometry_key(params)] = params
+    return geoms
+
+
+def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: float = 16.0,
+                    config=None) -> dict:
+    """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
+
+    The peak memory is estimated first; a geometry that would not fit raises
+    :class:`~roughcontact.influence.ModelTooLarge` with the estimate and the
+    options before anything is built. Returns the root attributes.
+    """
+    import hashlib
+
+    from . import influence
+
+    geom = block_geometry(params)
+    cost = influence.check_memory(geom, max_memory_gb * 1e9, solver)
+    key = geometry_key(params)
+    log.info(
+        "geometry %s: %d dofs, estimated peak %.2f GB (limit %.1f GB)",
+        key, cost.dofs, cost.peak_bytes / 1e9, max_memory_gb,
+    )
+    start = time.perf_counter()
+    unit = influence.unit_modulus_influence(geom, solver=solver, max_bytes=max_memory_gb * 1e9)
+    seconds = time.perf_counter() - start
+    if not np.isfinite(unit).all():
+        raise FloatingPointError(f"geometry {key}: the influence matrix has non-finite entries")
+    n = unit.shape[0]
+    nx, ny = geom.grid
+    diag = np.diag(unit)
+    eigmin = float(np.linalg.eigvalsh(unit)[0]) if n <= 4000 else float("nan")
+    rows = unit.sum(axis=1)
+    checks = {
+        "asymmetry": float(np.abs(unit - unit.T).max() / np.abs(unit).max()),
+        "min_eigenvalue_m": eigmin,
+        "row_sum_min_m": float(rows.min()),
+        "row_sum_max_m": float(rows.max()),
+        "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
+    }
+    if not eigmin > 0 and np.isfinite(eigmin):
+        raise FloatingPointError(f"geometry {key}: E * C is not positive definite "
+                                 f"(smallest eigenvalue {eigmin:.3g} m)")
+    log.info("geometry %s: built in %.1f s; checks %s", key, seconds, checks)
+    attrs = {
+        "geometry": key,
+        "params": canonical_json(params),
+        **{f"geometry_{k}": v for k, v in params.items()},
+        "mesh_spec": canonical_json(dataclasses.asdict(geom.mesh_spec)),
+        "dofs": int(cost.dofs),
+        "estimated_peak_gb": cost.peak_bytes / 1e9,
+        "build_seconds": seconds,
+        "solver": solver,
+        "content_sha256": hashlib.sha256(np.ascontiguousarray(unit).tobytes()).hexdigest(),
+        **{f"check_{k}": v for k, v in checks.items()},
+        **provenance(config),
+    }
+    datasets = {
+        "unit_influence": (
+            unit,
+            {
+                "units": "m (E * C: displacement per unit pressure times Young's modulus)",
+                "layout": "C[i, j]: displacement at the centre of element i per unit pressure "
+                          "on element j; elements row-major over y then x",
+            },
+        ),
     }
     write_h5(path, datasets, attrs)
     return attrs

@@ -13,6 +13,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 NOTEBOOKS = os.path.join(workflow.basedir, "notebooks")
 FIGURES = [f"fig{i:02d}" for i in range(1, 6) if f"fig{i:02d}" in config["figures"]]
 SURFACE_CELLS = study.surface_cells(config)
+GEOMETRIES = study.influence_geometries(config)
 
 _infeasible = study.check_feasible(SURFACE_CELLS)
 if _infeasible:
@@ -25,12 +26,28 @@ if _infeasible:
 wildcard_constraints:
     cell="|".join(re.escape(k) for k in SURFACE_CELLS) or "__none__",
     fig="|".join(FIGURES) or "__none__",
+    geometry="|".join(re.escape(k) for k in GEOMETRIES) or "__none__",
 
 
 def get_final_outputs():
-    return expand(
+    figures = expand(
         "results/figures/{fig}.{ext}", fig=FIGURES, ext=("png", "pdf", "ipynb")
     )
+    influence = expand("results/influence/{geometry}.h5", geometry=GEOMETRIES)
+    return figures + influence
+
+
+def get_geometry_params(wildcards):
+    return GEOMETRIES[wildcards.geometry]
+
+
+def get_influence_mem_mb(wildcards):
+    """Estimated peak memory of an influence build [MB], for the scheduler."""
+    from roughcontact.influence import estimate_cost
+
+    geom = study.block_geometry(GEOMETRIES[wildcards.geometry])
+    solver = config.get("body", {}).get("solver", "auto")
+    return int(estimate_cost(geom, solver).peak_bytes / 1e6) + 200
 
 
 def get_surface_params(wildcards):

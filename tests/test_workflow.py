@@ -1,5 +1,6 @@
 """The real Snakemake workflow on config/quick.yaml, in a temporary directory."""
 
+import hashlib
 import json
 import os
 import subprocess
@@ -13,7 +14,15 @@ import pytest
 import yaml
 
 from roughcontact import johnson, surface
-from roughcontact.study import cell_key, figure_cells, spec_from_params, statistics_key
+from roughcontact.storage import read_influence
+from roughcontact.study import (
+    cell_key,
+    figure_cells,
+    geometry_key,
+    geometry_params,
+    spec_from_params,
+    statistics_key,
+)
 
 REPO = Path(__file__).resolve().parent.parent
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
@@ -75,6 +84,24 @@ def test_surface_files_hold_seeded_surfaces_with_their_moments(quick_run):
         assert curve.family == attrs["johnson_family"]
         for key in ("package_version", "git_commit", "config_hash", "created"):
             assert attrs[key], key
+
+
+def test_influence_file_holds_unit_modulus_matrix_of_the_block(quick_run):
+    workdir, _ = quick_run
+    config = quick_config()
+    params = geometry_params(config["body"], config["surfaces"])
+    path = workdir / "results" / "influence" / f"{geometry_key(params)}.h5"
+    unit, attrs = read_influence(path)
+    nx, ny = params["grid"]
+    assert unit.shape == (nx * ny, nx * ny)
+    # nu = 0, bonded base: a uniform pressure P gives u = P L / E (Eq 37-38),
+    # so every row of E * C sums to the thickness L
+    assert params["nu"] == 0.0
+    assert np.allclose(unit.sum(axis=1), params["thickness_mm"] * 1e-3, rtol=1e-10)
+    assert np.abs(unit - unit.T).max() <= 1e-10 * np.abs(unit).max()
+    assert attrs["content_sha256"] == hashlib.sha256(unit.tobytes()).hexdigest()
+    for key in ("package_version", "git_commit", "config_hash", "dofs", "build_seconds"):
+        assert attrs[key], key
 
 
 def test_figures_are_written_by_this_run(quick_run):

@@ -1,0 +1,21 @@
+# Stage 2: influence coefficients of the finite block, once per geometry.
+# E does not enter (the file holds E * C); a geometry whose estimated peak
+# memory exceeds body.max_memory_gb is refused before it is built.
+
+
+rule influence:
+    output:
+        "results/influence/{geometry}.h5",
+    log:
+        "results/logs/influence/{geometry}.log",
+    benchmark:
+        "results/benchmarks/rules/influence/{geometry}.tsv"
+    threads: 2
+    resources:
+        mem_mb=get_influence_mem_mb,
+    params:
+        geometry=get_geometry_params,
+        solver=config.get("body", {}).get("solver", "auto"),
+        max_memory_gb=config.get("body", {}).get("max_memory_gb", 16),
+    script:
+        "../scripts/build_influence.py"

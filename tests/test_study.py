@@ -1,0 +1,52 @@
+"""Study bookkeeping: geometry keys, and building influence files."""
+
+import numpy as np
+import pytest
+
+from roughcontact.influence import ModelTooLarge
+from roughcontact.storage import read_influence
+from roughcontact.study import (
+    block_geometry,
+    build_influence,
+    geometry_key,
+    geometry_params,
+)
+
+BODY = {"thickness_mm": 2.0, "E_MPa": 511.0, "nu": 0.0, "base": "clamped", "mesh": "paper"}
+SURFACES = {"grid": [8, 8], "size_mm": [1.2, 1.2], "count": 1}
+
+
+def test_every_geometry_parameter_but_young_modulus_changes_the_key():
+    base = geometry_params(BODY, SURFACES)
+    keys = {geometry_key(base)}
+    for change in ({"nu": 0.3}, {"thickness_mm": 3.0}, {"mesh": "refined"},
+                   {"base": "sliding"}, {"grid": [8, 10]}, {"size_mm": [1.2, 1.5]}):
+        keys.add(geometry_key(geometry_params(BODY, SURFACES, **change)))
+    assert len(keys) == 7
+    assert geometry_key(geometry_params({**BODY, "E_MPa": 1.0}, SURFACES)) == geometry_key(base)
+
+
+def test_block_geometry_converts_millimetres():
+    geom = block_geometry(geometry_params(BODY, SURFACES, grid=[8, 10]))
+    assert geom.size == pytest.approx((1.2e-3, 1.2e-3))
+    assert geom.thickness == pytest.approx(2e-3)
+    assert geom.grid == (8, 10)
+
+
+def test_build_influence_writes_rows_summing_to_the_thickness(tmp_path):
+    params = geometry_params(BODY, SURFACES)
+    path = tmp_path / "g.h5"
+    build_influence(params, path)
+    unit, attrs = read_influence(path)
+    assert unit.shape == (64, 64)
+    assert np.allclose(unit.sum(axis=1), 2e-3, rtol=1e-10)
+    assert attrs["check_min_eigenvalue_m"] > 0
+    assert attrs["geometry"] == geometry_key(params)
+
+
+def test_build_influence_refuses_a_model_too_large_before_building(tmp_path):
+    params = geometry_params(BODY, SURFACES)
+    path = tmp_path / "g.h5"
+    with pytest.raises(ModelTooLarge, match=r"GB.*Options"):
+        build_influence(params, path, max_memory_gb=0.001)
+    assert not path.exists()
