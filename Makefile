@@ -34,8 +34,10 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/pytest -q
 
+# Benchmarks (minutes; results in results/benchmarks/). QUICK=1 for a short run.
 bench: $(STAMP)
-	$(BIN)/python -m benchmarks
+	$(BIN)/python benchmarks/bench_influence.py $(if $(QUICK),--quick)
+	$(BIN)/python benchmarks/bench_contact.py $(if $(QUICK),--quick)
 
 clean-results:
 	rm -rf results .snakemake

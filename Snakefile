@@ -19,6 +19,7 @@ validate(config, "config/schema.yaml")
 include: "rules/common.smk"
 include: "rules/surfaces.smk"
 include: "rules/influence.smk"
+include: "rules/contact.smk"
 include: "rules/figures.smk"
 
 

@@ -62,3 +62,47 @@ def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
             progress_bar=False,
         )
     log.info("executed %s in %.1f s -> %s", notebook, time.perf_counter() - start, output)
+
+
+def load_aggregates(paths) -> tuple:
+    """The aggregate table, per-surface moduli and sidecar of a study (``aggregate_files``)."""
+    import json
+
+    import pandas as pd
+
+    table_path, moduli_path, meta_path = paths
+    return (pd.read_csv(table_path), pd.read_csv(moduli_path),
+            json.loads(Path(meta_path).read_text()))
+
+
+def plot_band(ax, frame, quantity: str, *, y_scale: float = 1.0, label=None, color=None,
+              linestyle="-"):
+    """Mean curve of ``quantity`` against nominal pressure [MPa] with its confidence band.
+
+    ``frame`` holds one cell's rows of an aggregate table. Levels that rest on
+    no surface are left out; a level resting on fewer surfaces than the cell
+    has is drawn with a hollow marker, so a thin band there is not mistaken
+    for a tight one. Returns the line.
+    """
+    import numpy as np
+
+    count = frame[f"{quantity}_count"].to_numpy()
+    ok = count > 0
+    x = frame["nominal_pressure"].to_numpy()[ok] / 1e6
+    y = frame[f"{quantity}_mean"].to_numpy()[ok] * y_scale
+    hw = np.nan_to_num(frame[f"{quantity}_half_width"].to_numpy()[ok] * y_scale)
+    (line,) = ax.plot(x, y, label=label, color=color, linestyle=linestyle)
+    ax.fill_between(x, y - hw, y + hw, color=line.get_color(), alpha=0.2, linewidth=0)
+    partial = count[ok] < frame["surfaces"].to_numpy()[ok]
+    if partial.any():
+        ax.plot(x[partial], y[partial], "o", mfc="none", color=line.get_color(), ms=4)
+    return line
+
+
+def study_note(table) -> str:
+    """One line for a caption: surfaces per cell, confidence, unconverged solves."""
+    cells = table.drop_duplicates("cell")
+    bad = int(cells["unconverged_steps"].sum())
+    return (f"{int(cells['surfaces'].min())}-{int(cells['surfaces'].max())} surfaces per "
+            f"curve; bands: 95 % confidence interval of the mean; unconverged solves "
+            f"excluded: {bad}")

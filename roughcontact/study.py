@@ -37,6 +37,8 @@ MM = 1e-3
 UM = 1e-6
 
 SURFACE_FIGURES = ("fig03", "fig04", "fig05")
+#: Figures that need no contact solve (Fig 1 and 2 need no surfaces either).
+SURFACE_ONLY_FIGURES = ("fig01", "fig02", "fig03", "fig04", "fig05")
 
 
 def _pair(value) -> list:
@@ -109,6 +111,8 @@ def figure_cells(config: dict, figure: str) -> list[dict]:
             cell_params(defaults, b_mm=b, skew=0.0, kurt=3.0, count=fig.get("count", 1))
             for b in fig["b_mm"]
         ]
+    if figure == "fig10":  # the cumulative height distributions of the Fig 9 surfaces
+        return [c["surface"] for c in contact_cells(config, "fig10")]
     if figure in ("fig04", "fig05"):
         src = config["figures"]["fig04"]
         return [
@@ -336,3 +340,118 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
     }
     write_h5(path, datasets, attrs)
     return attrs
+
+
+# ---------------------------------------------------------------------------
+# Contact study cells: surfaces x geometry x (sigma, E) x pressure range
+
+#: Figures drawn from contact results, and the source of their cells.
+CONTACT_FIGURES = ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu")
+
+
+def _as_list(value) -> list:
+    return list(value) if isinstance(value, list | tuple) else [value]
+
+
+def resolve_source(config: dict, name: str) -> dict:
+    """A figure's (or sweep's) cell description, following ``from: other``."""
+    section = {**config.get("figures", {}), **config.get("sweeps", {})}
+    seen = [name]
+    entry = section[name]
+    while "from" in entry:
+        source = entry["from"]
+        if source in seen or source not in section:
+            raise ValueError(f"{name}: 'from: {source}' must name another figure or sweep "
+                             f"without a cycle (followed {' -> '.join(seen)})")
+        seen.append(source)
+        entry = section[source]
+    return entry
+
+
+def source_name(config: dict, name: str) -> str:
+    """The figure or sweep whose cells ``name`` uses (itself unless ``from:``)."""
+    resolve_source(config, name)  # refuses unknown names and cycles
+    section = {**config.get("figures", {}), **config.get("sweeps", {})}
+    while "from" in section[name]:
+        name = section[name]["from"]
+    return name
+
+
+def contact_cells(config: dict, name: str) -> list[dict]:
+    """The study cells of a contact figure or sweep: the product of its axes.
+
+    Axes (scalars or lists): ``moments`` (pairs of Sk, Ku), ``b_mm``,
+    ``size_mm`` (square nominal areas; the grid keeps the surfaces' spacing),
+    ``nu``, ``meshes``, ``sigma_um``, ``E_MPa``; ``count`` and
+    ``pressure_MPa`` ([P_min, P_max]) apply to every cell. Each cell carries
+    its surface cell, its geometry and the scaling parameters.
+    """
+    fig = resolve_source(config, name)
+    surfaces, body = config["surfaces"], config["body"]
+    spacing = [s / g for s, g in zip(_pair(surfaces["size_mm"]), _pair(surfaces["grid"]),
+                                     strict=True)]
+    cells = []
+    for mesh in _as_list(fig.get("meshes", body.get("mesh", "paper"))):
+        for nu in _as_list(fig.get("nu", body["nu"])):
+            sizes = ([[s, s] for s in _as_list(fig["size_mm"])] if "size_mm" in fig
+                     else [_pair(surfaces["size_mm"])])
+            for size in sizes:
+                grid = [max(4, round(s / h)) for s, h in zip(size, spacing, strict=True)]
+                for b in _as_list(fig.get("b_mm", 1.0)):
+                    for skew, kurt in fig.get("moments", [[0.0, 3.0]]):
+                        for sigma in _as_list(fig["sigma_um"]):
+                            for E in _as_list(fig.get("E_MPa", body["E_MPa"])):
+                                surf = cell_params(
+                                    surfaces, skew=skew, kurt=kurt, b_mm=b,
+                                    size_mm=size, grid=grid,
+                                    count=fig.get("count", surfaces["count"]),
+                                )
+                                geom = geometry_params(body, surfaces, nu=nu, mesh=mesh,
+                                                       size_mm=size, grid=grid)
+                                cells.append({
+                                    "surface": surf,
+                                    "geometry": geom,
+                                    "sigma_um": float(sigma),
+                                    "E_MPa": float(E),
+                                    "pressure_MPa": [float(p) for p in fig["pressure_MPa"]],
+                                    "surface_key": cell_key(surf),
+                                    "geometry_key": geometry_key(geom),
+                                })
+    return cells
+
+
+def contact_key(cell: dict) -> str:
+    """File key of a contact job: one surface cell solved on one geometry."""
+    return f"{cell['surface_key']}__{cell['geometry_key']}"
+
+
+def sweep_end(cell: dict) -> float:
+    """Non-dimensional nominal pressure P L / (E sigma) a cell needs, rounded up to 2^k.
+
+    Rounding keeps a small change of sigma, E or the pressure range from
+    re-solving a contact job that already reaches far enough.
+    """
+    p_max = cell["pressure_MPa"][1] * 1e6
+    value = p_max * cell["geometry"]["thickness_mm"] * MM / (
+        cell["E_MPa"] * 1e6 * cell["sigma_um"] * UM
+    )
+    return float(2.0 ** np.ceil(np.log2(value)))
+
+
+def contact_jobs(config: dict, names) -> dict[str, dict]:
+    """Every contact job the named figures and sweeps need, with its sweep end.
+
+    A job is shared by every cell on the same surfaces and geometry; it
+    sweeps as far as the most demanding of them needs.
+    """
+    jobs = {}
+    for name in names:
+        for cell in contact_cells(config, name):
+            key = contact_key(cell)
+            job = jobs.setdefault(key, {
+                "surface": cell["surface"], "geometry": cell["geometry"],
+                "surface_key": cell["surface_key"], "geometry_key": cell["geometry_key"],
+                "pressure_end": 0.0,
+            })
+            job["pressure_end"] = max(job["pressure_end"], sweep_end(cell))
+    return jobs

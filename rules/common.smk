@@ -11,9 +11,24 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = str(config.get("blas_threads", 1))
 
 NOTEBOOKS = os.path.join(workflow.basedir, "notebooks")
-FIGURES = [f"fig{i:02d}" for i in range(1, 6) if f"fig{i:02d}" in config["figures"]]
-SURFACE_CELLS = study.surface_cells(config)
-GEOMETRIES = study.influence_geometries(config)
+FIGURES = [
+    name
+    for name in (*study.SURFACE_ONLY_FIGURES, *study.CONTACT_FIGURES)
+    if name in config["figures"]
+]
+# contact studies: the paper's figures and the user's own sweeps
+STUDIES = [n for n in FIGURES if n in study.CONTACT_FIGURES] + list(
+    config.get("sweeps", {})
+)
+CONTACT_JOBS = study.contact_jobs(config, STUDIES)
+SURFACE_CELLS = study.surface_cells(config) | {
+    job["surface_key"]: job["surface"] for job in CONTACT_JOBS.values()
+}
+GEOMETRIES = study.influence_geometries(config) | {
+    job["geometry_key"]: job["geometry"] for job in CONTACT_JOBS.values()
+}
+# aggregates are computed once per source ("fig12: {from: fig07}" reuses fig07's)
+AGGREGATES = sorted({study.source_name(config, name) for name in STUDIES})
 
 _infeasible = study.check_feasible(SURFACE_CELLS)
 if _infeasible:
@@ -27,6 +42,8 @@ wildcard_constraints:
     cell="|".join(re.escape(k) for k in SURFACE_CELLS) or "__none__",
     fig="|".join(FIGURES) or "__none__",
     geometry="|".join(re.escape(k) for k in GEOMETRIES) or "__none__",
+    job="|".join(re.escape(k) for k in CONTACT_JOBS) or "__none__",
+    study="|".join(AGGREGATES) or "__none__",
 
 
 def get_final_outputs():
@@ -34,7 +51,33 @@ def get_final_outputs():
         "results/figures/{fig}.{ext}", fig=FIGURES, ext=("png", "pdf", "ipynb")
     )
     influence = expand("results/influence/{geometry}.h5", geometry=GEOMETRIES)
-    return figures + influence
+    aggregates = expand(
+        "results/aggregates/{study}.{ext}",
+        study=AGGREGATES,
+        ext=("csv", "moduli.csv", "json"),
+    )
+    return figures + influence + aggregates
+
+
+def get_contact_params(wildcards):
+    return CONTACT_JOBS[wildcards.job]
+
+
+def get_contact_inputs(wildcards):
+    job = CONTACT_JOBS[wildcards.job]
+    return {
+        "surfaces": f"results/surfaces/{job['surface_key']}.h5",
+        "influence": f"results/influence/{job['geometry_key']}.h5",
+    }
+
+
+def get_aggregate_cells(wildcards):
+    return study.contact_cells(config, wildcards.study)
+
+
+def get_aggregate_inputs(wildcards):
+    cells = study.contact_cells(config, wildcards.study)
+    return sorted({f"results/contact/{study.contact_key(c)}.h5" for c in cells})
 
 
 def get_geometry_params(wildcards):
@@ -62,13 +105,25 @@ def get_figure_surfaces(wildcards):
     return [get_surface_path(p) for p in study.figure_cells(config, wildcards.fig)]
 
 
+def get_figure_aggregates(wildcards):
+    if wildcards.fig not in study.CONTACT_FIGURES:
+        return []
+    name = study.source_name(config, wildcards.fig)
+    return [
+        f"results/aggregates/{name}.csv",
+        f"results/aggregates/{name}.moduli.csv",
+        f"results/aggregates/{name}.json",
+    ]
+
+
 def get_figure_parameters(wildcards):
     """Everything a figure notebook needs, passed to it by papermill."""
     cells = study.figure_cells(config, wildcards.fig)
     return {
         "figure": wildcards.fig,
-        "settings": config["figures"][wildcards.fig],
+        "settings": study.resolve_source(config, wildcards.fig),
         "surface_files": [get_surface_path(p) for p in cells],
+        "aggregate_files": get_figure_aggregates(wildcards),
         "cells": cells,
         "fig04": config["figures"].get("fig04", {}),
     }

@@ -5,6 +5,7 @@ rule figure:
     input:
         notebook=os.path.join(NOTEBOOKS, "{fig}.ipynb"),
         surfaces=get_figure_surfaces,
+        aggregates=get_figure_aggregates,
     output:
         png="results/figures/{fig}.png",
         pdf="results/figures/{fig}.pdf",

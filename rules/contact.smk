@@ -1,0 +1,41 @@
+# Stage 3: contact. One job per (surface cell, geometry): every surface of the
+# cell through the whole approach sweep, in non-dimensional form (sigma and E
+# enter only in aggregation). Stage 4: aggregates per figure or sweep.
+
+
+rule contact:
+    input:
+        unpack(get_contact_inputs),
+    output:
+        "results/contact/{job}.h5",
+    log:
+        "results/logs/contact/{job}.log",
+    benchmark:
+        "results/benchmarks/rules/contact/{job}.tsv"
+    threads: 1
+    resources:
+        mem_mb=2000,
+    params:
+        job=get_contact_params,
+        solver=config.get("contact", {}),
+    script:
+        "../scripts/solve_contact.py"
+
+
+rule aggregate:
+    input:
+        get_aggregate_inputs,
+    output:
+        table="results/aggregates/{study}.csv",
+        moduli="results/aggregates/{study}.moduli.csv",
+        meta="results/aggregates/{study}.json",
+    log:
+        "results/logs/aggregates/{study}.log",
+    threads: 1
+    resources:
+        mem_mb=1000,
+    params:
+        cells=get_aggregate_cells,
+        levels=config.get("contact", {}).get("pressure_levels", 30),
+    script:
+        "../scripts/aggregate.py"

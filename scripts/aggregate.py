@@ -1,0 +1,21 @@
+"""Snakemake entry point of rule `aggregate`: a figure's or sweep's tables."""
+
+from roughcontact.logs import route_logging
+from roughcontact.pipeline import aggregate_study
+from roughcontact.study import contact_key
+
+route_logging(snakemake.log[0])
+cells = snakemake.params.cells
+paths = {contact_key(c): f"results/contact/{contact_key(c)}.h5" for c in cells}
+missing = sorted(set(paths.values()) - set(snakemake.input))
+if missing:
+    raise RuntimeError(f"contact files not among the rule's inputs: {missing}")
+aggregate_study(
+    cells,
+    paths,
+    snakemake.params.levels,
+    snakemake.output.table,
+    snakemake.output.moduli,
+    snakemake.output.meta,
+    config=snakemake.config,
+)
