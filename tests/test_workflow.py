@@ -3,6 +3,8 @@
 import hashlib
 import json
 import os
+import re
+import signal
 import subprocess
 import sys
 import time
@@ -10,13 +12,17 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
 from roughcontact import johnson, surface
+from roughcontact.pipeline import read_contact
 from roughcontact.storage import read_influence
 from roughcontact.study import (
     cell_key,
+    contact_cells,
+    contact_key,
     figure_cells,
     geometry_key,
     geometry_params,
@@ -180,3 +186,114 @@ def test_config_files_validate():
     for name in ("config.yaml", "quick.yaml"):
         config = yaml.safe_load((REPO / "config" / name).read_text())
         validate(config, str(REPO / "config" / "schema.yaml"))
+
+
+# ---------------------------------------------------------------------------
+# The contact study on the quick config
+
+
+def aggregates(workdir, name):
+    base = workdir / "results" / "aggregates"
+    return (pd.read_csv(base / f"{name}.csv"), pd.read_csv(base / f"{name}.moduli.csv"),
+            json.loads((base / f"{name}.json").read_text()))
+
+
+def test_mean_plane_modulus_is_E_for_nu0_and_deviates_for_nu03(quick_run):
+    workdir, _ = quick_run
+    _, moduli, meta = aggregates(workdir, "table_Eu")
+    ratio = moduli["mean_plane_modulus"] / (moduli["E_MPa"] * 1e6)
+    nu0 = moduli["nu"] == 0.0
+    assert nu0.any() and (~nu0).any()
+    # Eq 44: rows of C sum to L / E, so d_b = P L / E on every surface
+    assert np.abs(ratio[nu0] - 1.0).max() < 1e-6
+    # nu = 0.3: still linear in P, but E_u differs from E (the paper: about 5 %)
+    summaries = [s for s in meta["mean_plane_modulus"] if s["nu"] == 0.3]
+    assert summaries and all(abs(s["relative_deviation"]) > 1e-3 for s in summaries)
+    assert all(s["max_linearity_residual"] < 1e-3 for s in summaries)
+
+
+def test_stiffness_rises_towards_E_and_negative_skew_is_stiffer(quick_run):
+    workdir, _ = quick_run
+    table, _, _ = aggregates(workdir, "fig07")
+    assert (table["unconverged_steps"] == 0).all()
+    for _, cell in table.groupby("cell"):
+        k = cell["normalized_stiffness_mean"].to_numpy() / (cell["E_MPa"].iloc[0] * 1e6)
+        assert np.all(np.diff(k) > -0.05 * k[:-1]), k  # rises with P (within its noise)
+        assert 0.85 < k[-1] <= 1.0 + 1e-9, k[-1]  # at 5 MPa, approaching E from below
+    for _mesh, part in table.groupby("mesh"):
+        gauss = part[part["skew"] == 0.0]["normalized_stiffness_mean"].to_numpy()
+        negative = part[part["skew"] < 0.0]["normalized_stiffness_mean"].to_numpy()
+        assert np.mean(negative > gauss) > 0.8  # Fig 7: negative skew stiffer
+
+
+def test_two_nominal_areas_agree_within_their_bands_for_nu0(quick_run):
+    workdir, _ = quick_run
+    table, _, _ = aggregates(workdir, "fig14")
+    (_, a), (_, b) = table.groupby("cell")
+    assert a["size_mm"].iloc[0] != b["size_mm"].iloc[0]
+    gap = np.abs(a["normalized_stiffness_mean"].to_numpy()
+                 - b["normalized_stiffness_mean"].to_numpy())
+    band = (a["normalized_stiffness_half_width"].to_numpy()
+            + b["normalized_stiffness_half_width"].to_numpy())
+    assert np.all(gap <= band)
+
+
+def test_study_figures_are_written(quick_run):
+    workdir, start = quick_run
+    for fig in ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu"):
+        path = workdir / "results" / "figures" / f"{fig}.png"
+        assert path.stat().st_size > 1000 and path.stat().st_mtime >= start - 1, fig
+
+
+def test_contact_results_are_reproducible(quick_run, tmp_path):
+    workdir, _ = quick_run
+    before = (workdir / "results" / "aggregates" / "fig14.csv").read_bytes()
+    proc = run_snakemake(workdir, "--forcerun", "contact", "aggregate", "--",
+                         "results/aggregates/fig14.csv")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "contact" in proc.stdout + proc.stderr  # the solves really ran again
+    assert (workdir / "results" / "aggregates" / "fig14.csv").read_bytes() == before
+
+
+def test_a_single_figure_builds_only_its_cells(tmp_path):
+    proc = run_snakemake(tmp_path, "--dry-run", "--quiet", "rules", "--",
+                         "results/figures/fig14.png")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    counts = dict(re.findall(r"^(\w+)\s+(\d+)\s*$", proc.stdout, re.MULTILINE))
+    # two areas: two surface cells, two geometries, two contact jobs, one aggregate
+    assert counts == {"surfaces": "2", "influence": "2", "contact": "2", "aggregate": "1",
+                      "figure": "1", "total": "8"}, proc.stdout
+
+
+def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path):
+    config = quick_config()
+    config["contact"].update(method="steepest", tol=1e-10, steps=60)
+    path = tmp_path / "slow.yaml"
+    path.write_text(yaml.safe_dump(config))
+    cell = contact_cells(config, "fig14")[0]
+    key = contact_key(cell)
+    target = f"results/contact/{key}.h5"
+    first = run_snakemake(tmp_path, f"results/surfaces/{cell['surface_key']}.h5",
+                          f"results/influence/{cell['geometry_key']}.h5", config=path)
+    assert first.returncode == 0, first.stderr[-3000:]
+    done = {p: p.stat().st_mtime_ns for p in (tmp_path / "results").rglob("*.h5")}
+    log = tmp_path / "results" / "logs" / "contact" / f"{key}.log"
+    proc = subprocess.Popen(
+        [*SNAKEMAKE, "--snakefile", str(REPO / "Snakefile"), "--directory", str(tmp_path),
+         "--configfile", str(path), "--cores", "2", target],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+        env=dict(os.environ, OPENBLAS_NUM_THREADS="1"),
+    )
+    deadline = time.time() + 120
+    while not (log.exists() and "surfaces x" in log.read_text()):
+        assert time.time() < deadline and proc.poll() is None, "contact job did not start"
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGINT)
+    assert proc.wait(timeout=120) != 0  # interrupted mid-solve
+    assert not (tmp_path / target).exists()  # no partial result under the final name
+    again = run_snakemake(tmp_path, target, config=path)
+    assert again.returncode == 0, again.stderr[-3000:]
+    nd, attrs = read_contact(tmp_path / target)
+    assert nd.converged.all() and attrs["unconverged_steps"] == 0
+    for p, mtime in done.items():  # the finished surfaces and influence files were kept
+        assert p.stat().st_mtime_ns == mtime, p
