@@ -26,6 +26,7 @@ $(STAMP): $(BIN)/python pyproject.toml requirements.lock
 
 run: $(STAMP)
 	$(BIN)/snakemake --cores $(CORES) --configfile $(CONFIG)
+	$(BIN)/snakemake --configfile $(CONFIG) --report results/report.html
 
 lint: $(STAMP)
 	$(BIN)/ruff check --quiet .

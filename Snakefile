@@ -16,6 +16,9 @@ if not config:
 validate(config, "config/schema.yaml")
 
 
+report: "report/workflow.rst"
+
+
 include: "rules/common.smk"
 include: "rules/surfaces.smk"
 include: "rules/influence.smk"

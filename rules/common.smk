@@ -56,7 +56,7 @@ def get_final_outputs():
         study=AGGREGATES,
         ext=("csv", "moduli.csv", "json"),
     )
-    return figures + influence + aggregates
+    return figures + influence + aggregates + ["results/config.yaml"]
 
 
 def get_contact_params(wildcards):

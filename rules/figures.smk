@@ -7,7 +7,11 @@ rule figure:
         surfaces=get_figure_surfaces,
         aggregates=get_figure_aggregates,
     output:
-        png="results/figures/{fig}.png",
+        png=report(
+            "results/figures/{fig}.png",
+            caption="../report/figure.rst",
+            category="Figures",
+        ),
         pdf="results/figures/{fig}.pdf",
         notebook="results/figures/{fig}.ipynb",
     log:
@@ -21,3 +25,20 @@ rule figure:
         parameters=get_figure_parameters,
     script:
         "../scripts/render_figure.py"
+
+
+rule config_snapshot:
+    output:
+        report("results/config.yaml", category="Configuration"),
+    log:
+        "results/logs/config_snapshot.log",
+    run:
+        import yaml
+        from roughcontact.provenance import atomic_path, config_hash
+
+        with atomic_path(output[0]) as tmp:
+            with open(tmp, "w") as f:
+                f.write(
+                    f"# the configuration of this run (hash {config_hash(config)})\n"
+                )
+                yaml.safe_dump(dict(config), f, sort_keys=False)
