@@ -32,13 +32,5 @@ rule config_snapshot:
         report("results/config.yaml", category="Configuration"),
     log:
         "results/logs/config_snapshot.log",
-    run:
-        import yaml
-        from roughcontact.provenance import atomic_path, config_hash
-
-        with atomic_path(output[0]) as tmp:
-            with open(tmp, "w") as f:
-                f.write(
-                    f"# the configuration of this run (hash {config_hash(config)})\n"
-                )
-                yaml.safe_dump(dict(config), f, sort_keys=False)
+    script:
+        "../scripts/config_snapshot.py"
