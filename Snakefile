@@ -23,6 +23,7 @@ include: "rules/common.smk"
 include: "rules/surfaces.smk"
 include: "rules/influence.smk"
 include: "rules/contact.smk"
+include: "rules/audit.smk"
 include: "rules/figures.smk"
 
 

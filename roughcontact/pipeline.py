@@ -42,6 +42,19 @@ _SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffn
 
 #: Steps of the sweep's geometric approach grid below its end (first step = end / this).
 APPROACH_RANGE = 64.0
+#: Surfaces solved together in one call (the batch also fixes the rounding of the
+#: matrix products, so a re-solve of the same batch is bit-identical).
+BATCH_SIZE = 20
+
+
+def arrays_sha256(datasets: dict) -> str:
+    """SHA-256 of named arrays (names sorted; dtype, shape and bytes of each)."""
+    digest = hashlib.sha256()
+    for name in sorted(datasets):
+        array = np.ascontiguousarray(datasets[name])
+        digest.update(f"{name}|{array.dtype.str}|{array.shape}|".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
 
 
 def _file_sha256(path) -> str:
@@ -109,7 +122,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
 
     result = nondim.solve_cell(
         unit, heights, thickness=thickness, element_area=element_area, approaches=approaches,
-        method=method, tol=tol, precision=precision, batch_size=max(1, min(m, 20)),
+        method=method, tol=tol, precision=precision, batch_size=min(m, BATCH_SIZE),
         progress=progress,
     )
     reached = result.nominal_pressure[:, -1].min()
@@ -132,6 +145,8 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
         "contact %s__%s: %s", job["surface_key"], job["geometry_key"], stats)
     datasets = {name: np.asarray(getattr(result, name)) for name in _ARRAYS}
     attrs = {
+        "content_sha256": arrays_sha256(datasets),
+        "batch_size": min(m, BATCH_SIZE),
         "job": canonical_json(job),
         **{f"sweep_{k}": getattr(result, k) for k in _SETTINGS},
         "sweep_max_iter": -1 if result.max_iter is None else result.max_iter,
@@ -229,7 +244,9 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
 
 
 __all__ = [
+    "BATCH_SIZE",
     "aggregate_study",
+    "arrays_sha256",
     "cell_label",
     "read_contact",
     "solve_contact_job",

@@ -1,11 +1,13 @@
 # Shared workflow logic: environment, the study grid from the config, input
 # functions (get_*) and wildcard constraints.
+import json
 import os
 import re
 
 from snakemake.exceptions import WorkflowError
 
 from roughcontact import study
+from roughcontact.provenance import config_hash
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = str(config.get("blas_threads", 1))
@@ -46,6 +48,13 @@ wildcard_constraints:
     study="|".join(AGGREGATES) or "__none__",
 
 
+def canonical(obj):
+    """``obj`` with every dict's keys sorted: rule params that do not depend on
+    the order of keys in the config file (Snakemake reruns a job when the text
+    of its params changes)."""
+    return json.loads(study.canonical_json(obj))
+
+
 def get_final_outputs():
     figures = expand(
         "results/figures/{fig}.{ext}", fig=FIGURES, ext=("png", "pdf", "ipynb")
@@ -56,7 +65,24 @@ def get_final_outputs():
         study=AGGREGATES,
         ext=("csv", "moduli.csv", "json"),
     )
-    return figures + influence + aggregates + ["results/config.yaml"]
+    audit = ["results/audit/audit.csv", "results/audit/audit.md"] if STUDIES else []
+    if STUDIES and config.get("audit", {}).get("verify", False):
+        audit.append("results/audit/verify.csv")
+    return figures + influence + aggregates + audit + ["results/config.yaml"]
+
+
+def get_audit_studies(wildcards):
+    return {name: study.contact_cells(config, name) for name in STUDIES}
+
+
+def get_audit_inputs(wildcards):
+    files = set()
+    for job in CONTACT_JOBS.values():
+        key = f"{job['surface_key']}__{job['geometry_key']}"
+        files.add(f"results/contact/{key}.h5")
+        files.add(f"results/surfaces/{job['surface_key']}.h5")
+        files.add(f"results/influence/{job['geometry_key']}.h5")
+    return sorted(files)
 
 
 def get_contact_params(wildcards):
@@ -119,11 +145,13 @@ def get_figure_aggregates(wildcards):
 def get_figure_parameters(wildcards):
     """Everything a figure notebook needs, passed to it by papermill."""
     cells = study.figure_cells(config, wildcards.fig)
-    return {
-        "figure": wildcards.fig,
-        "settings": study.resolve_source(config, wildcards.fig),
-        "surface_files": [get_surface_path(p) for p in cells],
-        "aggregate_files": get_figure_aggregates(wildcards),
-        "cells": cells,
-        "fig04": config["figures"].get("fig04", {}),
-    }
+    return canonical(
+        {
+            "figure": wildcards.fig,
+            "settings": study.resolve_source(config, wildcards.fig),
+            "surface_files": [get_surface_path(p) for p in cells],
+            "aggregate_files": get_figure_aggregates(wildcards),
+            "cells": cells,
+            "fig04": config["figures"].get("fig04", {}),
+        }
+    )

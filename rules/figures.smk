@@ -32,5 +32,7 @@ rule config_snapshot:
         report("results/config.yaml", category="Configuration"),
     log:
         "results/logs/config_snapshot.log",
+    params:
+        config_hash=config_hash(config),
     script:
         "../scripts/config_snapshot.py"

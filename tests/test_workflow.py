@@ -4,6 +4,7 @@ import hashlib
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -246,7 +247,8 @@ def test_study_figures_are_written(quick_run):
 
 
 def test_contact_results_are_reproducible(quick_run, tmp_path):
-    workdir, _ = quick_run
+    workdir = tmp_path / "run"  # a copy: the shared run stays up to date
+    shutil.copytree(quick_run[0], workdir, symlinks=True)
     before = (workdir / "results" / "aggregates" / "fig14.csv").read_bytes()
     proc = run_snakemake(workdir, "--forcerun", "contact", "aggregate", "--",
                          "results/aggregates/fig14.csv")
@@ -259,10 +261,9 @@ def test_a_single_figure_builds_only_its_cells(tmp_path):
     proc = run_snakemake(tmp_path, "--dry-run", "--quiet", "rules", "--",
                          "results/figures/fig14.png")
     assert proc.returncode == 0, proc.stderr[-3000:]
-    counts = dict(re.findall(r"^(\w+)\s+(\d+)\s*$", proc.stdout, re.MULTILINE))
     # two areas: two surface cells, two geometries, two contact jobs, one aggregate
-    assert counts == {"surfaces": "2", "influence": "2", "contact": "2", "aggregate": "1",
-                      "figure": "1", "total": "8"}, proc.stdout
+    assert job_counts(proc.stdout) == {"surfaces": "2", "influence": "2", "contact": "2",
+                                       "aggregate": "1", "figure": "1", "total": "8"}, proc.stdout
 
 
 def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path):
@@ -297,3 +298,63 @@ def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path)
     assert nd.converged.all() and attrs["unconverged_steps"] == 0
     for p, mtime in done.items():  # the finished surfaces and influence files were kept
         assert p.stat().st_mtime_ns == mtime, p
+
+
+# ---------------------------------------------------------------------------
+# Audit
+
+
+def job_counts(text):
+    block = text[text.index("Job stats:"):]
+    return dict(re.findall(r"^(\w+)\s+(\d+)\s*$", block.split("\n\n")[0], re.MULTILINE))
+
+
+def test_editing_one_cell_reruns_exactly_its_jobs(quick_run, tmp_path):
+    workdir, _ = quick_run
+    config = quick_config()
+    config["figures"]["fig14"]["size_mm"] = [4.8, 3.0]
+    path = tmp_path / "edited.yaml"
+    path.write_text(yaml.safe_dump(config))
+    proc = run_snakemake(workdir, "--dry-run", "--quiet", "rules", config=path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    # the new area: its surfaces, geometry and contact job; the fig14 aggregate
+    # and figure; the audit and configuration snapshot; nothing else
+    assert job_counts(proc.stdout) == {
+        "surfaces": "1", "influence": "1", "contact": "1", "aggregate": "1", "figure": "1",
+        "audit": "1", "config_snapshot": "1", "all": "1", "total": "8"}, proc.stdout
+
+
+def test_audit_lists_every_cell_and_flags_a_corrupted_result(quick_run, tmp_path):
+    workdir, _ = quick_run
+    audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv")
+    config = quick_config()
+    studies = [n for n in config["figures"] if n in ("fig07", "fig09", "fig10", "fig11",
+                                                       "fig12", "fig13", "fig14", "table_Eu")]
+    assert len(audit) == sum(len(contact_cells(config, n)) for n in studies)
+    assert not audit["flags"].fillna("").str.contains("changed|unconverged|another").any()
+    assert (audit["worst_residual"] <= audit["tol"]).all()
+    # corrupt one value of one stored result in a copy of the run
+    copy = tmp_path / "run"
+    shutil.copytree(workdir, copy, symlinks=True)
+    victim = copy / "results" / "contact" / f"{audit['contact_job'].iloc[0]}.h5"
+    with h5py.File(victim, "r+") as f:
+        f["nominal_pressure"][0, 5] *= 1.0 + 1e-9
+    proc = run_snakemake(copy, "audit")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    audit = pd.read_csv(copy / "results" / "audit" / "audit.csv")
+    hit = audit["contact_job"] == victim.stem
+    assert audit.loc[hit, "flags"].str.contains("contact result changed").all()
+    assert not audit.loc[~hit, "flags"].fillna("").str.contains("changed").any()
+    md = (copy / "results" / "audit" / "audit.md").read_text()
+    flagged_part = md.split("## All cells")[0]
+    assert victim.stem in flagged_part
+
+
+def test_audit_verify_resolves_a_sample_bit_identically(quick_run):
+    workdir, _ = quick_run
+    proc = run_snakemake(workdir, "audit_verify")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    table = pd.read_csv(workdir / "results" / "audit" / "verify.csv")
+    assert len(table) == 3
+    # same code, same machine: the re-solved batches equal the stored ones bit for bit
+    assert table["identical"].all() and table["ok"].all()

@@ -1,0 +1,32 @@
+# Audit: every study cell traceable and checkable (`snakemake audit`), and a
+# seeded sample of stored solutions re-solved from their inputs
+# (`snakemake audit_verify`).
+
+
+rule audit:
+    input:
+        get_audit_inputs,
+    output:
+        csv="results/audit/audit.csv",
+        md=report("results/audit/audit.md", category="Audit"),
+    log:
+        "results/logs/audit/audit.log",
+    params:
+        studies=get_audit_studies,
+    script:
+        "../scripts/audit.py"
+
+
+rule audit_verify:
+    input:
+        get_audit_inputs,
+    output:
+        report("results/audit/verify.csv", category="Audit"),
+    log:
+        "results/logs/audit/verify.log",
+    params:
+        jobs=CONTACT_JOBS,
+        sample=config.get("audit", {}).get("verify_sample", 3),
+        seed=config.get("audit", {}).get("verify_seed", config["study_seed"]),
+    script:
+        "../scripts/audit_verify.py"
