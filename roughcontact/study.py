@@ -420,6 +420,22 @@ def contact_cells(config: dict, name: str) -> list[dict]:
     return cells
 
 
+def check_studies(config: dict, names) -> list[str]:
+    """Messages for contact figures or sweeps the schema cannot check."""
+    problems = []
+    for name in names:
+        try:
+            entry = resolve_source(config, name)
+        except (KeyError, ValueError) as err:
+            problems.append(f"{name}: {err}")
+            continue
+        low, high = entry["pressure_MPa"]
+        if not low < high:
+            problems.append(f"{name}.pressure_MPa = [{low}, {high}]: expected [P_min, P_max] "
+                            f"with P_min < P_max (MPa)")
+    return problems
+
+
 def contact_key(cell: dict) -> str:
     """File key of a contact job: one surface cell solved on one geometry."""
     return f"{cell['surface_key']}__{cell['geometry_key']}"

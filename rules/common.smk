@@ -22,6 +22,12 @@ FIGURES = [
 STUDIES = [n for n in FIGURES if n in study.CONTACT_FIGURES] + list(
     config.get("sweeps", {})
 )
+_bad_studies = study.check_studies(config, STUDIES)
+if _bad_studies:
+    raise WorkflowError(
+        "Invalid contact studies in the config (no job was started):\n  "
+        + "\n  ".join(_bad_studies)
+    )
 CONTACT_JOBS = study.contact_jobs(config, STUDIES)
 SURFACE_CELLS = study.surface_cells(config) | {
     job["surface_key"]: job["surface"] for job in CONTACT_JOBS.values()

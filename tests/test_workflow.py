@@ -141,6 +141,10 @@ def test_second_run_has_nothing_to_do(quick_run):
         (lambda c: c.update(studyseed=3), "studyseed"),
         (lambda c: c["surfaces"].update(acf="fractal"), "fractal"),
         (lambda c: c["figures"]["fig04"].update(moments=[[1.0, 1.5]]), "Eq 14"),
+        (lambda c: c["figures"]["fig07"].update(sigma_um=-30.0), "sigma_um"),
+        (lambda c: c["contact"].update(method="newton"), "newton"),
+        (lambda c: c["body"].update(nu=0.5), "nu"),
+        (lambda c: c["figures"]["fig07"].update(pressure_MPa=[5.0, 0.1]), "pressure_MPa"),
     ],
 )
 def test_bad_config_fails_before_any_job(tmp_path, edit, message):
