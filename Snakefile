@@ -24,6 +24,7 @@ include: "rules/surfaces.smk"
 include: "rules/influence.smk"
 include: "rules/contact.smk"
 include: "rules/audit.smk"
+include: "rules/reports.smk"
 include: "rules/figures.smk"
 
 

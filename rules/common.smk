@@ -74,7 +74,34 @@ def get_final_outputs():
     audit = ["results/audit/audit.csv", "results/audit/audit.md"] if STUDIES else []
     if STUDIES and config.get("audit", {}).get("verify", False):
         audit.append("results/audit/verify.csv")
-    return figures + influence + aggregates + audit + ["results/config.yaml"]
+    reports = []
+    if config.get("reports", {}).get("influence_convergence"):
+        reports += [
+            "results/reports/influence_convergence.csv",
+            "results/reports/influence_convergence.png",
+        ]
+    return figures + influence + aggregates + audit + reports + ["results/config.yaml"]
+
+
+def get_body_geometry(wildcards):
+    return study.geometry_params(config["body"], config["surfaces"])
+
+
+def get_convergence_mem_mb(wildcards):
+    """Peak memory of the convergence report: its largest influence build [MB]."""
+    from roughcontact.influence import estimate_cost
+
+    presets = (
+        config.get("reports", {})
+        .get("influence_convergence", {})
+        .get("presets", ["paper", "graded", "refined", "converged"])
+    )
+    params = study.geometry_params(config["body"], config["surfaces"])
+    peaks = [
+        estimate_cost(study.block_geometry({**params, "mesh": m})).peak_bytes
+        for m in presets
+    ]
+    return int(max(peaks) / 1e6) + 500
 
 
 def get_audit_studies(wildcards):
