@@ -12,6 +12,7 @@ from roughcontact.influence import (
     ModelTooLarge,
     estimate_cost,
     halfspace_influence,
+    hybrid_unit_modulus_influence,
     influence_matrix,
     layer_coarsening,
     layer_thicknesses,
@@ -290,3 +291,34 @@ def test_memory_guard_raises_before_building():
     assert cost.peak_bytes > 16e9
     with pytest.raises(ModelTooLarge, match="GB"):
         influence_matrix(geom, max_bytes=16e9)
+
+
+# --- hybrid operator ----------------------------------------------------------
+
+
+def test_hybrid_without_coarsening_is_the_finite_element_matrix():
+    geom = small_block(grid=(6, 6), thickness=6 * H, mesh="paper")
+    np.testing.assert_allclose(hybrid_unit_modulus_influence(geom, coarsening=1),
+                               unit_modulus_influence(geom), rtol=1e-12, atol=1e-18)
+
+
+def test_hybrid_matches_the_fine_model_away_from_the_edges():
+    geom = small_block(grid=(16, 16), thickness=16 * H, mesh="converged")
+    fine = unit_modulus_influence(geom)
+    hybrid = hybrid_unit_modulus_influence(geom, coarsening=2)
+    np.testing.assert_allclose(hybrid, hybrid.T, rtol=0, atol=1e-15 * hybrid.max())
+    diag = (np.diag(hybrid) / np.diag(fine) - 1).reshape(16, 16)
+    assert np.abs(diag[3:-3, 3:-3]).max() < 0.01
+    c = 8 * 16 + 8
+    for j in (c + 1, c + 17, c + 2, c + 6):
+        assert hybrid[c, j] == pytest.approx(fine[c, j], rel=0.03)
+    # the documented limitation: free edges are worse than the interior
+    assert np.abs(diag[0]).max() > np.abs(diag[3:-3, 3:-3]).max()
+    # rows still sum to about L (nu = 0, Eq 38)
+    assert hybrid.sum(axis=1) / geom.thickness == pytest.approx(1.0, abs=0.05)
+
+
+def test_hybrid_checks_the_coarsening():
+    geom = small_block(grid=(6, 6), mesh="paper")
+    with pytest.raises(ValueError, match="coarsening"):
+        hybrid_unit_modulus_influence(geom, coarsening=4)
