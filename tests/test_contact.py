@@ -386,3 +386,57 @@ def test_zero_mean_operator_limits_approach(small_problem):
     assert solve(op, gaps[0], 0.5 * mean_gap).converged
     stiff = PeriodicHalfSpace((20, 20), (1e-3, 1e-3), E, NU, mean_compliance=1e-11)
     assert solve(stiff, gaps[0], 1.01 * mean_gap).converged
+
+
+# --- sweep predictor (extrapolate) ----------------------------------------------
+
+
+@pytest.mark.parametrize("stiffness", [True, False])
+def test_sweep_extrapolation_same_solution_fewer_iterations(small_problem, stiffness):
+    """The predictor (tangent or secant dp/dd) changes the start, not the solution."""
+    C, gaps, area = small_problem
+    approaches = np.linspace(0.5e-6, 5e-6, 10)
+    runs = [sweep(C, gaps, approaches, element_area=area, tol=1e-10, stiffness=stiffness,
+                  stiffness_tol=1e-10, extrapolate=flag, return_fields=True)
+            for flag in (True, False)]
+    predicted, plain = runs
+    assert predicted.converged.all() and plain.converged.all()
+    assert predicted.residual.max() <= 1e-10
+    np.testing.assert_allclose(predicted.load, plain.load, rtol=1e-8)
+    np.testing.assert_array_equal(predicted.pressure > 0, plain.pressure > 0)
+    for j in range(3):
+        reference = nnls_reference(C, gaps[j], approaches[-1])
+        np.testing.assert_allclose(predicted.pressure[j, -1].ravel(), reference,
+                                   atol=1e-7 * reference.max())
+    # Warm starts along the sweep: the extrapolated start needs fewer products.
+    assert predicted.matvecs[:, 1:].sum() < plain.matvecs[:, 1:].sum()
+
+
+def test_predict_is_exact_on_a_fixed_contact_set(small_problem):
+    """Full contact never changes the set, so the tangent prediction is the solution."""
+    from roughcontact.contact import _predict
+
+    C, gaps, area = small_problem
+    f = gaps[0].ravel()
+    first, second = 1e-3, 2e-3  # [m], a thousand times the roughness: full contact
+    p1 = np.linalg.solve(C, first - f)
+    p2 = np.linalg.solve(C, second - f)
+    assert (p1 > 0).all()
+    rate = np.linalg.solve(C, np.ones_like(f))
+    predicted = _predict(p1[None], np.array([second]), np.array([first]), rate[None])
+    np.testing.assert_allclose(predicted[0], p2, rtol=1e-9)
+    # No rate yet (NaN): the start stays the last solution; negatives are clipped.
+    kept = _predict(p1[None], np.array([second]), np.array([first]), np.full((1, 400), np.nan))
+    np.testing.assert_array_equal(kept[0], p1)
+    clipped = _predict(p1[None], np.array([0.0]), np.array([first]), rate[None])
+    assert (clipped >= 0).all()
+
+
+def test_sweep_extrapolation_nonconvergence_is_flagged_not_nan(small_problem, caplog):
+    C, gaps, area = small_problem
+    approaches = np.linspace(0.5e-6, 5e-6, 4)
+    with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
+        result = sweep(C, gaps, approaches, element_area=area, max_iter=2, stiffness=False)
+    assert not result.converged[:, 1:].all()
+    assert np.isfinite(result.load).all() and np.isfinite(result.residual).all()
+    assert "did not converge" in caplog.text
