@@ -348,8 +348,9 @@ def initial_separation(heights) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the heights are not a finite batch, or their standard deviation is
-        outside ``HEIGHT_STD_RANGE`` (heights passed in metres, not in sigma).
+        If the heights are not a finite batch, a surface is flat (all heights
+        equal), or their standard deviation is outside ``HEIGHT_STD_RANGE``
+        (heights passed in metres, not in sigma).
     """
     h = np.asarray(heights, dtype=float)
     if h.ndim not in (2, 3) or h.shape[0] < 1 or h[0].size < 2:
@@ -357,6 +358,15 @@ def initial_separation(heights) -> np.ndarray:
     if not np.isfinite(h).all():
         raise ValueError("heights must be finite (NaN or inf found)")
     flat = h.reshape(h.shape[0], -1)
+    level = np.ptp(flat, axis=1) == 0.0
+    if level.any():
+        # std of equal heights is rounding noise (1e-16), not a scale: name the real problem
+        j = int(np.argmax(level))
+        raise ValueError(
+            f"heights of surface {j} are all equal (a flat surface, standard deviation 0): "
+            f"it has no roughness scale sigma to make the problem dimensionless. A flat "
+            f"punch (full contact, C p = d) is solved in SI units with contact.solve."
+        )
     std = flat.std(axis=1)
     low, high = HEIGHT_STD_RANGE
     if ((std < low) | (std > high)).any():
