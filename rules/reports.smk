@@ -22,3 +22,31 @@ rule influence_convergence:
         E_MPa=config["body"]["E_MPa"],
     script:
         "../scripts/influence_convergence.py"
+
+
+rule speed_vs_error:
+    input:
+        mesh_table="results/reports/influence_convergence.csv",
+    output:
+        md=report(
+            "results/reports/speed_vs_error.md",
+            caption="../report/speed_vs_error.rst",
+            category="Reports",
+        ),
+        csv="results/reports/speed_vs_error.csv",
+        png="results/reports/speed_vs_error.png",
+        counts_png="results/reports/speed_vs_error_counts.png",
+    log:
+        "results/logs/reports/speed_vs_error.log",
+    benchmark:
+        "results/benchmarks/rules/reports/speed_vs_error.tsv"
+    threads: 1
+    resources:
+        mem_mb=4000,
+    params:
+        geometry=get_body_geometry,
+        settings=canonical(config.get("reports", {}).get("speed_vs_error", {})),
+        E_MPa=config["body"]["E_MPa"],
+        study_seed=config["study_seed"],
+    script:
+        "../scripts/speed_vs_error.py"

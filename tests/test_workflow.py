@@ -362,3 +362,15 @@ def test_audit_verify_resolves_a_sample_bit_identically(quick_run):
     assert len(table) == 3
     # same code, same machine: the re-solved batches equal the stored ones bit for bit
     assert table["identical"].all() and table["ok"].all()
+
+
+def test_speed_vs_error_report_is_built_on_demand(quick_run):
+    workdir, _ = quick_run
+    proc = run_snakemake(workdir, "results/reports/speed_vs_error.md")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    md = (workdir / "results" / "reports" / "speed_vs_error.md").read_text()
+    assert "## Recommendation" in md and "## How it was measured" in md
+    table = pd.read_csv(workdir / "results" / "reports" / "speed_vs_error.csv")
+    assert {"solver", "mesh", "grid", "surfaces", "recommendation"} <= set(table["table"])
+    solver = table[table["table"] == "solver"]
+    assert {"cg", "steepest", "exact"} <= set(solver["method"])
