@@ -74,6 +74,7 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
         "P_min_MPa": cell["pressure_MPa"][0], "P_max_MPa": cell["pressure_MPa"][1],
         "surface_cell": cell["surface_key"], "geometry": cell["geometry_key"],
         "contact_job": key,
+        **{f"expected_{k}": v for k, v in cell.get("expected_error", {}).items()},
     }
     flags = []
     missing = [p.name for p in (surf_path, infl_path, cont_path) if not p.exists()]

@@ -368,6 +368,36 @@ def resolve_source(config: dict, name: str) -> dict:
     return entry
 
 
+def accuracy_preset(config: dict) -> dict | None:
+    """The accuracy preset the config names (``accuracy: paper|fast|converged``), or None."""
+    name = config.get("accuracy")
+    if name is None:
+        return None
+    from .speed import ACCURACY_PRESETS
+
+    return dict(ACCURACY_PRESETS[name])
+
+
+def accuracy_attrs(config: dict) -> dict:
+    """``accuracy`` and the preset's measured ``expected_error`` for a cell's records."""
+    preset = accuracy_preset(config)
+    if preset is None:
+        return {"accuracy": "as configured"}
+    errors = {k: v for k, v in preset.items() if k.endswith("_error") or
+              k.startswith(("grid_change_", "sampling_"))}
+    return {"accuracy": config["accuracy"], "expected_error": errors}
+
+
+def contact_settings(config: dict) -> dict:
+    """The solver settings of the contact jobs: the config's, or the accuracy preset's."""
+    settings = dict(config.get("contact", {}))
+    preset = accuracy_preset(config)
+    if preset is not None:
+        settings.update(method=preset["method"], tol=preset["tol"],
+                        precision=preset["precision"])
+    return settings
+
+
 def source_name(config: dict, name: str) -> str:
     """The figure or sweep whose cells ``name`` uses (itself unless ``from:``)."""
     resolve_source(config, name)  # refuses unknown names and cycles
@@ -388,6 +418,10 @@ def contact_cells(config: dict, name: str) -> list[dict]:
     """
     fig = resolve_source(config, name)
     surfaces, body = config["surfaces"], config["body"]
+    preset = accuracy_preset(config)
+    if preset is not None:  # the preset's mesh and count unless the figure names its own
+        body = {**body, "mesh": preset["mesh"]}
+        fig = {"count": preset["surfaces"], **fig}
     spacing = [s / g for s, g in zip(_pair(surfaces["size_mm"]), _pair(surfaces["grid"]),
                                      strict=True)]
     cells = []
@@ -416,6 +450,7 @@ def contact_cells(config: dict, name: str) -> list[dict]:
                                     "pressure_MPa": [float(p) for p in fig["pressure_MPa"]],
                                     "surface_key": cell_key(surf),
                                     "geometry_key": geometry_key(geom),
+                                    **accuracy_attrs(config),
                                 })
     return cells
 
@@ -468,6 +503,8 @@ def contact_jobs(config: dict, names) -> dict[str, dict]:
                 "surface": cell["surface"], "geometry": cell["geometry"],
                 "surface_key": cell["surface_key"], "geometry_key": cell["geometry_key"],
                 "pressure_end": 0.0,
+                "accuracy": cell.get("accuracy", "as configured"),
+                "expected_error": cell.get("expected_error", {}),
             })
             job["pressure_end"] = max(job["pressure_end"], sweep_end(cell))
     return jobs

@@ -17,7 +17,7 @@ rule contact:
         mem_mb=2000,
     params:
         job=get_contact_params,
-        solver=canonical(config.get("contact", {})),
+        solver=canonical(study.contact_settings(config)),
     script:
         "../scripts/solve_contact.py"
 

@@ -50,3 +50,33 @@ def test_build_influence_refuses_a_model_too_large_before_building(tmp_path):
     with pytest.raises(ModelTooLarge, match=r"GB.*Options"):
         build_influence(params, path, max_memory_gb=0.001)
     assert not path.exists()
+
+
+def quick_config():
+    from pathlib import Path
+
+    import yaml
+
+    return yaml.safe_load((Path(__file__).parent.parent / "config" / "quick.yaml").read_text())
+
+
+def test_accuracy_preset_sets_mesh_count_and_solver_and_records_its_errors():
+    from roughcontact.speed import ACCURACY_PRESETS
+    from roughcontact.study import contact_cells, contact_jobs, contact_settings
+
+    config = quick_config()
+    plain = contact_cells(config, "fig11")
+    assert {c["geometry"]["mesh"] for c in plain} == {config["body"]["mesh"]}
+    assert plain[0]["accuracy"] == "as configured"
+    config["accuracy"] = "fast"
+    preset = ACCURACY_PRESETS["fast"]
+    cells = contact_cells(config, "fig11")
+    assert {c["geometry"]["mesh"] for c in cells} == {preset["mesh"]}
+    assert {c["surface"]["count"] for c in cells} == {preset["surfaces"]}
+    assert cells[0]["expected_error"]["real_area_error"] == preset["real_area_error"]
+    assert contact_settings(config)["tol"] == preset["tol"]
+    # a figure that names its meshes keeps them
+    named = contact_cells(config, "fig07")
+    assert {c["geometry"]["mesh"] for c in named} == set(config["figures"]["fig07"]["meshes"])
+    job = next(iter(contact_jobs(config, ["fig11"]).values()))
+    assert job["accuracy"] == "fast" and job["expected_error"]
