@@ -52,7 +52,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -248,6 +248,23 @@ def _run_task(task: dict) -> dict:
     geom: BlockGeometry = task["geometry"]
     rss_before = _rss_bytes()
     start = time.perf_counter()
+    stored = task.get("stored")
+    if stored is not None:  # built by the workflow's influence rule: reuse it and its costs
+        from .storage import read_influence
+
+        ec, attrs = read_influence(stored)
+        row = {
+            "dofs": int(attrs["dofs"]), "build_s": float(attrs["build_seconds"]),
+            "estimate_GB": float(attrs["estimated_peak_gb"]),
+            "peak_memory_GB": float(attrs.get("peak_rss_gb", math.nan)),
+            "memory_increase_GB": math.nan,
+            **_centre_entries(ec, geom, task["far"]),
+        }
+        if task.get("heights") is not None:
+            start = time.perf_counter()
+            row |= _contact_response(ec, geom, task)
+            row["contact_s"] = time.perf_counter() - start
+        return row
     if task["kind"] == HALFSPACE:
         ec = halfspace_influence(geom.grid, geom.size, 1.0, geom.nu)
         dofs, estimate = 0, math.nan
@@ -375,6 +392,7 @@ def influence_convergence(
     tol: float = 1e-10,
     isolate: bool = True,
     progress: Callable[[str], None] | None = None,
+    stored: Mapping[str, str | os.PathLike] | None = None,
 ) -> pd.DataFrame:
     """Cost, influence entries and rough-contact response per mesh, with errors.
 
@@ -423,6 +441,10 @@ def influence_convergence(
     progress : callable, optional
         Called with a one-line message after each mesh (also logged to
         ``logging.getLogger("roughcontact.convergence")`` at INFO).
+    stored : mapping, optional
+        Preset name -> influence file written by the workflow's ``influence``
+        rule for ``base`` with that mesh: the matrix is read instead of built,
+        and its build time and peak memory are those recorded by that build.
 
     Returns
     -------
@@ -472,8 +494,10 @@ def influence_convergence(
     start = time.perf_counter()
     rows = []
     for label, kind, geom in jobs:
-        task = {"label": label, "kind": kind, "geometry": geom, **common}
-        result = _run_isolated(task) if isolate else _run_task(task)
+        task = {"label": label, "kind": kind, "geometry": geom, **common,
+                "stored": (stored or {}).get(label) if kind == "fe" else None}
+        isolated = isolate and task["stored"] is None
+        result = _run_isolated(task) if isolated else _run_task(task)
         spec = geom.mesh_spec
         info = {
             "mesh": label, "kind": kind, "element": spec.element if kind == "fe" else "",

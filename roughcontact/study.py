@@ -272,7 +272,18 @@ def influence_geometries(config: dict) -> dict[str, dict]:
     if "body" in config:
         params = geometry_params(config["body"], config["surfaces"])
         geoms[geometry_key(params)] = params
+        for mesh in convergence_presets(config):  # the mesh report reuses these builds
+            variant = {**params, "mesh": mesh}
+            geoms[geometry_key(variant)] = variant
     return geoms
+
+
+def convergence_presets(config: dict) -> list[str]:
+    """Mesh presets of the influence-convergence report ([] when it is not configured)."""
+    report = config.get("reports", {}).get("influence_convergence")
+    if not report:
+        return []
+    return list(report.get("presets", ["paper", "graded", "refined", "converged"]))
 
 
 def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: float = 16.0,
@@ -297,6 +308,9 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
     start = time.perf_counter()
     unit = influence.unit_modulus_influence(geom, solver=solver, max_bytes=max_memory_gb * 1e9)
     seconds = time.perf_counter() - start
+    import resource
+
+    peak_rss_gb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9  # Linux: KiB
     if not np.isfinite(unit).all():
         raise FloatingPointError(f"geometry {key}: the influence matrix has non-finite entries")
     n = unit.shape[0]
@@ -323,6 +337,7 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
         "dofs": int(cost.dofs),
         "estimated_peak_gb": cost.peak_bytes / 1e9,
         "build_seconds": seconds,
+        "peak_rss_gb": peak_rss_gb,
         "solver": solver,
         "content_sha256": hashlib.sha256(np.ascontiguousarray(unit).tobytes()).hexdigest(),
         **{f"check_{k}": v for k, v in checks.items()},

@@ -87,21 +87,17 @@ def get_body_geometry(wildcards):
     return study.geometry_params(config["body"], config["surfaces"])
 
 
-def get_convergence_mem_mb(wildcards):
-    """Peak memory of the convergence report: its largest influence build [MB]."""
-    from roughcontact.influence import estimate_cost
-
-    presets = (
-        config.get("reports", {})
-        .get("influence_convergence", {})
-        .get("presets", ["paper", "graded", "refined", "converged"])
-    )
+def get_convergence_stored(wildcards):
+    """Preset -> influence file of the body's geometry with that mesh."""
     params = study.geometry_params(config["body"], config["surfaces"])
-    peaks = [
-        estimate_cost(study.block_geometry({**params, "mesh": m})).peak_bytes
-        for m in presets
-    ]
-    return int(max(peaks) / 1e6) + 500
+    return {
+        mesh: f"results/influence/{study.geometry_key({**params, 'mesh': mesh})}.h5"
+        for mesh in study.convergence_presets(config)
+    }
+
+
+def get_convergence_inputs(wildcards):
+    return sorted(get_convergence_stored(wildcards).values())
 
 
 def get_audit_studies(wildcards):

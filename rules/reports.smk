@@ -2,6 +2,8 @@
 
 
 rule influence_convergence:
+    input:
+        get_convergence_inputs,
     output:
         csv="results/reports/influence_convergence.csv",
         png=report(
@@ -13,11 +15,12 @@ rule influence_convergence:
         "results/logs/reports/influence_convergence.log",
     benchmark:
         "results/benchmarks/rules/reports/influence_convergence.tsv"
-    threads: 2
+    threads: 1
     resources:
-        mem_mb=get_convergence_mem_mb,
+        mem_mb=2000,
     params:
         geometry=get_body_geometry,
+        stored=get_convergence_stored,
         settings=canonical(config.get("reports", {}).get("influence_convergence", {})),
         E_MPa=config["body"]["E_MPa"],
     script:

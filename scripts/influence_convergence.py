@@ -19,6 +19,7 @@ table = influence_convergence(
     corr_length=settings.get("b_mm", 1.0) * 1e-3,
     pressures=[p * 1e6 for p in settings.get("pressures_MPa", [0.3, 1.0, 2.0])],
     progress=log.info,
+    stored=snakemake.params.stored,
 )
 with atomic_path(snakemake.output.csv) as tmp:
     table.to_csv(tmp, index=False)
