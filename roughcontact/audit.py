@@ -11,20 +11,17 @@ stored: bit-identical for the same library versions.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import logging
 import time
 from pathlib import Path
 
-import h5py
 import numpy as np
 import pandas as pd
 
 from . import nondim
 from .pipeline import _ARRAYS, _file_sha256, arrays_sha256, read_contact, sweep_approaches
 from .provenance import atomic_path, git_commit
-from .storage import read_influence, read_surfaces
+from .storage import array_sha256, read_influence, read_surfaces
 from .study import contact_key
 
 log = logging.getLogger(__name__)
@@ -89,15 +86,14 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
     flags += moment_flags
 
     unit, geometry_attrs = read_influence(infl_path)
-    influence_hash = hashlib.sha256(np.ascontiguousarray(unit).tobytes()).hexdigest()
+    influence_hash = array_sha256(unit)
     row["influence_sha256"] = influence_hash
     if influence_hash != geometry_attrs.get("content_sha256"):
         flags.append("influence file changed since it was built")
     row["mesh_diagonal_error"] = MESH_DIAGONAL_ERROR.get(g["mesh"], float("nan"))
 
-    with h5py.File(cont_path, "r") as f:
-        arrays = {name: f[name][...] for name in _ARRAYS}
-    _, attrs = read_contact(cont_path)
+    stored, attrs = read_contact(cont_path)
+    arrays = {name: getattr(stored, name) for name in _ARRAYS}
     row.update({
         "method": attrs["sweep_method"], "tol": float(attrs["sweep_tol"]),
         "precision": attrs["sweep_precision"],
@@ -111,9 +107,7 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
         "git_commit": attrs["git_commit"], "created": attrs["created"],
     })
     residual = arrays["residual"]
-    if not np.array_equal(arrays["converged"], residual <= row["tol"]) and np.any(
-        arrays["converged"] & ~(residual <= row["tol"])
-    ):
+    if np.any(arrays["converged"] & ~(residual <= row["tol"])):
         flags.append("converged flag inconsistent with residual")
     if row["unconverged_steps"] or not arrays["converged"].all():
         flags.append(f"{int((~arrays['converged']).sum())} unconverged solves")
@@ -195,8 +189,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
     for key in sorted(jobs):
         path = root / "results" / "contact" / f"{key}.h5"
         _, attrs = read_contact(path)
-        m = len(json.loads(attrs["seeds"])) if isinstance(attrs["seeds"], str) else len(
-            attrs["seeds"])
+        m = len(attrs["seeds"])
         size = int(attrs.get("batch_size", m))
         candidates += [(key, start, min(m, start + size)) for start in range(0, m, size)]
     picks = rng.choice(len(candidates), size=min(sample, len(candidates)), replace=False)

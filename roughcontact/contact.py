@@ -420,6 +420,20 @@ def _check_options(method, tol, max_iter, precision="double"):
     return tol
 
 
+def _approach_steps(approaches, m: int, unit: str) -> np.ndarray:
+    """Approaches as an (m, k) array, shared (k,) ones broadcast; checked finite and >= 0."""
+    steps = np.asarray(approaches, dtype=float)
+    if steps.ndim == 1:
+        steps = np.broadcast_to(steps, (m, steps.size))
+    if steps.ndim != 2 or steps.shape[0] != m or steps.shape[1] < 1:
+        raise ValueError(
+            f"approaches must have shape (k,) or (m, k) with m = {m}, got {np.shape(approaches)}"
+        )
+    if not np.isfinite(steps).all() or (steps < 0.0).any():
+        raise ValueError(f"approaches must be finite and non-negative ({unit})")
+    return steps
+
+
 def _default_max_iter(method: str, n: int) -> int:
     if method == "cg":
         return max(1000, 2 * n)
@@ -1103,15 +1117,7 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
     op = _as_operator(operator, element_area)
     gaps, shape = _check_surfaces(gaps0, op, "gaps0", batched=True)
     m, n = gaps.shape
-    steps = np.asarray(approaches, dtype=float)
-    if steps.ndim == 1:
-        steps = np.broadcast_to(steps, (m, steps.size))
-    if steps.ndim != 2 or steps.shape[0] != m or steps.shape[1] < 1:
-        raise ValueError(
-            f"approaches must have shape (k,) or (m, k) with m = {m}, got {np.shape(approaches)}"
-        )
-    if not np.isfinite(steps).all() or (steps < 0.0).any():
-        raise ValueError("approaches must be finite and non-negative (m)")
+    steps = _approach_steps(approaches, m, "m")
     _check_bounded(op, gaps, steps.max(axis=1), "approaches")
     k = steps.shape[1]
     names = ("load", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",

@@ -425,15 +425,7 @@ def dimensionless_operator(unit_influence, thickness: float):
 
 
 def _check_steps(approaches, m: int) -> np.ndarray:
-    steps = np.asarray(approaches, dtype=float)
-    if steps.ndim == 1:
-        steps = np.broadcast_to(steps, (m, steps.size))
-    if steps.ndim != 2 or steps.shape[0] != m or steps.shape[1] < 1:
-        raise ValueError(
-            f"approaches must have shape (k,) or (m, k) with m = {m}, got {np.shape(approaches)}"
-        )
-    if not np.isfinite(steps).all() or (steps < 0.0).any():
-        raise ValueError("approaches must be finite and non-negative (units of sigma)")
+    steps = contact._approach_steps(approaches, m, "units of sigma")
     if (np.diff(steps, axis=1) <= 0.0).any():
         raise ValueError("approaches must increase strictly along the steps (units of sigma)")
     return np.ascontiguousarray(steps)

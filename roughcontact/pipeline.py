@@ -169,6 +169,8 @@ def read_contact(path) -> tuple[nondim.NondimSweep, dict]:
     settings["n_elements"] = int(settings["n_elements"])
     for key in ("method", "precision"):
         settings[key] = str(settings[key])
+    if isinstance(attrs.get("seeds"), str):  # stored as JSON text
+        attrs["seeds"] = json.loads(attrs["seeds"])
     max_iter = int(attrs["sweep_max_iter"])
     return nondim.NondimSweep(**arrays, **settings,
                               max_iter=None if max_iter < 0 else max_iter), attrs
@@ -212,8 +214,7 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
         }
         rows.append(frame.assign(**labels))
         per_surface = aggregate.mean_plane_modulus(physical)
-        moduli.append(per_surface.assign(seed=json.loads(attrs["seeds"]) if isinstance(
-            attrs["seeds"], str) else list(attrs["seeds"]), **labels))
+        moduli.append(per_surface.assign(seed=attrs["seeds"], **labels))
         summary = aggregate.modulus_summary(per_surface, E)
         summaries.append({**labels, **{k: float(v) for k, v in summary.items()},
                           "unconverged_steps": int(attrs["unconverged_steps"]),

@@ -15,6 +15,7 @@ influence matrices.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 
@@ -77,6 +78,11 @@ def read_surfaces(path: str | os.PathLike, count: int | None = None) -> dict:
         }
     out["spec"] = json.loads(out["attrs"]["spec"])
     return out
+
+
+def array_sha256(array: np.ndarray) -> str:
+    """SHA-256 of an array's bytes (C order): the content hash of an influence matrix."""
+    return hashlib.sha256(np.ascontiguousarray(array).tobytes()).hexdigest()
 
 
 def read_influence(path: str | os.PathLike) -> tuple[np.ndarray, dict]:

@@ -18,7 +18,7 @@ import numpy as np
 
 from . import johnson
 from .provenance import canonical_json, provenance
-from .storage import write_h5
+from .storage import array_sha256, write_h5
 from .surface import (
     SurfaceSpec,
     correlation_length,
@@ -294,8 +294,6 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
     :class:`~roughcontact.influence.ModelTooLarge` with the estimate and the
     options before anything is built. Returns the root attributes.
     """
-    import hashlib
-
     from . import influence
 
     geom = block_geometry(params)
@@ -339,7 +337,7 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
         "build_seconds": seconds,
         "peak_rss_gb": peak_rss_gb,
         "solver": solver,
-        "content_sha256": hashlib.sha256(np.ascontiguousarray(unit).tobytes()).hexdigest(),
+        "content_sha256": array_sha256(unit),
         **{f"check_{k}": v for k, v in checks.items()},
         **provenance(config),
     }
@@ -368,19 +366,24 @@ def _as_list(value) -> list:
     return list(value) if isinstance(value, list | tuple) else [value]
 
 
+def source_name(config: dict, name: str) -> str:
+    """The figure or sweep whose cells ``name`` uses (itself unless ``from:``)."""
+    section = {**config.get("figures", {}), **config.get("sweeps", {})}
+    seen = [name]
+    while "from" in section[name]:
+        source = section[name]["from"]
+        if source in seen or source not in section:
+            raise ValueError(f"{seen[0]}: 'from: {source}' must name another figure or sweep "
+                             f"without a cycle (followed {' -> '.join(seen)})")
+        seen.append(source)
+        name = source
+    return name
+
+
 def resolve_source(config: dict, name: str) -> dict:
     """A figure's (or sweep's) cell description, following ``from: other``."""
     section = {**config.get("figures", {}), **config.get("sweeps", {})}
-    seen = [name]
-    entry = section[name]
-    while "from" in entry:
-        source = entry["from"]
-        if source in seen or source not in section:
-            raise ValueError(f"{name}: 'from: {source}' must name another figure or sweep "
-                             f"without a cycle (followed {' -> '.join(seen)})")
-        seen.append(source)
-        entry = section[source]
-    return entry
+    return section[source_name(config, name)]
 
 
 def accuracy_preset(config: dict) -> dict | None:
@@ -411,15 +414,6 @@ def contact_settings(config: dict) -> dict:
         settings.update(method=preset["method"], tol=preset["tol"],
                         precision=preset["precision"])
     return settings
-
-
-def source_name(config: dict, name: str) -> str:
-    """The figure or sweep whose cells ``name`` uses (itself unless ``from:``)."""
-    resolve_source(config, name)  # refuses unknown names and cycles
-    section = {**config.get("figures", {}), **config.get("sweeps", {})}
-    while "from" in section[name]:
-        name = section[name]["from"]
-    return name
 
 
 def contact_cells(config: dict, name: str) -> list[dict]:

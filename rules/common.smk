@@ -107,8 +107,7 @@ def get_audit_studies(wildcards):
 def get_audit_inputs(wildcards):
     files = set()
     for job in CONTACT_JOBS.values():
-        key = f"{job['surface_key']}__{job['geometry_key']}"
-        files.add(f"results/contact/{key}.h5")
+        files.add(f"results/contact/{study.contact_key(job)}.h5")
         files.add(f"results/surfaces/{job['surface_key']}.h5")
         files.add(f"results/influence/{job['geometry_key']}.h5")
     return sorted(files)
