@@ -28,10 +28,14 @@ import numpy as np
 import pandas as pd
 
 from . import aggregate, nondim
+from .operators import read_operator
 from .provenance import atomic_path, canonical_json, config_hash, provenance
-from .storage import read_influence, read_surfaces, write_h5
+from .storage import read_surfaces, write_h5
 
 log = logging.getLogger(__name__)
+
+#: Seconds between progress lines of a contact job within one batch.
+PROGRESS_SECONDS = 30.0
 
 MM = 1e-3
 _ARRAYS = ("approach", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
@@ -92,7 +96,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
     """
     start = time.perf_counter()
     cell = read_surfaces(surfaces_path)
-    unit, geometry_attrs = read_influence(influence_path)
+    unit, geometry_attrs = read_operator(influence_path)
     heights = cell["heights"]
     m = heights.shape[0]
     geometry = job["geometry"]
@@ -110,15 +114,26 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
     tol = float(settings.get("tol", 1e-8))
     precision = settings.get("precision", "mixed")
     log.info("contact %s__%s: %d surfaces x %d steps, approach d/sigma %.3g .. %.3g, "
-             "sweep to P L / (E sigma) = %g; method %s, tol %.1e, precision %s",
+             "sweep to P L / (E sigma) = %g; method %s, tol %.1e, precision %s, influence %s",
              job["surface_key"], job["geometry_key"], m, steps, approaches[0], approaches[-1],
-             job["pressure_end"], method, tol, precision)
+             job["pressure_end"], method, tol, precision,
+             geometry_attrs.get("operator", "dense"))
+
+    last = [time.perf_counter()]
 
     def progress(report):
+        now = time.perf_counter()
         if report.step == report.steps_total:
             log.info("  surfaces %d/%d done, %d steps, %.1f s elapsed, %d unconverged",
                      report.surfaces_done, report.surfaces_total, report.steps_total,
                      report.elapsed, report.unconverged)
+        elif now - last[0] > PROGRESS_SECONDS:  # long batches (large grids): a heartbeat
+            log.info("  step %d/%d of the batch ending at surface %d/%d, %.1f s elapsed",
+                     report.step, report.steps_total, report.surfaces_done,
+                     report.surfaces_total, report.elapsed)
+        else:
+            return
+        last[0] = now
 
     result = nondim.solve_cell(
         unit, heights, thickness=thickness, element_area=element_area, approaches=approaches,
