@@ -11,6 +11,11 @@ rule audit:
         md=report("results/audit/audit.md", category="Audit"),
     log:
         "results/logs/audit/audit.log",
+    group:
+        "summaries"
+    resources:
+        mem_mb=get_audit_mem_mb,
+        runtime=get_audit_runtime,
     params:
         studies=get_audit_studies,
     script:
@@ -24,6 +29,9 @@ rule audit_verify:
         report("results/audit/verify.csv", category="Audit"),
     log:
         "results/logs/audit/verify.log",
+    resources:
+        mem_mb=get_audit_verify_mem_mb,
+        runtime=get_audit_verify_runtime,
     params:
         jobs=CONTACT_JOBS,
         sample=config.get("audit", {}).get("verify_sample", 3),

@@ -183,3 +183,204 @@ def get_figure_parameters(wildcards):
             "fig04": config["figures"].get("fig04", {}),
         }
     )
+
+
+# ---- Cluster resources ------------------------------------------------------
+# Memory [MB] and wall time [min] of every job, for schedulers that enforce
+# them (profiles/slurm). Estimated from the grid, the surface count, the mesh
+# and the solver settings, scaled from runs on the reference machine (2 cores,
+# see README); a job that outlives its wall time is killed, so the estimate is
+# multiplied by RUNTIME_MARGIN and by the attempt (`retries` in the profile).
+RUNTIME_MARGIN = 3
+RUNTIME_START_MIN = 5  # interpreter start, imports, reading and writing files
+# one contact solve (one surface, one approach step) on 60 x 60 elements: the
+# slowest measured cell, 186 s for 60 surfaces x 30 steps (paper mesh, CG 1e-8)
+CONTACT_SOLVE_SECONDS = 0.11
+# matrix products per solve relative to CG (steepest descent: 2-3 times)
+CONTACT_METHOD_COST = {"cg": 1.0, "steepest": 3.0, "exact": 3.0}
+
+
+def _runtime_minutes(seconds, attempt=1):
+    """Requested wall time [min] of a job estimated to take ``seconds`` [s]."""
+    import math
+
+    return attempt * (RUNTIME_START_MIN + math.ceil(RUNTIME_MARGIN * seconds / 60))
+
+
+def _dense_scale(grid):
+    """Cost of the contact solves on ``grid`` [nx, ny] relative to 60 x 60.
+
+    A product with the dense influence matrix costs n^2 for n = nx ny
+    elements, and CG iterations grow about as sqrt(n) with its condition
+    number: n^2.5 (measured at 30 x 30 and 60 x 60 only, an upper bound there).
+    """
+    return (grid[0] * grid[1] / 3600) ** 2.5
+
+
+def _contact_solve_seconds(grid, settings):
+    """Wall time [s] of one contact solve on ``grid`` with solver ``settings``.
+
+    A tighter tolerance costs iterations in proportion to its digits (1e-8 is
+    the reference).
+    """
+    import math
+
+    digits = max(1.0, math.log10(1.0 / float(settings.get("tol", 1e-8))) / 8)
+    method = CONTACT_METHOD_COST[settings.get("method", "cg")]
+    return CONTACT_SOLVE_SECONDS * _dense_scale(grid) * digits * method
+
+
+def _contact_seconds(job):
+    """Wall time [s] of a contact job: surfaces x approach steps x one solve.
+
+    Measured 35-186 s per cell of 60 surfaces x 30 steps on 60 x 60 (paper
+    mesh; the converged mesh needs fewer iterations) and 4 s on 30 x 30. A
+    sweep beyond P L / (E sigma) = 4 (the study's) reaches larger contact
+    fractions, where CG needs more iterations: counted in proportion.
+    """
+    settings = study.contact_settings(config)
+    solves = job["surface"]["count"] * int(settings.get("steps", 30))
+    reach = max(1.0, job["pressure_end"] / 4)
+    return solves * _contact_solve_seconds(job["geometry"]["grid"], settings) * reach
+
+
+def get_contact_runtime(wildcards, attempt):
+    return _runtime_minutes(_contact_seconds(CONTACT_JOBS[wildcards.job]), attempt)
+
+
+def _contact_mem_mb(job):
+    """Peak memory [MB] of a contact job: E * C in double and single precision
+    and the contact-set matrix of the stiffness (3 n^2 doubles at most), the
+    batch of surfaces (10 (count, n) arrays) and 400 MB of interpreter and
+    libraries (measured: 415 MB on 60 x 60, 167 MB on 30 x 30)."""
+    nx, ny = job["geometry"]["grid"]
+    n = nx * ny
+    return int(400 + (3 * 8 * n**2 + 10 * 8 * job["surface"]["count"] * n) / 1e6)
+
+
+def get_contact_mem_mb(wildcards):
+    return _contact_mem_mb(CONTACT_JOBS[wildcards.job])
+
+
+def get_influence_runtime(wildcards, attempt):
+    """Wall time [min] of an influence build, from its estimated peak memory.
+
+    The work of the sparse factorization and of the dense Schur complement
+    grows with the memory they need. Build times on 2 cores (MKL PARDISO)
+    against ``roughcontact.influence.estimate_cost``'s peak: 60 x 60 paper
+    4.2 s (0.92 GB), graded 12.5 s (2.0 GB), refined 12.3 s (2.1 GB),
+    converged 116-132 s (9.6 GB); 120 x 120 paper 63 s (6.9 GB), graded
+    248 s (12.6 GB). 4.2 s (GB / 0.92)^1.56 passes through the first and
+    the last and lies above the others (SuperLU: 36 s at 60 x 60 paper,
+    45 s predicted).
+    """
+    from roughcontact.influence import estimate_cost
+
+    geom = study.block_geometry(GEOMETRIES[wildcards.geometry])
+    solver = config.get("body", {}).get("solver", "auto")
+    peak_gb = estimate_cost(geom, solver).peak_bytes / 1e9
+    return _runtime_minutes(4.2 * (peak_gb / 0.92) ** 1.56, attempt)
+
+
+def get_surfaces_runtime(wildcards, attempt):
+    """Wall time [min] of a surface cell: 60 surfaces of 60 x 60 take 0.01 s
+    by the filter and 1.3 s by IAAFT (``exact``); 120 x 120: 0.04 s, 7.7 s."""
+    cell = SURFACE_CELLS[wildcards.cell]
+    per_surface = 0.03 if cell["method"] == "exact" else 0.001
+    size = cell["grid"][0] * cell["grid"][1] / 3600
+    return _runtime_minutes(cell["count"] * per_surface * size**1.5, attempt)
+
+
+def get_surfaces_mem_mb(wildcards):
+    """Peak memory [MB] of a surface cell: 300 MB of interpreter and libraries
+    (measured 92 MB in all) and 20 work arrays per surface."""
+    cell = SURFACE_CELLS[wildcards.cell]
+    return int(300 + 20 * 8 * cell["count"] * cell["grid"][0] * cell["grid"][1] / 1e6)
+
+
+def _largest_grid():
+    """[nx, ny] of the largest influence geometry of the study."""
+    return max(
+        (g["grid"] for g in GEOMETRIES.values()),
+        key=lambda grid: grid[0] * grid[1],
+        default=config["surfaces"]["grid"],
+    )
+
+
+def get_summary_runtime(wildcards, attempt):
+    """Wall time [min] of an aggregate, a figure or the config snapshot:
+    3-6 s measured (a figure starts a notebook kernel)."""
+    return _runtime_minutes(30, attempt)
+
+
+def get_audit_runtime(wildcards, attempt):
+    """Wall time [min] of the audit: it reads and hashes every stored file."""
+    return _runtime_minutes(30 + 2 * len(get_audit_inputs(wildcards)), attempt)
+
+
+def get_audit_mem_mb(wildcards):
+    """Peak memory [MB] of the audit: one influence matrix (held twice while
+    hashed) at a time, plus 1 GB."""
+    nx, ny = _largest_grid()
+    return int(1000 + 2 * 8 * (nx * ny) ** 2 / 1e6)
+
+
+def _verify_sample():
+    return int(config.get("audit", {}).get("verify_sample", 3))
+
+
+def get_audit_verify_runtime(wildcards, attempt):
+    """Wall time [min] of audit_verify: at most `verify_sample` contact jobs re-solved."""
+    slowest = max((_contact_seconds(job) for job in CONTACT_JOBS.values()), default=0)
+    return _runtime_minutes(_verify_sample() * slowest, attempt)
+
+
+def get_audit_verify_mem_mb(wildcards):
+    largest = max((_contact_mem_mb(job) for job in CONTACT_JOBS.values()), default=0)
+    return max(get_audit_mem_mb(wildcards), largest)
+
+
+def get_convergence_runtime(wildcards, attempt):
+    """Wall time [min] of the mesh-convergence report: it reads the stored
+    matrices and solves its surfaces on each preset and on the half-space
+    (measured about 10 s per preset for 3 surfaces on 60 x 60)."""
+    settings = config.get("reports", {}).get("influence_convergence", {})
+    params = study.geometry_params(config["body"], config["surfaces"])
+    solves = (len(study.convergence_presets(config)) + 1) * settings.get("surfaces", 3)
+    return _runtime_minutes(30 + solves * 4 * _dense_scale(params["grid"]), attempt)
+
+
+def get_convergence_mem_mb(wildcards):
+    """Peak memory [MB] of the mesh-convergence report: every preset's matrix
+    and the half-space's at once, plus 1 GB."""
+    params = study.geometry_params(config["body"], config["surfaces"])
+    n = params["grid"][0] * params["grid"][1]
+    matrices = len(study.convergence_presets(config)) + 1
+    return max(2000, int(1000 + matrices * 8 * n**2 / 1e6))
+
+
+def _speed_settings():
+    return config.get("reports", {}).get("speed_vs_error", {})
+
+
+def get_speed_vs_error_runtime(wildcards, attempt):
+    """Wall time [min] of the speed-against-error report: about 10 minutes
+    with its defaults (grid 60, grids up to 120, 4 surfaces, 120 for the
+    surface-count study), scaled by the grids and the surface counts."""
+    settings = _speed_settings()
+    grid = study.geometry_params(config["body"], config["surfaces"])["grid"]
+    finest = max(settings.get("grids", [30, 60, 120]))
+    grids = max(
+        _dense_scale(grid), _dense_scale([finest, finest]) / _dense_scale([120, 120])
+    )
+    counts = max(
+        1.0, settings.get("surfaces", 4) / 4, settings.get("count_surfaces", 120) / 120
+    )
+    return _runtime_minutes(600 * grids * counts, attempt)
+
+
+def get_speed_vs_error_mem_mb(wildcards):
+    """Peak memory [MB] of the speed-against-error report: three matrices of
+    the finest grid at once (1.7 GB each at 120 x 120), plus 1 GB."""
+    finest = max(_speed_settings().get("grids", [30, 60, 120]))
+    return max(4000, int(1000 + 3 * 8 * finest**4 / 1e6))

@@ -14,7 +14,8 @@ rule contact:
         "results/benchmarks/rules/contact/{job}.tsv"
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=get_contact_mem_mb,
+        runtime=get_contact_runtime,
     params:
         job=get_contact_params,
         solver=canonical(study.contact_settings(config)),
@@ -31,9 +32,12 @@ rule aggregate:
         meta="results/aggregates/{study}.json",
     log:
         "results/logs/aggregates/{study}.log",
+    group:
+        "summaries"
     threads: 1
     resources:
         mem_mb=1000,
+        runtime=get_summary_runtime,
     params:
         cells=get_aggregate_cells,
         levels=config.get("contact", {}).get("pressure_levels", 30),

@@ -18,9 +18,12 @@ rule figure:
         "results/logs/figures/{fig}.log",
     benchmark:
         "results/benchmarks/rules/figures/{fig}.tsv"
+    group:
+        "summaries"
     threads: 1
     resources:
         mem_mb=1000,
+        runtime=get_summary_runtime,
     params:
         parameters=get_figure_parameters,
     script:
@@ -32,6 +35,11 @@ rule config_snapshot:
         report("results/config.yaml", category="Configuration"),
     log:
         "results/logs/config_snapshot.log",
+    group:
+        "summaries"
+    resources:
+        mem_mb=500,
+        runtime=get_summary_runtime,
     params:
         config_hash=config_hash(config),
     script:

@@ -13,6 +13,7 @@ rule influence:
     threads: 2
     resources:
         mem_mb=get_influence_mem_mb,
+        runtime=get_influence_runtime,
     params:
         geometry=get_geometry_params,
         solver=config.get("body", {}).get("solver", "auto"),

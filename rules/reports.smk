@@ -17,7 +17,8 @@ rule influence_convergence:
         "results/benchmarks/rules/reports/influence_convergence.tsv"
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=get_convergence_mem_mb,
+        runtime=get_convergence_runtime,
     params:
         geometry=get_body_geometry,
         stored=get_convergence_stored,
@@ -45,7 +46,8 @@ rule speed_vs_error:
         "results/benchmarks/rules/reports/speed_vs_error.tsv"
     threads: 1
     resources:
-        mem_mb=4000,
+        mem_mb=get_speed_vs_error_mem_mb,
+        runtime=get_speed_vs_error_runtime,
     params:
         geometry=get_body_geometry,
         settings=canonical(config.get("reports", {}).get("speed_vs_error", {})),

@@ -8,9 +8,12 @@ rule surfaces:
         "results/logs/surfaces/{cell}.log",
     benchmark:
         "results/benchmarks/rules/surfaces/{cell}.tsv"
+    group:
+        "surfaces"
     threads: 1
     resources:
-        mem_mb=1000,
+        mem_mb=get_surfaces_mem_mb,
+        runtime=get_surfaces_runtime,
     params:
         cell=get_surface_params,
         study_seed=config["study_seed"],
