@@ -9,3 +9,18 @@ class InfeasibleMoments(ValueError):
     kurtosis of the linear filter for the given grid and autocorrelation
     (Eq 15 with Eq 12-13). The message states the limit and what to change.
     """
+
+
+class MeasurementError(ValueError):
+    """A measured height map cannot be imported as it stands.
+
+    The message names the file and, where it applies, the line (ragged rows,
+    non-numeric values, repeated points), the count and fraction of missing
+    points, or the axis and spacings of a non-uniform grid. ``path`` and
+    ``line`` (1-based, or None) are kept as attributes.
+    """
+
+    def __init__(self, message: str, path=None, line: int | None = None):
+        super().__init__(message)
+        self.path = None if path is None else str(path)
+        self.line = line

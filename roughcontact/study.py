@@ -11,12 +11,17 @@ at use (Eq 28-32 of Kumar et al. 2006).
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import logging
+import math
+import re
 import time
+from pathlib import Path
 
 import numpy as np
 
-from . import johnson
+from . import johnson, measured
+from .errors import MeasurementError
 from .provenance import canonical_json, provenance
 from .storage import array_sha256, write_h5
 from .surface import (
@@ -71,8 +76,10 @@ def statistics_key(params: dict) -> str:
     """Key of a cell's statistics and sampling, without the surface count.
 
     Seeds derive from this key, so the first k surfaces of a cell are the same
-    whatever the count.
+    whatever the count. A measured cell's key is :func:`measured_key`.
     """
+    if params["method"] == "measured":
+        return measured_key(params)
     bx, by = params["b_mm"]
     lx, ly = params["size_mm"]
     nx, ny = params["grid"]
@@ -113,6 +120,9 @@ def figure_cells(config: dict, figure: str) -> list[dict]:
         ]
     if figure == "fig10":  # the cumulative height distributions of the Fig 9 surfaces
         return [c["surface"] for c in contact_cells(config, "fig10")]
+    if figure == "measured":  # the measured surface and its twin, once each
+        unique = {c["surface_key"]: c["surface"] for c in contact_cells(config, figure)}
+        return list(unique.values())
     if figure in ("fig04", "fig05"):
         src = config["figures"]["fig04"]
         return [
@@ -152,7 +162,11 @@ def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict
     surface); realised moments (Eq 2-5) and 10 % ACF lags [m] per surface;
     the filter's transfer factors and the fitted Johnson curve of the white
     noise as attributes, with provenance. Returns the root attributes.
+    A measured cell (``method: measured``) is imported by
+    :func:`build_measured_cell` instead.
     """
+    if params["method"] == "measured":
+        return build_measured_cell(params, study_seed, path, config)
     start = time.perf_counter()
     spec = spec_from_params(params)
     seeds = derive_seeds(study_seed, statistics_key(params), params["count"])
@@ -212,6 +226,219 @@ def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict
     }
     write_h5(path, datasets, attrs)
     return attrs
+
+
+# ---------------------------------------------------------------------------
+# Measured surfaces: a study's ``surface: {file: ...}`` in place of moments
+
+
+def _round12(value: float) -> float:
+    """``value`` to 12 significant digits (keys and labels free of rounding noise)."""
+    return float(f"{value:.12g}")
+
+
+def measured_options(entry: dict) -> dict:
+    """Canonical import options of a study's ``surface:`` entry (lengths in mm).
+
+    Keys: ``file``, ``format`` (npy, text, xyz), ``height_unit`` (nm, um, mm,
+    m), ``lateral_unit`` (um, mm, m; the x, y columns of xyz files),
+    ``spacing_mm`` ([dx, dy] of npy and text grids, else None) and
+    ``fill_holes`` (largest fraction of missing points filled).
+    """
+    spacing = entry.get("spacing_mm")
+    return {
+        "file": str(entry["file"]),
+        "format": str(entry["format"]),
+        "height_unit": str(entry["height_unit"]),
+        "lateral_unit": str(entry.get("lateral_unit", "mm")),
+        "spacing_mm": None if spacing is None else [float(v) for v in _pair(spacing)],
+        "fill_holes": float(entry.get("fill_holes", 0.0)),
+    }
+
+
+def load_measured(options: dict) -> measured.Measurement:
+    """Import the measurement that :func:`measured_options` describe (mm to m)."""
+    spacing = options["spacing_mm"]
+    return measured.load_measurement(
+        options["file"], options["format"], height_unit=options["height_unit"],
+        lateral_unit=options["lateral_unit"],
+        spacing=None if spacing is None else tuple(v * MM for v in spacing),
+        fill_holes=options["fill_holes"],
+    )
+
+
+def measured_cell_params(entry: dict) -> dict:
+    """Surface-cell parameters of a measured surface, read from its file.
+
+    The file is imported here (milliseconds for the grids a dense influence
+    matrix allows), so the cell knows its content hash (for its key), its
+    grid and plan size (for its geometry) and its statistics: ``skew``,
+    ``kurt`` and ``b_mm`` are the measured values (the labels of its results
+    and the targets of a synthetic twin), ``count`` is 1 and ``method`` is
+    ``"measured"``. ``measured`` holds the import options, the file's SHA-256
+    and the measured sigma [um]. Relative paths are relative to the working
+    directory (Snakemake's ``--directory``).
+    """
+    options = measured_options(entry)
+    measurement = load_measured(options)
+    stats = measured.statistics(measurement)
+    return {
+        "skew": _round12(stats["skew"]),
+        "kurt": _round12(stats["kurt"]),
+        "b_mm": [_round12(stats["corr_length_x"] / MM), _round12(stats["corr_length_y"] / MM)],
+        "grid": [int(v) for v in stats["grid"]],
+        "size_mm": [_round12(v / MM) for v in stats["size"]],
+        "acf": "measured",
+        "periodic": False,
+        "method": "measured",
+        "count": 1,
+        "measured": {**options, "file_sha256": measurement.sha256,
+                     "sigma_um": _round12(stats["sigma"] / UM)},
+    }
+
+
+def measured_key(params: dict) -> str:
+    """Key of a measured cell: the file's name, a short hash of its content and of
+    the import options (``measured-<stem>_<sha256[:12]>_<options[:8]>``).
+
+    A changed file or option is a new key, so everything that depends on the
+    surface is recomputed; the same content under another name or folder keeps
+    the hashes.
+    """
+    info = params["measured"]
+    stem = re.sub(r"[^A-Za-z0-9-]+", "-", Path(info["file"]).stem).strip("-")[:40]
+    options = {k: v for k, v in info.items() if k not in ("file", "file_sha256", "sigma_um")}
+    digest = hashlib.sha256(canonical_json(options).encode()).hexdigest()[:8]
+    return f"measured-{stem or 'surface'}_{info['file_sha256'][:12]}_{digest}"
+
+
+def synthetic_twin(defaults: dict, measured_cell: dict, count: int) -> dict:
+    """A generated cell with a measurement's Sk, Ku and correlation lengths.
+
+    Same grid and plan size as the measurement; ACF shape, periodicity and
+    generator are the config's ``surfaces`` defaults. Sigma is not part of a
+    cell: both are scaled by the same sigma in the study.
+    """
+    return cell_params(defaults, skew=measured_cell["skew"], kurt=measured_cell["kurt"],
+                       b_mm=measured_cell["b_mm"], grid=measured_cell["grid"],
+                       size_mm=measured_cell["size_mm"], count=count)
+
+
+def study_surfaces(config: dict, entry: dict) -> list[dict]:
+    """Surface cells of a study that names a measured surface.
+
+    The measurement, then, with ``compare_synthetic: true``, its
+    :func:`synthetic_twin` with the study's (or the config's) surface count.
+    """
+    measured_cell = measured_cell_params(entry["surface"])
+    cells = [measured_cell]
+    if entry.get("compare_synthetic", False):
+        count = entry.get("count", config["surfaces"]["count"])
+        cells.append(synthetic_twin(config["surfaces"], measured_cell, count))
+    return cells
+
+
+def build_measured_cell(params: dict, study_seed: int, path, config=None) -> dict:
+    """Import a measured surface and write it as a surface cell of one surface.
+
+    The layout is that of generated cells (heights in units of sigma with
+    zero mean, ``stats/*``, ``seeds``; seed -1: none), so contact jobs read
+    it unchanged. Attributes: the source file and its SHA-256 (which must be
+    the one the workflow was planned with), the import options, the measured
+    statistics in SI (``measured_*``), the filled points, the removed plane,
+    the Johnson law of the measured moments (for heights / sigma), provenance.
+    Returns the root attributes.
+    """
+    start = time.perf_counter()
+    info = params["measured"]
+    measurement = load_measured(info)
+    if measurement.sha256 != info["file_sha256"]:
+        raise MeasurementError(
+            f"{info['file']}: the file changed after the workflow was planned (sha256 "
+            f"{measurement.sha256[:12]}, planned {info['file_sha256'][:12]}); run again",
+            info["file"],
+        )
+    stats = measured.statistics(measurement)
+    sigma = stats["sigma"]
+    heights = (measurement.heights / sigma)[None]
+    realised = height_stats(heights)
+    unit = {"units": "1 (heights / sigma)"}
+    one = {"units": "1"}
+    datasets = {
+        "heights": (heights, unit | {"layout": "(surface, y, x), row-major over y then x",
+                                     "source": info["file"]}),
+        "seeds": (np.array([-1], dtype=np.int64), {"generator": "none: a measured surface"}),
+        "stats/mean": (realised["mean"], unit),
+        "stats/sigma": (realised["sigma"], unit),
+        "stats/skew": (realised["skew"], one),
+        "stats/kurt": (realised["kurt"], {"units": "1 (Pearson, normal = 3)"}),
+        "stats/corr_length_x": (np.array([stats["corr_length_x"]]), {"units": "m"}),
+        "stats/corr_length_y": (np.array([stats["corr_length_y"]]), {"units": "m"}),
+        "stats/filled_points": (np.array([stats["filled_points"]]),
+                                one | {"description": "missing points filled by Laplace "
+                                                      "interpolation"}),
+    }
+    spec = {"grid": stats["grid"], "size": stats["size"],
+            "corr_length": [stats["corr_length_x"], stats["corr_length_y"]],
+            "sigma": sigma, "skew": stats["skew"], "kurt": stats["kurt"],
+            "acf": "measured", "periodic": False}
+    options = {k: v for k, v in info.items() if k not in ("file_sha256", "sigma_um")}
+    attrs = {
+        "cell": cell_key(params), "study_seed": int(study_seed), "method": "measured",
+        "source_file": str(info["file"]),
+        "source_sha256": measurement.sha256,
+        "import_options": canonical_json(options),
+        **{f"import_{k}": v for k, v in options.items() if k != "file"},
+        "measured_sigma_m": sigma,
+        "measured_skew": stats["skew"],
+        "measured_kurt": stats["kurt"],
+        "measured_corr_length_x_m": stats["corr_length_x"],
+        "measured_corr_length_y_m": stats["corr_length_y"],
+        "measured_spacing_m": stats["spacing"],
+        "filled_points": stats["filled_points"],
+        "filled_fraction": stats["filled_fraction"],
+        "plane_offset_m": stats["plane_offset"],
+        "plane_slope_x": stats["plane_slope_x"],
+        "plane_slope_y": stats["plane_slope_y"],
+        "johnson_family": stats["johnson_family"],
+        "johnson_params": stats["johnson_params"],
+        "johnson_of": "measured heights / sigma: [gamma, delta, xi, lambda]",
+        "spec": canonical_json(spec),
+        "params": canonical_json(params),
+        **{f"spec_{k}": v for k, v in spec.items()},
+        **provenance(config),
+    }
+    log.info(
+        "measured cell %s from %s: %d x %d, sigma %.4g um, Sk %.4f, Ku %.4f, b %.4g x %.4g mm, "
+        "%d points filled (%.3g %%), Johnson %s; %.2f s",
+        attrs["cell"], info["file"], *stats["grid"], sigma / UM, stats["skew"], stats["kurt"],
+        stats["corr_length_x"] / MM, stats["corr_length_y"] / MM, stats["filled_points"],
+        100 * stats["filled_fraction"], stats["johnson_family"], time.perf_counter() - start,
+    )
+    write_h5(path, datasets, attrs)
+    return attrs
+
+
+def check_measured(config: dict, name: str, entry: dict) -> list[str]:
+    """Messages for a study whose measured surface cannot be used as configured."""
+    if "surface" not in entry:
+        if entry.get("compare_synthetic"):
+            return [f"{name}: compare_synthetic needs a measured surface ('surface:')"]
+        return []
+    clashing = [k for k in ("moments", "b_mm", "size_mm") if k in entry]
+    if clashing:
+        return [f"{name}: 'surface' (a measured surface) fixes the statistics, grid and "
+                f"size; remove {', '.join(clashing)}"]
+    try:
+        cells = study_surfaces(config, entry)
+    except (OSError, ValueError) as err:
+        return [f"{name}.surface: {err}"]
+    b_mm = cells[0]["b_mm"]
+    if len(cells) > 1 and not all(math.isfinite(b) for b in b_mm):
+        return [f"{name}: the measured autocorrelation does not decay to 10 % within half "
+                f"the measured length (b = {b_mm[0]:g} x {b_mm[1]:g} mm), so no synthetic "
+                "twin can be made; measure a larger area or drop compare_synthetic"]
+    return []
 
 
 # ---------------------------------------------------------------------------
@@ -358,8 +585,10 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
 # ---------------------------------------------------------------------------
 # Contact study cells: surfaces x geometry x (sigma, E) x pressure range
 
-#: Figures drawn from contact results, and the source of their cells.
-CONTACT_FIGURES = ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu")
+#: Figures drawn from contact results, and the source of their cells ("measured": a
+#: measured surface against its synthetic twin, usually ``from:`` a sweep).
+CONTACT_FIGURES = ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu",
+                   "measured")
 
 
 def _as_list(value) -> list:
@@ -423,7 +652,9 @@ def contact_cells(config: dict, name: str) -> list[dict]:
     ``size_mm`` (square nominal areas; the grid keeps the surfaces' spacing),
     ``nu``, ``meshes``, ``sigma_um``, ``E_MPa``; ``count`` and
     ``pressure_MPa`` ([P_min, P_max]) apply to every cell. Each cell carries
-    its surface cell, its geometry and the scaling parameters.
+    its surface cell, its geometry and the scaling parameters. A study that
+    names a measured surface (``surface:``) has the cells of
+    :func:`measured_study_cells` instead.
     """
     fig = resolve_source(config, name)
     surfaces, body = config["surfaces"], config["body"]
@@ -431,6 +662,8 @@ def contact_cells(config: dict, name: str) -> list[dict]:
     if preset is not None:  # the preset's mesh and count unless the figure names its own
         body = {**body, "mesh": preset["mesh"]}
         fig = {"count": preset["surfaces"], **fig}
+    if "surface" in fig:
+        return measured_study_cells(config, fig, body)
     spacing = [s / g for s, g in zip(_pair(surfaces["size_mm"]), _pair(surfaces["grid"]),
                                      strict=True)]
     cells = []
@@ -451,16 +684,43 @@ def contact_cells(config: dict, name: str) -> list[dict]:
                                 )
                                 geom = geometry_params(body, surfaces, nu=nu, mesh=mesh,
                                                        size_mm=size, grid=grid)
-                                cells.append({
-                                    "surface": surf,
-                                    "geometry": geom,
-                                    "sigma_um": float(sigma),
-                                    "E_MPa": float(E),
-                                    "pressure_MPa": [float(p) for p in fig["pressure_MPa"]],
-                                    "surface_key": cell_key(surf),
-                                    "geometry_key": geometry_key(geom),
-                                    **accuracy_attrs(config),
-                                })
+                                cells.append(_study_cell(config, fig, surf, geom, sigma, E))
+    return cells
+
+
+def _study_cell(config: dict, fig: dict, surf: dict, geom: dict, sigma, E) -> dict:
+    return {
+        "surface": surf,
+        "geometry": geom,
+        "sigma_um": float(sigma),
+        "E_MPa": float(E),
+        "pressure_MPa": [float(p) for p in fig["pressure_MPa"]],
+        "surface_key": cell_key(surf),
+        "geometry_key": geometry_key(geom),
+        **accuracy_attrs(config),
+    }
+
+
+def measured_study_cells(config: dict, fig: dict, body: dict) -> list[dict]:
+    """The cells of a study on a measured surface (and its synthetic twin).
+
+    Axes: ``meshes``, ``nu``, ``sigma_um`` (default: the measured sigma, so
+    the results are those of the measured heights; another value rescales
+    both surfaces) and ``E_MPa``. The geometry's grid and plan size are the
+    measurement's, as the surfaces' are for generated cells; the measured
+    cell comes first, its twin (``compare_synthetic``) second.
+    """
+    surface_cells_ = study_surfaces(config, fig)
+    first = surface_cells_[0]
+    cells = []
+    for mesh in _as_list(fig.get("meshes", body.get("mesh", "paper"))):
+        for nu in _as_list(fig.get("nu", body["nu"])):
+            geom = geometry_params(body, config["surfaces"], nu=nu, mesh=mesh,
+                                   size_mm=first["size_mm"], grid=first["grid"])
+            for surf in surface_cells_:
+                for sigma in _as_list(fig.get("sigma_um", first["measured"]["sigma_um"])):
+                    for E in _as_list(fig.get("E_MPa", body["E_MPa"])):
+                        cells.append(_study_cell(config, fig, surf, geom, sigma, E))
     return cells
 
 
@@ -477,6 +737,7 @@ def check_studies(config: dict, names) -> list[str]:
         if not low < high:
             problems.append(f"{name}.pressure_MPa = [{low}, {high}]: expected [P_min, P_max] "
                             f"with P_min < P_max (MPa)")
+        problems += check_measured(config, name, entry)
     return problems
 
 

@@ -151,6 +151,13 @@ def get_surface_params(wildcards):
     return SURFACE_CELLS[wildcards.cell]
 
 
+def get_surface_inputs(wildcards):
+    """The measured file of a measured surface cell (none for generated cells)."""
+    cell = SURFACE_CELLS[wildcards.cell]
+    return [cell["measured"]["file"]] if cell["method"] == "measured" else []
+
+
+
 def get_surface_path(params):
     return f"results/surfaces/{study.cell_key(params)}.h5"
 

@@ -1,7 +1,10 @@
-# Stage 1: seeded random rough surfaces, one HDF5 file per surface cell.
+# Stage 1: seeded random rough surfaces, one HDF5 file per surface cell; a
+# measured surface (input: its file) is imported into a cell of one surface.
 
 
 rule surfaces:
+    input:
+        get_surface_inputs,
     output:
         "results/surfaces/{cell}.h5",
     log:

@@ -1,4 +1,4 @@
-"""Snakemake entry point of rule `surfaces`: generate and store one surface cell."""
+"""Snakemake entry point of rule `surfaces`: generate (or import, if measured) one surface cell."""
 
 from roughcontact.logs import route_logging
 from roughcontact.study import build_surface_cell
