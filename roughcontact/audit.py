@@ -35,6 +35,9 @@ MESH_DIAGONAL_ERROR = {"paper": -0.82, "graded": -0.51, "refined": -0.024, "conv
 #: The same for the matrix-free operators (roughcontact.operators): the hybrid's
 #: interior diagonal with a "refined" coarse model (the outermost ring of
 #: elements: up to 18 %); the half-space has no finite body to compare with.
+#: Relative tolerance on the moments of the "exact" generator's cells (the
+#: finite-sample quantiles it maps to: Ku 7.699 for a target 7.764, 0.8 %).
+EXACT_MOMENT_TOL = 0.02
 OPERATOR_DIAGONAL_ERROR = {"hybrid": 0.009, "halfspace": float("nan")}
 
 #: Realised moments further than this many standard errors from the target are flagged.
@@ -52,7 +55,14 @@ def _moment_check(stats: dict, target: dict) -> dict:
         out[f"realised_{name}_mean"] = mean
         out[f"realised_{name}_se"] = se
         out[f"realised_{name}_z"] = (mean - goal) / se if se > 0 else float("nan")
-        if name != "sigma" and se > 0 and abs(mean - goal) > MOMENT_SIGMAS * se:
+        if name == "sigma":
+            continue
+        if target.get("method") == "exact":
+            # every realisation has the same heights (rearranged), so the spread
+            # is round-off; the fixed quantile bias is judged against a tolerance
+            if abs(mean - goal) > EXACT_MOMENT_TOL * max(1.0, abs(goal)):
+                flags.append(f"{name} off target")
+        elif se > 0 and abs(mean - goal) > MOMENT_SIGMAS * se:
             flags.append(f"{name} off target")
     return out, flags
 

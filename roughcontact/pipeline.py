@@ -194,7 +194,9 @@ def read_contact(path) -> tuple[nondim.NondimSweep, dict]:
 def cell_label(cell: dict) -> str:
     """Short legend text of a study cell."""
     s, g = cell["surface"], cell["geometry"]
-    return (f"Sk {s['skew']:g}, Ku {s['kurt']:g}, b {s['b_mm'][0]:g} mm, "
+    source = (f"measured {Path(s['measured']['file']).name}: " if s.get("method") == "measured"
+              else "")
+    return (f"{source}Sk {s['skew']:g}, Ku {s['kurt']:g}, b {s['b_mm'][0]:g} mm, "
             f"{g['size_mm'][0]:g} mm, nu {g['nu']:g}, {g['mesh']} mesh, "
             f"sigma {cell['sigma_um']:g} um")
 

@@ -23,7 +23,7 @@ import numpy as np
 from . import johnson, measured
 from .errors import MeasurementError
 from .provenance import canonical_json, provenance
-from .storage import array_sha256, write_h5
+from .storage import write_h5
 from .surface import (
     SurfaceSpec,
     correlation_length,
@@ -454,7 +454,7 @@ def geometry_params(body: dict, surfaces: dict, **overrides) -> dict:
     modulus is not part of a geometry: matrices are stored as E * C.
     """
     merged = {**body, "grid": surfaces["grid"], "size_mm": surfaces["size_mm"], **overrides}
-    return {
+    params = {
         "nu": float(merged["nu"]),
         "size_mm": [float(v) for v in _pair(merged["size_mm"])],
         "thickness_mm": float(merged["thickness_mm"]),
@@ -462,16 +462,37 @@ def geometry_params(body: dict, surfaces: dict, **overrides) -> dict:
         "base": str(merged.get("base", "clamped")),
         "mesh": str(merged.get("mesh", "paper")),
     }
+    # the influence model; the dense matrix (the paper's) adds no key, so its files keep
+    # their names
+    operator = str(merged.get("operator", "dense"))
+    if operator != "dense":
+        params["operator"] = operator
+    if operator == "auto":
+        tolerance = {**HALFSPACE_TOLERANCE, **(merged.get("halfspace_tolerance") or {})}
+        params["halfspace_tolerance"] = {k: (None if v is None else float(v))
+                                         for k, v in sorted(tolerance.items())}
+    return params
+
+
+#: Default tolerances of the half-space criterion (``operator: auto``): largest
+#: relative error of the half-space model in each quantity (None: not needed).
+HALFSPACE_TOLERANCE = {"k_P": 0.02, "real_area": 0.05, "max_pressure": 0.05}
 
 
 def geometry_key(params: dict) -> str:
     """File key of an influence geometry (every parameter that changes E * C)."""
     lx, ly = params["size_mm"]
     nx, ny = params["grid"]
-    return (
+    key = (
         f"nu{params['nu']:g}_L{lx:g}x{ly:g}mm_t{params['thickness_mm']:g}mm"
         f"_g{nx}x{ny}_{params['base']}_{params['mesh']}"
     )
+    operator = params.get("operator", "dense")
+    if operator == "auto":
+        tolerance = "-".join("x" if v is None else f"{v:g}"
+                             for _, v in sorted(params["halfspace_tolerance"].items()))
+        return f"{key}_auto{tolerance}"
+    return key if operator == "dense" else f"{key}_{operator}"
 
 
 def block_geometry(params: dict, E: float = 1.0):
@@ -513,31 +534,46 @@ def convergence_presets(config: dict) -> list[str]:
     return list(report.get("presets", ["paper", "graded", "refined", "converged"]))
 
 
-def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: float = 16.0,
-                    config=None) -> dict:
-    """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
+def _coarse_geometry(geom):
+    """The coarse finite-element model of a hybrid operator (``refined`` for inaccurate meshes)."""
+    from .operators import HYBRID_MESHES, default_coarse_grid
 
-    The peak memory is estimated first; a geometry that would not fit raises
-    :class:`~roughcontact.influence.ModelTooLarge` with the estimate and the
-    options before anything is built. Returns the root attributes.
+    mesh = geom.mesh if geom.mesh in HYBRID_MESHES else "refined"
+    return dataclasses.replace(geom, grid=default_coarse_grid(geom.grid), mesh=mesh)
+
+
+def planned_operator(params: dict, max_memory_gb: float = 16.0) -> str:
+    """The influence model a geometry's build starts with: "dense", "hybrid" or "halfspace".
+
+    ``operator: auto`` picks dense or hybrid here (by size and memory,
+    :func:`roughcontact.operators.choose_operator`); the build may then
+    replace either by the half-space when the measured criterion allows.
     """
-    from . import influence
+    from .operators import choose_operator
+
+    operator = params.get("operator", "dense")
+    if operator != "auto":
+        return operator
+    return choose_operator(block_geometry(params), max_dense_bytes=max_memory_gb * 1e9)
+
+
+def influence_cost(params: dict, solver: str = "auto", max_memory_gb: float = 16.0):
+    """:class:`~roughcontact.influence.CostEstimate` of the finite-element model a build solves."""
+    from .influence import estimate_cost
 
     geom = block_geometry(params)
-    cost = influence.check_memory(geom, max_memory_gb * 1e9, solver)
-    key = geometry_key(params)
-    log.info(
-        "geometry %s: %d dofs, estimated peak %.2f GB (limit %.1f GB)",
-        key, cost.dofs, cost.peak_bytes / 1e9, max_memory_gb,
-    )
-    start = time.perf_counter()
-    unit = influence.unit_modulus_influence(geom, solver=solver, max_bytes=max_memory_gb * 1e9)
-    seconds = time.perf_counter() - start
+    if planned_operator(params, max_memory_gb) in ("hybrid", "halfspace"):
+        geom = _coarse_geometry(geom)
+    return estimate_cost(geom, solver)
+
+
+def _peak_rss_gb() -> float:
     import resource
 
-    peak_rss_gb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9  # Linux: KiB
-    if not np.isfinite(unit).all():
-        raise FloatingPointError(f"geometry {key}: the influence matrix has non-finite entries")
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9  # Linux: KiB
+
+
+def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
     n = unit.shape[0]
     nx, ny = geom.grid
     diag = np.diag(unit)
@@ -553,30 +589,113 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
     if not eigmin > 0 and np.isfinite(eigmin):
         raise FloatingPointError(f"geometry {key}: E * C is not positive definite "
                                  f"(smallest eigenvalue {eigmin:.3g} m)")
-    log.info("geometry %s: built in %.1f s; checks %s", key, seconds, checks)
+    return checks
+
+
+def _operator_checks(op, geom) -> dict:
+    nx, ny = geom.grid
+    rows = op.matvec(np.ones(nx * ny))
+    diag = op.diagonal()
+    return {
+        "row_sum_min_m": float(rows.min()),
+        "row_sum_max_m": float(rows.max()),
+        "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
+        "min_diagonal_m": float(diag.min()),
+    }
+
+
+def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: float = 16.0,
+                    config=None) -> dict:
+    """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
+
+    The influence model is the geometry's ``operator``: "dense" (the
+    finite-element matrix, the paper's), "hybrid" (matrix-free: Love's
+    half-space plus a coarse finite-element correction,
+    :mod:`roughcontact.operators`), "halfspace" (Love only) or "auto" (dense
+    up to 64 x 64 elements, hybrid above; then the half-space instead when
+    :func:`roughcontact.operators.halfspace_errors`, measured on the coarse
+    model, is within the geometry's ``halfspace_tolerance`` for every
+    quantity it names).
+
+    The peak memory is estimated first; a geometry that would not fit raises
+    :class:`~roughcontact.influence.ModelTooLarge` with the estimate and the
+    options before anything is built. Returns the root attributes.
+    """
+    from . import influence, operators
+
+    geom = block_geometry(params)
+    key = geometry_key(params)
+    requested = params.get("operator", "dense")
+    operator = planned_operator(params, max_memory_gb)
+    model = geom if operator == "dense" else _coarse_geometry(geom)
+    cost = influence.check_memory(model, max_memory_gb * 1e9, solver)
+    log.info(
+        "geometry %s: operator %s (requested %s); finite-element model %s grid %s, %d dofs, "
+        "estimated peak %.2f GB (limit %.1f GB)", key, operator, requested, model.mesh,
+        model.grid, cost.dofs, cost.peak_bytes / 1e9, max_memory_gb,
+    )
+    start = time.perf_counter()
+    fe = influence.unit_modulus_influence(model, solver=solver, max_bytes=max_memory_gb * 1e9)
+    if not np.isfinite(fe).all():
+        raise FloatingPointError(f"geometry {key}: the influence matrix has non-finite entries")
+    extra = {}
+    if requested == "auto":
+        tolerance = params["halfspace_tolerance"]
+        errors = operators.halfspace_errors(fe, model.grid, model.size, geom.nu, geom.thickness)
+        meets = operators.halfspace_meets(errors, tolerance)
+        log.info("geometry %s: half-space errors measured on the %s grid %s: %s; tolerance %s: "
+                 "%s", key, model.mesh, model.grid, errors, tolerance,
+                 "use the half-space" if meets else "keep the finite body")
+        extra = {"halfspace_errors": errors, "halfspace_tolerance": tolerance}
+        if meets:
+            operator = "halfspace"
+    if operator == "dense":
+        unit = fe
+        checks = _dense_checks(unit, geom, key)
+        datasets = {
+            "unit_influence": (
+                unit,
+                {
+                    "units": "m (E * C: displacement per unit pressure times Young's modulus)",
+                    "layout": "C[i, j]: displacement at the centre of element i per unit "
+                              "pressure on element j; elements row-major over y then x",
+                },
+            ),
+        }
+        op_attrs = {}
+    else:
+        if operator == "hybrid":
+            from .halfspace import halfspace_influence
+
+            fe -= halfspace_influence(model.grid, model.size, 1.0, geom.nu)
+            fe /= model.spacing[0] * model.spacing[1]
+            unit = operators.BlockOperator(grid=geom.grid, size=geom.size, nu=geom.nu,
+                                           correction=fe, coarse_grid=model.grid)
+        else:
+            unit = operators.halfspace_operator(geom.grid, geom.size, geom.nu)
+        del fe
+        checks = _operator_checks(unit, geom)
+        datasets, op_attrs = operators.operator_datasets(unit)
+        op_attrs["coarse_mesh"] = model.mesh
+    seconds = time.perf_counter() - start
+    log.info("geometry %s: %s built in %.1f s; checks %s", key, operator, seconds, checks)
     attrs = {
         "geometry": key,
         "params": canonical_json(params),
         **{f"geometry_{k}": v for k, v in params.items()},
-        "mesh_spec": canonical_json(dataclasses.asdict(geom.mesh_spec)),
+        "operator": operator,
+        "operator_requested": requested,
+        **op_attrs,
+        **extra,
+        "mesh_spec": canonical_json(dataclasses.asdict(model.mesh_spec)),
         "dofs": int(cost.dofs),
         "estimated_peak_gb": cost.peak_bytes / 1e9,
         "build_seconds": seconds,
-        "peak_rss_gb": peak_rss_gb,
+        "peak_rss_gb": _peak_rss_gb(),
         "solver": solver,
-        "content_sha256": array_sha256(unit),
+        "content_sha256": operators.content_sha256(unit),
         **{f"check_{k}": v for k, v in checks.items()},
         **provenance(config),
-    }
-    datasets = {
-        "unit_influence": (
-            unit,
-            {
-                "units": "m (E * C: displacement per unit pressure times Young's modulus)",
-                "layout": "C[i, j]: displacement at the centre of element i per unit pressure "
-                          "on element j; elements row-major over y then x",
-            },
-        ),
     }
     write_h5(path, datasets, attrs)
     return attrs
@@ -738,7 +857,26 @@ def check_studies(config: dict, names) -> list[str]:
             problems.append(f"{name}.pressure_MPa = [{low}, {high}]: expected [P_min, P_max] "
                             f"with P_min < P_max (MPa)")
         problems += check_measured(config, name, entry)
+        problems += _check_operator(config, name, entry)
     return problems
+
+
+def _check_operator(config: dict, name: str, entry: dict) -> list[str]:
+    """The hybrid operator needs a coarse model with an accurate near field."""
+    from .operators import HYBRID_MESHES
+
+    if config.get("body", {}).get("operator", "dense") != "hybrid":
+        return []
+    preset = accuracy_preset(config)
+    default = preset["mesh"] if preset else config["body"].get("mesh", "paper")
+    bad = [m for m in _as_list(entry.get("meshes", default)) if m not in HYBRID_MESHES]
+    if not bad:
+        return []
+    return [f"{name}: body.operator = hybrid with mesh {bad[0]!r}: the hybrid operator takes "
+            f"its finite-body correction from a coarse model whose near field must be "
+            f"accurate, so the mesh must be one of {list(HYBRID_MESHES)}; use operator: "
+            f"dense (the paper's model) or auto (dense up to 64 x 64, hybrid with a "
+            f"'refined' coarse model above)"]
 
 
 def contact_key(cell: dict) -> str:

@@ -1,6 +1,7 @@
 # Shared workflow logic: environment, the study grid from the config, input
 # functions (get_*) and wildcard constraints.
 import json
+import math
 import os
 import re
 
@@ -140,11 +141,18 @@ def get_geometry_params(wildcards):
 
 def get_influence_mem_mb(wildcards):
     """Estimated peak memory of an influence build [MB], for the scheduler."""
-    from roughcontact.influence import estimate_cost
+    cost = study.influence_cost(
+        GEOMETRIES[wildcards.geometry], **_influence_build_settings()
+    )
+    return int(cost.peak_bytes / 1e6) + 200
 
-    geom = study.block_geometry(GEOMETRIES[wildcards.geometry])
-    solver = config.get("body", {}).get("solver", "auto")
-    return int(estimate_cost(geom, solver).peak_bytes / 1e6) + 200
+
+def _influence_build_settings():
+    body = config.get("body", {})
+    return {
+        "solver": body.get("solver", "auto"),
+        "max_memory_gb": body.get("max_memory_gb", 16),
+    }
 
 
 def get_surface_params(wildcards):
@@ -155,7 +163,6 @@ def get_surface_inputs(wildcards):
     """The measured file of a measured surface cell (none for generated cells)."""
     cell = SURFACE_CELLS[wildcards.cell]
     return [cell["measured"]["file"]] if cell["method"] == "measured" else []
-
 
 
 def get_surface_path(params):
@@ -248,6 +255,14 @@ def _contact_seconds(job):
     settings = study.contact_settings(config)
     solves = job["surface"]["count"] * int(settings.get("steps", 30))
     reach = max(1.0, job["pressure_end"] / 4)
+    if study.planned_operator(job["geometry"]) != "dense":
+        # matrix-free operator: 0.62 s per solve at 256 x 256 (0.64 s at 240,
+        # 0.19 s at 120; 2 loaded cores), about in proportion to n
+        nx, ny = job["geometry"]["grid"]
+        per_solve = max(0.05, 0.62 * nx * ny / 65536)
+        digits = max(1.0, math.log10(1.0 / float(settings.get("tol", 1e-8))) / 8)
+        method = CONTACT_METHOD_COST[settings.get("method", "cg")]
+        return solves * per_solve * digits * method * reach
     return solves * _contact_solve_seconds(job["geometry"]["grid"], settings) * reach
 
 
@@ -262,6 +277,10 @@ def _contact_mem_mb(job):
     libraries (measured: 415 MB on 60 x 60, 167 MB on 30 x 30)."""
     nx, ny = job["geometry"]["grid"]
     n = nx * ny
+    if study.planned_operator(job["geometry"]) != "dense":
+        # matrix-free: the coarse correction (64^2 x 64^2 doubles at most) and
+        # FFT work arrays of the batch (4 padded copies per surface)
+        return int(400 + (8 * 4096**2 + 30 * 8 * job["surface"]["count"] * n) / 1e6)
     return int(400 + (3 * 8 * n**2 + 10 * 8 * job["surface"]["count"] * n) / 1e6)
 
 
@@ -281,11 +300,10 @@ def get_influence_runtime(wildcards, attempt):
     the last and lies above the others (SuperLU: 36 s at 60 x 60 paper,
     45 s predicted).
     """
-    from roughcontact.influence import estimate_cost
-
-    geom = study.block_geometry(GEOMETRIES[wildcards.geometry])
-    solver = config.get("body", {}).get("solver", "auto")
-    peak_gb = estimate_cost(geom, solver).peak_bytes / 1e9
+    cost = study.influence_cost(
+        GEOMETRIES[wildcards.geometry], **_influence_build_settings()
+    )
+    peak_gb = cost.peak_bytes / 1e9
     return _runtime_minutes(4.2 * (peak_gb / 0.92) ** 1.56, attempt)
 
 
@@ -305,15 +323,6 @@ def get_surfaces_mem_mb(wildcards):
     return int(300 + 20 * 8 * cell["count"] * cell["grid"][0] * cell["grid"][1] / 1e6)
 
 
-def _largest_grid():
-    """[nx, ny] of the largest influence geometry of the study."""
-    return max(
-        (g["grid"] for g in GEOMETRIES.values()),
-        key=lambda grid: grid[0] * grid[1],
-        default=config["surfaces"]["grid"],
-    )
-
-
 def get_summary_runtime(wildcards, attempt):
     """Wall time [min] of an aggregate, a figure or the config snapshot:
     3-6 s measured (a figure starts a notebook kernel)."""
@@ -328,8 +337,18 @@ def get_audit_runtime(wildcards, attempt):
 def get_audit_mem_mb(wildcards):
     """Peak memory [MB] of the audit: one influence matrix (held twice while
     hashed) at a time, plus 1 GB."""
-    nx, ny = _largest_grid()
-    return int(1000 + 2 * 8 * (nx * ny) ** 2 / 1e6)
+    return int(
+        1000 + 2 * max((_stored_bytes(g) for g in GEOMETRIES.values()), default=0) / 1e6
+    )
+
+
+def _stored_bytes(geometry):
+    """Bytes of a stored influence model: the dense matrix, or a matrix-free
+    operator's coarse correction (at most 64^2 x 64^2 doubles)."""
+    nx, ny = geometry["grid"]
+    if study.planned_operator(geometry) != "dense":
+        return 8 * 4096**2
+    return 8 * (nx * ny) ** 2
 
 
 def _verify_sample():
