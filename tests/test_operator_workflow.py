@@ -40,7 +40,7 @@ def _run(tmp_path, name, **body):
     influence = list((workdir / "results" / "influence").glob("*.h5"))
     assert len(influence) == 1
     table = pd.read_csv(workdir / "results" / "aggregates" / "models.csv")
-    audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv")
+    audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv", dtype={"flags": str})
     return influence[0], table, audit
 
 

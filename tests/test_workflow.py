@@ -330,7 +330,7 @@ def test_editing_one_cell_reruns_exactly_its_jobs(quick_run, tmp_path):
 
 def test_audit_lists_every_cell_and_flags_a_corrupted_result(quick_run, tmp_path):
     workdir, _ = quick_run
-    audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv")
+    audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv", dtype={"flags": str})
     config = quick_config()
     studies = [n for n in config["figures"] if n in ("fig07", "fig09", "fig10", "fig11",
                                                        "fig12", "fig13", "fig14", "table_Eu")]
@@ -345,7 +345,7 @@ def test_audit_lists_every_cell_and_flags_a_corrupted_result(quick_run, tmp_path
         f["nominal_pressure"][0, 5] *= 1.0 + 1e-9
     proc = run_snakemake(copy, "audit")
     assert proc.returncode == 0, proc.stderr[-3000:]
-    audit = pd.read_csv(copy / "results" / "audit" / "audit.csv")
+    audit = pd.read_csv(copy / "results" / "audit" / "audit.csv", dtype={"flags": str})
     hit = audit["contact_job"] == victim.stem
     assert audit.loc[hit, "flags"].str.contains("contact result changed").all()
     assert not audit.loc[~hit, "flags"].fillna("").str.contains("changed").any()
