@@ -20,9 +20,9 @@ import pandas as pd
 
 from . import nondim
 from .operators import content_sha256, read_operator
-from .pipeline import _ARRAYS, _file_sha256, arrays_sha256, read_contact, sweep_approaches
+from .pipeline import CONTACT_ARRAYS, arrays_sha256, read_contact, sweep_approaches
 from .provenance import atomic_path, git_commit
-from .storage import read_surfaces
+from .storage import file_sha256, read_surfaces
 from .study import contact_key
 
 log = logging.getLogger(__name__)
@@ -111,7 +111,7 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
         else OPERATOR_DIAGONAL_ERROR.get(row["operator"], float("nan")))
 
     stored, attrs = read_contact(cont_path)
-    arrays = {name: getattr(stored, name) for name in _ARRAYS}
+    arrays = {name: getattr(stored, name) for name in CONTACT_ARRAYS}
     row.update({
         "method": attrs["sweep_method"], "tol": float(attrs["sweep_tol"]),
         "precision": attrs["sweep_precision"],
@@ -133,7 +133,7 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
         flags.append("contact result changed since it was solved")
     if attrs.get("influence_content_sha256") != influence_hash:
         flags.append("solved on another influence matrix")
-    if attrs.get("surfaces_sha256") != _file_sha256(surf_path):
+    if attrs.get("surfaces_sha256") != file_sha256(surf_path):
         flags.append("solved on other surfaces")
     row["flags"] = "; ".join(flags)
     return row

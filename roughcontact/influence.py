@@ -83,6 +83,7 @@ __all__ = [
     "MeshSpec",
     "ModelTooLarge",
     "build_mesh",
+    "centre_interpolation",
     "check_memory",
     "estimate_cost",
     "halfspace_influence",
@@ -565,7 +566,7 @@ def influence_matrix(
                                   max_bytes=max_bytes) / geom.E
 
 
-def _centre_interpolation(fine: int, coarse: int) -> np.ndarray:
+def centre_interpolation(fine: int, coarse: int) -> np.ndarray:
     """Linear interpolation (extrapolation at the ends) from coarse to fine element centres.
 
     Both grids cover the same length with ``coarse`` and ``fine`` equal
@@ -648,8 +649,8 @@ def hybrid_unit_modulus_influence(
     fe = unit_modulus_influence(coarse, solver=solver, max_bytes=max_bytes)
     fe -= halfspace_influence(coarse.grid, coarse.size, 1.0, geom.nu)
     fe /= coarse.spacing[0] * coarse.spacing[1]
-    interp = sp.csr_array(sp.kron(sp.csr_array(_centre_interpolation(ny, ny // k)),
-                                  sp.csr_array(_centre_interpolation(nx, nx // k))))
+    interp = sp.csr_array(sp.kron(sp.csr_array(centre_interpolation(ny, ny // k)),
+                                  sp.csr_array(centre_interpolation(nx, nx // k))))
     correction = interp @ np.ascontiguousarray((interp @ fe).T)  # fe is symmetric
     del fe
     correction *= geom.spacing[0] * geom.spacing[1]

@@ -42,7 +42,6 @@ Arrays are ``(ny, nx)``, row-major over y then x, as everywhere in the package.
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import math
 import os
@@ -56,6 +55,7 @@ from scipy.sparse import linalg as sparse_linalg
 
 from . import johnson
 from .errors import MeasurementError
+from .storage import file_sha256
 from .surface import correlation_length, height_stats
 
 log = logging.getLogger(__name__)
@@ -76,15 +76,6 @@ _SEPARATORS = re.compile(r"[,;]")
 
 
 # --------------------------------------------------------------------------- reading
-
-
-def file_sha256(path: str | os.PathLike) -> str:
-    """SHA-256 (hex) of a file's bytes: the identity of a measurement."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def _data_lines(path):

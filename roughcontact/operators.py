@@ -52,7 +52,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
-from .halfspace import _check_grid, _element_kernel
+from .halfspace import _check_grid, _element_kernel, halfspace_influence
+from .influence import centre_interpolation, estimate_cost, unit_modulus_influence
 
 __all__ = [
     "COARSE_MAX",
@@ -100,20 +101,6 @@ def default_coarse_grid(grid, coarse_max: int | None = None) -> tuple[int, int]:
         k = next((k for k in range(k0, 2 * k0 + 1) if g % k == 0), None)
         out.append(g // k if k is not None else math.ceil(g / k0))
     return (out[0], out[1])
-
-
-def _interpolation(fine: int, coarse: int) -> np.ndarray:
-    """(fine, coarse) linear interpolation of centre values, linear extrapolation at the ends."""
-    if coarse == 1:
-        return np.ones((fine, 1))
-    x = (np.arange(fine) + 0.5) / fine * coarse - 0.5  # fine centres in coarse index units
-    left = np.clip(np.floor(x).astype(int), 0, coarse - 2)
-    weight = x - left
-    matrix = np.zeros((fine, coarse))
-    rows = np.arange(fine)
-    matrix[rows, left] = 1.0 - weight
-    matrix[rows, left + 1] = weight
-    return matrix
 
 
 def _padded_love_spectrum(nx: int, ny: int, dx: float, dy: float, nu: float) -> np.ndarray:
@@ -192,8 +179,8 @@ class BlockOperator:
             correction = 0.5 * (correction + correction.T)
             correction.setflags(write=False)
             set_(self, "correction", correction)
-            px = _interpolation(nx, ncx)
-            py = _interpolation(ny, ncy)
+            px = centre_interpolation(nx, ncx)
+            py = centre_interpolation(ny, ncy)
             set_(self, "_px", px)
             set_(self, "_py", py)
             diagonal = diagonal + dx * dy * _interpolated_diagonal(correction, px, py)
@@ -298,8 +285,6 @@ def block_operator(geom, *, coarse_grid=None, solver: str = "auto",
     solver, max_bytes
         As in :func:`roughcontact.influence.unit_modulus_influence`.
     """
-    from .halfspace import halfspace_influence
-    from .influence import unit_modulus_influence
 
     if geom.mesh not in HYBRID_MESHES:
         raise ValueError(
@@ -327,7 +312,6 @@ def choose_operator(geom, *, max_dense_bytes: float, halfspace_ok: bool = False)
     3. ``"hybrid"`` otherwise; the coarse model uses the geometry's mesh, or
        "refined" when that mesh cannot serve (paper, graded).
     """
-    from .influence import estimate_cost
 
     if halfspace_ok:
         return "halfspace"

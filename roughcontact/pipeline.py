@@ -1,8 +1,12 @@
-"""Bodies of the workflow's contact and aggregation jobs.
+"""Bodies of the workflow's jobs: surfaces, influence, contact, aggregation.
 
-A *contact job* solves every surface of one surface cell on one influence
-geometry through an approach sweep, in the non-dimensional form of
-:mod:`roughcontact.nondim`, and stores the result; sigma and E never enter.
+A *surface job* generates the seeded realisations of one surface cell (or
+imports a measured height map) and stores them in units of sigma. An
+*influence job* builds E * C of one block geometry (a dense finite-element
+matrix or a matrix-free operator). A *contact job* solves every surface of
+one surface cell on one influence geometry through an approach sweep, in the
+non-dimensional form of :mod:`roughcontact.nondim`, and stores the result;
+sigma and E never enter.
 An *aggregation* turns the contact results of a figure's (or sweep's) cells
 into SI curves for each cell's sigma and E (Eq 28-32) and averages them on a
 common nominal-pressure axis (:mod:`roughcontact.aggregate`).
@@ -17,9 +21,11 @@ Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import logging
+import resource
 import time
 from pathlib import Path
 
@@ -27,10 +33,32 @@ import h5py
 import numpy as np
 import pandas as pd
 
-from . import aggregate, nondim
-from .operators import read_operator
+from . import aggregate, influence, johnson, measured, nondim, operators
+from .errors import MeasurementError
+from .halfspace import halfspace_influence
 from .provenance import atomic_path, canonical_json, config_hash, provenance
-from .storage import read_surfaces, write_h5
+from .storage import file_sha256, read_surfaces, write_h5
+from .study import (
+    block_geometry,
+    cell_key,
+    coarse_geometry,
+    contact_key,
+    geometry_key,
+    load_measured,
+    planned_operator,
+    spec_from_params,
+    statistics_key,
+)
+from .surface import (
+    correlation_length,
+    derive_seeds,
+    filter_kernel,
+    generate_exact,
+    generate_many,
+    height_stats,
+    input_moments,
+    moment_transfer,
+)
 
 log = logging.getLogger(__name__)
 
@@ -38,9 +66,11 @@ log = logging.getLogger(__name__)
 PROGRESS_SECONDS = 30.0
 
 MM = 1e-3
-_ARRAYS = ("approach", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
-           "max_pressure", "stiffness", "iterations", "matvecs", "residual", "converged",
-           "stiffness_converged")
+UM = 1e-6
+#: Arrays of a contact file (the fields of NondimSweep that are stored).
+CONTACT_ARRAYS = ("approach", "nominal_pressure", "mean_plane_deflection",
+                  "real_area_fraction", "max_pressure", "stiffness", "iterations", "matvecs",
+                  "residual", "converged", "stiffness_converged")
 _SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffness_tol",
              "precision")
 
@@ -61,12 +91,299 @@ def arrays_sha256(datasets: dict) -> str:
     return digest.hexdigest()
 
 
-def _file_sha256(path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+# ---------------------------------------------------------------------------
+# Surface jobs: generated cells and measured surfaces
+
+
+def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict:
+    """Generate a cell's surfaces and write them, with statistics, to ``path``.
+
+    Heights are stored in units of sigma (dimensionless, zero mean per
+    surface); realised moments (Eq 2-5) and 10 % ACF lags [m] per surface;
+    the filter's transfer factors and the fitted Johnson curve of the white
+    noise as attributes, with provenance. Returns the root attributes.
+    A measured cell (``method: measured``) is imported by
+    :func:`build_measured_cell` instead.
+    """
+    if params["method"] == "measured":
+        return build_measured_cell(params, study_seed, path, config)
+    start = time.perf_counter()
+    spec = spec_from_params(params)
+    seeds = derive_seeds(study_seed, statistics_key(params), params["count"])
+    attrs = {"cell": cell_key(params), "study_seed": int(study_seed), "method": params["method"]}
+    extra = {}
+    if params["method"] == "filter":
+        kern = filter_kernel(spec)
+        s3, s4 = moment_transfer(spec)
+        skew_x, kurt_x = input_moments(spec)
+        curve = johnson.fit(skew_x, kurt_x)
+        attrs |= {
+            "filter_S3": s3,
+            "filter_S4": s4,
+            "filter_clipped": kern.clipped,
+            "input_skew": skew_x,
+            "input_kurt": kurt_x,
+            "johnson_family": curve.family,
+            "johnson_params": [curve.gamma, curve.delta, curve.xi, curve.lam],
+        }
+        log.info(
+            "cell %s: S3 = %.4f, S4 = %.4f, white noise Sk_x = %.4f, Ku_x = %.4f (%s)",
+            attrs["cell"], s3, s4, skew_x, kurt_x, curve.family,
+        )
+        heights = generate_many(spec, seeds)
+    else:
+        results = [generate_exact(spec, s) for s in seeds]
+        heights = np.stack([z for z, _ in results])
+        extra["spectral_error"] = (
+            np.array([r.spectral_error for _, r in results]),
+            {"units": "1", "description": "relative L2 error of the Fourier amplitude"},
+        )
+        extra["converged"] = np.array([r.converged for _, r in results])
+    stats = height_stats(heights)
+    lags = np.array([correlation_length(z, spec.spacing, spec.periodic) for z in heights])
+    log.info(
+        "cell %s: %d surfaces in %.2f s; mean realised Sk %.3f (target %g), Ku %.3f (target %g)",
+        attrs["cell"], len(seeds), time.perf_counter() - start,
+        np.mean(stats["skew"]), params["skew"], np.mean(stats["kurt"]), params["kurt"],
+    )
+    unit = {"units": "1 (heights / sigma)"}
+    datasets = {
+        "heights": (heights, unit | {"layout": "(surface, y, x), row-major over y then x"}),
+        "seeds": (seeds.astype(np.int64), {"generator": "numpy.random.default_rng(seed)"}),
+        "stats/mean": (stats["mean"], unit),
+        "stats/sigma": (stats["sigma"], unit),
+        "stats/skew": (stats["skew"], {"units": "1"}),
+        "stats/kurt": (stats["kurt"], {"units": "1 (Pearson, normal = 3)"}),
+        "stats/corr_length_x": (lags[:, 0], {"units": "m"}),
+        "stats/corr_length_y": (lags[:, 1], {"units": "m"}),
+        **{f"stats/{k}": v for k, v in extra.items()},
+    }
+    attrs |= {
+        "spec": canonical_json(spec.as_dict()),
+        "params": canonical_json(params),
+        **{f"spec_{k}": v for k, v in spec.as_dict().items()},
+        **provenance(config),
+    }
+    write_h5(path, datasets, attrs)
+    return attrs
+
+
+
+def build_measured_cell(params: dict, study_seed: int, path, config=None) -> dict:
+    """Import a measured surface and write it as a surface cell of one surface.
+
+    The layout is that of generated cells (heights in units of sigma with
+    zero mean, ``stats/*``, ``seeds``; seed -1: none), so contact jobs read
+    it unchanged. Attributes: the source file and its SHA-256 (which must be
+    the one the workflow was planned with), the import options, the measured
+    statistics in SI (``measured_*``), the filled points, the removed plane,
+    the Johnson law of the measured moments (for heights / sigma), provenance.
+    Returns the root attributes.
+    """
+    start = time.perf_counter()
+    info = params["measured"]
+    measurement = load_measured(info)
+    if measurement.sha256 != info["file_sha256"]:
+        raise MeasurementError(
+            f"{info['file']}: the file changed after the workflow was planned (sha256 "
+            f"{measurement.sha256[:12]}, planned {info['file_sha256'][:12]}); run again",
+            info["file"],
+        )
+    stats = measured.statistics(measurement)
+    sigma = stats["sigma"]
+    heights = (measurement.heights / sigma)[None]
+    realised = height_stats(heights)
+    unit = {"units": "1 (heights / sigma)"}
+    one = {"units": "1"}
+    datasets = {
+        "heights": (heights, unit | {"layout": "(surface, y, x), row-major over y then x",
+                                     "source": info["file"]}),
+        "seeds": (np.array([-1], dtype=np.int64), {"generator": "none: a measured surface"}),
+        "stats/mean": (realised["mean"], unit),
+        "stats/sigma": (realised["sigma"], unit),
+        "stats/skew": (realised["skew"], one),
+        "stats/kurt": (realised["kurt"], {"units": "1 (Pearson, normal = 3)"}),
+        "stats/corr_length_x": (np.array([stats["corr_length_x"]]), {"units": "m"}),
+        "stats/corr_length_y": (np.array([stats["corr_length_y"]]), {"units": "m"}),
+        "stats/filled_points": (np.array([stats["filled_points"]]),
+                                one | {"description": "missing points filled by Laplace "
+                                                      "interpolation"}),
+    }
+    spec = {"grid": stats["grid"], "size": stats["size"],
+            "corr_length": [stats["corr_length_x"], stats["corr_length_y"]],
+            "sigma": sigma, "skew": stats["skew"], "kurt": stats["kurt"],
+            "acf": "measured", "periodic": False}
+    options = {k: v for k, v in info.items() if k not in ("file_sha256", "sigma_um")}
+    attrs = {
+        "cell": cell_key(params), "study_seed": int(study_seed), "method": "measured",
+        "source_file": str(info["file"]),
+        "source_sha256": measurement.sha256,
+        "import_options": canonical_json(options),
+        **{f"import_{k}": v for k, v in options.items() if k != "file"},
+        "measured_sigma_m": sigma,
+        "measured_skew": stats["skew"],
+        "measured_kurt": stats["kurt"],
+        "measured_corr_length_x_m": stats["corr_length_x"],
+        "measured_corr_length_y_m": stats["corr_length_y"],
+        "measured_spacing_m": stats["spacing"],
+        "filled_points": stats["filled_points"],
+        "filled_fraction": stats["filled_fraction"],
+        "plane_offset_m": stats["plane_offset"],
+        "plane_slope_x": stats["plane_slope_x"],
+        "plane_slope_y": stats["plane_slope_y"],
+        "johnson_family": stats["johnson_family"],
+        "johnson_params": stats["johnson_params"],
+        "johnson_of": "measured heights / sigma: [gamma, delta, xi, lambda]",
+        "spec": canonical_json(spec),
+        "params": canonical_json(params),
+        **{f"spec_{k}": v for k, v in spec.items()},
+        **provenance(config),
+    }
+    log.info(
+        "measured cell %s from %s: %d x %d, sigma %.4g um, Sk %.4f, Ku %.4f, b %.4g x %.4g mm, "
+        "%d points filled (%.3g %%), Johnson %s; %.2f s",
+        attrs["cell"], info["file"], *stats["grid"], sigma / UM, stats["skew"], stats["kurt"],
+        stats["corr_length_x"] / MM, stats["corr_length_y"] / MM, stats["filled_points"],
+        100 * stats["filled_fraction"], stats["johnson_family"], time.perf_counter() - start,
+    )
+    write_h5(path, datasets, attrs)
+    return attrs
+
+
+# ---------------------------------------------------------------------------
+# Influence jobs: the elastic body of a geometry
+
+
+def _peak_rss_gb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9  # Linux: KiB
+
+
+def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
+    n = unit.shape[0]
+    nx, ny = geom.grid
+    diag = np.diag(unit)
+    eigmin = float(np.linalg.eigvalsh(unit)[0]) if n <= 4000 else float("nan")
+    rows = unit.sum(axis=1)
+    checks = {
+        "asymmetry": float(np.abs(unit - unit.T).max() / np.abs(unit).max()),
+        "min_eigenvalue_m": eigmin,
+        "row_sum_min_m": float(rows.min()),
+        "row_sum_max_m": float(rows.max()),
+        "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
+    }
+    if not eigmin > 0 and np.isfinite(eigmin):
+        raise FloatingPointError(f"geometry {key}: E * C is not positive definite "
+                                 f"(smallest eigenvalue {eigmin:.3g} m)")
+    return checks
+
+
+def _operator_checks(op, geom) -> dict:
+    nx, ny = geom.grid
+    rows = op.matvec(np.ones(nx * ny))
+    diag = op.diagonal()
+    return {
+        "row_sum_min_m": float(rows.min()),
+        "row_sum_max_m": float(rows.max()),
+        "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
+        "min_diagonal_m": float(diag.min()),
+    }
+
+
+def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: float = 16.0,
+                    config=None) -> dict:
+    """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
+
+    The influence model is the geometry's ``operator``: "dense" (the
+    finite-element matrix, the paper's), "hybrid" (matrix-free: Love's
+    half-space plus a coarse finite-element correction,
+    :mod:`roughcontact.operators`), "halfspace" (Love only) or "auto" (dense
+    up to 64 x 64 elements, hybrid above; then the half-space instead when
+    :func:`roughcontact.operators.halfspace_errors`, measured on the coarse
+    model, is within the geometry's ``halfspace_tolerance`` for every
+    quantity it names).
+
+    The peak memory is estimated first; a geometry that would not fit raises
+    :class:`~roughcontact.influence.ModelTooLarge` with the estimate and the
+    options before anything is built. Returns the root attributes.
+    """
+    geom = block_geometry(params)
+    key = geometry_key(params)
+    requested = params.get("operator", "dense")
+    operator = planned_operator(params, max_memory_gb)
+    model = geom if operator == "dense" else coarse_geometry(geom)
+    cost = influence.check_memory(model, max_memory_gb * 1e9, solver)
+    log.info(
+        "geometry %s: operator %s (requested %s); finite-element model %s grid %s, %d dofs, "
+        "estimated peak %.2f GB (limit %.1f GB)", key, operator, requested, model.mesh,
+        model.grid, cost.dofs, cost.peak_bytes / 1e9, max_memory_gb,
+    )
+    start = time.perf_counter()
+    fe = influence.unit_modulus_influence(model, solver=solver, max_bytes=max_memory_gb * 1e9)
+    if not np.isfinite(fe).all():
+        raise FloatingPointError(f"geometry {key}: the influence matrix has non-finite entries")
+    extra = {}
+    if requested == "auto":
+        tolerance = params["halfspace_tolerance"]
+        errors = operators.halfspace_errors(fe, model.grid, model.size, geom.nu, geom.thickness)
+        meets = operators.halfspace_meets(errors, tolerance)
+        log.info("geometry %s: half-space errors measured on the %s grid %s: %s; tolerance %s: "
+                 "%s", key, model.mesh, model.grid, errors, tolerance,
+                 "use the half-space" if meets else "keep the finite body")
+        extra = {"halfspace_errors": errors, "halfspace_tolerance": tolerance}
+        if meets:
+            operator = "halfspace"
+    if operator == "dense":
+        unit = fe
+        checks = _dense_checks(unit, geom, key)
+        datasets = {
+            "unit_influence": (
+                unit,
+                {
+                    "units": "m (E * C: displacement per unit pressure times Young's modulus)",
+                    "layout": "C[i, j]: displacement at the centre of element i per unit "
+                              "pressure on element j; elements row-major over y then x",
+                },
+            ),
+        }
+        op_attrs = {}
+    else:
+        if operator == "hybrid":
+            fe -= halfspace_influence(model.grid, model.size, 1.0, geom.nu)
+            fe /= model.spacing[0] * model.spacing[1]
+            unit = operators.BlockOperator(grid=geom.grid, size=geom.size, nu=geom.nu,
+                                           correction=fe, coarse_grid=model.grid)
+        else:
+            unit = operators.halfspace_operator(geom.grid, geom.size, geom.nu)
+        del fe
+        checks = _operator_checks(unit, geom)
+        datasets, op_attrs = operators.operator_datasets(unit)
+        op_attrs["coarse_mesh"] = model.mesh
+    seconds = time.perf_counter() - start
+    log.info("geometry %s: %s built in %.1f s; checks %s", key, operator, seconds, checks)
+    attrs = {
+        "geometry": key,
+        "params": canonical_json(params),
+        **{f"geometry_{k}": v for k, v in params.items()},
+        "operator": operator,
+        "operator_requested": requested,
+        **op_attrs,
+        **extra,
+        "mesh_spec": canonical_json(dataclasses.asdict(model.mesh_spec)),
+        "dofs": int(cost.dofs),
+        "estimated_peak_gb": cost.peak_bytes / 1e9,
+        "build_seconds": seconds,
+        "peak_rss_gb": _peak_rss_gb(),
+        "solver": solver,
+        "content_sha256": operators.content_sha256(unit),
+        **{f"check_{k}": v for k, v in checks.items()},
+        **provenance(config),
+    }
+    write_h5(path, datasets, attrs)
+    return attrs
+
+
+# ---------------------------------------------------------------------------
+# Contact jobs
 
 
 def sweep_approaches(heights: np.ndarray, pressure_end: float, steps: int,
@@ -96,7 +413,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
     """
     start = time.perf_counter()
     cell = read_surfaces(surfaces_path)
-    unit, geometry_attrs = read_operator(influence_path)
+    unit, geometry_attrs = operators.read_operator(influence_path)
     heights = cell["heights"]
     m = heights.shape[0]
     geometry = job["geometry"]
@@ -158,7 +475,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
     }
     (log.warning if unconverged else log.info)(
         "contact %s__%s: %s", job["surface_key"], job["geometry_key"], stats)
-    datasets = {name: np.asarray(getattr(result, name)) for name in _ARRAYS}
+    datasets = {name: np.asarray(getattr(result, name)) for name in CONTACT_ARRAYS}
     attrs = {
         "content_sha256": arrays_sha256(datasets),
         "batch_size": min(m, BATCH_SIZE),
@@ -166,7 +483,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
         **{f"sweep_{k}": getattr(result, k) for k in _SETTINGS},
         "sweep_max_iter": -1 if result.max_iter is None else result.max_iter,
         **stats,
-        "surfaces_sha256": _file_sha256(surfaces_path),
+        "surfaces_sha256": file_sha256(surfaces_path),
         "influence_content_sha256": geometry_attrs.get("content_sha256", ""),
         "seeds": cell["seeds"].tolist(),
         **provenance(config),
@@ -178,7 +495,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
 def read_contact(path) -> tuple[nondim.NondimSweep, dict]:
     """The :class:`~roughcontact.nondim.NondimSweep` and attributes of a contact file."""
     with h5py.File(path, "r") as f:
-        arrays = {name: f[name][...] for name in _ARRAYS}
+        arrays = {name: f[name][...] for name in CONTACT_ARRAYS}
         attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
     settings = {k: attrs[f"sweep_{k}"] for k in _SETTINGS}
     settings["n_elements"] = int(settings["n_elements"])
@@ -211,8 +528,6 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
     surface (E_u, Eq 36) with the cell summary in the sidecar. Unconverged
     solves are excluded by the aggregation and counted in both.
     """
-    from .study import contact_key
-
     rows, moduli, summaries = [], [], []
     for index, cell in enumerate(cells):
         key = contact_key(cell)

@@ -1,11 +1,12 @@
-"""The study grid: which surface cells a configuration asks for, and building them.
+"""The study grid: which surface cells, geometries and contact cells a configuration asks for.
 
 A *surface cell* is one set of surface statistics and sampling (skewness,
 kurtosis, correlation lengths, grid, size, ACF, periodicity, generator) with a
 number of seeded realisations. Its key names every parameter, so a changed
 parameter is a new file and the workflow reruns exactly what depends on it.
 Sigma is not part of a cell: surfaces are stored in units of sigma and scaled
-at use (Eq 28-32 of Kumar et al. 2006).
+at use (Eq 28-32 of Kumar et al. 2006). The jobs that build them are in
+:mod:`roughcontact.pipeline`.
 """
 
 from __future__ import annotations
@@ -15,26 +16,13 @@ import hashlib
 import logging
 import math
 import re
-import time
 from pathlib import Path
 
 import numpy as np
 
-from . import johnson, measured
-from .errors import MeasurementError
-from .provenance import canonical_json, provenance
-from .storage import write_h5
-from .surface import (
-    SurfaceSpec,
-    correlation_length,
-    derive_seeds,
-    filter_kernel,
-    generate_exact,
-    generate_many,
-    height_stats,
-    input_moments,
-    moment_transfer,
-)
+from . import measured
+from .provenance import canonical_json
+from .surface import SurfaceSpec, input_moments
 
 log = logging.getLogger(__name__)
 
@@ -155,79 +143,6 @@ def check_feasible(cells: dict[str, dict]) -> list[str]:
     return problems
 
 
-def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict:
-    """Generate a cell's surfaces and write them, with statistics, to ``path``.
-
-    Heights are stored in units of sigma (dimensionless, zero mean per
-    surface); realised moments (Eq 2-5) and 10 % ACF lags [m] per surface;
-    the filter's transfer factors and the fitted Johnson curve of the white
-    noise as attributes, with provenance. Returns the root attributes.
-    A measured cell (``method: measured``) is imported by
-    :func:`build_measured_cell` instead.
-    """
-    if params["method"] == "measured":
-        return build_measured_cell(params, study_seed, path, config)
-    start = time.perf_counter()
-    spec = spec_from_params(params)
-    seeds = derive_seeds(study_seed, statistics_key(params), params["count"])
-    attrs = {"cell": cell_key(params), "study_seed": int(study_seed), "method": params["method"]}
-    extra = {}
-    if params["method"] == "filter":
-        kern = filter_kernel(spec)
-        s3, s4 = moment_transfer(spec)
-        skew_x, kurt_x = input_moments(spec)
-        curve = johnson.fit(skew_x, kurt_x)
-        attrs |= {
-            "filter_S3": s3,
-            "filter_S4": s4,
-            "filter_clipped": kern.clipped,
-            "input_skew": skew_x,
-            "input_kurt": kurt_x,
-            "johnson_family": curve.family,
-            "johnson_params": [curve.gamma, curve.delta, curve.xi, curve.lam],
-        }
-        log.info(
-            "cell %s: S3 = %.4f, S4 = %.4f, white noise Sk_x = %.4f, Ku_x = %.4f (%s)",
-            attrs["cell"], s3, s4, skew_x, kurt_x, curve.family,
-        )
-        heights = generate_many(spec, seeds)
-    else:
-        results = [generate_exact(spec, s) for s in seeds]
-        heights = np.stack([z for z, _ in results])
-        extra["spectral_error"] = (
-            np.array([r.spectral_error for _, r in results]),
-            {"units": "1", "description": "relative L2 error of the Fourier amplitude"},
-        )
-        extra["converged"] = np.array([r.converged for _, r in results])
-    stats = height_stats(heights)
-    lags = np.array([correlation_length(z, spec.spacing, spec.periodic) for z in heights])
-    log.info(
-        "cell %s: %d surfaces in %.2f s; mean realised Sk %.3f (target %g), Ku %.3f (target %g)",
-        attrs["cell"], len(seeds), time.perf_counter() - start,
-        np.mean(stats["skew"]), params["skew"], np.mean(stats["kurt"]), params["kurt"],
-    )
-    unit = {"units": "1 (heights / sigma)"}
-    datasets = {
-        "heights": (heights, unit | {"layout": "(surface, y, x), row-major over y then x"}),
-        "seeds": (seeds.astype(np.int64), {"generator": "numpy.random.default_rng(seed)"}),
-        "stats/mean": (stats["mean"], unit),
-        "stats/sigma": (stats["sigma"], unit),
-        "stats/skew": (stats["skew"], {"units": "1"}),
-        "stats/kurt": (stats["kurt"], {"units": "1 (Pearson, normal = 3)"}),
-        "stats/corr_length_x": (lags[:, 0], {"units": "m"}),
-        "stats/corr_length_y": (lags[:, 1], {"units": "m"}),
-        **{f"stats/{k}": v for k, v in extra.items()},
-    }
-    attrs |= {
-        "spec": canonical_json(spec.as_dict()),
-        "params": canonical_json(params),
-        **{f"spec_{k}": v for k, v in spec.as_dict().items()},
-        **provenance(config),
-    }
-    write_h5(path, datasets, attrs)
-    return attrs
-
-
 # ---------------------------------------------------------------------------
 # Measured surfaces: a study's ``surface: {file: ...}`` in place of moments
 
@@ -336,87 +251,6 @@ def study_surfaces(config: dict, entry: dict) -> list[dict]:
         count = entry.get("count", config["surfaces"]["count"])
         cells.append(synthetic_twin(config["surfaces"], measured_cell, count))
     return cells
-
-
-def build_measured_cell(params: dict, study_seed: int, path, config=None) -> dict:
-    """Import a measured surface and write it as a surface cell of one surface.
-
-    The layout is that of generated cells (heights in units of sigma with
-    zero mean, ``stats/*``, ``seeds``; seed -1: none), so contact jobs read
-    it unchanged. Attributes: the source file and its SHA-256 (which must be
-    the one the workflow was planned with), the import options, the measured
-    statistics in SI (``measured_*``), the filled points, the removed plane,
-    the Johnson law of the measured moments (for heights / sigma), provenance.
-    Returns the root attributes.
-    """
-    start = time.perf_counter()
-    info = params["measured"]
-    measurement = load_measured(info)
-    if measurement.sha256 != info["file_sha256"]:
-        raise MeasurementError(
-            f"{info['file']}: the file changed after the workflow was planned (sha256 "
-            f"{measurement.sha256[:12]}, planned {info['file_sha256'][:12]}); run again",
-            info["file"],
-        )
-    stats = measured.statistics(measurement)
-    sigma = stats["sigma"]
-    heights = (measurement.heights / sigma)[None]
-    realised = height_stats(heights)
-    unit = {"units": "1 (heights / sigma)"}
-    one = {"units": "1"}
-    datasets = {
-        "heights": (heights, unit | {"layout": "(surface, y, x), row-major over y then x",
-                                     "source": info["file"]}),
-        "seeds": (np.array([-1], dtype=np.int64), {"generator": "none: a measured surface"}),
-        "stats/mean": (realised["mean"], unit),
-        "stats/sigma": (realised["sigma"], unit),
-        "stats/skew": (realised["skew"], one),
-        "stats/kurt": (realised["kurt"], {"units": "1 (Pearson, normal = 3)"}),
-        "stats/corr_length_x": (np.array([stats["corr_length_x"]]), {"units": "m"}),
-        "stats/corr_length_y": (np.array([stats["corr_length_y"]]), {"units": "m"}),
-        "stats/filled_points": (np.array([stats["filled_points"]]),
-                                one | {"description": "missing points filled by Laplace "
-                                                      "interpolation"}),
-    }
-    spec = {"grid": stats["grid"], "size": stats["size"],
-            "corr_length": [stats["corr_length_x"], stats["corr_length_y"]],
-            "sigma": sigma, "skew": stats["skew"], "kurt": stats["kurt"],
-            "acf": "measured", "periodic": False}
-    options = {k: v for k, v in info.items() if k not in ("file_sha256", "sigma_um")}
-    attrs = {
-        "cell": cell_key(params), "study_seed": int(study_seed), "method": "measured",
-        "source_file": str(info["file"]),
-        "source_sha256": measurement.sha256,
-        "import_options": canonical_json(options),
-        **{f"import_{k}": v for k, v in options.items() if k != "file"},
-        "measured_sigma_m": sigma,
-        "measured_skew": stats["skew"],
-        "measured_kurt": stats["kurt"],
-        "measured_corr_length_x_m": stats["corr_length_x"],
-        "measured_corr_length_y_m": stats["corr_length_y"],
-        "measured_spacing_m": stats["spacing"],
-        "filled_points": stats["filled_points"],
-        "filled_fraction": stats["filled_fraction"],
-        "plane_offset_m": stats["plane_offset"],
-        "plane_slope_x": stats["plane_slope_x"],
-        "plane_slope_y": stats["plane_slope_y"],
-        "johnson_family": stats["johnson_family"],
-        "johnson_params": stats["johnson_params"],
-        "johnson_of": "measured heights / sigma: [gamma, delta, xi, lambda]",
-        "spec": canonical_json(spec),
-        "params": canonical_json(params),
-        **{f"spec_{k}": v for k, v in spec.items()},
-        **provenance(config),
-    }
-    log.info(
-        "measured cell %s from %s: %d x %d, sigma %.4g um, Sk %.4f, Ku %.4f, b %.4g x %.4g mm, "
-        "%d points filled (%.3g %%), Johnson %s; %.2f s",
-        attrs["cell"], info["file"], *stats["grid"], sigma / UM, stats["skew"], stats["kurt"],
-        stats["corr_length_x"] / MM, stats["corr_length_y"] / MM, stats["filled_points"],
-        100 * stats["filled_fraction"], stats["johnson_family"], time.perf_counter() - start,
-    )
-    write_h5(path, datasets, attrs)
-    return attrs
 
 
 def check_measured(config: dict, name: str, entry: dict) -> list[str]:
@@ -534,7 +368,7 @@ def convergence_presets(config: dict) -> list[str]:
     return list(report.get("presets", ["paper", "graded", "refined", "converged"]))
 
 
-def _coarse_geometry(geom):
+def coarse_geometry(geom):
     """The coarse finite-element model of a hybrid operator (``refined`` for inaccurate meshes)."""
     from .operators import HYBRID_MESHES, default_coarse_grid
 
@@ -563,142 +397,8 @@ def influence_cost(params: dict, solver: str = "auto", max_memory_gb: float = 16
 
     geom = block_geometry(params)
     if planned_operator(params, max_memory_gb) in ("hybrid", "halfspace"):
-        geom = _coarse_geometry(geom)
+        geom = coarse_geometry(geom)
     return estimate_cost(geom, solver)
-
-
-def _peak_rss_gb() -> float:
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9  # Linux: KiB
-
-
-def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
-    n = unit.shape[0]
-    nx, ny = geom.grid
-    diag = np.diag(unit)
-    eigmin = float(np.linalg.eigvalsh(unit)[0]) if n <= 4000 else float("nan")
-    rows = unit.sum(axis=1)
-    checks = {
-        "asymmetry": float(np.abs(unit - unit.T).max() / np.abs(unit).max()),
-        "min_eigenvalue_m": eigmin,
-        "row_sum_min_m": float(rows.min()),
-        "row_sum_max_m": float(rows.max()),
-        "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
-    }
-    if not eigmin > 0 and np.isfinite(eigmin):
-        raise FloatingPointError(f"geometry {key}: E * C is not positive definite "
-                                 f"(smallest eigenvalue {eigmin:.3g} m)")
-    return checks
-
-
-def _operator_checks(op, geom) -> dict:
-    nx, ny = geom.grid
-    rows = op.matvec(np.ones(nx * ny))
-    diag = op.diagonal()
-    return {
-        "row_sum_min_m": float(rows.min()),
-        "row_sum_max_m": float(rows.max()),
-        "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
-        "min_diagonal_m": float(diag.min()),
-    }
-
-
-def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: float = 16.0,
-                    config=None) -> dict:
-    """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
-
-    The influence model is the geometry's ``operator``: "dense" (the
-    finite-element matrix, the paper's), "hybrid" (matrix-free: Love's
-    half-space plus a coarse finite-element correction,
-    :mod:`roughcontact.operators`), "halfspace" (Love only) or "auto" (dense
-    up to 64 x 64 elements, hybrid above; then the half-space instead when
-    :func:`roughcontact.operators.halfspace_errors`, measured on the coarse
-    model, is within the geometry's ``halfspace_tolerance`` for every
-    quantity it names).
-
-    The peak memory is estimated first; a geometry that would not fit raises
-    :class:`~roughcontact.influence.ModelTooLarge` with the estimate and the
-    options before anything is built. Returns the root attributes.
-    """
-    from . import influence, operators
-
-    geom = block_geometry(params)
-    key = geometry_key(params)
-    requested = params.get("operator", "dense")
-    operator = planned_operator(params, max_memory_gb)
-    model = geom if operator == "dense" else _coarse_geometry(geom)
-    cost = influence.check_memory(model, max_memory_gb * 1e9, solver)
-    log.info(
-        "geometry %s: operator %s (requested %s); finite-element model %s grid %s, %d dofs, "
-        "estimated peak %.2f GB (limit %.1f GB)", key, operator, requested, model.mesh,
-        model.grid, cost.dofs, cost.peak_bytes / 1e9, max_memory_gb,
-    )
-    start = time.perf_counter()
-    fe = influence.unit_modulus_influence(model, solver=solver, max_bytes=max_memory_gb * 1e9)
-    if not np.isfinite(fe).all():
-        raise FloatingPointError(f"geometry {key}: the influence matrix has non-finite entries")
-    extra = {}
-    if requested == "auto":
-        tolerance = params["halfspace_tolerance"]
-        errors = operators.halfspace_errors(fe, model.grid, model.size, geom.nu, geom.thickness)
-        meets = operators.halfspace_meets(errors, tolerance)
-        log.info("geometry %s: half-space errors measured on the %s grid %s: %s; tolerance %s: "
-                 "%s", key, model.mesh, model.grid, errors, tolerance,
-                 "use the half-space" if meets else "keep the finite body")
-        extra = {"halfspace_errors": errors, "halfspace_tolerance": tolerance}
-        if meets:
-            operator = "halfspace"
-    if operator == "dense":
-        unit = fe
-        checks = _dense_checks(unit, geom, key)
-        datasets = {
-            "unit_influence": (
-                unit,
-                {
-                    "units": "m (E * C: displacement per unit pressure times Young's modulus)",
-                    "layout": "C[i, j]: displacement at the centre of element i per unit "
-                              "pressure on element j; elements row-major over y then x",
-                },
-            ),
-        }
-        op_attrs = {}
-    else:
-        if operator == "hybrid":
-            from .halfspace import halfspace_influence
-
-            fe -= halfspace_influence(model.grid, model.size, 1.0, geom.nu)
-            fe /= model.spacing[0] * model.spacing[1]
-            unit = operators.BlockOperator(grid=geom.grid, size=geom.size, nu=geom.nu,
-                                           correction=fe, coarse_grid=model.grid)
-        else:
-            unit = operators.halfspace_operator(geom.grid, geom.size, geom.nu)
-        del fe
-        checks = _operator_checks(unit, geom)
-        datasets, op_attrs = operators.operator_datasets(unit)
-        op_attrs["coarse_mesh"] = model.mesh
-    seconds = time.perf_counter() - start
-    log.info("geometry %s: %s built in %.1f s; checks %s", key, operator, seconds, checks)
-    attrs = {
-        "geometry": key,
-        "params": canonical_json(params),
-        **{f"geometry_{k}": v for k, v in params.items()},
-        "operator": operator,
-        "operator_requested": requested,
-        **op_attrs,
-        **extra,
-        "mesh_spec": canonical_json(dataclasses.asdict(model.mesh_spec)),
-        "dofs": int(cost.dofs),
-        "estimated_peak_gb": cost.peak_bytes / 1e9,
-        "build_seconds": seconds,
-        "peak_rss_gb": _peak_rss_gb(),
-        "solver": solver,
-        "content_sha256": operators.content_sha256(unit),
-        **{f"check_{k}": v for k, v in checks.items()},
-        **provenance(config),
-    }
-    write_h5(path, datasets, attrs)
-    return attrs
 
 
 # ---------------------------------------------------------------------------

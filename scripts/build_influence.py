@@ -3,7 +3,7 @@
 import os
 
 from roughcontact.logs import route_logging
-from roughcontact.study import build_influence
+from roughcontact.pipeline import build_influence
 
 route_logging(snakemake.log[0])
 # the sparse factorization is the one multithreaded step of the pipeline

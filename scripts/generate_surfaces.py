@@ -1,7 +1,7 @@
 """Snakemake entry point of rule `surfaces`: generate (or import, if measured) one surface cell."""
 
 from roughcontact.logs import route_logging
-from roughcontact.study import build_surface_cell
+from roughcontact.pipeline import build_surface_cell
 
 route_logging(snakemake.log[0])
 build_surface_cell(

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from roughcontact import contact, operators, study
+from roughcontact import contact, operators, pipeline, study
 from roughcontact.halfspace import halfspace_influence
 from roughcontact.influence import BlockGeometry, hybrid_unit_modulus_influence
 
@@ -144,7 +144,7 @@ def _build(tmp_path, body, grid, monkeypatch, coarse_max=None):
         monkeypatch.setattr(operators, "COARSE_MAX", coarse_max)
     params = study.geometry_params(body, {"grid": [grid, grid], "size_mm": [4.8, 4.8]})
     path = tmp_path / f"{study.geometry_key(params)}.h5"
-    attrs = study.build_influence(params, path)
+    attrs = pipeline.build_influence(params, path)
     unit, stored = operators.read_operator(path)
     return params, attrs, unit, stored
 

@@ -4,13 +4,9 @@ import numpy as np
 import pytest
 
 from roughcontact.influence import ModelTooLarge
+from roughcontact.pipeline import build_influence
 from roughcontact.storage import read_influence
-from roughcontact.study import (
-    block_geometry,
-    build_influence,
-    geometry_key,
-    geometry_params,
-)
+from roughcontact.study import block_geometry, geometry_key, geometry_params
 
 BODY = {"thickness_mm": 2.0, "E_MPa": 511.0, "nu": 0.0, "base": "clamped", "mesh": "paper"}
 SURFACES = {"grid": [8, 8], "size_mm": [1.2, 1.2], "count": 1}
