@@ -39,6 +39,7 @@ test: lint
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_influence.py $(if $(QUICK),--quick)
 	$(BIN)/python benchmarks/bench_contact.py $(if $(QUICK),--quick)
+	$(BIN)/python benchmarks/bench_operators.py $(if $(QUICK),--quick)
 
 clean-results:
 	rm -rf results .snakemake

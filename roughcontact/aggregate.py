@@ -8,9 +8,15 @@ curves onto one pressure axis and reports mean and Student-t confidence
 band per pressure level. :func:`mean_plane_modulus` fits the bulk modulus
 ``E_u = P L / d_b`` of Eq 36-44.
 
-Interpolation: piecewise linear in ``log P`` (each quantity linear between
-two solved steps, the abscissa logarithmic), over the converged steps with
-``P > 0`` of one surface. A pressure level outside a surface's solved range
+Interpolation: piecewise linear in ``log P`` and ``log q`` (a power law
+between two solved steps), over the converged steps with ``P > 0`` of one
+surface; exact for quantities that follow a power law of P, such as the
+mean-plane deflection ``d_b = P L / E_u`` (Eq 36), so the averaged curves
+keep Eq 36 to rounding at every level. A surface whose values of a quantity
+are not all positive is interpolated linearly in ``q`` instead. The
+asperity deflection is not interpolated on its own: it is ``d - d_b`` of the
+interpolated approach and mean-plane deflection, so ``d = d_a + d_b`` (Eq 45)
+holds at every level too. A pressure level outside a surface's solved range
 ``[P_first, P_last]`` is never extrapolated: that surface is left out there
 (the ``*_count`` columns say how many surfaces a value rests on; a count of
 0 gives NaN).
@@ -44,7 +50,8 @@ QUANTITIES = {
     "max_pressure": ("Pa", "largest element pressure"),
 }
 
-INTERPOLATION = "piecewise linear in log(P) over converged steps, no extrapolation"
+INTERPOLATION = ("piecewise linear in log(P) and log(q) (linear in q where q <= 0) over "
+                 "converged steps, no extrapolation; d_a = d - d_b of the interpolated curves")
 
 
 def pressure_axis(P_min: float, P_max: float, n: int, spacing: str = "log") -> np.ndarray:
@@ -103,15 +110,21 @@ def _increasing(P: np.ndarray) -> np.ndarray:
 def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> np.ndarray:
     """Each surface's ``quantity`` interpolated onto ``pressures``, (m, len(pressures)).
 
-    Linear in ``log P`` between the surface's usable steps (contact solve
-    converged, and for ``normalized_stiffness`` the stiffness solve too;
+    A power law (linear in ``log P`` and ``log q``; linear in ``q`` for a
+    surface with a value ``q <= 0``) between the surface's usable steps
+    (contact solve converged, and for ``normalized_stiffness`` the stiffness solve too;
     ``P > 0``; ``P`` strictly increasing along the steps, later steps that do
     not raise ``P`` are dropped). NaN outside the surface's usable range
-    (no extrapolation) and for a surface without usable steps.
+    (no extrapolation) and for a surface without usable steps. The asperity
+    deflection is the difference of the approach's and the mean-plane
+    deflection's curves (Eq 45).
     """
     sweep = _check_sweep(sweep_physical)
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {tuple(QUANTITIES)}, got {quantity!r}")
+    if quantity == "asperity_deflection":  # Eq 45 at every level
+        return (surface_curves(sweep, pressures, "approach")
+                - surface_curves(sweep, pressures, "mean_plane_deflection"))
     levels = np.asarray(pressures, dtype=float)
     if levels.ndim != 1 or not np.isfinite(levels).all() or (levels <= 0.0).any():
         raise ValueError("pressures must be a 1-d array of finite positive levels [Pa]")
@@ -126,7 +139,11 @@ def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> n
         keep = _increasing(P)
         P, y = P[keep], y[keep]
         inside = (levels >= P[0]) & (levels <= P[-1])
-        out[j, inside] = np.interp(np.log(levels[inside]), np.log(P), y)
+        x = np.log(levels[inside])
+        if (y > 0.0).all():
+            out[j, inside] = np.exp(np.interp(x, np.log(P), np.log(y)))
+        else:
+            out[j, inside] = np.interp(x, np.log(P), y)
     return out
 
 

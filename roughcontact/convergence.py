@@ -12,9 +12,9 @@ small. :func:`influence_convergence` measures, per mesh preset,
    (1, 0), (1, 1), (2, 0) and one far entry, and the row sum (for nu = 0 and
    a clamped base every row sums to L, Eq 37-38);
 3. the rough-contact response that depends on them: for a few Gaussian
-   surfaces swept over rigid approaches (``roughcontact.contact.sweep``),
-   interpolated at given nominal pressures P, the normalized stiffness
-   ``k_P = (L / A_n) dF/dd`` (Eq 33), the real area fraction, the peak
+   surfaces swept over rigid approaches and read at given nominal pressures
+   P exactly as the workflow's contact and aggregate jobs do, the normalized
+   stiffness ``k_P = (L / A_n) dF/dd`` (Eq 33), the real area fraction, the peak
    pressure and the asperity deflection ``d_a = d - d_b`` (Eq 35, 45),
 
 and the relative error of every number against a reference mesh (by default
@@ -58,7 +58,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import contact
 from .influence import (
     GB,
     BlockGeometry,
@@ -134,7 +133,7 @@ COLUMNS = {
     "note": ("-", "remarks (Richardson rows: the meshes and ratio used)"),
 }
 
-#: Rigid approaches per sweep (linearly spaced up to the largest one needed).
+#: Rigid approaches per sweep (``pipeline.sweep_approaches``: geometric up to the end).
 _SWEEP_STEPS = 40
 
 
@@ -187,60 +186,41 @@ def _centre_entries(ec: np.ndarray, geom: BlockGeometry, far: int) -> dict:
 
 
 def _contact_response(ec: np.ndarray, geom: BlockGeometry, task: dict) -> dict:
-    """Sweep the task's surfaces on ``C = ec / E`` and interpolate at the task's pressures.
+    """Sweep the task's surfaces on ``C = ec / E`` and read them at the task's pressures.
 
-    The approaches run linearly up to a largest approach that makes every
-    surface carry at least 1.1 times the largest target pressure (found by a
-    first, coarse doubling sweep), so each target is bracketed by steps of a
-    fortieth of that range. Per surface, each quantity is interpolated
-    linearly in the nominal pressure, then averaged over the surfaces (equal-P
-    averaging, as the paper's curves).
+    The steps of a workflow contact job and its aggregation, so that the
+    report's numbers are read off the sweeps as the figures' are: approaches
+    from :func:`roughcontact.pipeline.sweep_approaches` (geometric, up to an
+    end that reaches 1.1 times the largest target pressure on every surface
+    without a trial solve), :func:`roughcontact.nondim.solve_cell` (every
+    surface in one batch, tangent stiffness at every step) and
+    :func:`roughcontact.aggregate.aggregate_cell` (each surface's curves
+    interpolated linearly in log P, unconverged steps excluded, then averaged
+    over the surfaces at equal P, as the paper's curves).
     """
-    heights = task["heights"]
+    from . import aggregate, nondim
+    from .pipeline import sweep_approaches
+
+    sigma = float(task["sigma"])
+    heights = task["heights"] / sigma
     pressures = np.asarray(task["pressures"], dtype=float)
-    gaps = heights.max(axis=(1, 2), keepdims=True) - heights
-    C = ec / geom.E
-    area = geom.spacing[0] * geom.spacing[1]
-    nominal_area = geom.size[0] * geom.size[1]
-    target = 1.1 * pressures.max()
-
-    def run(d_max: float, stiffness: bool, count: int = _SWEEP_STEPS):
-        steps = np.linspace(d_max / count, d_max, count)
-        return contact.sweep(C, gaps, steps, element_area=area, method="cg",
-                             tol=task["tol"], stiffness=stiffness)
-
-    # bulk compression at the target plus a few sigma of asperity deflection
-    d_max = target * geom.thickness / geom.E + 3.0 * float(heights.std())
-    for _ in range(12):
-        trial = run(d_max, stiffness=False, count=10)
-        if trial.nominal_pressure[:, -1].min() >= target:
-            break
-        d_max *= 2.0
-    d_needed = max(float(np.interp(target, trial.nominal_pressure[s], trial.approach[s]))
-                   for s in range(len(gaps)))
-    result = run(d_needed, stiffness=True)
-    if not result.converged.all():
+    pressure_end = 1.1 * pressures.max() * geom.thickness / (geom.E * sigma)
+    sweep = nondim.solve_cell(ec, heights, thickness=geom.thickness,
+                              element_area=geom.spacing[0] * geom.spacing[1],
+                              approaches=sweep_approaches(heights, pressure_end, _SWEEP_STEPS),
+                              method="cg", tol=task["tol"])
+    if not sweep.converged.all():
         log.warning("contact sweep: %d of %d solves did not converge",
-                    int((~result.converged).sum()), result.converged.size)
-    k_p = geom.thickness / nominal_area * result.tangent_stiffness
-    fields = {
-        "k_P_Pa": k_p,
-        "real_area_fraction": result.real_area_fraction,
-        "max_pressure_Pa": result.max_pressure,
-        "approach_m": result.approach,
-        "mean_plane_deflection_m": result.mean_plane_deflection,
-        "asperity_deflection_m": result.approach - result.mean_plane_deflection,
-    }
-    m = len(gaps)
-    out = {name: np.empty((m, pressures.size)) for name in fields}
-    reached = np.ones(pressures.size, dtype=bool)
-    for s in range(m):
-        p = result.nominal_pressure[s]
-        reached &= p[-1] >= pressures
-        for name, values in fields.items():
-            out[name][s] = np.interp(pressures, p, values[s], right=np.nan)
-    return {name: values.mean(axis=0) for name, values in out.items()} | {
-        "reached": reached, "surfaces": m}
+                    int((~sweep.converged).sum()), sweep.converged.size)
+    physical = nondim.to_physical(sweep, sigma, geom.E)
+    frame = aggregate.aggregate_cell(physical, pressures)
+    quantities = {"k_P_Pa": "normalized_stiffness", "real_area_fraction": "real_area_fraction",
+                  "max_pressure_Pa": "max_pressure", "approach_m": "approach",
+                  "mean_plane_deflection_m": "mean_plane_deflection",
+                  "asperity_deflection_m": "asperity_deflection"}
+    return {name: frame[f"{column}_mean"].to_numpy() for name, column in quantities.items()} | {
+        "reached": physical.nominal_pressure[:, -1].min() >= pressures,
+        "surfaces": heights.shape[0]}
 
 
 def _run_task(task: dict) -> dict:
@@ -402,8 +382,9 @@ def influence_convergence(
     Gaussian surfaces (exponential ACF, Eq 1; std ``sigma``, 10 % correlation
     length ``corr_length``, sampled on the contact grid, seeds from
     ``surface.derive_seeds(seed, "influence_convergence", surfaces)``) over
-    rigid approaches with ``contact.sweep`` (displacement control, Eq 27) and
-    interpolates at each nominal pressure in ``pressures``: ``k_P = (L / A_n)
+    rigid approaches (displacement control, Eq 27), as a workflow contact job
+    does, and reads at each nominal pressure in ``pressures``, as the
+    aggregation does: ``k_P = (L / A_n)
     dF/dd`` (Eq 33), real area fraction, peak pressure, approach d,
     mean-plane deflection d_b (Eq 35) and asperity deflection d_a = d - d_b
     (Eq 45), each averaged over the surfaces at equal P.
@@ -485,7 +466,7 @@ def influence_convergence(
                            sigma=sigma)
         heights = generate_many(spec, derive_seeds(seed, "influence_convergence", surfaces))
     common = {"far": far, "solver": solver, "max_bytes": float(max_bytes), "tol": tol,
-              "heights": heights, "pressures": pressures, "isolated": isolate}
+              "heights": heights, "sigma": sigma, "pressures": pressures, "isolated": isolate}
     jobs = [(label, "fe", dataclasses.replace(base, mesh=preset))
             for (label, _), preset in zip(meshes, presets, strict=True)]
     if halfspace:

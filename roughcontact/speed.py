@@ -653,8 +653,8 @@ def band_vs_count(
 
     From one solved set of m surfaces (no re-solve): each surface's k_P,
     real area fraction and peak pressure are interpolated at ``pressures``
-    (:func:`roughcontact.aggregate.surface_curves`, linear in log P), then for
-    each count c <= m, ``draws`` random subsets of c surfaces (without
+    (:func:`roughcontact.aggregate.surface_curves`, a power law between
+    steps), then for each count c <= m, ``draws`` random subsets of c surfaces (without
     replacement; one subset when c = m) give the Student-t half-width
     ``t_{(1+c)/2, c-1} s / sqrt(c)`` of the band of :func:`~roughcontact.aggregate.aggregate_cell`.
     Reported: the mean half-width over the subsets, and relative to the mean
