@@ -44,14 +44,20 @@ def _kernel_name() -> str:
 def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
     """Execute ``notebook`` with papermill into ``output`` (atomically).
 
-    The notebook must have a cell tagged ``parameters``; ``parameters`` are
-    injected after it. The executed notebook is kept so a reader sees the code
-    beside the figure. A failing cell raises with the notebook's traceback.
+    The notebook must have a cell tagged ``parameters``; the entries of
+    ``parameters`` that it declares there are injected after it (the workflow
+    passes one set to every figure; the others are logged, not passed). The
+    executed notebook is kept so a reader sees the code beside the figure. A
+    failing cell raises with the notebook's traceback.
     """
     import papermill
 
     start = time.perf_counter()
-    log.info("executing %s with parameters %s", notebook, sorted(parameters))
+    declared = papermill.inspect_notebook(str(notebook))
+    unused = sorted(set(parameters) - set(declared))
+    parameters = {k: v for k, v in parameters.items() if k in declared}
+    log.info("executing %s with parameters %s%s", notebook, sorted(parameters),
+             f" (not declared there, not passed: {unused})" if unused else "")
     with atomic_path(output) as tmp:
         papermill.execute_notebook(
             str(notebook),

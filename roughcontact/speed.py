@@ -82,22 +82,22 @@ SOLVER_QUANTITIES = MappingProxyType({
 })
 
 #: Mesh errors used when no influence-convergence table is given: the numbers of
-#: ``results/benchmarks/influence_convergence.csv`` (60 x 60 over 9 mm, L = 10 mm,
+#: ``results/reports/influence_convergence.csv`` (60 x 60 over 9 mm, L = 10 mm,
 #: nu = 0, 3 Gaussian surfaces, sigma 24.5 um, b 1 mm, P = 0.3, 1, 2 MPa, against
-#: the "converged" preset; build time on 2 shared cores). Errors are the largest
-#: |relative error| over the three pressures; the signed ranges were paper k_P
-#: +3..+11 %, area -80..-84 %, p_max +233..+366 %.
+#: the "converged" preset; build time on 2 shared cores; measured 2026-11-24).
+#: Errors are the largest |relative error| over the three pressures; the signed
+#: ranges were paper k_P +1.9..+9.0 %, area -80.9..-84.0 %, p_max +233..+367 %.
 FALLBACK_MESH_ERRORS = MappingProxyType({
-    "paper": {"build_s": 4.8, "peak_memory_GB": 0.74, "k_P_error": 0.113,
-              "real_area_error": 0.837, "max_pressure_error": 3.66},
-    "graded": {"build_s": 22.9, "peak_memory_GB": 1.82, "k_P_error": 0.082,
-               "real_area_error": 0.558, "max_pressure_error": 1.11},
-    "refined": {"build_s": 18.3, "peak_memory_GB": 1.74, "k_P_error": 0.0027,
-                "real_area_error": 0.024, "max_pressure_error": 0.018},
-    "converged": {"build_s": 174.3, "peak_memory_GB": 7.82, "k_P_error": 0.0,
+    "paper": {"build_s": 5.6, "peak_memory_GB": 0.81, "k_P_error": 0.090,
+              "real_area_error": 0.840, "max_pressure_error": 3.67},
+    "graded": {"build_s": 14.6, "peak_memory_GB": 1.89, "k_P_error": 0.049,
+               "real_area_error": 0.554, "max_pressure_error": 1.11},
+    "refined": {"build_s": 12.8, "peak_memory_GB": 1.80, "k_P_error": 0.0046,
+                "real_area_error": 0.034, "max_pressure_error": 0.018},
+    "converged": {"build_s": 90.0, "peak_memory_GB": 7.88, "k_P_error": 0.0,
                   "real_area_error": 0.0, "max_pressure_error": 0.0},
-    "halfspace": {"build_s": 0.07, "peak_memory_GB": 0.21, "k_P_error": 0.165,
-                  "real_area_error": 0.040, "max_pressure_error": 0.026},
+    "halfspace": {"build_s": 0.05, "peak_memory_GB": 0.50, "k_P_error": 0.167,
+                  "real_area_error": 0.033, "max_pressure_error": 0.027},
 })
 
 #: Accuracy presets of a contact study: the settings (influence ``mesh`` preset,
@@ -107,32 +107,35 @@ FALLBACK_MESH_ERRORS = MappingProxyType({
 #: P = 0.3, 1 and 2-3 MPa; all for sigma 24.5 um, b 1 mm, nu = 0, L = 10 mm):
 #:
 #: - ``k_P_error``, ``real_area_error``, ``max_pressure_error``: the mesh,
-#:   against the "converged" preset (``results/benchmarks/influence_convergence.csv``;
-#:   paper mesh k_P +3..+11 %, area -80..-84 %, p_max +233..+366 %; refined
-#:   within 0.3 / 2.4 / 1.8 %; converged is the reference, 0 by definition).
+#:   against the "converged" preset (``results/reports/influence_convergence.csv``;
+#:   paper mesh k_P +1.9..+9.0 %, area -80.9..-84.0 %, p_max +233..+367 %;
+#:   refined within 0.5 / 3.4 / 1.8 %; converged is the reference, 0 by definition).
 #: - ``solver_*``: the solver tolerance, against the exact solution at equal
 #:   approach (``results/reports/speed_vs_error.csv``, paper mesh, Gaussian and
-#:   Sk -0.8 / Ku 4 cells; k_P floored by the stiffness CG tolerance 1e-6).
-#: - ``grid_change_*``: 60 x 60 against 120 x 120 over 9 mm (hybrid refined
-#:   influence, the same surfaces point-sampled). Real area and peak pressure
-#:   are NOT grid-converged at 0.15 mm (area +48..+63 %, p_max -39..-44 % from
-#:   60 to 120): the exponential ACF (Eq 1) keeps adding roughness at every
+#:   Sk -0.8 / Ku 4 cells; k_P floored by the stiffness CG tolerance 1e-6 at
+#:   6e-7; real area 0 from tol 1e-6 on, 2 % at tol 1e-4).
+#: - ``grid_change_*``: 60 x 60 against 240 x 240 over 9 mm, the finest grid
+#:   measured (hybrid refined influence, 4 Gaussian surfaces generated at 240
+#:   and point-sampled). Real area and peak pressure are NOT grid-converged:
+#:   from 60 to 120 to 240 elements the area falls by a factor 1.5-1.9 per
+#:   halving (60 gives +126..+189 % against 240, 120 gives +48..+54 %) and
+#:   p_max rises: the exponential ACF (Eq 1) keeps adding roughness at every
 #:   scale, so these two depend on the element size in every preset; k_P moves
-#:   by 1.4 % at most.
+#:   by 7.0 % at 0.3 MPa, 2.2 % at 1 MPa and 0.02 % at 3 MPa.
 #: - ``sampling_*``: relative 95 % half-width of the cell mean with that many
 #:   surfaces (Gaussian cell, hybrid refined, subsets of 120 solved surfaces;
 #:   largest at 0.3 MPa, about 1/3 of it at 3 MPa).
 #:
-#: Measured on 2 shared cores, 2026-11-23 (``results/reports/speed_vs_error.md``).
+#: Measured on 2 shared cores, 2026-11-24 (``results/reports/speed_vs_error.md``).
 ACCURACY_PRESETS = MappingProxyType({
     "paper": MappingProxyType({
         "description": "the paper's mesh and grid (Table 1), our CG solver",
         "mesh": "paper", "grid_per_9mm": 60, "element_size_m": 0.15e-3,
         "method": "cg", "tol": 1e-8, "precision": "mixed", "surfaces": 60,
-        "k_P_error": 0.113, "real_area_error": 0.84, "max_pressure_error": 3.66,
-        "solver_k_P_error": 2e-7, "solver_real_area_error": 0.0,
-        "grid_change_k_P": 0.014, "grid_change_real_area": 0.63,
-        "sampling_k_P": 0.021, "sampling_real_area": 0.028,
+        "k_P_error": 0.090, "real_area_error": 0.84, "max_pressure_error": 3.67,
+        "solver_k_P_error": 6e-7, "solver_real_area_error": 0.0,
+        "grid_change_k_P": 0.070, "grid_change_real_area": 1.89,
+        "sampling_k_P": 0.021, "sampling_real_area": 0.029,
         "source": "influence_convergence.csv (mesh); speed_vs_error.csv (solver, grid, "
                   "sampling)",
     }),
@@ -141,10 +144,10 @@ ACCURACY_PRESETS = MappingProxyType({
                        "(k_P) and 5 % (area); sampling within them from P = 1 MPa up",
         "mesh": "refined", "grid_per_9mm": 60, "element_size_m": 0.15e-3,
         "method": "cg", "tol": 1e-6, "precision": "mixed", "surfaces": 20,
-        "k_P_error": 0.0027, "real_area_error": 0.024, "max_pressure_error": 0.018,
-        "solver_k_P_error": 2e-7, "solver_real_area_error": 0.0,
-        "grid_change_k_P": 0.014, "grid_change_real_area": 0.63,
-        "sampling_k_P": 0.037, "sampling_real_area": 0.051,
+        "k_P_error": 0.0046, "real_area_error": 0.034, "max_pressure_error": 0.018,
+        "solver_k_P_error": 6e-7, "solver_real_area_error": 0.0,
+        "grid_change_k_P": 0.070, "grid_change_real_area": 1.89,
+        "sampling_k_P": 0.038, "sampling_real_area": 0.052,
         "source": "influence_convergence.csv (mesh); speed_vs_error.csv (solver, grid, "
                   "sampling)",
     }),
@@ -153,9 +156,9 @@ ACCURACY_PRESETS = MappingProxyType({
         "mesh": "converged", "grid_per_9mm": 60, "element_size_m": 0.15e-3,
         "method": "cg", "tol": 1e-10, "precision": "double", "surfaces": 120,
         "k_P_error": 0.0, "real_area_error": 0.0, "max_pressure_error": 0.0,
-        "solver_k_P_error": 2e-7, "solver_real_area_error": 0.0,
-        "grid_change_k_P": 0.014, "grid_change_real_area": 0.63,
-        "sampling_k_P": 0.014, "sampling_real_area": 0.020,
+        "solver_k_P_error": 6e-7, "solver_real_area_error": 0.0,
+        "grid_change_k_P": 0.070, "grid_change_real_area": 1.89,
+        "sampling_k_P": 0.015, "sampling_real_area": 0.020,
         "source": "reference of influence_convergence.csv; speed_vs_error.csv (solver, grid, "
                   "sampling)",
     }),
@@ -1161,11 +1164,11 @@ def speed_vs_error_report(
     ``out_png`` is one path or a list of two. Returns the tables (keys
     solver, mesh, grid, surfaces, recommendation).
 
-    Cost with the defaults (measured 2026-11-23, 2 shared cores, one BLAS
-    thread): about 10 minutes; memory is set by the 120 x 120 matrices (1.7 GB
-    each, a few held at once while the hybrid is built):
-    solver study 335 s (two cells), grid study 190 s (120 x 120: 29 s
-    influence + 152 s sweep), 120 surfaces 68 s.
+    Cost with the workflow's settings (grids 30-240; measured 2026-11-24, 2
+    cores, one BLAS thread): 401 s and a peak resident set of 1.4 GB (the
+    coarse "refined" models of the hybrid operators, 60 x 60 at most):
+    solver study about 240 s (two cells), grid study 83 s (240 x 240: 15 s
+    influence + 35 s sweep; 120 x 120: 15 s + 15 s), 120 surfaces 70 s.
     """
     say = progress or (lambda message: log.info("%s", message))
     started = time.perf_counter()

@@ -389,24 +389,51 @@ def _speed_settings():
     return config.get("reports", {}).get("speed_vs_error", {})
 
 
+def _speed_grid_coarse(grid):
+    """Coarse finite-element grid of the speed report's hybrid operator on
+    ``grid`` x ``grid`` (half the grid, at most 64 per side)."""
+    from roughcontact.operators import COARSE_MAX, default_coarse_grid
+
+    coarse = grid // 2
+    return coarse if coarse <= COARSE_MAX else default_coarse_grid([grid, grid])[0]
+
+
 def get_speed_vs_error_runtime(wildcards, attempt):
-    """Wall time [min] of the speed-against-error report: about 10 minutes
-    with its defaults (grid 60, grids up to 120, 4 surfaces, 120 for the
-    surface-count study), scaled by the grids and the surface counts."""
+    """Wall time [min] of the speed-against-error report, from its parts as
+    measured with the defaults (2026-11-24, 2 cores, 401 s in all): the solver
+    study on the body's grid with dense matrices (240 s at 60 x 60, 4 surfaces,
+    scaled as the contact jobs), the grid study with the matrix-free hybrid
+    operator (30 s per grid plus 50 s at 240 x 240, in proportion to n) and
+    the surface-count study (70 s for 120 surfaces at 60 x 60)."""
     settings = _speed_settings()
     grid = study.geometry_params(config["body"], config["surfaces"])["grid"]
-    finest = max(settings.get("grids", [30, 60, 120]))
-    grids = max(
-        _dense_scale(grid), _dense_scale([finest, finest]) / _dense_scale([120, 120])
+    surfaces = settings.get("surfaces", 4)
+    solver = 240 * _dense_scale(grid) * surfaces / 4
+    grids = sum(
+        (30 + 50 * (g / 240) ** 2) * surfaces / 4
+        for g in settings.get("grids", [30, 60, 120])
     )
-    counts = max(
-        1.0, settings.get("surfaces", 4) / 4, settings.get("count_surfaces", 120) / 120
-    )
-    return _runtime_minutes(600 * grids * counts, attempt)
+    counts = 70 * settings.get("count_surfaces", 120) / 120 * grid[0] * grid[1] / 3600
+    return _runtime_minutes(solver + grids + counts, attempt)
 
 
 def get_speed_vs_error_mem_mb(wildcards):
-    """Peak memory [MB] of the speed-against-error report: three matrices of
-    the finest grid at once (1.7 GB each at 120 x 120), plus 1 GB."""
-    finest = max(_speed_settings().get("grids", [30, 60, 120]))
-    return max(4000, int(1000 + 3 * 8 * finest**4 / 1e6))
+    """Peak memory [MB] of the speed-against-error report: the largest
+    finite-element build it makes (the body's grid with the "paper" mesh of
+    the solver study; the hybrid operators' coarse "refined" models), three dense
+    matrices of the body's grid, and 500 MB (measured 1.4 GB with the
+    defaults, against 2.9 GB from this estimate)."""
+    settings = _speed_settings()
+    params = study.geometry_params(config["body"], config["surfaces"])
+    n = params["grid"][0] * params["grid"][1]
+    dense = dict(params, operator="dense")
+    # the solver study's "paper" matrix; the hybrid operators' coarse models
+    builds = [dict(dense, mesh="paper")] + [
+        dict(dense, mesh="refined", grid=[_speed_grid_coarse(g)] * 2)
+        for g in [*settings.get("grids", [30, 60, 120]), params["grid"][0]]
+    ]
+    peak = max(
+        study.influence_cost(b, **_influence_build_settings()).peak_bytes
+        for b in builds
+    )
+    return int(500 + (peak + 3 * 8 * n**2) / 1e6)

@@ -237,6 +237,17 @@ def test_slurm_profile_gives_every_job_of_the_study_its_resources(tmp_path):
 
 
 @pytest.mark.workflow
+def test_slurm_resources_of_the_on_demand_speed_report(tmp_path):
+    """Measured with the paper's config (2 cores, 2026-11-24): 401 s, peak 1.4 GB.
+    The request covers that and fits the 24 GB machine it was measured on (its
+    grid study reaches 240 x 240 matrix-free, with no dense matrix of that grid)."""
+    text = slurm_dry_run(tmp_path, "results/reports/speed_vs_error.md")
+    (job,) = [j for j in dry_run_jobs(text) if j["rule"] == "speed_vs_error"]
+    runtime, mem_mb = int(job["resources"]["runtime"]), int(job["resources"]["mem_mb"])
+    assert runtime * 60 >= 401 and 1400 <= mem_mb <= 24000
+
+
+@pytest.mark.workflow
 def test_slurm_account_and_partition_from_the_command_line(tmp_path):
     text = slurm_dry_run(tmp_path, "results/config.yaml", "--default-resources",
                          "slurm_account=proj42", "slurm_partition=short")
