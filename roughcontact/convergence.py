@@ -14,8 +14,8 @@ small. :func:`influence_convergence` measures, per mesh preset,
 3. the rough-contact response that depends on them: for a few Gaussian
    surfaces swept over rigid approaches and read at given nominal pressures
    P exactly as the workflow's contact and aggregate jobs do, the normalized
-   stiffness ``k_P = (L / A_n) dF/dd`` (Eq 33), the real area fraction, the peak
-   pressure and the asperity deflection ``d_a = d - d_b`` (Eq 35, 45),
+   stiffness ``k_P = (L / A_n) dF/dd`` (Eq 33), the real area fraction, the
+   peak pressure and the asperity deflection ``d_a = d - d_b`` (Eq 35, 45),
 
 and the relative error of every number against a reference mesh (by default
 the ``"converged"`` preset). Love's elastic half-space (``halfspace_influence``)
@@ -195,8 +195,8 @@ def _contact_response(ec: np.ndarray, geom: BlockGeometry, task: dict) -> dict:
     without a trial solve), :func:`roughcontact.nondim.solve_cell` (every
     surface in one batch, tangent stiffness at every step) and
     :func:`roughcontact.aggregate.aggregate_cell` (each surface's curves
-    interpolated linearly in log P, unconverged steps excluded, then averaged
-    over the surfaces at equal P, as the paper's curves).
+    read as a power law between its solved steps, unconverged steps excluded,
+    then averaged over the surfaces at equal P, as the paper's curves).
     """
     from . import aggregate, nondim
     from .pipeline import sweep_approaches
@@ -384,10 +384,9 @@ def influence_convergence(
     ``surface.derive_seeds(seed, "influence_convergence", surfaces)``) over
     rigid approaches (displacement control, Eq 27), as a workflow contact job
     does, and reads at each nominal pressure in ``pressures``, as the
-    aggregation does: ``k_P = (L / A_n)
-    dF/dd`` (Eq 33), real area fraction, peak pressure, approach d,
-    mean-plane deflection d_b (Eq 35) and asperity deflection d_a = d - d_b
-    (Eq 45), each averaged over the surfaces at equal P.
+    aggregation does: ``k_P = (L / A_n) dF/dd`` (Eq 33), real area fraction,
+    peak pressure, approach d, mean-plane deflection d_b (Eq 35) and asperity
+    deflection d_a = d - d_b (Eq 45), each averaged over the surfaces at equal P.
 
     Parameters
     ----------

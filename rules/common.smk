@@ -389,15 +389,6 @@ def _speed_settings():
     return config.get("reports", {}).get("speed_vs_error", {})
 
 
-def _speed_grid_coarse(grid):
-    """Coarse finite-element grid of the speed report's hybrid operator on
-    ``grid`` x ``grid`` (half the grid, at most 64 per side)."""
-    from roughcontact.operators import COARSE_MAX, default_coarse_grid
-
-    coarse = grid // 2
-    return coarse if coarse <= COARSE_MAX else default_coarse_grid([grid, grid])[0]
-
-
 def get_speed_vs_error_runtime(wildcards, attempt):
     """Wall time [min] of the speed-against-error report, from its parts as
     measured with the defaults (2026-11-24, 2 cores, 401 s in all): the solver
@@ -423,13 +414,15 @@ def get_speed_vs_error_mem_mb(wildcards):
     the solver study; the hybrid operators' coarse "refined" models), three dense
     matrices of the body's grid, and 500 MB (measured 1.4 GB with the
     defaults, against 2.9 GB from this estimate)."""
+    from roughcontact.speed import grid_study_coarse
+
     settings = _speed_settings()
     params = study.geometry_params(config["body"], config["surfaces"])
     n = params["grid"][0] * params["grid"][1]
     dense = dict(params, operator="dense")
     # the solver study's "paper" matrix; the hybrid operators' coarse models
     builds = [dict(dense, mesh="paper")] + [
-        dict(dense, mesh="refined", grid=[_speed_grid_coarse(g)] * 2)
+        dict(dense, mesh="refined", grid=[grid_study_coarse(g)] * 2)
         for g in [*settings.get("grids", [30, 60, 120]), params["grid"][0]]
     ]
     peak = max(
