@@ -47,7 +47,6 @@ import logging
 import math
 import os
 import pickle
-import resource
 import subprocess
 import sys
 import tempfile
@@ -66,6 +65,7 @@ from .influence import (
     halfspace_influence,
     unit_modulus_influence,
 )
+from .provenance import peak_rss_bytes
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -153,12 +153,6 @@ def mesh_label(mesh: str | MeshSpec) -> str:
     return f"{mesh.element} r{mesh.refinement} {through}{coarse}"
 
 
-def _rss_bytes() -> float:
-    """Peak resident set of this process so far [bytes] (Linux: ru_maxrss in KiB)."""
-    scale = 1 if sys.platform == "darwin" else 1024
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * scale
-
-
 def _centre_entries(ec: np.ndarray, geom: BlockGeometry, far: int) -> dict:
     """Centre-row entries E C / h and row-sum checks of one matrix ``ec = E * C`` [m]."""
     nx, ny = geom.grid
@@ -226,7 +220,7 @@ def _contact_response(ec: np.ndarray, geom: BlockGeometry, task: dict) -> dict:
 def _run_task(task: dict) -> dict:
     """Build one influence matrix, measure it, and (optionally) solve the contact problem."""
     geom: BlockGeometry = task["geometry"]
-    rss_before = _rss_bytes()
+    rss_before = peak_rss_bytes()
     start = time.perf_counter()
     stored = task.get("stored")
     if stored is not None:  # built by the workflow's influence rule: reuse it and its costs
@@ -253,7 +247,7 @@ def _run_task(task: dict) -> dict:
         dofs, estimate = cost.dofs, cost.peak_bytes / GB
         ec = unit_modulus_influence(geom, solver=task["solver"], max_bytes=task["max_bytes"])
     seconds = time.perf_counter() - start
-    peak = _rss_bytes()
+    peak = peak_rss_bytes()
     row = {
         "dofs": dofs, "build_s": seconds, "estimate_GB": estimate,
         "peak_memory_GB": peak / GB if task["isolated"] else math.nan,

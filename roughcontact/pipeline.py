@@ -25,7 +25,6 @@ import dataclasses
 import hashlib
 import json
 import logging
-import resource
 import time
 from pathlib import Path
 
@@ -36,7 +35,7 @@ import pandas as pd
 from . import aggregate, influence, johnson, measured, nondim, operators
 from .errors import MeasurementError
 from .halfspace import halfspace_influence
-from .provenance import atomic_path, canonical_json, config_hash, provenance
+from .provenance import atomic_path, canonical_json, config_hash, peak_rss_bytes, provenance
 from .storage import file_sha256, read_surfaces, write_h5
 from .study import (
     block_geometry,
@@ -254,10 +253,6 @@ def build_measured_cell(params: dict, study_seed: int, path, config=None) -> dic
 # Influence jobs: the elastic body of a geometry
 
 
-def _peak_rss_gb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9  # Linux: KiB
-
-
 def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
     n = unit.shape[0]
     nx, ny = geom.grid
@@ -372,7 +367,7 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
         "dofs": int(cost.dofs),
         "estimated_peak_gb": cost.peak_bytes / 1e9,
         "build_seconds": seconds,
-        "peak_rss_gb": _peak_rss_gb(),
+        "peak_rss_gb": peak_rss_bytes() / 1e9,
         "solver": solver,
         "content_sha256": operators.content_sha256(unit),
         **{f"check_{k}": v for k, v in checks.items()},
@@ -532,7 +527,7 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
     for index, cell in enumerate(cells):
         key = contact_key(cell)
         nd, attrs = read_contact(contact_paths[key])
-        sigma, E = cell["sigma_um"] * 1e-6, cell["E_MPa"] * 1e6
+        sigma, E = cell["sigma_um"] * UM, cell["E_MPa"] * 1e6
         physical = nondim.to_physical(nd, sigma, E)
         p_min, p_max = (p * 1e6 for p in cell["pressure_MPa"])
         frame = aggregate.aggregate_cell(physical, aggregate.pressure_axis(p_min, p_max, levels))

@@ -12,7 +12,9 @@ import datetime as _dt
 import hashlib
 import json
 import os
+import resource
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +22,12 @@ import numpy as np
 from . import __version__
 
 _SOURCE_DIR = Path(__file__).resolve().parent.parent
+
+
+def peak_rss_bytes() -> float:
+    """Peak resident set of this process so far [bytes] (``ru_maxrss``: KiB on Linux)."""
+    scale = 1 if sys.platform == "darwin" else 1024
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * scale
 
 
 def git_commit(path: str | os.PathLike | None = None) -> str:
