@@ -54,8 +54,8 @@ import scipy.fft
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact.contact import kkt_residual, solve, solve_many, sweep  # noqa: E402
-from roughcontact.halfspace import PeriodicHalfSpace, halfspace_influence  # noqa: E402
+from roughcontact.contact.solver import kkt_residual, solve, solve_many, sweep  # noqa: E402
+from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence  # noqa: E402
 
 SIGMA = 24.5e-6  # surface standard deviation [m]
 CORRELATION = 1.0e-3  # ACF length b at 10 % [m] (Eq 1)
@@ -97,8 +97,8 @@ def initial_gaps(z: np.ndarray) -> np.ndarray:
 
 def paper_problem(count: int):
     """The paper's block influence matrix [m/Pa], element area [m^2] and gaps [m]."""
-    from roughcontact.influence import BlockGeometry, influence_matrix
-    from roughcontact.surface import SurfaceSpec, generate_many
+    from roughcontact.elasticity.influence import BlockGeometry, influence_matrix
+    from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many
 
     geometry = BlockGeometry()
     if MATRIX_CACHE.exists():

@@ -59,7 +59,7 @@ from pathlib import Path
 
 import numpy as np
 
-from roughcontact.influence import (
+from roughcontact.elasticity.influence import (
     MESH_PRESETS,
     BlockGeometry,
     MeshSpec,
@@ -250,7 +250,7 @@ def convergence_study() -> None:
     """``influence_convergence`` on the paper's block (nu = 0), CSV and PNG."""
     import logging
 
-    from roughcontact.convergence import influence_convergence, plot_influence_convergence
+    from roughcontact.reports.convergence import influence_convergence, plot_influence_convergence
 
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
     table = influence_convergence(paper_block("paper"), list(MESH_PRESETS))
@@ -266,9 +266,9 @@ def run_hybrid(which: str) -> dict:
     """Build "converged" or "hybrid:<coarse mesh>" at 60 x 60; entries and contact response."""
     import dataclasses
 
-    from roughcontact.convergence import _contact_response
-    from roughcontact.influence import hybrid_unit_modulus_influence
-    from roughcontact.surface import SurfaceSpec, derive_seeds, generate_many
+    from roughcontact.contact.cell import sweep_and_aggregate
+    from roughcontact.elasticity.influence import hybrid_unit_modulus_influence
+    from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
 
     geom = paper_block("converged")
     start = time.perf_counter()
@@ -281,12 +281,19 @@ def run_hybrid(which: str) -> dict:
     seconds = time.perf_counter() - start
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9
     np.save(OUT / f"ec_{which.replace(':', '_')}.npy", ec)
-    spec = SurfaceSpec(grid=geom.grid, size=geom.size, corr_length=(1e-3, 1e-3), sigma=24.5e-6)
-    task = {"heights": generate_many(spec, derive_seeds(2006, "influence_convergence", 3)),
-            "pressures": (0.3e6, 1e6, 2e6), "tol": 1e-10}
-    response = _contact_response(ec, geom, task)
+    sigma = 24.5e-6
+    spec = SurfaceSpec(grid=geom.grid, size=geom.size, corr_length=(1e-3, 1e-3), sigma=sigma)
+    heights = generate_many(spec, derive_seeds(2006, "influence_convergence", 3)) / sigma
+    # swept and read as the convergence report does (40 steps to 1.1 P_max, exact-ish CG)
+    _, _, frame = sweep_and_aggregate(ec, heights, geom, sigma=sigma,
+                                      pressures=(0.3e6, 1e6, 2e6), steps=40, reach=1.1,
+                                      method="cg", tol=1e-10, precision="double")
+    columns = {"k_P_Pa": "normalized_stiffness", "real_area_fraction": "real_area_fraction",
+               "max_pressure_Pa": "max_pressure", "approach_m": "approach",
+               "mean_plane_deflection_m": "mean_plane_deflection",
+               "asperity_deflection_m": "asperity_deflection"}
     return {"seconds": seconds, "peak_gb": peak,
-            **{k: np.asarray(v).tolist() for k, v in response.items() if k != "reached"}}
+            **{k: frame[f"{c}_mean"].tolist() for k, c in columns.items()}}
 
 
 def hybrid_study() -> None:

@@ -38,7 +38,7 @@ C. Build time and peak memory: the dense finite-element matrix
    the matrix alone is 8 n^2 bytes).
 D. Time per contact solve: ``nondim.solve_cell`` on 2 Gaussian surfaces
    (exponential ACF, b = 1 mm, sigma = 1) at 10 approaches up to
-   ``pipeline.sweep_approaches(heights, 4.0, 10)``, method "cg", tol 1e-8,
+   ``contact.cell.approach_grid(heights, 4.0, 10)``, method "cg", tol 1e-8,
    precision "mixed", tangent stiffness at every step: at 60 x 60 on the dense
    "refined" matrix and the hybrid operator (coarse 30), with the largest
    relative difference of k_P, real area and peak pressure at the last step;
@@ -77,21 +77,22 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact import fem, nondim  # noqa: E402
-from roughcontact.influence import (  # noqa: E402
+from roughcontact.contact import nondim  # noqa: E402
+from roughcontact.contact.cell import approach_grid  # noqa: E402
+from roughcontact.elasticity import fem  # noqa: E402
+from roughcontact.elasticity.influence import (  # noqa: E402
     BlockGeometry,
     build_mesh,
     estimate_cost,
     unit_modulus_influence,
 )
-from roughcontact.operators import (  # noqa: E402
+from roughcontact.elasticity.operators import (  # noqa: E402
     BlockOperator,
     block_operator,
     default_coarse_grid,
     halfspace_operator,
 )
-from roughcontact.pipeline import sweep_approaches  # noqa: E402
-from roughcontact.surface import SurfaceSpec, generate_many  # noqa: E402
+from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many  # noqa: E402
 
 OUT = ROOT / "results" / "benchmarks"
 SIZE = (9e-3, 9e-3)  # plan size of the block [m]
@@ -260,7 +261,7 @@ def case_solve(model: str, grid: int, coarse: int | None) -> dict:
     build_s = time.perf_counter() - start
     spec = SurfaceSpec(grid=geom.grid, size=SIZE, corr_length=(1e-3, 1e-3), sigma=1.0)
     heights = generate_many(spec, SEEDS)
-    approaches = sweep_approaches(heights, PRESSURE_END, STEPS)
+    approaches = approach_grid(heights, PRESSURE_END, STEPS)
     hx, hy = geom.spacing
     start = time.perf_counter()
     result = nondim.solve_cell(unit, heights, thickness=geom.thickness, element_area=hx * hy,

@@ -52,7 +52,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_contact import NU, E, periodic_problem, score  # noqa: E402
 
-from roughcontact.contact import solve  # noqa: E402
+from roughcontact.contact.solver import solve  # noqa: E402
 
 # ----------------------------------------------------------------- part 1
 
@@ -130,7 +130,7 @@ SIZE2, THICK, N = 9e-3, 1e-3, 60
 
 def fe_matrix(nu: float, mesh: str, base: str) -> np.ndarray:
     """E * C of the FE block [m] (symmetric part), cached in /tmp."""
-    from roughcontact.influence import BlockGeometry, unit_modulus_influence
+    from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 
     cache = Path(f"/tmp/roughcontact_peers_{mesh}_{base}_nu{nu:g}.npy")
     if cache.exists():

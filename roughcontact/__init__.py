@@ -7,7 +7,7 @@ Proc. IMechE Part J 220, 65-77, with converged alternatives beside it.
 
 from importlib.metadata import PackageNotFoundError, version
 
-from .errors import InfeasibleMoments
+from roughcontact.errors import InfeasibleMoments
 
 try:
     __version__ = version("roughcontact")

@@ -7,8 +7,8 @@ import re
 
 from snakemake.exceptions import WorkflowError
 
-from roughcontact import study
-from roughcontact.provenance import config_hash
+from roughcontact.study import cells as study
+from roughcontact.study.provenance import config_hash
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = str(config.get("blas_threads", 1))
@@ -414,7 +414,7 @@ def get_speed_vs_error_mem_mb(wildcards):
     the solver study; the hybrid operators' coarse "refined" models), three dense
     matrices of the body's grid, and 500 MB (measured 1.4 GB with the
     defaults, against 2.9 GB from this estimate)."""
-    from roughcontact.speed import grid_study_coarse
+    from roughcontact.reports.speed import grid_study_coarse
 
     settings = _speed_settings()
     params = study.geometry_params(config["body"], config["surfaces"])

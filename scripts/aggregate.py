@@ -1,8 +1,8 @@
 """Snakemake entry point of rule `aggregate`: a figure's or sweep's tables."""
 
-from roughcontact.logs import route_logging
-from roughcontact.pipeline import aggregate_study
-from roughcontact.study import contact_key
+from roughcontact.study.cells import contact_key
+from roughcontact.study.jobs import aggregate_study
+from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])
 cells = snakemake.params.cells

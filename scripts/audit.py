@@ -1,8 +1,8 @@
 """Snakemake entry point of rule `audit`: one row per study cell, flagged cells first."""
 
-from roughcontact.audit import audit_table, write_audit
-from roughcontact.logs import route_logging
-from roughcontact.provenance import config_hash
+from roughcontact.reports.audit import audit_table, write_audit
+from roughcontact.study.logs import route_logging
+from roughcontact.study.provenance import config_hash
 
 route_logging(snakemake.log[0])
 table = audit_table(snakemake.params.studies)

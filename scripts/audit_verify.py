@@ -1,8 +1,8 @@
 """Snakemake entry point of rule `audit_verify`: re-solve a seeded sample and compare."""
 
-from roughcontact.audit import verify_sample
-from roughcontact.logs import route_logging
-from roughcontact.provenance import atomic_path
+from roughcontact.reports.audit import verify_sample
+from roughcontact.study.logs import route_logging
+from roughcontact.study.provenance import atomic_path
 
 route_logging(snakemake.log[0])
 table = verify_sample(snakemake.params.jobs, snakemake.params.sample, snakemake.params.seed,

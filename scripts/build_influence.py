@@ -2,8 +2,8 @@
 
 import os
 
-from roughcontact.logs import route_logging
-from roughcontact.pipeline import build_influence
+from roughcontact.study.jobs import build_influence
+from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])
 # the sparse factorization is the one multithreaded step of the pipeline

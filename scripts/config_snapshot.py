@@ -2,7 +2,7 @@
 
 import yaml
 
-from roughcontact.provenance import atomic_path, config_hash
+from roughcontact.study.provenance import atomic_path, config_hash
 
 config = dict(snakemake.config)
 with atomic_path(snakemake.output[0]) as tmp:

@@ -1,7 +1,7 @@
 """Snakemake entry point of rule `surfaces`: generate (or import, if measured) one surface cell."""
 
-from roughcontact.logs import route_logging
-from roughcontact.pipeline import build_surface_cell
+from roughcontact.study.jobs import build_surface_cell
+from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])
 build_surface_cell(

@@ -2,10 +2,10 @@
 
 import logging
 
-from roughcontact.convergence import influence_convergence, plot_influence_convergence
-from roughcontact.logs import route_logging
-from roughcontact.provenance import atomic_path
-from roughcontact.study import block_geometry
+from roughcontact.reports.convergence import influence_convergence, plot_influence_convergence
+from roughcontact.study.cells import block_geometry
+from roughcontact.study.logs import route_logging
+from roughcontact.study.provenance import atomic_path
 
 route_logging(snakemake.log[0])
 log = logging.getLogger("roughcontact.report")

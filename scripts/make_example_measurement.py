@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-from roughcontact.provenance import atomic_path
+from roughcontact.study.provenance import atomic_path
 
 
 def plateau_honed(grid: int, spacing_mm: float, seed: int, *, plateau_sigma_um: float,

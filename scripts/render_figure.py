@@ -1,7 +1,7 @@
 """Snakemake entry point of rule `figure`: execute a figure notebook with papermill."""
 
-from roughcontact.logs import route_logging
-from roughcontact.plotting import execute_notebook
+from roughcontact.reports.plotting import execute_notebook
+from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])
 execute_notebook(

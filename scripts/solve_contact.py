@@ -1,7 +1,7 @@
 """Snakemake entry point of rule `contact`: one surface cell on one geometry."""
 
-from roughcontact.logs import route_logging
-from roughcontact.pipeline import solve_contact_job
+from roughcontact.study.jobs import solve_contact_job
+from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])
 solve_contact_job(

@@ -2,8 +2,8 @@
 
 import logging
 
-from roughcontact.logs import route_logging
-from roughcontact.speed import speed_vs_error_report
+from roughcontact.reports.speed import speed_vs_error_report
+from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])
 log = logging.getLogger("roughcontact.report")

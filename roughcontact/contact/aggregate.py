@@ -1,0 +1,323 @@
+"""Per-cell statistics of force-deflection sweeps on a common nominal-pressure axis.
+
+The paper averages 60 surfaces per set of statistics at equal nominal
+pressure P (Figs 7, 9, 11-14 of Kumar, Sadeghi & Krousgrill 2006). Each
+surface's sweep is solved at prescribed approaches, so its P values differ
+from surface to surface; :func:`aggregate_cell` interpolates every surface's
+curves onto one pressure axis and reports mean and Student-t confidence
+band per pressure level. :func:`mean_plane_modulus` fits the bulk modulus
+``E_u = P L / d_b`` of Eq 36-44.
+
+Interpolation: piecewise linear in ``log P`` and ``log q`` (a power law
+between two solved steps), over the converged steps with ``P > 0`` of one
+surface; exact for quantities that follow a power law of P, such as the
+mean-plane deflection ``d_b = P L / E_u`` (Eq 36), so the averaged curves
+keep Eq 36 to rounding at every level. A surface whose values of a quantity
+are not all positive is interpolated linearly in ``q`` instead. The
+asperity deflection is not interpolated on its own: it is ``d - d_b`` of the
+interpolated approach and mean-plane deflection, so ``d = d_a + d_b`` (Eq 45)
+holds at every level too. A pressure level outside a surface's solved range
+``[P_first, P_last]`` is never extrapolated: that surface is left out there
+(the ``*_count`` columns say how many surfaces a value rests on; a count of
+0 gives NaN).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import scipy.stats
+
+from roughcontact.contact.nondim import PhysicalSweep
+
+__all__ = [
+    "QUANTITIES",
+    "aggregate_cell",
+    "covered_range",
+    "mean_plane_modulus",
+    "modulus_summary",
+    "pressure_axis",
+    "surface_curves",
+]
+
+#: Aggregated quantities: name -> (unit, symbol and equation of Kumar et al. 2006).
+QUANTITIES = {
+    "normalized_stiffness": ("Pa", "k_P = (L / A_n) dF/dd, tangent at fixed contact set (Eq 33)"),
+    "approach": ("m", "d, total deflection (rigid approach)"),
+    "mean_plane_deflection": ("m", "d_b, mean of u (Eq 35)"),
+    "asperity_deflection": ("m", "d_a = d - d_b (Eq 45)"),
+    "real_area_fraction": ("1", "real contact area / nominal area"),
+    "max_pressure": ("Pa", "largest element pressure"),
+}
+
+INTERPOLATION = ("piecewise linear in log(P) and log(q) (linear in q where q <= 0) over "
+                 "converged steps, no extrapolation; d_a = d - d_b of the interpolated curves")
+
+
+def pressure_axis(P_min: float, P_max: float, n: int, spacing: str = "log") -> np.ndarray:
+    """Nominal-pressure levels [Pa] from ``P_min`` to ``P_max`` inclusive.
+
+    Parameters
+    ----------
+    P_min, P_max : float
+        First and last level [Pa], ``0 < P_min < P_max``.
+    n : int
+        Number of levels, at least 2.
+    spacing : {"log", "linear"}
+        Geometric (equal ratios, the natural axis of Figs 7, 12, 13) or equal steps.
+    """
+    try:
+        low, high = float(P_min), float(P_max)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"P_min and P_max must be numbers [Pa], got {P_min!r}, {P_max!r}"
+        ) from None
+    if not (np.isfinite(low) and np.isfinite(high) and 0.0 < low < high):
+        raise ValueError(f"need 0 < P_min < P_max (finite, Pa), got {P_min!r}, {P_max!r}")
+    if isinstance(n, bool) or int(n) != n or n < 2:
+        raise ValueError(f"n must be an integer >= 2, got {n!r}")
+    if spacing == "log":
+        return np.geomspace(low, high, int(n))
+    if spacing == "linear":
+        return np.linspace(low, high, int(n))
+    raise ValueError(f"spacing must be 'log' or 'linear', got {spacing!r}")
+
+
+def _check_sweep(sweep) -> PhysicalSweep:
+    if not isinstance(sweep, PhysicalSweep):
+        raise TypeError(
+            "sweep_physical must be a roughcontact.nondim.PhysicalSweep (from to_physical or "
+            f"PhysicalSweep.from_contact_sweep), got {type(sweep).__name__}"
+        )
+    return sweep
+
+
+def _usable(sweep: PhysicalSweep, quantity: str) -> np.ndarray:
+    """(m, k) mask of steps a quantity may be interpolated from."""
+    P = sweep.nominal_pressure
+    mask = sweep.converged & np.isfinite(P) & (P > 0.0)
+    if quantity == "normalized_stiffness":
+        mask &= sweep.stiffness_converged
+    return mask & np.isfinite(getattr(sweep, quantity))
+
+
+def _increasing(P: np.ndarray) -> np.ndarray:
+    """Mask of the points strictly above every earlier point (keeps P monotone)."""
+    previous = np.maximum.accumulate(np.concatenate(([-np.inf], P[:-1])))
+    return P > previous
+
+
+def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> np.ndarray:
+    """Each surface's ``quantity`` interpolated onto ``pressures``, (m, len(pressures)).
+
+    A power law (linear in ``log P`` and ``log q``; linear in ``q`` for a
+    surface with a value ``q <= 0``) between the surface's usable steps
+    (contact solve converged, and for ``normalized_stiffness`` the stiffness solve too;
+    ``P > 0``; ``P`` strictly increasing along the steps, later steps that do
+    not raise ``P`` are dropped). NaN outside the surface's usable range
+    (no extrapolation) and for a surface without usable steps. The asperity
+    deflection is the difference of the approach's and the mean-plane
+    deflection's curves (Eq 45).
+    """
+    sweep = _check_sweep(sweep_physical)
+    if quantity not in QUANTITIES:
+        raise ValueError(f"quantity must be one of {tuple(QUANTITIES)}, got {quantity!r}")
+    if quantity == "asperity_deflection":  # Eq 45 at every level
+        return (surface_curves(sweep, pressures, "approach")
+                - surface_curves(sweep, pressures, "mean_plane_deflection"))
+    levels = np.asarray(pressures, dtype=float)
+    if levels.ndim != 1 or not np.isfinite(levels).all() or (levels <= 0.0).any():
+        raise ValueError("pressures must be a 1-d array of finite positive levels [Pa]")
+    values = np.asarray(getattr(sweep, quantity), dtype=float)
+    usable = _usable(sweep, quantity)
+    out = np.full((values.shape[0], levels.size), np.nan)
+    for j in range(values.shape[0]):
+        P = sweep.nominal_pressure[j, usable[j]]
+        y = values[j, usable[j]]
+        if P.size == 0:
+            continue
+        keep = _increasing(P)
+        P, y = P[keep], y[keep]
+        inside = (levels >= P[0]) & (levels <= P[-1])
+        x = np.log(levels[inside])
+        if (y > 0.0).all():
+            out[j, inside] = np.exp(np.interp(x, np.log(P), np.log(y)))
+        else:
+            out[j, inside] = np.interp(x, np.log(P), y)
+    return out
+
+
+def _statistics(samples: np.ndarray, confidence: float):
+    """Mean, Student-t half-width and count per column, ignoring NaN."""
+    finite = np.isfinite(samples)
+    count = finite.sum(axis=0)
+    filled = np.where(finite, samples, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.where(count > 0, filled.sum(axis=0) / count, np.nan)
+        deviation = np.where(finite, samples - mean, 0.0)
+        variance = np.where(count > 1, (deviation**2).sum(axis=0) / (count - 1), np.nan)
+        t = scipy.stats.t.ppf(0.5 * (1.0 + confidence), np.maximum(count - 1, 1))
+        half_width = np.where(count > 1, t * np.sqrt(variance / count), np.nan)
+    return mean, half_width, count
+
+
+def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
+                   confidence: float = 0.95) -> pd.DataFrame:
+    """Mean and confidence band over the surfaces of a cell at each nominal pressure.
+
+    Every surface's curves are interpolated onto ``pressures`` by
+    :func:`surface_curves` (linear in log P, no extrapolation, unconverged
+    steps excluded), then at each level the mean over the surfaces that
+    cover it, the half-width ``t_{(1+c)/2, n-1} s / sqrt(n)`` of the
+    two-sided Student-t confidence interval of that mean (``s`` the sample
+    standard deviation, ``n`` the count; NaN for ``n < 2``) and ``n`` are
+    reported.
+
+    Parameters
+    ----------
+    sweep_physical : PhysicalSweep
+        SI sweep of the cell (:func:`roughcontact.nondim.to_physical`).
+    pressures : array_like
+        Nominal-pressure levels [Pa], positive (:func:`pressure_axis`).
+    confidence : float
+        Confidence level of the band, in (0, 1).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per level. Columns: ``nominal_pressure`` [Pa]; for each
+        quantity ``q`` of ``QUANTITIES`` (``normalized_stiffness`` k_P [Pa],
+        ``approach`` d [m], ``mean_plane_deflection`` d_b [m],
+        ``asperity_deflection`` d_a [m], ``real_area_fraction`` [-],
+        ``max_pressure`` [Pa]): ``q_mean``, ``q_half_width`` (same unit) and
+        ``q_count`` (surfaces used; fewer than ``surfaces`` where the level
+        lies outside some surfaces' swept range, 0 with NaN values where it
+        lies outside all); ``surfaces`` (m); ``unconverged_steps`` and
+        ``unconverged_stiffness_steps``, the cell's totals (all surfaces and
+        steps, repeated on every row) of steps excluded because the contact
+        solve did not converge, respectively because the contact solve
+        converged but the stiffness solve did not (excluded from k_P only).
+        ``frame.attrs`` holds ``units``, ``confidence``, ``interpolation``,
+        ``sigma``, ``E``, ``thickness`` and ``nominal_area``.
+    """
+    sweep = _check_sweep(sweep_physical)
+    try:
+        confidence = float(confidence)
+    except (TypeError, ValueError):
+        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}") from None
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+    levels = np.asarray(pressures, dtype=float)
+    m = sweep.nominal_pressure.shape[0]
+    columns = {"nominal_pressure": levels}
+    units = {"nominal_pressure": "Pa"}
+    for quantity, (unit, _) in QUANTITIES.items():
+        samples = surface_curves(sweep, levels, quantity)
+        mean, half_width, count = _statistics(samples, confidence)
+        columns[f"{quantity}_mean"] = mean
+        columns[f"{quantity}_half_width"] = half_width
+        columns[f"{quantity}_count"] = count
+        units.update({f"{quantity}_mean": unit, f"{quantity}_half_width": unit,
+                      f"{quantity}_count": "1"})
+    columns["surfaces"] = np.full(levels.size, m)
+    columns["unconverged_steps"] = np.full(levels.size, int((~sweep.converged).sum()))
+    columns["unconverged_stiffness_steps"] = np.full(
+        levels.size, int((sweep.converged & ~sweep.stiffness_converged).sum()))
+    units.update(surfaces="1", unconverged_steps="1", unconverged_stiffness_steps="1")
+    frame = pd.DataFrame(columns)
+    frame.attrs.update(units=units, confidence=confidence, interpolation=INTERPOLATION,
+                       sigma=sweep.sigma, E=sweep.E, thickness=sweep.thickness,
+                       nominal_area=sweep.nominal_area)
+    return frame
+
+
+def covered_range(sweep_physical: PhysicalSweep) -> tuple[float, float]:
+    """Nominal-pressure range [Pa] covered by every surface's converged steps.
+
+    ``(max_j P_first_j, min_j P_last_j)``: a :func:`pressure_axis` inside it
+    gives full counts (for all but the stiffness, which may lose a few steps
+    more). Raises ``ValueError`` if the surfaces' ranges do not overlap.
+    """
+    sweep = _check_sweep(sweep_physical)
+    usable = _usable(sweep, "approach")
+    P = np.where(usable, sweep.nominal_pressure, np.nan)
+    if not usable.any(axis=1).all():
+        raise ValueError("some surfaces have no converged step with P > 0")
+    low, high = float(np.nanmax(np.nanmin(P, axis=1))), float(np.nanmin(np.nanmax(P, axis=1)))
+    if not low < high:
+        raise ValueError(
+            f"the surfaces' pressure ranges do not overlap: {low:.6g} >= {high:.6g} Pa"
+        )
+    return low, high
+
+
+def mean_plane_modulus(sweep_physical: PhysicalSweep,
+                       thickness: float | None = None) -> pd.DataFrame:
+    """Apparent bulk modulus ``E_u = P L / d_b`` of each surface (Eq 36-44).
+
+    Fits ``P = s d_b`` by least squares through the origin over the
+    surface's converged steps with ``P > 0``: ``s = sum(P d_b) / sum(d_b^2)``
+    and ``E_u = s L``. For nu = 0 and a block whose influence rows sum to
+    ``L/E`` (Eq 38), ``d_b = P L / E`` exactly and ``E_u = E``.
+
+    Parameters
+    ----------
+    sweep_physical : PhysicalSweep
+    thickness : float, optional
+        ``L`` [m]; default ``sweep_physical.thickness``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per surface: ``surface``, ``mean_plane_modulus`` (E_u [Pa]),
+        ``linearity_residual`` (``max |P - s d_b| / max P`` [-], 0 for an
+        exactly linear response), ``steps_used``. NaN where no step is usable.
+    """
+    sweep = _check_sweep(sweep_physical)
+    length = sweep.thickness if thickness is None else float(thickness)
+    if not (np.isfinite(length) and length > 0.0):
+        raise ValueError(f"thickness must be a finite positive length [m], got {thickness!r}")
+    usable = _usable(sweep, "mean_plane_deflection")
+    m = usable.shape[0]
+    modulus = np.full(m, np.nan)
+    residual = np.full(m, np.nan)
+    for j in range(m):
+        P = sweep.nominal_pressure[j, usable[j]]
+        d_b = sweep.mean_plane_deflection[j, usable[j]]
+        if P.size == 0 or not (d_b**2).sum() > 0.0:
+            continue
+        slope = (P * d_b).sum() / (d_b**2).sum()
+        modulus[j] = slope * length
+        residual[j] = np.abs(P - slope * d_b).max() / P.max()
+    frame = pd.DataFrame({"surface": np.arange(m), "mean_plane_modulus": modulus,
+                          "linearity_residual": residual, "steps_used": usable.sum(axis=1)})
+    frame.attrs.update(units={"mean_plane_modulus": "Pa", "linearity_residual": "1"},
+                       thickness=length)
+    return frame
+
+
+def modulus_summary(per_surface: pd.DataFrame, E: float) -> pd.Series:
+    """Per-cell summary of :func:`mean_plane_modulus` against the true modulus ``E`` [Pa].
+
+    Returns a Series with ``surfaces`` (with a finite E_u), ``mean``, ``std``
+    (ddof 1), ``min``, ``max`` [Pa], ``relative_deviation`` (``mean / E - 1``),
+    ``max_relative_deviation`` (``max |E_u / E - 1|``) and
+    ``max_linearity_residual``.
+    """
+    E = float(E)
+    if not (np.isfinite(E) and E > 0.0):
+        raise ValueError(f"E must be a finite positive modulus [Pa], got {E!r}")
+    values = per_surface["mean_plane_modulus"].to_numpy(dtype=float)
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        raise ValueError("no surface has a finite mean-plane modulus")
+    return pd.Series({
+        "surfaces": values.size,
+        "mean": values.mean(),
+        "std": values.std(ddof=1) if values.size > 1 else np.nan,
+        "min": values.min(),
+        "max": values.max(),
+        "relative_deviation": values.mean() / E - 1.0,
+        "max_relative_deviation": np.abs(values / E - 1.0).max(),
+        "max_linearity_residual": per_surface["linearity_residual"].max(),
+    })

@@ -1,0 +1,331 @@
+"""Matrix-free influence operators of the finite block, for large contact grids.
+
+A dense influence matrix of n = nx * ny contact elements needs 8 n^2 bytes:
+104 MB at 60 x 60, 1.7 GB at 120 x 120, 34 GB at 256 x 256. Its finite-element
+construction grows faster still (a 3-D factorization plus n solves). The
+paper stopped at 60 x 60 for that reason.
+
+:class:`BlockOperator` applies the unit-modulus compliance ``E C`` [m] of the
+block without forming it, by the decomposition of
+:func:`roughcontact.influence.hybrid_unit_modulus_influence`:
+
+    E C = E C_love + A_f W K W^T,
+
+- ``E C_love``: Love's (1929) uniformly loaded rectangles on a half-space at
+  the fine grid (:func:`roughcontact.halfspace.halfspace_influence` with
+  E = 1). It is block Toeplitz, so its product is a zero-padded FFT
+  convolution: O(n log n) time and O(n) memory.
+- ``K = (E C_fe - E C_love) / A_c`` [1/m]: the finite-body correction per
+  unit loaded area, from a finite-element model of the same block on a
+  *coarse* contact grid (at most ``COARSE_MAX`` elements per side). The
+  correction varies on the scale of the block (thickness, distance to the
+  free sides and the rigid base), not of an element, so a coarse grid
+  resolves it; ``W`` is the separable linear interpolation from coarse to
+  fine element centres and ``A_f``, ``A_c`` the fine and coarse element
+  areas. Its product costs two small interpolations and one dense
+  ``nc x nc`` product.
+
+With no correction (``correction=None``) the operator is the half-space
+itself (no finite body).
+
+Accuracy (measured at 60 x 60 on the paper's block, nu = 0, against the
+"converged" finite-element matrix, see ``hybrid_unit_modulus_influence``):
+the interior entries within 0.3 % ("converged" coarse model) or 0.9 %
+("refined"), and k_P, real area and peak pressure within 1.2 %. Next to
+the free lateral faces the correction is not smooth, so the outermost ring of
+elements has diagonal errors of up to 14-18 %. The paper's 5-layer mesh and
+the graded preset are too stiff in the near field (diagonal -82 % and -51 %)
+to serve as the coarse model: their error would be interpolated into the
+fine grid, so they are refused.
+
+The product is the same operator as the dense hybrid matrix (to rounding,
+tests/test_operators.py), so these accuracy figures carry over.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.fft
+
+from roughcontact.elasticity.halfspace import _check_grid, _element_kernel
+from roughcontact.elasticity.influence import (
+    centre_interpolation,
+    estimate_cost,
+    finite_body_correction,
+    unit_modulus_influence,
+)
+
+__all__ = [
+    "COARSE_MAX",
+    "DENSE_MAX_ELEMENTS",
+    "HYBRID_MESHES",
+    "OPERATORS",
+    "BlockOperator",
+    "block_operator",
+    "choose_operator",
+    "default_coarse_grid",
+    "halfspace_operator",
+    "hybrid_operator",
+]
+
+logger = logging.getLogger("roughcontact.operators")
+
+#: Influence models of a geometry: the dense finite-element matrix, the
+#: matrix-free hybrid (Love + coarse finite-element correction), the
+#: matrix-free half-space (Love only), or chosen by :func:`choose_operator`.
+OPERATORS = ("dense", "hybrid", "halfspace", "auto")
+#: Mesh presets accurate enough in the near field to serve as the coarse model.
+HYBRID_MESHES = ("refined", "converged")
+#: Largest coarse contact grid per side of the finite-element correction.
+COARSE_MAX = 64
+#: Largest grid (elements) for which ``operator: auto`` keeps the dense matrix:
+#: up to 64 x 64 its product (BLAS) is as fast as the FFT operator and its
+#: entries are the finite-element model's own (benchmarks/bench_operators.py).
+DENSE_MAX_ELEMENTS = 64 * 64
+
+
+def default_coarse_grid(grid, coarse_max: int | None = None) -> tuple[int, int]:
+    """Coarse grid of the correction: ``g / k`` per side, the smallest k giving ``<= coarse_max``.
+
+    ``k`` divides ``g`` when possible (then coarse and fine elements nest);
+    otherwise ``ceil(g / k)``.
+    """
+    coarse_max = COARSE_MAX if coarse_max is None else int(coarse_max)
+    out = []
+    for g in (int(v) for v in grid):
+        k0 = max(1, math.ceil(g / coarse_max))
+        k = next((k for k in range(k0, 2 * k0 + 1) if g % k == 0), None)
+        out.append(g // k if k is not None else math.ceil(g / k0))
+    return (out[0], out[1])
+
+
+def _padded_love_spectrum(nx: int, ny: int, dx: float, dy: float, nu: float) -> np.ndarray:
+    """rfft2 of the Love kernel (E = 1) laid out for a zero-padded (2ny, 2nx) convolution."""
+    kernel = _element_kernel(nx, ny, dx, dy, 1.0, nu)
+    full = np.zeros((2 * ny, 2 * nx))
+    full[:ny, :nx] = kernel
+    full[:ny, nx + 1:] = kernel[:, 1:][:, ::-1]  # offsets -(nx-1) .. -1
+    full[ny + 1:, :] = full[1:ny, :][::-1]  # offsets -(ny-1) .. -1
+    return scipy.fft.rfft2(full)
+
+
+@dataclass(frozen=True)
+class BlockOperator:
+    """Matrix-free unit-modulus compliance ``E C`` [m] of the finite block.
+
+    ``u = matvec(p)`` is the displacement [m] times Young's modulus [Pa] for
+    element pressures ``p`` [Pa] (or, equally, the displacement for E = 1 Pa);
+    elements are row-major over y then x, as in the dense matrices. Divide by
+    E (or use :func:`roughcontact.nondim.dimensionless_operator`) for C.
+
+    Parameters
+    ----------
+    grid : (int, int)
+        Contact elements ``(nx, ny)``.
+    size : (float, float)
+        Nominal contact area ``(Lx, Ly)`` [m].
+    nu : float
+        Poisson's ratio [-].
+    correction : ndarray (nc, nc) or None
+        Finite-body correction ``K`` per unit loaded area [1/m] on the coarse
+        grid (symmetric), or None for the half-space alone.
+    coarse_grid : (int, int) or None
+        Coarse contact elements ``(ncx, ncy)`` of ``correction``.
+    """
+
+    grid: tuple[int, int]
+    size: tuple[float, float]
+    nu: float
+    correction: np.ndarray | None = field(default=None, repr=False, compare=False)
+    coarse_grid: tuple[int, int] | None = None
+    _spectrum: np.ndarray = field(init=False, repr=False, compare=False)
+    _px: np.ndarray | None = field(init=False, repr=False, compare=False)
+    _py: np.ndarray | None = field(init=False, repr=False, compare=False)
+    _diagonal: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        nx, ny, lx, ly = _check_grid(self.grid, self.size)
+        nu = float(self.nu)
+        if not 0.0 <= nu < 0.5:
+            raise ValueError(f"nu must satisfy 0 <= nu < 0.5, got {self.nu!r}")
+        set_ = object.__setattr__
+        set_(self, "grid", (nx, ny))
+        set_(self, "size", (lx, ly))
+        set_(self, "nu", nu)
+        dx, dy = lx / nx, ly / ny
+        set_(self, "_spectrum", _padded_love_spectrum(nx, ny, dx, dy, nu))
+        diagonal = np.full(nx * ny, _element_kernel(1, 1, dx, dy, 1.0, nu)[0, 0])
+        if self.correction is None:
+            if self.coarse_grid is not None:
+                raise ValueError("coarse_grid is given but correction is None")
+            set_(self, "_px", None)
+            set_(self, "_py", None)
+        else:
+            if self.coarse_grid is None:
+                raise ValueError("correction needs its coarse_grid (ncx, ncy)")
+            ncx, ncy, _, _ = _check_grid(self.coarse_grid, self.size)
+            set_(self, "coarse_grid", (ncx, ncy))
+            nc = ncx * ncy
+            correction = np.ascontiguousarray(self.correction, dtype=float)
+            if correction.shape != (nc, nc):
+                raise ValueError(f"correction must have shape ({nc}, {nc}) for coarse grid "
+                                 f"{self.coarse_grid}, got {correction.shape}")
+            if not np.isfinite(correction).all():
+                raise ValueError("correction has non-finite entries")
+            correction = 0.5 * (correction + correction.T)
+            correction.setflags(write=False)
+            set_(self, "correction", correction)
+            px = centre_interpolation(nx, ncx)
+            py = centre_interpolation(ny, ncy)
+            set_(self, "_px", px)
+            set_(self, "_py", py)
+            diagonal = diagonal + dx * dy * _interpolated_diagonal(correction, px, py)
+        if not np.all(diagonal > 0):
+            raise ValueError("operator has a non-positive self-compliance: the correction "
+                             "is inconsistent with the grid")
+        diagonal.setflags(write=False)
+        set_(self, "_diagonal", diagonal)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(n, n)``, ``n = nx * ny``."""
+        n = self.grid[0] * self.grid[1]
+        return (n, n)
+
+    @property
+    def element_area(self) -> float:
+        """Contact element area ``dx * dy`` [m^2]."""
+        return self.size[0] * self.size[1] / (self.grid[0] * self.grid[1])
+
+    @property
+    def kind(self) -> str:
+        """"hybrid" (with a finite-body correction) or "halfspace"."""
+        return "halfspace" if self.correction is None else "hybrid"
+
+    def diagonal(self) -> np.ndarray:
+        """Self-compliances ``E C_ii`` [m], shape (n,)."""
+        return self._diagonal
+
+    def matvec(self, pressure) -> np.ndarray:
+        """``E C p`` [m * Pa / Pa = m] for element pressures ``p``, shape (n,) or (n, m)."""
+        nx, ny = self.grid
+        n = nx * ny
+        p = np.asarray(pressure, dtype=float)
+        if p.ndim not in (1, 2) or p.shape[0] != n:
+            raise ValueError(f"pressure must have shape (n,) or (n, m) with n = {n}, got {p.shape}")
+        fields = p.reshape(n, -1).T.reshape(-1, ny, nx)
+        m = fields.shape[0]
+        u = scipy.fft.irfft2(scipy.fft.rfft2(fields, s=(2 * ny, 2 * nx)) * self._spectrum,
+                             s=(2 * ny, 2 * nx))[:, :ny, :nx]
+        if self.correction is not None:
+            ncx, ncy = self.coarse_grid
+            coarse = (self._py.T @ fields @ self._px).reshape(m, ncx * ncy)
+            coarse = (coarse @ self.correction).reshape(m, ncy, ncx)  # K symmetric
+            u = u + self.element_area * (self._py @ coarse @ self._px.T)
+        return np.ascontiguousarray(u).reshape(m, n).T.reshape(p.shape)
+
+    def __matmul__(self, pressure) -> np.ndarray:
+        return self.matvec(pressure)
+
+    def to_dense(self, max_elements: int = 6000) -> np.ndarray:
+        """The (n, n) matrix, for small grids (checks and the exact solver)."""
+        n = self.shape[0]
+        if n > max_elements:
+            raise ValueError(f"to_dense: n = {n} exceeds max_elements = {max_elements}")
+        return self.matvec(np.eye(n))
+
+    def nbytes(self) -> int:
+        """Memory held by the operator [bytes]."""
+        held = self._spectrum.nbytes + self._diagonal.nbytes
+        if self.correction is not None:
+            held += self.correction.nbytes + self._px.nbytes + self._py.nbytes
+        return int(held)
+
+
+def _interpolated_diagonal(correction, px, py) -> np.ndarray:
+    """diag(W K W^T) for W = kron(py, px), using the two nonzeros per row of px and py."""
+    def taps(matrix):
+        width = min(2, matrix.shape[1])
+        cols = np.argsort(-np.abs(matrix), axis=1, kind="stable")[:, :width]
+        return cols, np.take_along_axis(matrix, cols, axis=1)
+
+    cx, wx = taps(px)
+    cy, wy = taps(py)
+    ncx = px.shape[1]
+    # coarse indices and weights of each fine element: (ny, nx, taps)
+    idx = (cy[:, None, :, None] * ncx + cx[None, :, None, :]).reshape(py.shape[0], px.shape[0], -1)
+    w = (wy[:, None, :, None] * wx[None, :, None, :]).reshape(idx.shape)
+    idx = idx.reshape(-1, idx.shape[-1])
+    w = w.reshape(idx.shape)
+    values = correction[idx[:, :, None], idx[:, None, :]]
+    return np.einsum("is,it,ist->i", w, w, values)
+
+
+def halfspace_operator(grid, size, nu: float) -> BlockOperator:
+    """Love's half-space at the contact grid, matrix-free (no finite body)."""
+    return BlockOperator(grid=tuple(grid), size=tuple(size), nu=nu)
+
+
+def block_operator(geom, *, coarse_grid=None, solver: str = "auto",
+                   max_bytes: float = 16e9) -> BlockOperator:
+    """Build the matrix-free :class:`BlockOperator` of a block geometry.
+
+    Parameters
+    ----------
+    geom : roughcontact.influence.BlockGeometry
+        Block and fine contact grid; ``geom.mesh`` (one of ``HYBRID_MESHES``)
+        is the finite-element mesh of the coarse model.
+    coarse_grid : (int, int), optional
+        Coarse contact grid of the correction; default
+        :func:`default_coarse_grid` (at most ``COARSE_MAX`` per side).
+    solver, max_bytes
+        As in :func:`roughcontact.influence.unit_modulus_influence`.
+    """
+
+    if geom.mesh not in HYBRID_MESHES:
+        raise ValueError(
+            f"the hybrid operator needs an accurate near field in its coarse model: mesh must "
+            f"be one of {HYBRID_MESHES}, got {geom.mesh!r} (the paper and graded presets are "
+            f"82 % and 51 % too stiff per element; use operator: dense for the paper's model)")
+    if coarse_grid is None:
+        coarse_grid = default_coarse_grid(geom.grid)
+    coarse = dataclasses.replace(geom, grid=tuple(int(g) for g in coarse_grid))
+    return hybrid_operator(geom, unit_modulus_influence(coarse, solver=solver,
+                                                        max_bytes=max_bytes), coarse)
+
+
+def hybrid_operator(geom, coarse_unit: np.ndarray, coarse) -> BlockOperator:
+    """The matrix-free :class:`BlockOperator` of ``geom`` from its coarse model's ``E C`` [m].
+
+    ``coarse_unit`` is the finite-element matrix of ``coarse`` (the same block
+    on a coarser contact grid); it is turned into the correction in place
+    (:func:`roughcontact.elasticity.influence.finite_body_correction`).
+    """
+    return BlockOperator(grid=geom.grid, size=geom.size, nu=geom.nu,
+                         correction=finite_body_correction(coarse_unit, coarse),
+                         coarse_grid=coarse.grid)
+
+
+def choose_operator(geom, *, max_dense_bytes: float, halfspace_ok: bool = False) -> str:
+    """The influence model ``operator: auto`` uses for a geometry: a decision rule.
+
+    1. ``"halfspace"`` when the caller measured that the half-space meets the
+       study's tolerance (``halfspace_ok``, see :func:`halfspace_errors`).
+    2. ``"dense"`` (the finite-element matrix itself) up to
+       ``DENSE_MAX_ELEMENTS`` contact elements, when its estimated build
+       memory is below ``max_dense_bytes``.
+    3. ``"hybrid"`` otherwise; the coarse model uses the geometry's mesh, or
+       "refined" when that mesh cannot serve (paper, graded).
+    """
+
+    if halfspace_ok:
+        return "halfspace"
+    if geom.n_elements <= DENSE_MAX_ELEMENTS and \
+            estimate_cost(geom).peak_bytes <= max_dense_bytes:
+        return "dense"
+    return "hybrid"

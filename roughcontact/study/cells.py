@@ -1,0 +1,607 @@
+"""The study grid: which surface cells, geometries and contact cells a configuration asks for.
+
+A *surface cell* is one set of surface statistics and sampling (skewness,
+kurtosis, correlation lengths, grid, size, ACF, periodicity, generator) with a
+number of seeded realisations. Its key names every parameter, so a changed
+parameter is a new file and the workflow reruns exactly what depends on it.
+Sigma is not part of a cell: surfaces are stored in units of sigma and scaled
+at use (Eq 28-32 of Kumar et al. 2006). The jobs that build them are in
+:mod:`roughcontact.pipeline`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import logging
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from roughcontact.contact.cell import nondim_pressure
+from roughcontact.elasticity.influence import BlockGeometry, estimate_cost
+from roughcontact.elasticity.operators import HYBRID_MESHES, choose_operator, default_coarse_grid
+from roughcontact.study.presets import ACCURACY_PRESETS
+from roughcontact.study.provenance import canonical_json
+from roughcontact.surfaces import measured
+from roughcontact.surfaces.synthetic import SurfaceSpec, input_moments
+from roughcontact.units import GB, MM, MPA, UM
+
+log = logging.getLogger(__name__)
+
+SURFACE_FIGURES = ("fig03", "fig04", "fig05")
+#: Figures that need no contact solve (Fig 1 and 2 need no surfaces either).
+SURFACE_ONLY_FIGURES = ("fig01", "fig02", "fig03", "fig04", "fig05")
+
+
+def _pair(value) -> list:
+    if isinstance(value, list | tuple):
+        return [value[0], value[1]]
+    return [value, value]
+
+
+def cell_params(defaults: dict, **overrides) -> dict:
+    """Complete, canonical parameters of one surface cell.
+
+    ``defaults`` is the config's ``surfaces`` section; ``overrides`` may set
+    ``skew``, ``kurt``, ``b_mm``, ``count`` and any default.
+    """
+    merged = {**defaults, **overrides}
+    return {
+        "skew": float(merged.get("skew", 0.0)),
+        "kurt": float(merged.get("kurt", 3.0)),
+        "b_mm": [float(v) for v in _pair(merged["b_mm"])],
+        "grid": [int(v) for v in _pair(merged["grid"])],
+        "size_mm": [float(v) for v in _pair(merged["size_mm"])],
+        "acf": str(merged.get("acf", "exponential")),
+        "periodic": bool(merged.get("periodic", True)),
+        "method": str(merged.get("method", "filter")),
+        "count": int(merged["count"]),
+    }
+
+
+def statistics_key(params: dict) -> str:
+    """Key of a cell's statistics and sampling, without the surface count.
+
+    Seeds derive from this key, so the first k surfaces of a cell are the same
+    whatever the count. A measured cell's key is :func:`measured_key`.
+    """
+    if params["method"] == "measured":
+        return measured_key(params)
+    bx, by = params["b_mm"]
+    lx, ly = params["size_mm"]
+    nx, ny = params["grid"]
+    return (
+        f"sk{params['skew']:g}_ku{params['kurt']:g}_b{bx:g}x{by:g}mm_L{lx:g}x{ly:g}mm"
+        f"_g{nx}x{ny}_{params['acf'][:3]}_{'per' if params['periodic'] else 'pad'}"
+        f"_{params['method']}"
+    )
+
+
+def cell_key(params: dict) -> str:
+    """File key of a surface cell: its statistics key and the surface count."""
+    return f"{statistics_key(params)}_n{params['count']}"
+
+
+def spec_from_params(params: dict, sigma: float = 1.0) -> SurfaceSpec:
+    """The :class:`SurfaceSpec` of a cell (lengths converted from mm to m)."""
+    return SurfaceSpec(
+        grid=tuple(params["grid"]),
+        size=tuple(v * MM for v in params["size_mm"]),
+        corr_length=tuple(v * MM for v in params["b_mm"]),
+        sigma=sigma,
+        skew=params["skew"],
+        kurt=params["kurt"],
+        acf=params["acf"],
+        periodic=params["periodic"],
+    )
+
+
+def figure_cells(config: dict, figure: str) -> list[dict]:
+    """Surface cells a figure needs, in the order it draws them."""
+    defaults = config["surfaces"]
+    fig = config["figures"][figure]
+    if figure == "fig03":
+        return [
+            cell_params(defaults, b_mm=b, skew=0.0, kurt=3.0, count=fig.get("count", 1))
+            for b in fig["b_mm"]
+        ]
+    if figure == "fig10":  # the cumulative height distributions of the Fig 9 surfaces
+        return [c["surface"] for c in contact_cells(config, "fig10")]
+    if figure == "measured":  # the measured surface and its twin, once each
+        unique = {c["surface_key"]: c["surface"] for c in contact_cells(config, figure)}
+        return list(unique.values())
+    if figure in ("fig04", "fig05"):
+        src = config["figures"]["fig04"]
+        return [
+            cell_params(defaults, b_mm=src["b_mm"], skew=sk, kurt=ku)
+            for sk, ku in src["moments"]
+        ]
+    return []
+
+
+def surface_cells(config: dict, figures=SURFACE_FIGURES) -> dict[str, dict]:
+    """All surface cells the requested figures need, keyed by :func:`cell_key`."""
+    cells = {}
+    for fig in figures:
+        if fig in config.get("figures", {}):
+            for params in figure_cells(config, fig):
+                cells[cell_key(params)] = params
+    return cells
+
+
+def check_feasible(cells: dict[str, dict]) -> list[str]:
+    """Messages for cells whose (skew, kurt) the filter cannot reach."""
+    problems = []
+    for key, params in cells.items():
+        if params["method"] != "filter":
+            continue
+        try:
+            input_moments(spec_from_params(params))
+        except ValueError as err:
+            problems.append(f"{key}: {err}")
+    return problems
+
+
+# ---------------------------------------------------------------------------
+# Measured surfaces: a study's ``surface: {file: ...}`` in place of moments
+
+
+def _round12(value: float) -> float:
+    """``value`` to 12 significant digits (keys and labels free of rounding noise)."""
+    return float(f"{value:.12g}")
+
+
+def measured_options(entry: dict) -> dict:
+    """Canonical import options of a study's ``surface:`` entry (lengths in mm).
+
+    Keys: ``file``, ``format`` (npy, text, xyz), ``height_unit`` (nm, um, mm,
+    m), ``lateral_unit`` (um, mm, m; the x, y columns of xyz files),
+    ``spacing_mm`` ([dx, dy] of npy and text grids, else None) and
+    ``fill_holes`` (largest fraction of missing points filled).
+    """
+    spacing = entry.get("spacing_mm")
+    return {
+        "file": str(entry["file"]),
+        "format": str(entry["format"]),
+        "height_unit": str(entry["height_unit"]),
+        "lateral_unit": str(entry.get("lateral_unit", "mm")),
+        "spacing_mm": None if spacing is None else [float(v) for v in _pair(spacing)],
+        "fill_holes": float(entry.get("fill_holes", 0.0)),
+    }
+
+
+def load_measured(options: dict) -> measured.Measurement:
+    """Import the measurement that :func:`measured_options` describe (mm to m)."""
+    spacing = options["spacing_mm"]
+    return measured.load_measurement(
+        options["file"], options["format"], height_unit=options["height_unit"],
+        lateral_unit=options["lateral_unit"],
+        spacing=None if spacing is None else tuple(v * MM for v in spacing),
+        fill_holes=options["fill_holes"],
+    )
+
+
+def measured_cell_params(entry: dict) -> dict:
+    """Surface-cell parameters of a measured surface, read from its file.
+
+    The file is imported here (milliseconds for the grids a dense influence
+    matrix allows), so the cell knows its content hash (for its key), its
+    grid and plan size (for its geometry) and its statistics: ``skew``,
+    ``kurt`` and ``b_mm`` are the measured values (the labels of its results
+    and the targets of a synthetic twin), ``count`` is 1 and ``method`` is
+    ``"measured"``. ``measured`` holds the import options, the file's SHA-256
+    and the measured sigma [um]. Relative paths are relative to the working
+    directory (Snakemake's ``--directory``).
+    """
+    options = measured_options(entry)
+    measurement = load_measured(options)
+    stats = measured.statistics(measurement)
+    return {
+        "skew": _round12(stats["skew"]),
+        "kurt": _round12(stats["kurt"]),
+        "b_mm": [_round12(stats["corr_length_x"] / MM), _round12(stats["corr_length_y"] / MM)],
+        "grid": [int(v) for v in stats["grid"]],
+        "size_mm": [_round12(v / MM) for v in stats["size"]],
+        "acf": "measured",
+        "periodic": False,
+        "method": "measured",
+        "count": 1,
+        "measured": {**options, "file_sha256": measurement.sha256,
+                     "sigma_um": _round12(stats["sigma"] / UM)},
+    }
+
+
+def measured_key(params: dict) -> str:
+    """Key of a measured cell: the file's name, a short hash of its content and of
+    the import options (``measured-<stem>_<sha256[:12]>_<options[:8]>``).
+
+    A changed file or option is a new key, so everything that depends on the
+    surface is recomputed; the same content under another name or folder keeps
+    the hashes.
+    """
+    info = params["measured"]
+    stem = re.sub(r"[^A-Za-z0-9-]+", "-", Path(info["file"]).stem).strip("-")[:40]
+    options = {k: v for k, v in info.items() if k not in ("file", "file_sha256", "sigma_um")}
+    digest = hashlib.sha256(canonical_json(options).encode()).hexdigest()[:8]
+    return f"measured-{stem or 'surface'}_{info['file_sha256'][:12]}_{digest}"
+
+
+def synthetic_twin(defaults: dict, measured_cell: dict, count: int) -> dict:
+    """A generated cell with a measurement's Sk, Ku and correlation lengths.
+
+    Same grid and plan size as the measurement; ACF shape, periodicity and
+    generator are the config's ``surfaces`` defaults. Sigma is not part of a
+    cell: both are scaled by the same sigma in the study.
+    """
+    return cell_params(defaults, skew=measured_cell["skew"], kurt=measured_cell["kurt"],
+                       b_mm=measured_cell["b_mm"], grid=measured_cell["grid"],
+                       size_mm=measured_cell["size_mm"], count=count)
+
+
+def study_surfaces(config: dict, entry: dict) -> list[dict]:
+    """Surface cells of a study that names a measured surface.
+
+    The measurement, then, with ``compare_synthetic: true``, its
+    :func:`synthetic_twin` with the study's (or the config's) surface count.
+    """
+    measured_cell = measured_cell_params(entry["surface"])
+    cells = [measured_cell]
+    if entry.get("compare_synthetic", False):
+        count = entry.get("count", config["surfaces"]["count"])
+        cells.append(synthetic_twin(config["surfaces"], measured_cell, count))
+    return cells
+
+
+def check_measured(config: dict, name: str, entry: dict) -> list[str]:
+    """Messages for a study whose measured surface cannot be used as configured."""
+    if "surface" not in entry:
+        if entry.get("compare_synthetic"):
+            return [f"{name}: compare_synthetic needs a measured surface ('surface:')"]
+        return []
+    clashing = [k for k in ("moments", "b_mm", "size_mm") if k in entry]
+    if clashing:
+        return [f"{name}: 'surface' (a measured surface) fixes the statistics, grid and "
+                f"size; remove {', '.join(clashing)}"]
+    try:
+        cells = study_surfaces(config, entry)
+    except (OSError, ValueError) as err:
+        return [f"{name}.surface: {err}"]
+    b_mm = cells[0]["b_mm"]
+    if len(cells) > 1 and not all(math.isfinite(b) for b in b_mm):
+        return [f"{name}: the measured autocorrelation does not decay to 10 % within half "
+                f"the measured length (b = {b_mm[0]:g} x {b_mm[1]:g} mm), so no synthetic "
+                "twin can be made; measure a larger area or drop compare_synthetic"]
+    return []
+
+
+# ---------------------------------------------------------------------------
+# Influence geometries: the elastic body a contact cell is solved on
+
+
+def geometry_params(body: dict, surfaces: dict, **overrides) -> dict:
+    """Complete, canonical parameters of one influence geometry.
+
+    ``body`` is the config's ``body`` section, ``surfaces`` its ``surfaces``
+    section (the contact grid and plan size are the surfaces'); ``overrides``
+    may set ``nu``, ``mesh``, ``size_mm``, ``grid`` and any body key. Young's
+    modulus is not part of a geometry: matrices are stored as E * C.
+    """
+    merged = {**body, "grid": surfaces["grid"], "size_mm": surfaces["size_mm"], **overrides}
+    params = {
+        "nu": float(merged["nu"]),
+        "size_mm": [float(v) for v in _pair(merged["size_mm"])],
+        "thickness_mm": float(merged["thickness_mm"]),
+        "grid": [int(v) for v in _pair(merged["grid"])],
+        "base": str(merged.get("base", "clamped")),
+        "mesh": str(merged.get("mesh", "paper")),
+    }
+    # the influence model; the dense matrix (the paper's) adds no key, so its files keep
+    # their names
+    operator = str(merged.get("operator", "dense"))
+    if operator != "dense":
+        params["operator"] = operator
+    if operator == "auto":
+        tolerance = {**HALFSPACE_TOLERANCE, **(merged.get("halfspace_tolerance") or {})}
+        params["halfspace_tolerance"] = {k: (None if v is None else float(v))
+                                         for k, v in sorted(tolerance.items())}
+    return params
+
+
+#: Default tolerances of the half-space criterion (``operator: auto``): largest
+#: relative error of the half-space model in each quantity (None: not needed).
+HALFSPACE_TOLERANCE = {"k_P": 0.02, "real_area": 0.05, "max_pressure": 0.05}
+
+
+def geometry_key(params: dict) -> str:
+    """File key of an influence geometry (every parameter that changes E * C)."""
+    lx, ly = params["size_mm"]
+    nx, ny = params["grid"]
+    key = (
+        f"nu{params['nu']:g}_L{lx:g}x{ly:g}mm_t{params['thickness_mm']:g}mm"
+        f"_g{nx}x{ny}_{params['base']}_{params['mesh']}"
+    )
+    operator = params.get("operator", "dense")
+    if operator == "auto":
+        tolerance = "-".join("x" if v is None else f"{v:g}"
+                             for _, v in sorted(params["halfspace_tolerance"].items()))
+        return f"{key}_auto{tolerance}"
+    return key if operator == "dense" else f"{key}_{operator}"
+
+
+def block_geometry(params: dict, E: float = 1.0):
+    """The :class:`~roughcontact.influence.BlockGeometry` of a geometry (mm to m)."""
+    return BlockGeometry(
+        size=tuple(v * MM for v in params["size_mm"]),
+        thickness=params["thickness_mm"] * MM,
+        grid=tuple(params["grid"]),
+        E=E,
+        nu=params["nu"],
+        base=params["base"],
+        mesh=params["mesh"],
+    )
+
+
+def influence_geometries(config: dict) -> dict[str, dict]:
+    """Every influence geometry the configuration asks for, keyed by :func:`geometry_key`.
+
+    The body of the config is always included (``make run`` builds it once);
+    study figures add the variants they need (another nu, mesh or area).
+    """
+    geoms = {}
+    if "body" in config:
+        params = geometry_params(config["body"], config["surfaces"])
+        geoms[geometry_key(params)] = params
+        for mesh in convergence_presets(config):  # the mesh report reuses these builds
+            variant = {**params, "mesh": mesh}
+            geoms[geometry_key(variant)] = variant
+    return geoms
+
+
+def convergence_presets(config: dict) -> list[str]:
+    """Mesh presets of the influence-convergence report ([] when it is not configured)."""
+    report = config.get("reports", {}).get("influence_convergence")
+    if not report:
+        return []
+    return list(report.get("presets", ["paper", "graded", "refined", "converged"]))
+
+
+def coarse_geometry(geom):
+    """The coarse finite-element model of a hybrid operator (``refined`` for inaccurate meshes)."""
+    mesh = geom.mesh if geom.mesh in HYBRID_MESHES else "refined"
+    return dataclasses.replace(geom, grid=default_coarse_grid(geom.grid), mesh=mesh)
+
+
+def planned_operator(params: dict, max_memory_gb: float = 16.0) -> str:
+    """The influence model a geometry's build starts with: "dense", "hybrid" or "halfspace".
+
+    ``operator: auto`` picks dense or hybrid here (by size and memory,
+    :func:`roughcontact.operators.choose_operator`); the build may then
+    replace either by the half-space when the measured criterion allows.
+    """
+    operator = params.get("operator", "dense")
+    if operator != "auto":
+        return operator
+    return choose_operator(block_geometry(params), max_dense_bytes=max_memory_gb * GB)
+
+
+def influence_cost(params: dict, solver: str = "auto", max_memory_gb: float = 16.0):
+    """:class:`~roughcontact.influence.CostEstimate` of the finite-element model a build solves."""
+    geom = block_geometry(params)
+    if planned_operator(params, max_memory_gb) in ("hybrid", "halfspace"):
+        geom = coarse_geometry(geom)
+    return estimate_cost(geom, solver)
+
+
+# ---------------------------------------------------------------------------
+# Contact study cells: surfaces x geometry x (sigma, E) x pressure range
+
+#: Figures drawn from contact results, and the source of their cells ("measured": a
+#: measured surface against its synthetic twin, usually ``from:`` a sweep).
+CONTACT_FIGURES = ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu",
+                   "measured")
+
+
+def _as_list(value) -> list:
+    return list(value) if isinstance(value, list | tuple) else [value]
+
+
+def source_name(config: dict, name: str) -> str:
+    """The figure or sweep whose cells ``name`` uses (itself unless ``from:``)."""
+    section = {**config.get("figures", {}), **config.get("sweeps", {})}
+    seen = [name]
+    while "from" in section[name]:
+        source = section[name]["from"]
+        if source in seen or source not in section:
+            raise ValueError(f"{seen[0]}: 'from: {source}' must name another figure or sweep "
+                             f"without a cycle (followed {' -> '.join(seen)})")
+        seen.append(source)
+        name = source
+    return name
+
+
+def resolve_source(config: dict, name: str) -> dict:
+    """A figure's (or sweep's) cell description, following ``from: other``."""
+    section = {**config.get("figures", {}), **config.get("sweeps", {})}
+    return section[source_name(config, name)]
+
+
+def accuracy_preset(config: dict) -> dict | None:
+    """The accuracy preset the config names (``accuracy: paper|fast|converged``), or None."""
+    name = config.get("accuracy")
+    if name is None:
+        return None
+    return dict(ACCURACY_PRESETS[name])
+
+
+def accuracy_attrs(config: dict) -> dict:
+    """``accuracy`` and the preset's measured ``expected_error`` for a cell's records."""
+    preset = accuracy_preset(config)
+    if preset is None:
+        return {"accuracy": "as configured"}
+    errors = {k: v for k, v in preset.items() if k.endswith("_error") or
+              k.startswith(("grid_change_", "sampling_"))}
+    return {"accuracy": config["accuracy"], "expected_error": errors}
+
+
+def contact_settings(config: dict) -> dict:
+    """The solver settings of the contact jobs: the config's, or the accuracy preset's."""
+    settings = dict(config.get("contact", {}))
+    preset = accuracy_preset(config)
+    if preset is not None:
+        settings.update(method=preset["method"], tol=preset["tol"],
+                        precision=preset["precision"])
+    return settings
+
+
+def contact_cells(config: dict, name: str) -> list[dict]:
+    """The study cells of a contact figure or sweep: the product of its axes.
+
+    Axes (scalars or lists): ``moments`` (pairs of Sk, Ku), ``b_mm``,
+    ``size_mm`` (square nominal areas; the grid keeps the surfaces' spacing),
+    ``nu``, ``meshes``, ``sigma_um``, ``E_MPa``; ``count`` and
+    ``pressure_MPa`` ([P_min, P_max]) apply to every cell. Each cell carries
+    its surface cell, its geometry and the scaling parameters. A study that
+    names a measured surface (``surface:``) has the cells of
+    :func:`measured_study_cells` instead.
+    """
+    fig = resolve_source(config, name)
+    surfaces, body = config["surfaces"], config["body"]
+    preset = accuracy_preset(config)
+    if preset is not None:  # the preset's mesh and count unless the figure names its own
+        body = {**body, "mesh": preset["mesh"]}
+        fig = {"count": preset["surfaces"], **fig}
+    if "surface" in fig:
+        return measured_study_cells(config, fig, body)
+    spacing = [s / g for s, g in zip(_pair(surfaces["size_mm"]), _pair(surfaces["grid"]),
+                                     strict=True)]
+    cells = []
+    for mesh in _as_list(fig.get("meshes", body.get("mesh", "paper"))):
+        for nu in _as_list(fig.get("nu", body["nu"])):
+            sizes = ([[s, s] for s in _as_list(fig["size_mm"])] if "size_mm" in fig
+                     else [_pair(surfaces["size_mm"])])
+            for size in sizes:
+                grid = [max(4, round(s / h)) for s, h in zip(size, spacing, strict=True)]
+                for b in _as_list(fig.get("b_mm", 1.0)):
+                    for skew, kurt in fig.get("moments", [[0.0, 3.0]]):
+                        for sigma in _as_list(fig["sigma_um"]):
+                            for E in _as_list(fig.get("E_MPa", body["E_MPa"])):
+                                surf = cell_params(
+                                    surfaces, skew=skew, kurt=kurt, b_mm=b,
+                                    size_mm=size, grid=grid,
+                                    count=fig.get("count", surfaces["count"]),
+                                )
+                                geom = geometry_params(body, surfaces, nu=nu, mesh=mesh,
+                                                       size_mm=size, grid=grid)
+                                cells.append(_study_cell(config, fig, surf, geom, sigma, E))
+    return cells
+
+
+def _study_cell(config: dict, fig: dict, surf: dict, geom: dict, sigma, E) -> dict:
+    return {
+        "surface": surf,
+        "geometry": geom,
+        "sigma_um": float(sigma),
+        "E_MPa": float(E),
+        "pressure_MPa": [float(p) for p in fig["pressure_MPa"]],
+        "surface_key": cell_key(surf),
+        "geometry_key": geometry_key(geom),
+        **accuracy_attrs(config),
+    }
+
+
+def measured_study_cells(config: dict, fig: dict, body: dict) -> list[dict]:
+    """The cells of a study on a measured surface (and its synthetic twin).
+
+    Axes: ``meshes``, ``nu``, ``sigma_um`` (default: the measured sigma, so
+    the results are those of the measured heights; another value rescales
+    both surfaces) and ``E_MPa``. The geometry's grid and plan size are the
+    measurement's, as the surfaces' are for generated cells; the measured
+    cell comes first, its twin (``compare_synthetic``) second.
+    """
+    surface_cells_ = study_surfaces(config, fig)
+    first = surface_cells_[0]
+    cells = []
+    for mesh in _as_list(fig.get("meshes", body.get("mesh", "paper"))):
+        for nu in _as_list(fig.get("nu", body["nu"])):
+            geom = geometry_params(body, config["surfaces"], nu=nu, mesh=mesh,
+                                   size_mm=first["size_mm"], grid=first["grid"])
+            for surf in surface_cells_:
+                for sigma in _as_list(fig.get("sigma_um", first["measured"]["sigma_um"])):
+                    for E in _as_list(fig.get("E_MPa", body["E_MPa"])):
+                        cells.append(_study_cell(config, fig, surf, geom, sigma, E))
+    return cells
+
+
+def check_studies(config: dict, names) -> list[str]:
+    """Messages for contact figures or sweeps the schema cannot check."""
+    problems = []
+    for name in names:
+        try:
+            entry = resolve_source(config, name)
+        except (KeyError, ValueError) as err:
+            problems.append(f"{name}: {err}")
+            continue
+        low, high = entry["pressure_MPa"]
+        if not low < high:
+            problems.append(f"{name}.pressure_MPa = [{low}, {high}]: expected [P_min, P_max] "
+                            f"with P_min < P_max (MPa)")
+        problems += check_measured(config, name, entry)
+        problems += _check_operator(config, name, entry)
+    return problems
+
+
+def _check_operator(config: dict, name: str, entry: dict) -> list[str]:
+    """The hybrid operator needs a coarse model with an accurate near field."""
+    if config.get("body", {}).get("operator", "dense") != "hybrid":
+        return []
+    preset = accuracy_preset(config)
+    default = preset["mesh"] if preset else config["body"].get("mesh", "paper")
+    bad = [m for m in _as_list(entry.get("meshes", default)) if m not in HYBRID_MESHES]
+    if not bad:
+        return []
+    return [f"{name}: body.operator = hybrid with mesh {bad[0]!r}: the hybrid operator takes "
+            f"its finite-body correction from a coarse model whose near field must be "
+            f"accurate, so the mesh must be one of {list(HYBRID_MESHES)}; use operator: "
+            f"dense (the paper's model) or auto (dense up to 64 x 64, hybrid with a "
+            f"'refined' coarse model above)"]
+
+
+def contact_key(cell: dict) -> str:
+    """File key of a contact job: one surface cell solved on one geometry."""
+    return f"{cell['surface_key']}__{cell['geometry_key']}"
+
+
+def sweep_end(cell: dict) -> float:
+    """Non-dimensional nominal pressure P L / (E sigma) a cell needs, rounded up to 2^k.
+
+    Rounding keeps a small change of sigma, E or the pressure range from
+    re-solving a contact job that already reaches far enough.
+    """
+    value = nondim_pressure(cell["pressure_MPa"][1] * MPA,
+                            thickness=cell["geometry"]["thickness_mm"] * MM,
+                            E=cell["E_MPa"] * MPA, sigma=cell["sigma_um"] * UM)
+    return float(2.0 ** np.ceil(np.log2(value)))
+
+
+def contact_jobs(config: dict, names) -> dict[str, dict]:
+    """Every contact job the named figures and sweeps need, with its sweep end.
+
+    A job is shared by every cell on the same surfaces and geometry; it
+    sweeps as far as the most demanding of them needs.
+    """
+    jobs = {}
+    for name in names:
+        for cell in contact_cells(config, name):
+            key = contact_key(cell)
+            job = jobs.setdefault(key, {
+                "surface": cell["surface"], "geometry": cell["geometry"],
+                "surface_key": cell["surface_key"], "geometry_key": cell["geometry_key"],
+                "pressure_end": 0.0,
+                "accuracy": cell.get("accuracy", "as configured"),
+                "expected_error": cell.get("expected_error", {}),
+            })
+            job["pressure_end"] = max(job["pressure_end"], sweep_end(cell))
+    return jobs

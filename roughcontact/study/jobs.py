@@ -1,0 +1,516 @@
+"""Bodies of the workflow's jobs: surfaces, influence, contact, aggregation.
+
+A *surface job* generates the seeded realisations of one surface cell (or
+imports a measured height map) and stores them in units of sigma. An
+*influence job* builds E * C of one block geometry (a dense finite-element
+matrix or a matrix-free operator). A *contact job* solves every surface of
+one surface cell on one influence geometry through an approach sweep, in the
+non-dimensional form of :mod:`roughcontact.nondim`, and stores the result;
+sigma and E never enter.
+An *aggregation* turns the contact results of a figure's (or sweep's) cells
+into SI curves for each cell's sigma and E (Eq 28-32) and averages them on a
+common nominal-pressure axis (:mod:`roughcontact.aggregate`).
+
+
+The layouts of the files are described in :mod:`roughcontact.study.storage`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from roughcontact.contact import aggregate, halfspace_criterion
+from roughcontact.contact import cell as cell_module
+from roughcontact.elasticity import influence, operators
+from roughcontact.errors import MeasurementError
+from roughcontact.hashes import file_sha256
+from roughcontact.study.cells import (
+    block_geometry,
+    cell_key,
+    coarse_geometry,
+    contact_key,
+    geometry_key,
+    load_measured,
+    planned_operator,
+    spec_from_params,
+    statistics_key,
+)
+from roughcontact.study.provenance import (
+    atomic_path,
+    canonical_json,
+    config_hash,
+    peak_rss_bytes,
+    provenance,
+)
+from roughcontact.study.storage import (
+    read_contact,
+    read_influence,
+    read_surfaces,
+    write_contact,
+    write_influence,
+    write_surfaces,
+)
+from roughcontact.surfaces import johnson, measured
+from roughcontact.surfaces.synthetic import (
+    correlation_length,
+    derive_seeds,
+    filter_kernel,
+    generate_exact,
+    generate_many,
+    height_stats,
+    input_moments,
+    moment_transfer,
+)
+from roughcontact.units import GB, MM, MPA, UM
+
+log = logging.getLogger(__name__)
+
+#: Seconds between progress lines of a contact job within one batch.
+PROGRESS_SECONDS = 30.0
+
+#: Surfaces solved together in one call (the batch also fixes the rounding of the
+#: matrix products, so a re-solve of the same batch is bit-identical).
+BATCH_SIZE = 20
+
+
+# ---------------------------------------------------------------------------
+# Surface jobs: generated cells and measured surfaces
+
+
+def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict:
+    """Generate a cell's surfaces and write them, with statistics, to ``path``.
+
+    Heights are stored in units of sigma (dimensionless, zero mean per
+    surface); realised moments (Eq 2-5) and 10 % ACF lags [m] per surface;
+    the filter's transfer factors and the fitted Johnson curve of the white
+    noise as attributes, with provenance. Returns the root attributes.
+    A measured cell (``method: measured``) is imported by
+    :func:`build_measured_cell` instead.
+    """
+    if params["method"] == "measured":
+        return build_measured_cell(params, study_seed, path, config)
+    start = time.perf_counter()
+    spec = spec_from_params(params)
+    seeds = derive_seeds(study_seed, statistics_key(params), params["count"])
+    attrs = {"cell": cell_key(params), "study_seed": int(study_seed), "method": params["method"]}
+    extra = {}
+    if params["method"] == "filter":
+        kern = filter_kernel(spec)
+        s3, s4 = moment_transfer(spec)
+        skew_x, kurt_x = input_moments(spec)
+        curve = johnson.fit(skew_x, kurt_x)
+        attrs |= {
+            "filter_S3": s3,
+            "filter_S4": s4,
+            "filter_clipped": kern.clipped,
+            "input_skew": skew_x,
+            "input_kurt": kurt_x,
+            "johnson_family": curve.family,
+            "johnson_params": [curve.gamma, curve.delta, curve.xi, curve.lam],
+        }
+        log.info(
+            "cell %s: S3 = %.4f, S4 = %.4f, white noise Sk_x = %.4f, Ku_x = %.4f (%s)",
+            attrs["cell"], s3, s4, skew_x, kurt_x, curve.family,
+        )
+        heights = generate_many(spec, seeds)
+    else:
+        results = [generate_exact(spec, s) for s in seeds]
+        heights = np.stack([z for z, _ in results])
+        extra["spectral_error"] = (
+            np.array([r.spectral_error for _, r in results]),
+            {"units": "1", "description": "relative L2 error of the Fourier amplitude"},
+        )
+        extra["converged"] = np.array([r.converged for _, r in results])
+    stats = height_stats(heights)
+    lags = np.array([correlation_length(z, spec.spacing, spec.periodic) for z in heights])
+    log.info(
+        "cell %s: %d surfaces in %.2f s; mean realised Sk %.3f (target %g), Ku %.3f (target %g)",
+        attrs["cell"], len(seeds), time.perf_counter() - start,
+        np.mean(stats["skew"]), params["skew"], np.mean(stats["kurt"]), params["kurt"],
+    )
+    unit = {"units": "1 (heights / sigma)"}
+    datasets = {
+        "heights": (heights, unit | {"layout": "(surface, y, x), row-major over y then x"}),
+        "seeds": (seeds.astype(np.int64), {"generator": "numpy.random.default_rng(seed)"}),
+        "stats/mean": (stats["mean"], unit),
+        "stats/sigma": (stats["sigma"], unit),
+        "stats/skew": (stats["skew"], {"units": "1"}),
+        "stats/kurt": (stats["kurt"], {"units": "1 (Pearson, normal = 3)"}),
+        "stats/corr_length_x": (lags[:, 0], {"units": "m"}),
+        "stats/corr_length_y": (lags[:, 1], {"units": "m"}),
+        **{f"stats/{k}": v for k, v in extra.items()},
+    }
+    attrs |= {
+        "spec": canonical_json(spec.as_dict()),
+        "params": canonical_json(params),
+        **{f"spec_{k}": v for k, v in spec.as_dict().items()},
+        **provenance(config),
+    }
+    write_surfaces(path, datasets, attrs)
+    return attrs
+
+
+def build_measured_cell(params: dict, study_seed: int, path, config=None) -> dict:
+    """Import a measured surface and write it as a surface cell of one surface.
+
+    The layout is that of generated cells (heights in units of sigma with
+    zero mean, ``stats/*``, ``seeds``; seed -1: none), so contact jobs read
+    it unchanged. Attributes: the source file and its SHA-256 (which must be
+    the one the workflow was planned with), the import options, the measured
+    statistics in SI (``measured_*``), the filled points, the removed plane,
+    the Johnson law of the measured moments (for heights / sigma), provenance.
+    Returns the root attributes.
+    """
+    start = time.perf_counter()
+    info = params["measured"]
+    measurement = load_measured(info)
+    if measurement.sha256 != info["file_sha256"]:
+        raise MeasurementError(
+            f"{info['file']}: the file changed after the workflow was planned (sha256 "
+            f"{measurement.sha256[:12]}, planned {info['file_sha256'][:12]}); run again",
+            info["file"],
+        )
+    stats = measured.statistics(measurement)
+    sigma = stats["sigma"]
+    heights = (measurement.heights / sigma)[None]
+    realised = height_stats(heights)
+    unit = {"units": "1 (heights / sigma)"}
+    one = {"units": "1"}
+    datasets = {
+        "heights": (heights, unit | {"layout": "(surface, y, x), row-major over y then x",
+                                     "source": info["file"]}),
+        "seeds": (np.array([-1], dtype=np.int64), {"generator": "none: a measured surface"}),
+        "stats/mean": (realised["mean"], unit),
+        "stats/sigma": (realised["sigma"], unit),
+        "stats/skew": (realised["skew"], one),
+        "stats/kurt": (realised["kurt"], {"units": "1 (Pearson, normal = 3)"}),
+        "stats/corr_length_x": (np.array([stats["corr_length_x"]]), {"units": "m"}),
+        "stats/corr_length_y": (np.array([stats["corr_length_y"]]), {"units": "m"}),
+        "stats/filled_points": (np.array([stats["filled_points"]]),
+                                one | {"description": "missing points filled by Laplace "
+                                                      "interpolation"}),
+    }
+    spec = {"grid": stats["grid"], "size": stats["size"],
+            "corr_length": [stats["corr_length_x"], stats["corr_length_y"]],
+            "sigma": sigma, "skew": stats["skew"], "kurt": stats["kurt"],
+            "acf": "measured", "periodic": False}
+    options = {k: v for k, v in info.items() if k not in ("file_sha256", "sigma_um")}
+    attrs = {
+        "cell": cell_key(params), "study_seed": int(study_seed), "method": "measured",
+        "source_file": str(info["file"]),
+        "source_sha256": measurement.sha256,
+        "import_options": canonical_json(options),
+        **{f"import_{k}": v for k, v in options.items() if k != "file"},
+        "measured_sigma_m": sigma,
+        "measured_skew": stats["skew"],
+        "measured_kurt": stats["kurt"],
+        "measured_corr_length_x_m": stats["corr_length_x"],
+        "measured_corr_length_y_m": stats["corr_length_y"],
+        "measured_spacing_m": stats["spacing"],
+        "filled_points": stats["filled_points"],
+        "filled_fraction": stats["filled_fraction"],
+        "plane_offset_m": stats["plane_offset"],
+        "plane_slope_x": stats["plane_slope_x"],
+        "plane_slope_y": stats["plane_slope_y"],
+        "johnson_family": stats["johnson_family"],
+        "johnson_params": stats["johnson_params"],
+        "johnson_of": "measured heights / sigma: [gamma, delta, xi, lambda]",
+        "spec": canonical_json(spec),
+        "params": canonical_json(params),
+        **{f"spec_{k}": v for k, v in spec.items()},
+        **provenance(config),
+    }
+    log.info(
+        "measured cell %s from %s: %d x %d, sigma %.4g um, Sk %.4f, Ku %.4f, b %.4g x %.4g mm, "
+        "%d points filled (%.3g %%), Johnson %s; %.2f s",
+        attrs["cell"], info["file"], *stats["grid"], sigma / UM, stats["skew"], stats["kurt"],
+        stats["corr_length_x"] / MM, stats["corr_length_y"] / MM, stats["filled_points"],
+        100 * stats["filled_fraction"], stats["johnson_family"], time.perf_counter() - start,
+    )
+    write_surfaces(path, datasets, attrs)
+    return attrs
+
+
+# ---------------------------------------------------------------------------
+# Influence jobs: the elastic body of a geometry
+
+
+def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
+    n = unit.shape[0]
+    nx, ny = geom.grid
+    diag = np.diag(unit)
+    eigmin = float(np.linalg.eigvalsh(unit)[0]) if n <= 4000 else float("nan")
+    rows = unit.sum(axis=1)
+    checks = {
+        "asymmetry": float(np.abs(unit - unit.T).max() / np.abs(unit).max()),
+        "min_eigenvalue_m": eigmin,
+        "row_sum_min_m": float(rows.min()),
+        "row_sum_max_m": float(rows.max()),
+        "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
+    }
+    if not eigmin > 0 and np.isfinite(eigmin):
+        raise FloatingPointError(f"geometry {key}: E * C is not positive definite "
+                                 f"(smallest eigenvalue {eigmin:.3g} m)")
+    return checks
+
+
+def _operator_checks(op, geom) -> dict:
+    nx, ny = geom.grid
+    rows = op.matvec(np.ones(nx * ny))
+    diag = op.diagonal()
+    return {
+        "row_sum_min_m": float(rows.min()),
+        "row_sum_max_m": float(rows.max()),
+        "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
+        "min_diagonal_m": float(diag.min()),
+    }
+
+
+def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: float = 16.0,
+                    config=None) -> dict:
+    """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
+
+    The influence model is the geometry's ``operator``: "dense" (the
+    finite-element matrix, the paper's), "hybrid" (matrix-free: Love's
+    half-space plus a coarse finite-element correction,
+    :mod:`roughcontact.operators`), "halfspace" (Love only) or "auto" (dense
+    up to 64 x 64 elements, hybrid above; then the half-space instead when
+    :func:`roughcontact.operators.halfspace_errors`, measured on the coarse
+    model, is within the geometry's ``halfspace_tolerance`` for every
+    quantity it names).
+
+    The peak memory is estimated first; a geometry that would not fit raises
+    :class:`~roughcontact.influence.ModelTooLarge` with the estimate and the
+    options before anything is built. Returns the root attributes.
+    """
+    geom = block_geometry(params)
+    key = geometry_key(params)
+    requested = params.get("operator", "dense")
+    operator = planned_operator(params, max_memory_gb)
+    model = geom if operator == "dense" else coarse_geometry(geom)
+    cost = influence.check_memory(model, max_memory_gb * 1e9, solver)
+    log.info(
+        "geometry %s: operator %s (requested %s); finite-element model %s grid %s, %d dofs, "
+        "estimated peak %.2f GB (limit %.1f GB)", key, operator, requested, model.mesh,
+        model.grid, cost.dofs, cost.peak_bytes / 1e9, max_memory_gb,
+    )
+    start = time.perf_counter()
+    fe = influence.unit_modulus_influence(model, solver=solver, max_bytes=max_memory_gb * 1e9)
+    if not np.isfinite(fe).all():
+        raise FloatingPointError(f"geometry {key}: the influence matrix has non-finite entries")
+    extra = {}
+    if requested == "auto":
+        tolerance = params["halfspace_tolerance"]
+        errors = halfspace_criterion.halfspace_errors(fe, model.grid, model.size, geom.nu,
+                                                      geom.thickness)
+        meets = halfspace_criterion.halfspace_meets(errors, tolerance)
+        log.info("geometry %s: half-space errors measured on the %s grid %s: %s; tolerance %s: "
+                 "%s", key, model.mesh, model.grid, errors, tolerance,
+                 "use the half-space" if meets else "keep the finite body")
+        extra = {"halfspace_errors": errors, "halfspace_tolerance": tolerance}
+        if meets:
+            operator = "halfspace"
+    model_attrs = {}
+    if operator == "dense":
+        unit = fe
+        checks = _dense_checks(unit, geom, key)
+    else:
+        if operator == "hybrid":
+            unit = operators.hybrid_operator(geom, fe, model)
+        else:
+            unit = operators.halfspace_operator(geom.grid, geom.size, geom.nu)
+        del fe
+        checks = _operator_checks(unit, geom)
+        model_attrs["coarse_mesh"] = model.mesh
+    seconds = time.perf_counter() - start
+    log.info("geometry %s: %s built in %.1f s; checks %s", key, operator, seconds, checks)
+    attrs = {
+        "geometry": key,
+        "params": canonical_json(params),
+        **{f"geometry_{k}": v for k, v in params.items()},
+        "operator": operator,
+        "operator_requested": requested,
+        **model_attrs,
+        **extra,
+        "mesh_spec": canonical_json(dataclasses.asdict(model.mesh_spec)),
+        "dofs": int(cost.dofs),
+        "estimated_peak_gb": cost.peak_bytes / 1e9,
+        "build_seconds": seconds,
+        "peak_rss_gb": peak_rss_bytes() / GB,
+        "solver": solver,
+        **{f"check_{k}": v for k, v in checks.items()},
+        **provenance(config),
+    }
+    return write_influence(path, unit, attrs)
+
+
+# ---------------------------------------------------------------------------
+# Contact jobs
+
+
+def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settings: dict,
+                      config=None) -> dict:
+    """Solve one contact job and write its non-dimensional sweep to ``out_path``.
+
+    ``job`` comes from :func:`roughcontact.study.contact_jobs` (surface and
+    geometry parameters and the non-dimensional pressure the sweep must
+    reach); ``settings`` is the config's ``contact`` section. Returns the
+    root attributes written.
+    """
+    start = time.perf_counter()
+    surfaces = read_surfaces(surfaces_path)
+    unit, geometry_attrs = read_influence(influence_path)
+    heights = surfaces["heights"]
+    m = heights.shape[0]
+    geometry = job["geometry"]
+    nx, ny = geometry["grid"]
+    if heights.shape[1:] != (ny, nx):
+        raise ValueError(
+            f"surfaces {surfaces_path} have shape {heights.shape[1:]} but geometry "
+            f"{job['geometry_key']} has a {ny} x {nx} (ny x nx) contact grid"
+        )
+    body = block_geometry(geometry)
+    steps = int(settings.get("steps", 30))
+    approaches = cell_module.approach_grid(heights, job["pressure_end"], steps)
+    method = settings.get("method", "cg")
+    tol = float(settings.get("tol", 1e-8))
+    precision = settings.get("precision", "mixed")
+    log.info("contact %s__%s: %d surfaces x %d steps, approach d/sigma %.3g .. %.3g, "
+             "sweep to P L / (E sigma) = %g; method %s, tol %.1e, precision %s, influence %s",
+             job["surface_key"], job["geometry_key"], m, steps, approaches[0], approaches[-1],
+             job["pressure_end"], method, tol, precision,
+             geometry_attrs.get("operator", "dense"))
+
+    last = [time.perf_counter()]
+
+    def progress(report):
+        now = time.perf_counter()
+        if report.step == report.steps_total:
+            log.info("  surfaces %d/%d done, %d steps, %.1f s elapsed, %d unconverged",
+                     report.surfaces_done, report.surfaces_total, report.steps_total,
+                     report.elapsed, report.unconverged)
+        elif now - last[0] > PROGRESS_SECONDS:  # long batches (large grids): a heartbeat
+            log.info("  step %d/%d of the batch ending at surface %d/%d, %.1f s elapsed",
+                     report.step, report.steps_total, report.surfaces_done,
+                     report.surfaces_total, report.elapsed)
+        else:
+            return
+        last[0] = now
+
+    result = cell_module.sweep_cell(unit, heights, body, job["pressure_end"], steps, method=method,
+                             tol=tol, precision=precision, batch_size=min(m, BATCH_SIZE),
+                             progress=progress)
+    reached = result.nominal_pressure[:, -1].min()
+    if reached < job["pressure_end"]:
+        log.warning("the sweep reached P L / (E sigma) = %.3g on its least loaded surface, "
+                    "below the %.3g asked for: higher pressure levels rest on fewer surfaces",
+                    reached, job["pressure_end"])
+    seconds = time.perf_counter() - start
+    unconverged = int((~result.converged).sum())
+    stats = {
+        "unconverged_steps": unconverged,
+        "unconverged_stiffness_steps": int((~result.stiffness_converged).sum()),
+        "worst_residual": float(result.residual.max()),
+        "total_iterations": int(result.iterations.sum()),
+        "max_iterations": int(result.iterations.max()),
+        "total_matvecs": int(result.matvecs.sum()),
+        "wall_seconds": seconds,
+    }
+    (log.warning if unconverged else log.info)(
+        "contact %s__%s: %s", job["surface_key"], job["geometry_key"], stats)
+    attrs = {
+        "batch_size": min(m, BATCH_SIZE),
+        "job": canonical_json(job),
+        **stats,
+        "surfaces_sha256": file_sha256(surfaces_path),
+        "influence_content_sha256": geometry_attrs.get("content_sha256", ""),
+        "seeds": surfaces["seeds"].tolist(),
+        **provenance(config),
+    }
+    return write_contact(out_path, result, attrs)
+
+
+def cell_label(cell: dict) -> str:
+    """Short legend text of a study cell."""
+    s, g = cell["surface"], cell["geometry"]
+    source = (f"measured {Path(s['measured']['file']).name}: " if s.get("method") == "measured"
+              else "")
+    return (f"{source}Sk {s['skew']:g}, Ku {s['kurt']:g}, b {s['b_mm'][0]:g} mm, "
+            f"{g['size_mm'][0]:g} mm, nu {g['nu']:g}, {g['mesh']} mesh, "
+            f"sigma {cell['sigma_um']:g} um")
+
+
+def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_path,
+                    moduli_path, meta_path, config=None) -> pd.DataFrame:
+    """Aggregate a figure's or sweep's cells into CSV tables with a JSON sidecar.
+
+    ``contact_paths`` maps a contact key to its file. The table has one row per
+    cell and pressure level (:func:`roughcontact.aggregate.aggregate_cell`
+    columns plus the cell's parameters); the moduli table one row per cell and
+    surface (E_u, Eq 36) with the cell summary in the sidecar. Unconverged
+    solves are excluded by the aggregation and counted in both.
+    """
+    rows, moduli, summaries = [], [], []
+    for index, cell in enumerate(cells):
+        key = contact_key(cell)
+        nd, attrs = read_contact(contact_paths[key])
+        sigma, E = cell["sigma_um"] * UM, cell["E_MPa"] * MPA
+        p_min, p_max = (p * MPA for p in cell["pressure_MPa"])
+        physical, frame = cell_module.aggregate_sweep(
+            nd, sigma, E, aggregate.pressure_axis(p_min, p_max, levels))
+        s, g = cell["surface"], cell["geometry"]
+        labels = {
+            "cell": index, "label": cell_label(cell), "contact_key": key,
+            "skew": s["skew"], "kurt": s["kurt"], "b_mm": s["b_mm"][0],
+            "size_mm": g["size_mm"][0], "nu": g["nu"], "mesh": g["mesh"],
+            "thickness_mm": g["thickness_mm"], "sigma_um": cell["sigma_um"],
+            "E_MPa": cell["E_MPa"],
+        }
+        rows.append(frame.assign(**labels))
+        per_surface = aggregate.mean_plane_modulus(physical)
+        moduli.append(per_surface.assign(seed=attrs["seeds"], **labels))
+        summary = aggregate.modulus_summary(per_surface, E)
+        summaries.append({**labels, **{k: float(v) for k, v in summary.items()},
+                          "unconverged_steps": int(attrs["unconverged_steps"]),
+                          "worst_residual": float(attrs["worst_residual"])})
+        if int(attrs["unconverged_steps"]):
+            log.warning("cell %s: %d unconverged steps excluded", key,
+                        int(attrs["unconverged_steps"]))
+    table = pd.concat(rows, ignore_index=True)
+    units = rows[0].attrs["units"] if rows else {}
+    with atomic_path(table_path) as tmp:
+        table.to_csv(tmp, index=False)
+    with atomic_path(moduli_path) as tmp:
+        pd.concat(moduli, ignore_index=True).to_csv(tmp, index=False)
+    meta = {
+        "description": "aggregates of the contact study; one row per cell and nominal "
+                       "pressure level; mean, 95 % Student-t half width and surface count "
+                       "per quantity",
+        "units": units,
+        "interpolation": aggregate.INTERPOLATION,
+        "cells": cells,
+        "mean_plane_modulus": summaries,
+        "config_hash": config_hash(config) if config is not None else "",
+        **{k: v for k, v in provenance(config).items() if k != "config_hash"},
+    }
+    with atomic_path(meta_path) as tmp:
+        Path(tmp).write_text(json.dumps(meta, indent=1, default=float))
+    return table
+
+
+__all__ = [
+    "BATCH_SIZE",
+    "aggregate_study",
+    "build_influence",
+    "build_measured_cell",
+    "build_surface_cell",
+    "cell_label",
+    "solve_contact_job",
+]

@@ -1,0 +1,105 @@
+"""Provenance and safe file writing: who made a result, from what, and how.
+
+Every HDF5 output of the pipeline carries the package version, the git commit
+of the source tree, a hash of the configuration and the creation time as
+attributes, so that a number found in ``results/`` can be traced back.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import hashlib
+import json
+import os
+import resource
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from roughcontact import __version__
+
+_SOURCE_DIR = Path(__file__).resolve().parent.parent
+
+
+def peak_rss_bytes() -> float:
+    """Peak resident set of this process so far [bytes] (``ru_maxrss``: KiB on Linux)."""
+    scale = 1 if sys.platform == "darwin" else 1024
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * scale
+
+
+def git_commit(path: str | os.PathLike | None = None) -> str:
+    """Commit hash of the git tree holding ``path`` (default: this package).
+
+    Appends ``-dirty`` when tracked files differ from the commit, and returns
+    ``"unknown"`` outside a git checkout or without git.
+    """
+    where = Path(path) if path is not None else _SOURCE_DIR
+    try:
+        commit = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=where, capture_output=True, text=True, check=True
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=where,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return commit + ("-dirty" if dirty else "")
+
+
+def _canonical(obj):
+    if isinstance(obj, dict):
+        return {str(k): _canonical(v) for k, v in sorted(obj.items(), key=lambda kv: str(kv[0]))}
+    if isinstance(obj, list | tuple):
+        return [_canonical(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    return obj
+
+
+def canonical_json(obj) -> str:
+    """Deterministic JSON text of a nested structure (sorted keys, no spaces)."""
+    return json.dumps(_canonical(obj), sort_keys=True, separators=(",", ":"))
+
+
+def config_hash(config) -> str:
+    """SHA-256 (hex, first 16 characters) of the canonical JSON of ``config``."""
+    return hashlib.sha256(canonical_json(config).encode()).hexdigest()[:16]
+
+
+def provenance(config=None) -> dict:
+    """Attributes describing how and when a result was made."""
+    return {
+        "package": "roughcontact",
+        "package_version": __version__,
+        "git_commit": git_commit(),
+        "config_hash": config_hash(config) if config is not None else "",
+        "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+        "numpy_version": np.__version__,
+    }
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike):
+    """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
+
+    An interrupted or failed write leaves no file at ``path`` (the temporary
+    file is removed), so a half-written output never looks finished.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp{os.getpid()}{path.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()

@@ -1,0 +1,226 @@
+"""HDF5 files of the pipeline: one reader and one writer per file kind, each with its hash.
+
+Every file is written atomically (temporary name, then rename), with units
+and provenance.
+
+Layout of a surface file (``results/surfaces/<cell>.h5``)::
+
+    /heights        (m, ny, nx) float64  heights / sigma, zero mean per surface
+    /seeds          (m,)        int64    white-noise seed of each surface
+    /stats/mean, sigma, skew, kurt   (m,)  realised moments (Eq 2-5), heights / sigma
+    /stats/corr_length_x, corr_length_y (m,) [m] lag of 10 % ACF decay
+    attributes: cell, study_seed, spec (JSON), every spec field, the filter's
+                S3 and S4, the input moments and Johnson curve, provenance
+
+Layout of an influence file (``results/influence/<geometry>.h5``)::
+
+    /unit_influence (n, n)  E * C [m] of a dense model, or
+    /correction     (nc, nc) the finite-body correction [1/m] of a matrix-free
+                    hybrid operator (none for the half-space)
+    attributes: geometry, params, operator, checks, content_sha256, provenance
+
+Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
+
+    /<field>   (m, k)  every array of NondimSweep in CONTACT_ARRAYS (dimensionless)
+    attributes: job (JSON), the NondimSweep settings (``sweep_*``), solver
+                statistics, the content hashes of the contact arrays and of
+                the surface and influence inputs, provenance
+
+Arrays are row-major over y then x (axis 0 is y), the element ordering of the
+influence matrices.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import h5py
+import numpy as np
+
+from roughcontact.contact.nondim import NondimSweep
+from roughcontact.elasticity.operators import BlockOperator
+from roughcontact.hashes import array_sha256, arrays_sha256
+from roughcontact.study.provenance import atomic_path
+
+#: Arrays of a contact file (the fields of NondimSweep that are stored).
+CONTACT_ARRAYS = ("approach", "nominal_pressure", "mean_plane_deflection",
+                  "real_area_fraction", "max_pressure", "stiffness", "iterations", "matvecs",
+                  "residual", "converged", "stiffness_converged")
+#: Scalar settings of NondimSweep, stored as ``sweep_<name>`` attributes.
+SWEEP_SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffness_tol",
+                  "precision")
+
+
+def _attr_value(value):
+    if isinstance(value, dict | list | tuple):
+        return json.dumps(value)
+    if value is None:
+        return ""
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    return value
+
+
+def _decoded(attrs) -> dict:
+    """HDF5 attributes as a dict, byte strings decoded (JSON text left as text)."""
+    return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in attrs.items()}
+
+
+def write_h5(path: str | os.PathLike, datasets: dict, attrs: dict) -> None:
+    """Write datasets and root attributes to ``path`` atomically.
+
+    ``datasets`` maps a name (``"stats/skew"`` makes a group) to an array or to
+    ``(array, {attribute: value})``; nested dicts and lists in attributes are
+    stored as JSON text.
+    """
+    with atomic_path(path) as tmp:
+        with h5py.File(tmp, "w") as f:
+            for name, item in datasets.items():
+                data, dattrs = item if isinstance(item, tuple) else (item, {})
+                dset = f.create_dataset(name, data=np.asarray(data))
+                for key, value in dattrs.items():
+                    dset.attrs[key] = _attr_value(value)
+            for key, value in attrs.items():
+                f.attrs[key] = _attr_value(value)
+
+
+def read_attrs(path: str | os.PathLike) -> dict:
+    """Root attributes of an HDF5 file (JSON text left as text)."""
+    with h5py.File(path, "r") as f:
+        return _decoded(f.attrs)
+
+
+# ---------------------------------------------------------------------------
+# Surface files
+
+
+def write_surfaces(path: str | os.PathLike, datasets: dict, attrs: dict) -> None:
+    """Write a surface cell (``heights``, ``seeds``, ``stats/*``; layout above)."""
+    write_h5(path, datasets, attrs)
+
+
+def read_surfaces(path: str | os.PathLike, count: int | None = None) -> dict:
+    """Read a surface file written by the ``surfaces`` rule.
+
+    Returns a dict with ``heights`` (m, ny, nx, in units of sigma), ``seeds``,
+    ``stats`` (dict of per-surface arrays), ``spec`` (dict) and ``attrs``.
+    ``count`` limits how many surfaces are read (the first ``count``).
+    """
+    sl = slice(None) if count is None else slice(0, count)
+    with h5py.File(path, "r") as f:
+        out = {
+            "heights": f["heights"][sl],
+            "seeds": f["seeds"][sl],
+            "stats": {k: f["stats"][k][sl] for k in f["stats"]},
+            "attrs": _decoded(f.attrs),
+        }
+    out["spec"] = json.loads(out["attrs"]["spec"])
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Influence files: a dense matrix or a matrix-free operator
+
+
+def influence_sha256(unit) -> str:
+    """Content hash of a stored influence model (matrix, or the operator's correction)."""
+    if isinstance(unit, BlockOperator):
+        return array_sha256(unit.correction) if unit.correction is not None else \
+            array_sha256(np.asarray(unit.grid + unit.size + (unit.nu,), dtype=float))
+    return array_sha256(unit)
+
+
+def _influence_datasets(unit) -> tuple[dict, dict]:
+    """Datasets and attributes that store ``unit`` (a matrix or a :class:`BlockOperator`)."""
+    if not isinstance(unit, BlockOperator):
+        return {"unit_influence": (unit, {
+            "units": "m (E * C: displacement per unit pressure times Young's modulus)",
+            "layout": "C[i, j]: displacement at the centre of element i per unit "
+                      "pressure on element j; elements row-major over y then x",
+        })}, {}
+    attrs = {"operator": unit.kind, "operator_grid": list(unit.grid),
+             "operator_size_m": list(unit.size), "operator_nu": unit.nu}
+    datasets = {}
+    if unit.correction is not None:
+        attrs["coarse_grid"] = list(unit.coarse_grid)
+        datasets["correction"] = (unit.correction, {
+            "units": "1/m (E * C of the coarse finite-element model minus Love's half-space, "
+                     "per unit coarse element area)",
+            "layout": "coarse elements row-major over y then x",
+        })
+    return datasets, attrs
+
+
+def write_influence(path: str | os.PathLike, unit, attrs: dict) -> dict:
+    """Write an influence model with ``attrs`` and its ``content_sha256``; returns the attrs."""
+    datasets, model_attrs = _influence_datasets(unit)
+    attrs = {**attrs, **model_attrs, "content_sha256": influence_sha256(unit)}
+    write_h5(path, datasets, attrs)
+    return attrs
+
+
+def read_influence(path: str | os.PathLike):
+    """``(E C, attributes)`` of an influence file: a dense ndarray [m] or a :class:`BlockOperator`.
+
+    Divide by Young's modulus for C [m/Pa].
+    """
+    with h5py.File(path, "r") as f:
+        attrs = _decoded(f.attrs)
+        if "unit_influence" in f:
+            return f["unit_influence"][...], attrs
+        correction = f["correction"][...] if "correction" in f else None
+
+    def pair(value):
+        return tuple(json.loads(value)) if isinstance(value, str) else tuple(value)
+
+    kind = attrs.get("operator")
+    if kind not in ("hybrid", "halfspace"):
+        raise ValueError(f"{path}: not an influence file (no unit_influence dataset and "
+                         f"operator attribute {kind!r})")
+    coarse = pair(attrs["coarse_grid"]) if correction is not None else None
+    op = BlockOperator(grid=pair(attrs["operator_grid"]), size=pair(attrs["operator_size_m"]),
+                       nu=float(attrs["operator_nu"]), correction=correction, coarse_grid=coarse)
+    return op, attrs
+
+
+# ---------------------------------------------------------------------------
+# Contact files
+
+
+def contact_sha256(sweep: NondimSweep) -> str:
+    """Content hash of a contact sweep's stored arrays (:data:`CONTACT_ARRAYS`)."""
+    return arrays_sha256({name: np.asarray(getattr(sweep, name)) for name in CONTACT_ARRAYS})
+
+
+def write_contact(path: str | os.PathLike, sweep: NondimSweep, attrs: dict) -> dict:
+    """Write a contact job's sweep with ``attrs`` and its hash; returns the attributes written.
+
+    The attributes gain ``content_sha256`` (:func:`contact_sha256`) and the
+    sweep's settings as ``sweep_<name>``.
+    """
+    datasets = {name: np.asarray(getattr(sweep, name)) for name in CONTACT_ARRAYS}
+    attrs = {
+        "content_sha256": arrays_sha256(datasets),
+        **attrs,
+        **{f"sweep_{k}": getattr(sweep, k) for k in SWEEP_SETTINGS},
+        "sweep_max_iter": -1 if sweep.max_iter is None else sweep.max_iter,
+    }
+    write_h5(path, datasets, attrs)
+    return attrs
+
+
+def read_contact(path: str | os.PathLike) -> tuple[NondimSweep, dict]:
+    """The :class:`~roughcontact.contact.nondim.NondimSweep` and attributes of a contact file."""
+    with h5py.File(path, "r") as f:
+        arrays = {name: f[name][...] for name in CONTACT_ARRAYS}
+        attrs = _decoded(f.attrs)
+    settings = {k: attrs[f"sweep_{k}"] for k in SWEEP_SETTINGS}
+    settings["n_elements"] = int(settings["n_elements"])
+    for key in ("method", "precision"):
+        settings[key] = str(settings[key])
+    if isinstance(attrs.get("seeds"), str):  # stored as JSON text
+        attrs["seeds"] = json.loads(attrs["seeds"])
+    max_iter = int(attrs["sweep_max_iter"])
+    return NondimSweep(**arrays, **settings,
+                       max_iter=None if max_iter < 0 else max_iter), attrs

@@ -1,0 +1,79 @@
+"""Study bookkeeping: geometry keys, and building influence files."""
+
+import numpy as np
+import pytest
+
+from roughcontact.elasticity.influence import ModelTooLarge
+from roughcontact.study.cells import block_geometry, geometry_key, geometry_params
+from roughcontact.study.jobs import build_influence
+from roughcontact.study.storage import read_influence
+
+BODY = {"thickness_mm": 2.0, "E_MPa": 511.0, "nu": 0.0, "base": "clamped", "mesh": "paper"}
+SURFACES = {"grid": [8, 8], "size_mm": [1.2, 1.2], "count": 1}
+
+
+def test_every_geometry_parameter_but_young_modulus_changes_the_key():
+    base = geometry_params(BODY, SURFACES)
+    keys = {geometry_key(base)}
+    for change in ({"nu": 0.3}, {"thickness_mm": 3.0}, {"mesh": "refined"},
+                   {"base": "sliding"}, {"grid": [8, 10]}, {"size_mm": [1.2, 1.5]}):
+        keys.add(geometry_key(geometry_params(BODY, SURFACES, **change)))
+    assert len(keys) == 7
+    assert geometry_key(geometry_params({**BODY, "E_MPa": 1.0}, SURFACES)) == geometry_key(base)
+
+
+def test_block_geometry_converts_millimetres():
+    geom = block_geometry(geometry_params(BODY, SURFACES, grid=[8, 10]))
+    assert geom.size == pytest.approx((1.2e-3, 1.2e-3))
+    assert geom.thickness == pytest.approx(2e-3)
+    assert geom.grid == (8, 10)
+
+
+def test_build_influence_writes_rows_summing_to_the_thickness(tmp_path):
+    params = geometry_params(BODY, SURFACES)
+    path = tmp_path / "g.h5"
+    build_influence(params, path)
+    unit, attrs = read_influence(path)
+    assert unit.shape == (64, 64)
+    assert np.allclose(unit.sum(axis=1), 2e-3, rtol=1e-10)
+    assert attrs["check_min_eigenvalue_m"] > 0
+    assert attrs["geometry"] == geometry_key(params)
+
+
+def test_build_influence_refuses_a_model_too_large_before_building(tmp_path):
+    params = geometry_params(BODY, SURFACES)
+    path = tmp_path / "g.h5"
+    with pytest.raises(ModelTooLarge, match=r"GB.*Options"):
+        build_influence(params, path, max_memory_gb=0.001)
+    assert not path.exists()
+
+
+def quick_config():
+    from pathlib import Path
+
+    import yaml
+
+    quick = Path(__file__).resolve().parents[2] / "config" / "quick.yaml"
+    return yaml.safe_load(quick.read_text())
+
+
+def test_accuracy_preset_sets_mesh_count_and_solver_and_records_its_errors():
+    from roughcontact.study.cells import contact_cells, contact_jobs, contact_settings
+    from roughcontact.study.presets import ACCURACY_PRESETS
+
+    config = quick_config()
+    plain = contact_cells(config, "fig11")
+    assert {c["geometry"]["mesh"] for c in plain} == {config["body"]["mesh"]}
+    assert plain[0]["accuracy"] == "as configured"
+    config["accuracy"] = "fast"
+    preset = ACCURACY_PRESETS["fast"]
+    cells = contact_cells(config, "fig11")
+    assert {c["geometry"]["mesh"] for c in cells} == {preset["mesh"]}
+    assert {c["surface"]["count"] for c in cells} == {preset["surfaces"]}
+    assert cells[0]["expected_error"]["real_area_error"] == preset["real_area_error"]
+    assert contact_settings(config)["tol"] == preset["tol"]
+    # a figure that names its meshes keeps them
+    named = contact_cells(config, "fig07")
+    assert {c["geometry"]["mesh"] for c in named} == set(config["figures"]["fig07"]["meshes"])
+    job = next(iter(contact_jobs(config, ["fig11"]).values()))
+    assert job["accuracy"] == "fast" and job["expected_error"]
