@@ -8,6 +8,7 @@ import re
 from snakemake.exceptions import WorkflowError
 
 from roughcontact.study import cells as study
+from roughcontact.elasticity.operators import coarsened_side
 from roughcontact.study.provenance import config_hash
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -414,15 +415,13 @@ def get_speed_vs_error_mem_mb(wildcards):
     the solver study; the hybrid operators' coarse "refined" models), three dense
     matrices of the body's grid, and 500 MB (measured 1.4 GB with the
     defaults, against 2.9 GB from this estimate)."""
-    from roughcontact.reports.speed import grid_study_coarse
-
     settings = _speed_settings()
     params = study.geometry_params(config["body"], config["surfaces"])
     n = params["grid"][0] * params["grid"][1]
     dense = dict(params, operator="dense")
     # the solver study's "paper" matrix; the hybrid operators' coarse models
     builds = [dict(dense, mesh="paper")] + [
-        dict(dense, mesh="refined", grid=[grid_study_coarse(g)] * 2)
+        dict(dense, mesh="refined", grid=[coarsened_side(g)] * 2)
         for g in [*settings.get("grids", [30, 60, 120]), params["grid"][0]]
     ]
     peak = max(

@@ -68,6 +68,7 @@ __all__ = [
     "BlockOperator",
     "block_operator",
     "choose_operator",
+    "coarsened_side",
     "default_coarse_grid",
     "halfspace_operator",
     "hybrid_operator",
@@ -102,6 +103,16 @@ def default_coarse_grid(grid, coarse_max: int | None = None) -> tuple[int, int]:
         k = next((k for k in range(k0, 2 * k0 + 1) if g % k == 0), None)
         out.append(g // k if k is not None else math.ceil(g / k0))
     return (out[0], out[1])
+
+
+def coarsened_side(grid: int, coarsening: int = 2) -> int:
+    """Coarse grid (per side) of a hybrid operator on ``grid`` x ``grid`` coarsened
+    ``coarsening`` times: ``grid // coarsening``, at most :data:`COARSE_MAX`
+    (then :func:`default_coarse_grid`). The speed report's grid study uses it."""
+    coarse = grid // coarsening
+    if coarse > COARSE_MAX:
+        coarse = default_coarse_grid((grid, grid))[0]
+    return coarse
 
 
 def _padded_love_spectrum(nx: int, ny: int, dx: float, dy: float, nu: float) -> np.ndarray:

@@ -69,7 +69,6 @@ __all__ = [
     "SOLVER_QUANTITIES",
     "band_vs_count",
     "grid_study",
-    "grid_study_coarse",
     "mesh_errors",
     "recommend",
     "solver_speed_vs_error",
@@ -413,20 +412,11 @@ def mesh_errors(convergence_csv=None, hybrid_csv=None) -> pd.DataFrame:
 # 3. Contact grid
 
 
-def grid_study_coarse(grid: int, coarsening: int = 2) -> int:
-    """Coarse finite-element grid (per side) of the grid study's hybrid operator on
-    ``grid`` x ``grid``: ``grid // coarsening``, at most ``operators.COARSE_MAX``."""
-    coarse = grid // coarsening
-    if coarse > operators.COARSE_MAX:
-        coarse = operators.default_coarse_grid((grid, grid))[0]
-    return coarse
-
-
 def _grid_influence(geometry: BlockGeometry, influence: str, coarsening: int):
     if influence == "hybrid":
         # matrix-free (the same operator as the dense hybrid matrix, without its
         # 8 n^2 bytes)
-        coarse = grid_study_coarse(geometry.grid[0], coarsening)
+        coarse = operators.coarsened_side(geometry.grid[0], coarsening)
         return operators.block_operator(geometry, coarse_grid=(coarse, coarse))
     if influence == "halfspace":
         return halfspace_influence(geometry.grid, geometry.size, 1.0, geometry.nu)
