@@ -34,7 +34,7 @@ rule audit_verify:
         runtime=get_audit_verify_runtime,
     params:
         jobs=CONTACT_JOBS,
-        sample=config.get("audit", {}).get("verify_sample", 3),
-        seed=config.get("audit", {}).get("verify_seed", config["study_seed"]),
+        sample=config["audit"]["verify_sample"],
+        seed=config["audit"].get("verify_seed", config["study_seed"]),
     script:
         "../scripts/audit_verify.py"

@@ -12,7 +12,7 @@ from roughcontact.elasticity.operators import coarsened_side
 from roughcontact.study.provenance import config_hash
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ[_var] = str(config.get("blas_threads", 1))
+    os.environ[_var] = str(config["blas_threads"])
 
 NOTEBOOKS = os.path.join(workflow.basedir, "notebooks")
 FIGURES = [
@@ -21,9 +21,7 @@ FIGURES = [
     if name in config["figures"]
 ]
 # contact studies: the paper's figures and the user's own sweeps
-STUDIES = [n for n in FIGURES if n in study.CONTACT_FIGURES] + list(
-    config.get("sweeps", {})
-)
+STUDIES = [n for n in FIGURES if n in study.CONTACT_FIGURES] + list(config["sweeps"])
 _bad_studies = study.check_studies(config, STUDIES)
 if _bad_studies:
     raise WorkflowError(
@@ -74,10 +72,10 @@ def get_final_outputs():
         ext=("csv", "moduli.csv", "json"),
     )
     audit = ["results/audit/audit.csv", "results/audit/audit.md"] if STUDIES else []
-    if STUDIES and config.get("audit", {}).get("verify", False):
+    if STUDIES and config["audit"]["verify"]:
         audit.append("results/audit/verify.csv")
     reports = []
-    if config.get("reports", {}).get("influence_convergence"):
+    if "influence_convergence" in config["reports"]:
         reports += [
             "results/reports/influence_convergence.csv",
             "results/reports/influence_convergence.png",

@@ -40,6 +40,6 @@ rule aggregate:
         runtime=get_summary_runtime,
     params:
         cells=get_aggregate_cells,
-        levels=config.get("contact", {}).get("pressure_levels", 30),
+        levels=config["contact"]["pressure_levels"],
     script:
         "../scripts/aggregate.py"

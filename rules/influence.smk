@@ -16,7 +16,7 @@ rule influence:
         runtime=get_influence_runtime,
     params:
         geometry=get_geometry_params,
-        solver=config.get("body", {}).get("solver", "auto"),
-        max_memory_gb=config.get("body", {}).get("max_memory_gb", 16),
+        solver=config["body"]["solver"],
+        max_memory_gb=config["body"]["max_memory_gb"],
     script:
         "../scripts/build_influence.py"

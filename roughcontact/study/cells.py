@@ -363,9 +363,7 @@ def influence_geometries(config: dict) -> dict[str, dict]:
 def convergence_presets(config: dict) -> list[str]:
     """Mesh presets of the influence-convergence report ([] when it is not configured)."""
     report = config.get("reports", {}).get("influence_convergence")
-    if not report:
-        return []
-    return list(report.get("presets", ["paper", "graded", "refined", "converged"]))
+    return [] if report is None else list(report["presets"])
 
 
 def coarse_geometry(geom):
@@ -448,7 +446,7 @@ def accuracy_attrs(config: dict) -> dict:
 
 def contact_settings(config: dict) -> dict:
     """The solver settings of the contact jobs: the config's, or the accuracy preset's."""
-    settings = dict(config.get("contact", {}))
+    settings = dict(config["contact"])
     preset = accuracy_preset(config)
     if preset is not None:
         settings.update(method=preset["method"], tol=preset["tol"],

@@ -42,6 +42,7 @@ from roughcontact.study.cells import (
     spec_from_params,
     statistics_key,
 )
+from roughcontact.study.config import ContactSettings
 from roughcontact.study.provenance import (
     atomic_path,
     canonical_json,
@@ -361,7 +362,8 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
 
     ``job`` comes from :func:`roughcontact.study.contact_jobs` (surface and
     geometry parameters and the non-dimensional pressure the sweep must
-    reach); ``settings`` is the config's ``contact`` section. Returns the
+    reach); ``settings`` is the config's validated ``contact`` section
+    (:class:`~roughcontact.study.config.ContactSettings`). Returns the
     root attributes written.
     """
     start = time.perf_counter()
@@ -377,16 +379,11 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
             f"{job['geometry_key']} has a {ny} x {nx} (ny x nx) contact grid"
         )
     body = block_geometry(geometry)
-    steps = int(settings.get("steps", 30))
-    approaches = cell_module.approach_grid(heights, job["pressure_end"], steps)
-    method = settings.get("method", "cg")
-    tol = float(settings.get("tol", 1e-8))
-    precision = settings.get("precision", "mixed")
-    log.info("contact %s__%s: %d surfaces x %d steps, approach d/sigma %.3g .. %.3g, "
-             "sweep to P L / (E sigma) = %g; method %s, tol %.1e, precision %s, influence %s",
-             job["surface_key"], job["geometry_key"], m, steps, approaches[0], approaches[-1],
-             job["pressure_end"], method, tol, precision,
-             geometry_attrs.get("operator", "dense"))
+    solver = ContactSettings.from_section(settings)
+    log.info("contact %s__%s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
+             "method %s, tol %.1e, precision %s, influence %s", job["surface_key"],
+             job["geometry_key"], m, solver.steps, job["pressure_end"], solver.method,
+             solver.tol, solver.precision, geometry_attrs.get("operator", "dense"))
 
     last = [time.perf_counter()]
 
@@ -404,9 +401,11 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
             return
         last[0] = now
 
-    result = cell_module.sweep_cell(unit, heights, body, job["pressure_end"], steps, method=method,
-                             tol=tol, precision=precision, batch_size=min(m, BATCH_SIZE),
-                             progress=progress)
+    result = cell_module.sweep_cell(unit, heights, body, job["pressure_end"], solver.steps,
+                                    method=solver.method, tol=solver.tol,
+                                    precision=solver.precision, batch_size=min(m, BATCH_SIZE),
+                                    progress=progress)
+    log.info("approach d/sigma %.3g .. %.3g", result.approach[0, 0], result.approach[0, -1])
     reached = result.nominal_pressure[:, -1].min()
     if reached < job["pressure_end"]:
         log.warning("the sweep reached P L / (E sigma) = %.3g on its least loaded surface, "

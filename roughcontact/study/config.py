@@ -1,0 +1,97 @@
+"""The configuration's edge: validated sections to typed settings in SI units.
+
+``config/schema.yaml`` carries every default (``default:`` entries, applied
+when the configuration is validated: by the Snakefile, or by
+:func:`validated` for library users and tests). The dataclasses below take a
+validated section and convert its units once (``*_mm`` -> m, ``*_um`` -> m,
+``*_MPa`` -> Pa, ``*_gb`` -> bytes); nothing past this module converts units
+of configuration values or repeats a default.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+from snakemake.utils import validate
+
+from roughcontact.units import GB, MM, MPA, UM
+
+#: The schema of every configuration (with its defaults).
+SCHEMA = Path(__file__).resolve().parents[2] / "config" / "schema.yaml"
+
+
+def validated(config: dict) -> dict:
+    """A copy of ``config`` validated against the schema, with every default applied.
+
+    Raises ``snakemake.exceptions.WorkflowError`` naming the offending key.
+    """
+    config = copy.deepcopy(config)
+    validate(config, str(SCHEMA))
+    return config
+
+
+def load_config(path: str | os.PathLike) -> dict:
+    """Read a YAML configuration and return it :func:`validated`."""
+    return validated(yaml.safe_load(Path(path).read_text()))
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """The contact solver of every contact job (config section ``contact``).
+
+    ``method``, ``tol`` (dimensionless KKT residual) and ``precision`` of
+    :func:`roughcontact.contact.nondim.solve_cell`; ``steps`` approaches per
+    sweep; ``pressure_levels`` nominal pressures per aggregated cell.
+    """
+
+    method: str
+    tol: float
+    precision: str
+    steps: int
+    pressure_levels: int
+
+    @classmethod
+    def from_section(cls, section: dict) -> ContactSettings:
+        return cls(method=str(section["method"]), tol=float(section["tol"]),
+                   precision=str(section["precision"]), steps=int(section["steps"]),
+                   pressure_levels=int(section["pressure_levels"]))
+
+
+@dataclass(frozen=True)
+class BuildSettings:
+    """How influence models are built (config section ``body``): the sparse
+    ``solver`` and the largest estimated peak memory ``max_bytes`` [bytes]."""
+
+    solver: str
+    max_bytes: float
+
+    @classmethod
+    def from_section(cls, body: dict) -> BuildSettings:
+        return cls(solver=str(body["solver"]), max_bytes=float(body["max_memory_gb"]) * GB)
+
+
+@dataclass(frozen=True)
+class ConvergenceSettings:
+    """The mesh-convergence report (``reports.influence_convergence``), SI units.
+
+    ``presets`` compared, ``surfaces`` Gaussian surfaces of height standard
+    deviation ``sigma`` [m] and 10 % correlation length ``corr_length`` [m],
+    read at the nominal ``pressures`` [Pa].
+    """
+
+    presets: tuple[str, ...]
+    surfaces: int
+    sigma: float
+    corr_length: float
+    pressures: tuple[float, ...]
+
+    @classmethod
+    def from_section(cls, section: dict) -> ConvergenceSettings:
+        return cls(presets=tuple(section["presets"]), surfaces=int(section["surfaces"]),
+                   sigma=float(section["sigma_um"]) * UM,
+                   corr_length=float(section["b_mm"]) * MM,
+                   pressures=tuple(float(p) * MPA for p in section["pressures_MPa"]))
