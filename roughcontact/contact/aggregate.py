@@ -176,7 +176,7 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
     Parameters
     ----------
     sweep_physical : PhysicalSweep
-        SI sweep of the cell (:func:`roughcontact.nondim.to_physical`).
+        SI sweep of the cell (:func:`roughcontact.contact.nondim.to_physical`).
     pressures : array_like
         Nominal-pressure levels [Pa], positive (:func:`pressure_axis`).
     confidence : float

@@ -49,7 +49,7 @@ Operators
 m/Pa; then ``element_area`` [m^2] must be given) or an object with
 ``shape == (n, n)``, ``element_area`` [m^2], ``diagonal()`` (the
 self-compliances ``C_ii`` [m/Pa]) and ``matvec(p)`` accepting (n,) and
-(n, m) arrays, such as :class:`roughcontact.halfspace.PeriodicHalfSpace`.
+(n, m) arrays, such as :class:`roughcontact.elasticity.halfspace.PeriodicHalfSpace`.
 An optional ``grid = (nx, ny)`` attribute fixes the surface shape (ny, nx).
 
 Performance

@@ -57,7 +57,7 @@ the thickness); so is the "paper" preset, the paper's model.
 interior: Love's half-space near field plus the finite-body correction from a
 finite-element model on a coarser contact grid (about 7 times cheaper at
 60 x 60, contact quantities within 0.5 %; edge elements less accurate).
-:class:`roughcontact.operators.BlockOperator` applies the same operator
+:class:`roughcontact.elasticity.operators.BlockOperator` applies the same operator
 without forming it (FFT plus a coarse dense product), for grids whose dense
 matrix would not fit (256 x 256: 34 GB).
 """

@@ -7,12 +7,12 @@ paper stopped at 60 x 60 for that reason.
 
 :class:`BlockOperator` applies the unit-modulus compliance ``E C`` [m] of the
 block without forming it, by the decomposition of
-:func:`roughcontact.influence.hybrid_unit_modulus_influence`:
+:func:`roughcontact.elasticity.influence.hybrid_unit_modulus_influence`:
 
     E C = E C_love + A_f W K W^T,
 
 - ``E C_love``: Love's (1929) uniformly loaded rectangles on a half-space at
-  the fine grid (:func:`roughcontact.halfspace.halfspace_influence` with
+  the fine grid (:func:`roughcontact.elasticity.halfspace.halfspace_influence` with
   E = 1). It is block Toeplitz, so its product is a zero-padded FFT
   convolution: O(n log n) time and O(n) memory.
 - ``K = (E C_fe - E C_love) / A_c`` [1/m]: the finite-body correction per
@@ -39,7 +39,7 @@ to serve as the coarse model: their error would be interpolated into the
 fine grid, so they are refused.
 
 The product is the same operator as the dense hybrid matrix (to rounding,
-tests/test_operators.py), so these accuracy figures carry over.
+tests/elasticity/test_operators.py), so these accuracy figures carry over.
 """
 
 from __future__ import annotations
@@ -132,7 +132,7 @@ class BlockOperator:
     ``u = matvec(p)`` is the displacement [m] times Young's modulus [Pa] for
     element pressures ``p`` [Pa] (or, equally, the displacement for E = 1 Pa);
     elements are row-major over y then x, as in the dense matrices. Divide by
-    E (or use :func:`roughcontact.nondim.dimensionless_operator`) for C.
+    E (or use :func:`roughcontact.contact.nondim.dimensionless_operator`) for C.
 
     Parameters
     ----------
@@ -295,7 +295,7 @@ def block_operator(geom, *, coarse_grid=None, solver: str = "auto",
         Coarse contact grid of the correction; default
         :func:`default_coarse_grid` (at most ``COARSE_MAX`` per side).
     solver, max_bytes
-        As in :func:`roughcontact.influence.unit_modulus_influence`.
+        As in :func:`roughcontact.elasticity.influence.unit_modulus_influence`.
     """
 
     if geom.mesh not in HYBRID_MESHES:

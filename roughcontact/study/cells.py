@@ -6,7 +6,7 @@ number of seeded realisations. Its key names every parameter, so a changed
 parameter is a new file and the workflow reruns exactly what depends on it.
 Sigma is not part of a cell: surfaces are stored in units of sigma and scaled
 at use (Eq 28-32 of Kumar et al. 2006). The jobs that build them are in
-:mod:`roughcontact.pipeline`.
+:mod:`roughcontact.study.jobs`.
 """
 
 from __future__ import annotations
@@ -376,7 +376,7 @@ def planned_operator(params: dict, max_memory_gb: float = 16.0) -> str:
     """The influence model a geometry's build starts with: "dense", "hybrid" or "halfspace".
 
     ``operator: auto`` picks dense or hybrid here (by size and memory,
-    :func:`roughcontact.operators.choose_operator`); the build may then
+    :func:`roughcontact.elasticity.operators.choose_operator`); the build may then
     replace either by the half-space when the measured criterion allows.
     """
     operator = params.get("operator", "dense")

@@ -5,11 +5,11 @@ imports a measured height map) and stores them in units of sigma. An
 *influence job* builds E * C of one block geometry (a dense finite-element
 matrix or a matrix-free operator). A *contact job* solves every surface of
 one surface cell on one influence geometry through an approach sweep, in the
-non-dimensional form of :mod:`roughcontact.nondim`, and stores the result;
+non-dimensional form of :mod:`roughcontact.contact.nondim`, and stores the result;
 sigma and E never enter.
 An *aggregation* turns the contact results of a figure's (or sweep's) cells
 into SI curves for each cell's sigma and E (Eq 28-32) and averages them on a
-common nominal-pressure axis (:mod:`roughcontact.aggregate`).
+common nominal-pressure axis (:mod:`roughcontact.contact.aggregate`).
 
 
 The layouts of the files are described in :mod:`roughcontact.study.storage`.
@@ -281,9 +281,9 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
     The influence model is the geometry's ``operator``: "dense" (the
     finite-element matrix, the paper's), "hybrid" (matrix-free: Love's
     half-space plus a coarse finite-element correction,
-    :mod:`roughcontact.operators`), "halfspace" (Love only) or "auto" (dense
+    :mod:`roughcontact.elasticity.operators`), "halfspace" (Love only) or "auto" (dense
     up to 64 x 64 elements, hybrid above; then the half-space instead when
-    :func:`roughcontact.operators.halfspace_errors`, measured on the coarse
+    :func:`roughcontact.contact.halfspace_criterion.halfspace_errors`, measured on the coarse
     model, is within the geometry's ``halfspace_tolerance`` for every
     quantity it names).
 
@@ -360,7 +360,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
                       config=None) -> dict:
     """Solve one contact job and write its non-dimensional sweep to ``out_path``.
 
-    ``job`` comes from :func:`roughcontact.study.contact_jobs` (surface and
+    ``job`` comes from :func:`roughcontact.study.cells.contact_jobs` (surface and
     geometry parameters and the non-dimensional pressure the sweep must
     reach); ``settings`` is the config's validated ``contact`` section
     (:class:`~roughcontact.study.config.ContactSettings`). Returns the
@@ -451,7 +451,7 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
     """Aggregate a figure's or sweep's cells into CSV tables with a JSON sidecar.
 
     ``contact_paths`` maps a contact key to its file. The table has one row per
-    cell and pressure level (:func:`roughcontact.aggregate.aggregate_cell`
+    cell and pressure level (:func:`roughcontact.contact.aggregate.aggregate_cell`
     columns plus the cell's parameters); the moduli table one row per cell and
     surface (E_u, Eq 36) with the cell summary in the sidecar. Unconverged
     solves are excluded by the aggregation and counted in both.

@@ -33,10 +33,10 @@ The height map is then prepared for the contact study in this order:
    mounting), which also leaves heights of zero mean.
 
 Its statistics are those of the generator's targets: sigma, skewness and
-kurtosis (Eq 2-5 of Kumar et al. 2006, :func:`roughcontact.surface.height_stats`),
+kurtosis (Eq 2-5 of Kumar et al. 2006, :func:`roughcontact.surfaces.synthetic.height_stats`),
 the 10 % decay lags of the autocorrelation function (Eq 1,
-:func:`roughcontact.surface.correlation_length`, non-periodic estimate) and the
-Johnson law with the same moments (:func:`roughcontact.johnson.fit`).
+:func:`roughcontact.surfaces.synthetic.correlation_length`, non-periodic estimate) and the
+Johnson law with the same moments (:func:`roughcontact.surfaces.johnson.fit`).
 Arrays are ``(ny, nx)``, row-major over y then x, as everywhere in the package.
 """
 

@@ -4,7 +4,7 @@ Implements Section 2 of Kumar, Sadeghi & Krousgrill (2006), after Patir (1978)
 and Hu & Tonder (1992):
 
 1. Gaussian white noise ``eta`` (seeded, ``numpy.random.default_rng``).
-2. A Johnson translator (Eq 6-8, :mod:`roughcontact.johnson`) turns ``eta`` into
+2. A Johnson translator (Eq 6-8, :mod:`roughcontact.surfaces.johnson`) turns ``eta`` into
    non-Gaussian white noise ``x`` with skewness ``Sk_x`` and kurtosis ``Ku_x``.
 3. A zero-phase linear filter ``h`` (Eq 9-11) whose power spectrum is the
    Fourier transform of the target autocorrelation function (ACF, Eq 1) turns
@@ -335,7 +335,7 @@ def input_family(spec: SurfaceSpec, skew, kurt):
     """Johnson family of the white noise needed for surface moments (skew, kurt).
 
     Maps (Sk_z, Ku_z) to (Sk_x, Ku_x) through Eq 12-13 and classifies with
-    :func:`roughcontact.johnson.family_of` (the regions of Fig 1). Vectorised.
+    :func:`roughcontact.surfaces.johnson.family_of` (the regions of Fig 1). Vectorised.
     """
     s3, s4 = moment_transfer(spec)
     skew_x, kurt_x = _transfer_to_input(np.asarray(skew, float), np.asarray(kurt, float), s3, s4)
