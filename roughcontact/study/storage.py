@@ -131,7 +131,7 @@ def influence_sha256(unit) -> str:
     return array_sha256(unit)
 
 
-def _influence_datasets(unit) -> tuple[dict, dict]:
+def influence_datasets(unit) -> tuple[dict, dict]:
     """Datasets and attributes that store ``unit`` (a matrix or a :class:`BlockOperator`)."""
     if not isinstance(unit, BlockOperator):
         return {"unit_influence": (unit, {
@@ -154,7 +154,7 @@ def _influence_datasets(unit) -> tuple[dict, dict]:
 
 def write_influence(path: str | os.PathLike, unit, attrs: dict) -> dict:
     """Write an influence model with ``attrs`` and its ``content_sha256``; returns the attrs."""
-    datasets, model_attrs = _influence_datasets(unit)
+    datasets, model_attrs = influence_datasets(unit)
     attrs = {**attrs, **model_attrs, "content_sha256": influence_sha256(unit)}
     write_h5(path, datasets, attrs)
     return attrs
