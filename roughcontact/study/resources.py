@@ -1,0 +1,432 @@
+"""Memory [MB] and wall time [min] every job asks a scheduler for.
+
+Estimated from the grid, the surface count, the mesh and the solver settings,
+scaled from runs on the reference machine (2 cores, see README). The measured
+numbers live in ``config/cost_model.yaml`` (each with what was measured); this
+module holds the formulas. A job that outlives its wall time is killed, so a
+time estimate is multiplied by the margin and by the attempt (``retries`` in
+the profile). ``rules/common.smk`` passes the jobs' plain dicts here.
+
+Check the model against a run's benchmarks::
+
+    python -m roughcontact.study.resources --compare results/benchmarks/rules \\
+        --configfile config/quick.yaml
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import csv
+import math
+import os
+import sys
+from pathlib import Path
+from types import MappingProxyType
+
+import yaml
+from snakemake.utils import validate
+
+from roughcontact.elasticity.operators import COARSE_MAX, coarsened_side
+from roughcontact.study.cells import (
+    CONTACT_FIGURES,
+    SURFACE_ONLY_FIGURES,
+    contact_jobs,
+    contact_key,
+    contact_settings,
+    influence_cost,
+    influence_geometries,
+    planned_operator,
+    surface_cells,
+)
+from roughcontact.units import GB
+
+#: The stored cost model of the source tree.
+COST_MODEL_FILE = Path(__file__).resolve().parents[2] / "config" / "cost_model.yaml"
+#: The configuration schema (its ``default:`` entries complete a config).
+SCHEMA_FILE = Path(__file__).resolve().parents[2] / "config" / "schema.yaml"
+#: Bytes of one double-precision value.
+DOUBLE_BYTES = 8
+#: One megabyte [bytes] (decimal, as schedulers count memory).
+MB = 1e6
+
+_REQUIRED = {
+    "runtime": ("margin", "start_min"),
+    "contact": ("reference_elements", "dense_solve_seconds", "dense_exponent",
+                "reference_tol_digits", "method_cost", "reference_reach",
+                "matrix_free_solve_seconds", "matrix_free_reference_elements",
+                "matrix_free_floor_seconds", "memory_base_mb", "dense_matrices",
+                "dense_batch_arrays", "matrix_free_batch_arrays"),
+    "influence": ("anchor_seconds", "anchor_peak_gb", "exponent", "memory_margin_mb"),
+    "surfaces": ("reference_elements", "exact_seconds", "filter_seconds", "exponent",
+                 "memory_base_mb", "work_arrays"),
+    "summaries": ("seconds",),
+    "audit": ("base_seconds", "seconds_per_file", "memory_base_mb", "model_copies"),
+    "convergence": ("base_seconds", "solve_seconds", "memory_base_mb", "memory_floor_mb"),
+    "speed_vs_error": ("solver_seconds", "reference_surfaces", "grid_seconds",
+                       "grid_reference_seconds", "grid_reference_side", "count_seconds",
+                       "count_surfaces", "reference_elements", "memory_base_mb",
+                       "dense_matrices"),
+}
+
+
+def _frozen(value):
+    if isinstance(value, dict):
+        return MappingProxyType({k: _frozen(v) for k, v in value.items()})
+    return value
+
+
+def load_cost_model(path: str | os.PathLike = COST_MODEL_FILE) -> MappingProxyType:
+    """The cost-model file as read-only mappings, one per section of ``_REQUIRED``.
+
+    Raises ``FileNotFoundError`` or ``ValueError`` naming the file (and the
+    missing ``section.key``).
+    """
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text()) or {}
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path}: the cost model of the job resources is missing; "
+                                f"restore it (git checkout -- config/cost_model.yaml)") from None
+    missing = [f"{section}.{key}" for section, keys in _REQUIRED.items() for key in keys
+               if key not in (data.get(section) or {})]
+    if missing:
+        raise ValueError(f"{path}: the cost model lacks {', '.join(missing)}")
+    return _frozen(data)
+
+
+_MODEL = load_cost_model()
+
+
+# ---------------------------------------------------------------------------
+# Wall time
+
+
+def runtime_minutes(seconds: float, attempt: int = 1) -> int:
+    """Requested wall time [min] of a job estimated to take ``seconds`` [s]:
+    ``attempt (start_min + ceil(margin seconds / 60))``."""
+    runtime = _MODEL["runtime"]
+    return attempt * (runtime["start_min"] + math.ceil(runtime["margin"] * seconds / 60))
+
+
+def dense_scale(grid) -> float:
+    """Cost of the dense contact solves on ``grid`` [nx, ny] relative to 60 x 60.
+
+    A product with the dense influence matrix costs n^2 for n = nx ny
+    elements, and CG iterations grow about as sqrt(n) with its condition
+    number: (n / 3600)^2.5 (measured at 30 x 30 and 60 x 60 only, an upper
+    bound there).
+    """
+    contact = _MODEL["contact"]
+    return (grid[0] * grid[1] / contact["reference_elements"]) ** contact["dense_exponent"]
+
+
+def tolerance_factor(settings: dict) -> float:
+    """Iterations of a solve to tolerance ``settings["tol"]`` relative to 1e-8 (the
+    reference), in proportion to its digits and never below 1."""
+    digits = _MODEL["contact"]["reference_tol_digits"]
+    return max(1.0, math.log10(1.0 / float(settings.get("tol", 1e-8))) / digits)
+
+
+def method_factor(settings: dict) -> float:
+    """Matrix products per solve of ``settings["method"]`` relative to CG."""
+    return _MODEL["contact"]["method_cost"][settings.get("method", "cg")]
+
+
+def dense_solve_seconds(grid, settings: dict) -> float:
+    """Wall time [s] of one dense contact solve (one surface, one step) on ``grid``:
+    0.11 s at 60 x 60 (the slowest measured cell: 186 s for 60 surfaces x
+    30 steps, paper mesh, CG 1e-8) times :func:`dense_scale`."""
+    seconds = _MODEL["contact"]["dense_solve_seconds"]
+    return seconds * dense_scale(grid) * tolerance_factor(settings) * method_factor(settings)
+
+
+def matrix_free_solve_seconds(grid) -> float:
+    """Wall time [s] of one matrix-free solve at tolerance 1e-8 by CG: 0.62 s at
+    256 x 256 (0.64 s at 240, 0.19 s at 120; 2 loaded cores), about in
+    proportion to n, at least 0.05 s."""
+    contact = _MODEL["contact"]
+    per_solve = contact["matrix_free_solve_seconds"] * grid[0] * grid[1]
+    return max(contact["matrix_free_floor_seconds"],
+               per_solve / contact["matrix_free_reference_elements"])
+
+
+def contact_seconds(job: dict, settings: dict) -> float:
+    """Wall time [s] of a contact job: surfaces x approach steps x one solve.
+
+    ``job`` is a dict of :func:`roughcontact.study.cells.contact_jobs`,
+    ``settings`` :func:`roughcontact.study.cells.contact_settings`. Measured
+    35-186 s per cell of 60 surfaces x 30 steps on 60 x 60 (paper mesh; the
+    converged mesh needs fewer iterations) and 4 s on 30 x 30. A sweep beyond
+    P L / (E sigma) = 4 (the study's) reaches larger contact fractions, where
+    CG needs more iterations: counted in proportion.
+    """
+    solves = job["surface"]["count"] * int(settings.get("steps", 30))
+    reach = max(1.0, job["pressure_end"] / _MODEL["contact"]["reference_reach"])
+    grid = job["geometry"]["grid"]
+    if planned_operator(job["geometry"]) != "dense":
+        return (solves * matrix_free_solve_seconds(grid) * tolerance_factor(settings)
+                * method_factor(settings) * reach)
+    return solves * dense_solve_seconds(grid, settings) * reach
+
+
+def contact_runtime(job: dict, settings: dict, attempt: int = 1) -> int:
+    """Requested wall time [min] of a contact job (:func:`contact_seconds`)."""
+    return runtime_minutes(contact_seconds(job, settings), attempt)
+
+
+def influence_build_settings(body: dict) -> dict:
+    """``solver`` and ``max_memory_gb`` of an influence build from the config's ``body``."""
+    return {"solver": body.get("solver", "auto"), "max_memory_gb": body.get("max_memory_gb", 16)}
+
+
+def influence_seconds(geometry: dict, body: dict) -> float:
+    """Wall time [s] of an influence build, from its estimated peak memory.
+
+    The work of the sparse factorization and of the dense Schur complement
+    grows with the memory they need. Build times on 2 cores (MKL PARDISO)
+    against :func:`roughcontact.study.cells.influence_cost`'s peak: 60 x 60
+    paper 4.2 s (0.92 GB), graded 12.5 s (2.0 GB), refined 12.3 s (2.1 GB),
+    converged 116-132 s (9.6 GB); 120 x 120 paper 63 s (6.9 GB), graded
+    248 s (12.6 GB). 4.2 s (GB / 0.92)^1.56 passes through the first and the
+    last and lies above the others (SuperLU: 36 s at 60 x 60 paper, 45 s
+    predicted).
+    """
+    fit = _MODEL["influence"]
+    peak_gb = influence_cost(geometry, **influence_build_settings(body)).peak_bytes / GB
+    return fit["anchor_seconds"] * (peak_gb / fit["anchor_peak_gb"]) ** fit["exponent"]
+
+
+def influence_runtime(geometry: dict, body: dict, attempt: int = 1) -> int:
+    """Requested wall time [min] of an influence build (:func:`influence_seconds`)."""
+    return runtime_minutes(influence_seconds(geometry, body), attempt)
+
+
+def surfaces_seconds(cell: dict) -> float:
+    """Wall time [s] of a surface cell: 60 surfaces of 60 x 60 take 0.01 s by the
+    filter and 1.3 s by IAAFT (``exact``); 120 x 120: 0.04 s, 7.7 s. Counted
+    as 0.001 s (filter) or 0.03 s (IAAFT) per surface times (n / 3600)^1.5."""
+    fit = _MODEL["surfaces"]
+    per_surface = fit["exact_seconds"] if cell["method"] == "exact" else fit["filter_seconds"]
+    size = cell["grid"][0] * cell["grid"][1] / fit["reference_elements"]
+    return cell["count"] * per_surface * size ** fit["exponent"]
+
+
+def surfaces_runtime(cell: dict, attempt: int = 1) -> int:
+    """Requested wall time [min] of a surface cell (:func:`surfaces_seconds`)."""
+    return runtime_minutes(surfaces_seconds(cell), attempt)
+
+
+def summary_runtime(attempt: int = 1) -> int:
+    """Wall time [min] of an aggregate, a figure or the config snapshot: 3-6 s
+    measured (a figure starts a notebook kernel), asked as 30 s."""
+    return runtime_minutes(_MODEL["summaries"]["seconds"], attempt)
+
+
+def audit_runtime(files: int, attempt: int = 1) -> int:
+    """Wall time [min] of the audit: it reads and hashes ``files`` stored files."""
+    audit = _MODEL["audit"]
+    return runtime_minutes(audit["base_seconds"] + audit["seconds_per_file"] * files, attempt)
+
+
+def audit_verify_runtime(jobs, settings: dict, sample: int, attempt: int = 1) -> int:
+    """Wall time [min] of audit_verify: at most ``sample`` of the contact ``jobs``
+    re-solved, each as long as the slowest."""
+    slowest = max((contact_seconds(job, settings) for job in jobs), default=0)
+    return runtime_minutes(sample * slowest, attempt)
+
+
+def convergence_runtime(geometry: dict, presets, report: dict, attempt: int = 1) -> int:
+    """Wall time [min] of the mesh-convergence report: it reads the stored
+    matrices and solves its surfaces on each of ``presets`` and on the
+    half-space (measured about 10 s per preset for 3 surfaces on 60 x 60;
+    counted as 4 s per solve, scaled as :func:`dense_scale`). ``report`` is
+    the config's ``reports: influence_convergence`` section."""
+    fit = _MODEL["convergence"]
+    solves = (len(presets) + 1) * report.get("surfaces", 3)
+    seconds = fit["base_seconds"] + solves * fit["solve_seconds"] * dense_scale(geometry["grid"])
+    return runtime_minutes(seconds, attempt)
+
+
+def speed_vs_error_runtime(geometry: dict, report: dict, attempt: int = 1) -> int:
+    """Wall time [min] of the speed-against-error report, from its parts as
+    measured with the defaults (2026-11-24, 2 cores, 401 s in all): the solver
+    study on the body's grid with dense matrices (240 s at 60 x 60, 4 surfaces,
+    scaled as the contact jobs), the grid study with the matrix-free hybrid
+    operator (30 s per grid plus 50 s at 240 x 240, in proportion to n) and
+    the surface-count study (70 s for 120 surfaces at 60 x 60). ``report`` is
+    the config's ``reports: speed_vs_error`` section."""
+    fit = _MODEL["speed_vs_error"]
+    grid = geometry["grid"]
+    surfaces = report.get("surfaces", 4)
+    solver = fit["solver_seconds"] * dense_scale(grid) * surfaces / fit["reference_surfaces"]
+    grids = sum(
+        (fit["grid_seconds"] + fit["grid_reference_seconds"]
+         * (g / fit["grid_reference_side"]) ** 2) * surfaces / fit["reference_surfaces"]
+        for g in report.get("grids", [30, 60, 120])
+    )
+    counts = (fit["count_seconds"] * report.get("count_surfaces", 120) / fit["count_surfaces"]
+              * grid[0] * grid[1] / fit["reference_elements"])
+    return runtime_minutes(solver + grids + counts, attempt)
+
+
+# ---------------------------------------------------------------------------
+# Memory
+
+
+def contact_mem_mb(job: dict) -> int:
+    """Peak memory [MB] of a contact job.
+
+    Dense model: E * C in double and single precision and the contact-set
+    matrix of the stiffness (3 n^2 doubles at most), the batch of surfaces
+    (10 (count, n) arrays) and 400 MB of interpreter and libraries (measured:
+    415 MB on 60 x 60, 167 MB on 30 x 30). Matrix-free model: the coarse
+    correction (64^2 x 64^2 doubles at most) and FFT work arrays of the batch
+    (30 (count, n) arrays: 4 padded copies per surface).
+    """
+    fit = _MODEL["contact"]
+    nx, ny = job["geometry"]["grid"]
+    n = nx * ny
+    count = job["surface"]["count"]
+    if planned_operator(job["geometry"]) != "dense":
+        return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2
+                   + fit["matrix_free_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
+    return int(fit["memory_base_mb"] + (fit["dense_matrices"] * DOUBLE_BYTES * n**2
+               + fit["dense_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
+
+
+def influence_mem_mb(geometry: dict, body: dict) -> int:
+    """Peak memory [MB] of an influence build: the estimated peak of its
+    finite-element solve plus 200 MB."""
+    cost = influence_cost(geometry, **influence_build_settings(body))
+    return int(cost.peak_bytes / MB) + _MODEL["influence"]["memory_margin_mb"]
+
+
+def surfaces_mem_mb(cell: dict) -> int:
+    """Peak memory [MB] of a surface cell: 300 MB of interpreter and libraries
+    (measured 92 MB in all) and 20 work arrays per surface."""
+    fit = _MODEL["surfaces"]
+    n = cell["grid"][0] * cell["grid"][1]
+    return int(fit["memory_base_mb"] + fit["work_arrays"] * DOUBLE_BYTES * cell["count"] * n / MB)
+
+
+def stored_bytes(geometry: dict) -> int:
+    """Bytes of a stored influence model: the dense matrix, or a matrix-free
+    operator's coarse correction (at most 64^2 x 64^2 doubles)."""
+    nx, ny = geometry["grid"]
+    if planned_operator(geometry) != "dense":
+        return DOUBLE_BYTES * (COARSE_MAX**2) ** 2
+    return DOUBLE_BYTES * (nx * ny) ** 2
+
+
+def audit_mem_mb(geometries) -> int:
+    """Peak memory [MB] of the audit: one influence model of ``geometries`` (held
+    twice while hashed) at a time, plus 1 GB."""
+    audit = _MODEL["audit"]
+    largest = max((stored_bytes(g) for g in geometries), default=0)
+    return int(audit["memory_base_mb"] + audit["model_copies"] * largest / MB)
+
+
+def audit_verify_mem_mb(jobs, geometries) -> int:
+    """Peak memory [MB] of audit_verify: the audit's or the largest contact job's."""
+    largest = max((contact_mem_mb(job) for job in jobs), default=0)
+    return max(audit_mem_mb(geometries), largest)
+
+
+def convergence_mem_mb(geometry: dict, presets) -> int:
+    """Peak memory [MB] of the mesh-convergence report: the matrix of each of
+    ``presets`` and the half-space's at once, plus 1 GB (2 GB at least)."""
+    fit = _MODEL["convergence"]
+    n = geometry["grid"][0] * geometry["grid"][1]
+    matrices = len(presets) + 1
+    return max(fit["memory_floor_mb"],
+               int(fit["memory_base_mb"] + matrices * DOUBLE_BYTES * n**2 / MB))
+
+
+def speed_vs_error_mem_mb(geometry: dict, report: dict, body: dict) -> int:
+    """Peak memory [MB] of the speed-against-error report: the largest
+    finite-element build it makes (the body's grid with the "paper" mesh of
+    the solver study; the hybrid operators' coarse "refined" models), three
+    dense matrices of the body's grid, and 500 MB (measured 1.4 GB with the
+    defaults, against 2.9 GB from this estimate)."""
+    fit = _MODEL["speed_vs_error"]
+    n = geometry["grid"][0] * geometry["grid"][1]
+    dense = dict(geometry, operator="dense")
+    builds = [dict(dense, mesh="paper")] + [
+        dict(dense, mesh="refined", grid=[coarsened_side(g)] * 2)
+        for g in [*report.get("grids", [30, 60, 120]), geometry["grid"][0]]
+    ]
+    settings = influence_build_settings(body)
+    peak = max(influence_cost(b, **settings).peak_bytes for b in builds)
+    return int(fit["memory_base_mb"] + (peak + fit["dense_matrices"] * DOUBLE_BYTES * n**2) / MB)
+
+
+# ---------------------------------------------------------------------------
+# Drift: the model against a run's benchmarks
+
+
+def predictions(config: dict) -> dict[str, dict[str, tuple[float, int]]]:
+    """Rule -> wildcard -> (runtime [s] before the margin, memory [MB]) of the
+    contact, influence and surfaces jobs of a validated ``config``."""
+    figures = [n for n in (*SURFACE_ONLY_FIGURES, *CONTACT_FIGURES) if n in config["figures"]]
+    studies = [n for n in figures if n in CONTACT_FIGURES] + list(config.get("sweeps", {}))
+    jobs = contact_jobs(config, studies)
+    cells = surface_cells(config) | {j["surface_key"]: j["surface"] for j in jobs.values()}
+    geometries = influence_geometries(config) | {j["geometry_key"]: j["geometry"]
+                                                 for j in jobs.values()}
+    settings = contact_settings(config)
+    body = config.get("body", {})
+    return {
+        "contact": {contact_key(j): (contact_seconds(j, settings), contact_mem_mb(j))
+                    for j in jobs.values()},
+        "influence": {k: (influence_seconds(g, body), influence_mem_mb(g, body))
+                      for k, g in geometries.items()},
+        "surfaces": {k: (surfaces_seconds(c), surfaces_mem_mb(c)) for k, c in cells.items()},
+    }
+
+
+def _number(text: str) -> float:
+    """A benchmark column's value ("NA" or "-" when Snakemake could not measure it: nan)."""
+    try:
+        return float(text)
+    except ValueError:
+        return math.nan
+
+
+def _ratio(predicted: float, measured: float) -> float:
+    """Predicted over measured (nan when nothing was measured)."""
+    return predicted / measured if measured > 0 else math.nan
+
+
+def compare(benchmarks: str | os.PathLike, config: dict) -> list[str]:
+    """Lines of a table of predicted against measured time [s] and memory [MB]
+    of every job benchmarked under ``benchmarks`` (``<rule>/<wildcard>.tsv``
+    as Snakemake writes them) that the validated ``config`` asks for."""
+    lines = [f"{'rule':10} {'s pred':>9} {'s meas':>9} {'ratio':>6} "
+             f"{'MB pred':>8} {'MB meas':>8} {'ratio':>6}  job"]
+    for rule, predicted in predictions(config).items():
+        for path in sorted((Path(benchmarks) / rule).glob("*.tsv")):
+            if path.stem not in predicted:
+                continue
+            with path.open() as table:
+                measured = next(csv.DictReader(table, delimiter="\t"))
+            seconds, mem_mb = predicted[path.stem]
+            s, rss = _number(measured["s"]), _number(measured["max_rss"])
+            lines.append(f"{rule:10} {seconds:9.2f} {s:9.2f} {_ratio(seconds, s):6.2f} "
+                         f"{mem_mb:8d} {rss:8.1f} {_ratio(mem_mb, rss):6.2f}  {path.stem}")
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--compare", required=True, help="results/benchmarks/rules of a run")
+    parser.add_argument("--configfile", default="config/config.yaml")
+    args = parser.parse_args(argv)
+    config = copy.deepcopy(yaml.safe_load(Path(args.configfile).read_text()))
+    validate(config, str(SCHEMA_FILE))  # fills the schema's defaults, as Snakemake does
+    print("\n".join(compare(args.compare, config)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,146 @@
+"""The cost model of the job resources (roughcontact.study.resources): values
+worked by hand from the documented formulas and config/cost_model.yaml."""
+
+import math
+
+import pytest
+import yaml
+from snakemake.utils import validate
+
+from roughcontact.study import resources
+from roughcontact.study.cells import influence_cost, influence_geometries
+
+CG = {"method": "cg", "tol": 1e-8, "steps": 30}
+
+
+def dense_job(grid=60, count=60, pressure_end=4.0):
+    geometry = {"nu": 0.0, "size_mm": [9.0, 9.0], "thickness_mm": 10.0, "grid": [grid, grid],
+                "base": "clamped", "mesh": "paper"}
+    return {"surface": {"count": count, "grid": [grid, grid]}, "geometry": geometry,
+            "pressure_end": pressure_end}
+
+
+def hybrid_job(grid=256, count=20):
+    job = dense_job(grid, count)
+    job["geometry"]["operator"] = "hybrid"
+    return job
+
+
+def test_contact_runtime_at_the_measured_cell():
+    # 60 surfaces x 30 steps x 0.11 s = 198 s; 3 x 198 / 60 = 9.9 -> 10 min, + 5 min start
+    assert resources.contact_seconds(dense_job(), CG) == pytest.approx(198.0)
+    assert resources.contact_runtime(dense_job(), CG) == 15
+    assert resources.contact_runtime(dense_job(), CG, attempt=2) == 30
+
+
+def test_contact_runtime_scales_with_surfaces_steps_grid_and_reach():
+    base = resources.contact_seconds(dense_job(), CG)
+    assert resources.contact_seconds(dense_job(count=30), CG) == pytest.approx(base / 2)
+    assert resources.contact_seconds(dense_job(), {**CG, "steps": 60}) == pytest.approx(2 * base)
+    # a quarter of the elements: (900 / 3600)^2.5 = 1/32
+    assert resources.contact_seconds(dense_job(grid=30), CG) == pytest.approx(base / 32)
+    # a sweep to P L / (E sigma) = 12 reaches three times the study's 4
+    assert resources.contact_seconds(dense_job(pressure_end=12.0), CG) == pytest.approx(3 * base)
+    # steepest descent: 3 times the products; tol 1e-12: 12 / 8 digits
+    assert resources.contact_seconds(dense_job(), {**CG, "method": "steepest"}) == \
+        pytest.approx(3 * base)
+    assert resources.contact_seconds(dense_job(), {**CG, "tol": 1e-12}) == pytest.approx(1.5 * base)
+
+
+def test_matrix_free_contact_runtime_in_proportion_to_n():
+    # 20 surfaces x 30 steps x 0.62 s at 256 x 256
+    assert resources.contact_seconds(hybrid_job(), CG) == pytest.approx(20 * 30 * 0.62)
+    # 128 x 128: a quarter of n; 16 x 16 hits the 0.05 s floor
+    assert resources.contact_seconds(hybrid_job(128), CG) == pytest.approx(600 * 0.62 / 4)
+    assert resources.contact_seconds(hybrid_job(16), CG) == pytest.approx(600 * 0.05)
+
+
+def test_contact_memory_dense_and_matrix_free():
+    n = 60 * 60
+    assert resources.contact_mem_mb(dense_job()) == int(400 + (24 * n**2 + 80 * 60 * n) / 1e6)
+    n = 256 * 256
+    # the 64 x 64 coarse correction, not a 34 GB dense matrix
+    assert resources.contact_mem_mb(hybrid_job()) == int(400 + (8 * 4096**2 + 240 * 20 * n) / 1e6)
+    assert resources.contact_mem_mb(hybrid_job()) < 1000
+
+
+def test_memory_and_time_grow_with_the_grid():
+    grids = [16, 30, 60, 120]
+    for small, large in zip(grids, grids[1:], strict=False):
+        assert resources.contact_mem_mb(dense_job(small)) < \
+            resources.contact_mem_mb(dense_job(large))
+        assert resources.contact_seconds(dense_job(small), CG) < \
+            resources.contact_seconds(dense_job(large), CG)
+        cell = {"method": "filter", "count": 60}
+        assert resources.surfaces_mem_mb({**cell, "grid": [small] * 2}) <= \
+            resources.surfaces_mem_mb({**cell, "grid": [large] * 2})
+
+
+def test_influence_runtime_through_the_measured_anchor():
+    geometry = dense_job()["geometry"]
+    peak_gb = influence_cost(geometry).peak_bytes / 1e9
+    expected = 4.2 * (peak_gb / 0.92) ** 1.56
+    assert resources.influence_seconds(geometry, {}) == pytest.approx(expected)
+    # at the anchor itself (0.92 GB -> 4.2 s): 3 x 4.2 / 60 -> 1 min, + 5 min start
+    assert resources.runtime_minutes(4.2 * (0.92 / 0.92) ** 1.56) == 6
+    # 9.6 GB (converged, measured 116-132 s): 4.2 x (9.6 / 0.92)^1.56 = 162 s -> 9 + 5 min
+    seconds = 4.2 * (9.6 / 0.92) ** 1.56
+    assert 132 < seconds < 170
+    assert resources.runtime_minutes(seconds, attempt=2) == 2 * (5 + math.ceil(3 * seconds / 60))
+    assert resources.influence_mem_mb(geometry, {}) == \
+        int(influence_cost(geometry).peak_bytes / 1e6) + 200
+
+
+def test_surfaces_runtime_and_memory():
+    # IAAFT, 60 surfaces of 120 x 120: 60 x 0.03 s x 4^1.5 = 14.4 s -> 1 min, + 5 min
+    cell = {"method": "exact", "count": 60, "grid": [120, 120]}
+    assert resources.surfaces_seconds(cell) == pytest.approx(14.4)
+    assert resources.surfaces_runtime(cell, attempt=3) == 18
+    assert resources.surfaces_mem_mb(cell) == int(300 + 160 * 60 * 14400 / 1e6)
+
+
+def test_convergence_and_summaries():
+    geometry = dense_job()["geometry"]
+    # 4 presets + half-space, 3 surfaces: 30 + 15 x 4 s = 90 s -> 5 + 5 min
+    assert resources.convergence_runtime(geometry, ["a"] * 4, {"surfaces": 3}) == 10
+    # 60 x 60: 5 matrices of 104 MB, below the 2 GB floor; 120 x 120: 8.3 GB
+    assert resources.convergence_mem_mb(geometry, ["a"] * 4) == 2000
+    assert resources.convergence_mem_mb({"grid": [120, 120]}, ["a"] * 4) == \
+        int(1000 + 5 * 8 * 14400**2 / 1e6)
+    assert resources.summary_runtime(attempt=2) == 2 * (5 + 2)
+
+
+def test_loader_names_the_file_and_the_missing_key(tmp_path):
+    data = yaml.safe_load(resources.COST_MODEL_FILE.read_text())
+    del data["contact"]["dense_solve_seconds"]
+    path = tmp_path / "cost_model.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(ValueError, match=r"cost_model\.yaml.*contact\.dense_solve_seconds"):
+        resources.load_cost_model(path)
+    with pytest.raises(FileNotFoundError, match="missing.yaml"):
+        resources.load_cost_model(tmp_path / "missing.yaml")
+
+
+HEADER = "s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\tcpu_time\n"
+
+
+def test_compare_prints_predictions_against_benchmarks(tmp_path, capsys):
+    quick = resources.SCHEMA_FILE.parent / "quick.yaml"
+    config = yaml.safe_load(quick.read_text())
+    validate(config, str(resources.SCHEMA_FILE))
+    key, geometry = sorted(influence_geometries(config).items())[0]
+    seconds = resources.influence_seconds(geometry, config["body"])
+    mem_mb = resources.influence_mem_mb(geometry, config["body"])
+    folder = tmp_path / "influence"
+    folder.mkdir()
+    (folder / f"{key}.tsv").write_text(HEADER + "2.00\t0:00:02\t100.0\t1\t1\t1\t0\t0\t50\t1\n")
+    (folder / "not_a_job.tsv").write_text(HEADER + "1\t0\t1\t1\t1\t1\t0\t0\t1\t1\n")
+    code = resources.main(["--compare", str(tmp_path), "--configfile", str(quick)])
+    assert code == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if key in line]
+    assert len(lines) == 1
+    fields = lines[0].split()
+    assert fields[0] == "influence"
+    assert float(fields[1]) == pytest.approx(seconds, abs=0.01)
+    assert float(fields[3]) == pytest.approx(seconds / 2.0, abs=0.01)
+    assert int(fields[4]) == mem_mb and float(fields[6]) == pytest.approx(mem_mb / 100, abs=0.01)
