@@ -40,6 +40,7 @@ rule speed_vs_error:
         csv="results/reports/speed_vs_error.csv",
         png="results/reports/speed_vs_error.png",
         counts_png="results/reports/speed_vs_error_counts.png",
+        presets="results/reports/accuracy_presets.yaml",
     log:
         "results/logs/reports/speed_vs_error.log",
     benchmark:

@@ -6,7 +6,6 @@ from roughcontact.reports.speed import speed_vs_error_report
 from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])
-log = logging.getLogger("roughcontact.report")
 geometry = snakemake.params.geometry
 settings = dict(snakemake.params.settings)
 if "pressures_MPa" in settings:
@@ -15,6 +14,7 @@ speed_vs_error_report(
     snakemake.output.md,
     snakemake.output.csv,
     [snakemake.output.png, snakemake.output.counts_png],
+    out_presets=snakemake.output.presets,
     grid=geometry["grid"][0],
     size=geometry["size_mm"][0] * 1e-3,
     thickness=geometry["thickness_mm"] * 1e-3,
@@ -22,6 +22,6 @@ speed_vs_error_report(
     nu=geometry["nu"],
     mesh_table_path=snakemake.input.mesh_table,
     seed=snakemake.params.study_seed,
-    progress=log.info,
+    progress=logging.getLogger("roughcontact.report").info,
     **settings,
 )

@@ -1,14 +1,15 @@
-"""Tests of the speed-against-error study (roughcontact.speed) on small grids."""
+"""Tests of the speed-against-error study (roughcontact.reports.speed) on small grids."""
 
 import numpy as np
 import pandas as pd
 import pytest
+import yaml
 from matplotlib.image import imread
 
 from roughcontact.contact.nondim import PhysicalSweep
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.reports import speed
-from roughcontact.study.presets import ACCURACY_PRESETS
+from roughcontact.study.presets import ACCURACY_PRESETS, PRESETS_FILE
 
 H = 0.15e-3  # contact element size of the paper's model [m]
 PRESSURES = (0.3e6, 1e6, 3e6)
@@ -235,13 +236,20 @@ def test_recommend_shares_tighten_a_component():
     assert choice.loc["solver", "choice"].startswith("cg tol 1e-08")
 
 
-def test_speed_vs_error_report_end_to_end(tmp_path):
-    """The Snakemake entry point, scaled down: every section produced from scratch."""
-    out = tmp_path / "reports"
+@pytest.fixture(scope="module")
+def quick_report(tmp_path_factory):
+    """The Snakemake entry point, scaled down (seconds): output folder and tables."""
+    out = tmp_path_factory.mktemp("speed") / "reports"
     tables = speed.speed_vs_error_report(
         out / "s.md", out / "s.csv", out / "s.png", grid=12, surfaces=2, cells=((0.0, 3.0),),
         tolerances={"cg": (1e-4, 1e-8), "steepest": (1e-4,)}, steps=6, grids=(6, 12),
         count_surfaces=8, counts=(4, 8), size=12 * H, thickness=2e-3, b=0.3e-3, seed=1)
+    return out, tables
+
+
+def test_speed_vs_error_report_end_to_end(quick_report):
+    """The Snakemake entry point, scaled down: every section produced from scratch."""
+    out, tables = quick_report
     assert set(tables) == {"solver", "mesh", "grid", "surfaces", "recommendation"}
     assert (tables["mesh"]["source"] == "FALLBACK_MESH_ERRORS").all()
     assert sorted(tables["grid"]["grid"].unique()) == [6, 12]
@@ -249,3 +257,57 @@ def test_speed_vs_error_report_end_to_end(tmp_path):
     text = (out / "s.md").read_text()
     assert "## Recommendation" in text and "Total wall time" in text
     assert imread(out / "s.png").shape[0] > 100
+
+
+def structure(presets) -> dict:
+    """Sections -> entry names -> key names, in file order."""
+    return {section: {name: list(values) for name, values in entries.items()}
+            for section, entries in presets.items()}
+
+
+def test_report_writes_presets_with_the_stored_structure(quick_report):
+    out, tables = quick_report
+    fresh = yaml.safe_load((out / "accuracy_presets.yaml").read_text())
+    stored = yaml.safe_load(PRESETS_FILE.read_text())
+    assert structure(fresh) == structure(stored)
+    paper, stored_paper = fresh["accuracy_presets"]["paper"], stored["accuracy_presets"]["paper"]
+    # measured by this run: cg at the paper preset's tol 1e-8 against the exact solution
+    solver = tables["solver"]
+    cg = solver[(solver["method"] == "cg") & (solver["tol"] == 1e-8)]
+    assert paper["solver_k_P_error"] == pytest.approx(cg["k_P_error"].max(), rel=1e-2)
+    # not measured (fallback mesh table, no run with 60 surfaces): the stored numbers
+    for key in ("mesh", "tol", "description", "k_P_error", "sampling_k_P"):
+        assert paper[key] == stored_paper[key], key
+    assert fresh["fallback_mesh_errors"] == stored["fallback_mesh_errors"]
+    assert "accuracy_presets.yaml" in (out / "s.md").read_text()
+
+
+def test_derive_presets_takes_what_the_tables_measure():
+    solver, mesh, grid, counts = synthetic_tables()
+    mesh["source"] = "conv.csv"
+    mesh.loc[mesh["mesh"] == "paper", "mesh"] = "refined"
+    grid["element_size_m"] = 9e-3 / grid["grid"]
+    counts["count"] = [5, 10, 40, 60]
+    stored = {"accuracy_presets": {"paper": dict(ACCURACY_PRESETS["paper"]),
+                                   "fast": dict(ACCURACY_PRESETS["fast"])},
+              "fallback_mesh_errors": {"refined": {"build_s": 12.8, "k_P_error": 0.5},
+                                       "graded": {"build_s": 14.6, "k_P_error": 0.049}}}
+    fresh = speed.derive_presets(solver, mesh, grid, counts, stored)
+    assert structure(fresh) == structure(stored)
+    paper, fast = fresh["accuracy_presets"]["paper"], fresh["accuracy_presets"]["fast"]
+    # cg 1e-8 and 1e-6 rows of the solver table
+    assert (paper["solver_k_P_error"], paper["solver_real_area_error"]) == (1e-5, 0.0)
+    assert (fast["solver_k_P_error"], fast["solver_real_area_error"]) == (1e-3, 0.01)
+    # 60 per 9 mm against the finest (120): largest |change| over the pressures
+    assert (paper["grid_change_k_P"], paper["grid_change_real_area"]) == (0.015, 0.04)
+    # 60 surfaces measured (paper), 20 not (fast keeps the stored numbers)
+    assert (paper["sampling_k_P"], paper["sampling_real_area"]) == (0.01, 0.04)
+    assert fast["sampling_k_P"] == ACCURACY_PRESETS["fast"]["sampling_k_P"]
+    # mesh errors: "refined" measured (fast), "paper" no longer in the table (kept)
+    assert (fast["k_P_error"], fast["max_pressure_error"]) == (0.1, 3.0)
+    assert paper["k_P_error"] == ACCURACY_PRESETS["paper"]["k_P_error"]
+    assert fresh["fallback_mesh_errors"]["refined"] == {"build_s": 1.0, "k_P_error": 0.1}
+    assert fresh["fallback_mesh_errors"]["graded"] == {"build_s": 14.6, "k_P_error": 0.049}
+    for preset in ("paper", "fast"):
+        for key in ("mesh", "tol", "surfaces", "description", "source"):
+            assert fresh["accuracy_presets"][preset][key] == ACCURACY_PRESETS[preset][key]
