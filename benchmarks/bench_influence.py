@@ -268,6 +268,7 @@ def run_hybrid(which: str) -> dict:
 
     from roughcontact.contact.cell import sweep_and_aggregate
     from roughcontact.elasticity.influence import hybrid_unit_modulus_influence
+    from roughcontact.reports.convergence import CONTACT_COLUMNS
     from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
 
     geom = paper_block("converged")
@@ -288,12 +289,8 @@ def run_hybrid(which: str) -> dict:
     _, _, frame = sweep_and_aggregate(ec, heights, geom, sigma=sigma,
                                       pressures=(0.3e6, 1e6, 2e6), steps=40, reach=1.1,
                                       method="cg", tol=1e-10, precision="double")
-    columns = {"k_P_Pa": "normalized_stiffness", "real_area_fraction": "real_area_fraction",
-               "max_pressure_Pa": "max_pressure", "approach_m": "approach",
-               "mean_plane_deflection_m": "mean_plane_deflection",
-               "asperity_deflection_m": "asperity_deflection"}
     return {"seconds": seconds, "peak_gb": peak,
-            **{k: frame[f"{c}_mean"].tolist() for k, c in columns.items()}}
+            **{k: frame[f"{c}_mean"].tolist() for k, c in CONTACT_COLUMNS.items()}}
 
 
 def hybrid_study() -> None:

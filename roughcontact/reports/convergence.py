@@ -63,6 +63,7 @@ from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_
 
 __all__ = [
     "COLUMNS",
+    "CONTACT_COLUMNS",
     "CONTACT_QUANTITIES",
     "ENTRY_QUANTITIES",
     "HALFSPACE",
@@ -80,6 +81,13 @@ ENTRY_QUANTITIES = ("self_compliance", "neighbour_1_0", "neighbour_1_1", "neighb
 #: Rough-contact quantities recorded per mesh and nominal pressure.
 CONTACT_QUANTITIES = ("k_P_Pa", "real_area_fraction", "max_pressure_Pa", "approach_m",
                       "mean_plane_deflection_m", "asperity_deflection_m")
+
+#: Each of ``CONTACT_QUANTITIES``: its column of the aggregated cell table
+#: (:func:`roughcontact.contact.aggregate.aggregate_cell`, ``<column>_mean``).
+CONTACT_COLUMNS = {"k_P_Pa": "normalized_stiffness", "real_area_fraction": "real_area_fraction",
+                   "max_pressure_Pa": "max_pressure", "approach_m": "approach",
+                   "mean_plane_deflection_m": "mean_plane_deflection",
+                   "asperity_deflection_m": "asperity_deflection"}
 
 #: Column -> (unit, description) of the table returned by ``influence_convergence``.
 #: Every quantity q of ``ENTRY_QUANTITIES + CONTACT_QUANTITIES`` also has a column
@@ -162,11 +170,8 @@ def _contact_response(ec: np.ndarray, geom: BlockGeometry, task: dict) -> dict:
     if not sweep.converged.all():
         log.warning("contact sweep: %d of %d solves did not converge",
                     int((~sweep.converged).sum()), sweep.converged.size)
-    quantities = {"k_P_Pa": "normalized_stiffness", "real_area_fraction": "real_area_fraction",
-                  "max_pressure_Pa": "max_pressure", "approach_m": "approach",
-                  "mean_plane_deflection_m": "mean_plane_deflection",
-                  "asperity_deflection_m": "asperity_deflection"}
-    return {name: frame[f"{column}_mean"].to_numpy() for name, column in quantities.items()} | {
+    return {name: frame[f"{column}_mean"].to_numpy()
+            for name, column in CONTACT_COLUMNS.items()} | {
         "reached": physical.nominal_pressure[:, -1].min() >= pressures,
         "surfaces": heights.shape[0]}
 
