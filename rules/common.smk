@@ -14,35 +14,18 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = str(config["blas_threads"])
 
 NOTEBOOKS = os.path.join(workflow.basedir, "notebooks")
-FIGURES = [
-    name
-    for name in (*study.SURFACE_ONLY_FIGURES, *study.CONTACT_FIGURES)
-    if name in config["figures"]
-]
+try:
+    PLAN = study.study_plan(config)
+except study.ConfigProblems as err:
+    raise WorkflowError(str(err)) from None
+FIGURES = PLAN.figures
 # contact studies: the paper's figures and the user's own sweeps
-STUDIES = [n for n in FIGURES if n in study.CONTACT_FIGURES] + list(config["sweeps"])
-_bad_studies = study.check_studies(config, STUDIES)
-if _bad_studies:
-    raise WorkflowError(
-        "Invalid contact studies in the config (no job was started):\n  "
-        + "\n  ".join(_bad_studies)
-    )
-CONTACT_JOBS = study.contact_jobs(config, STUDIES)
-SURFACE_CELLS = study.surface_cells(config) | {
-    job["surface_key"]: job["surface"] for job in CONTACT_JOBS.values()
-}
-GEOMETRIES = study.influence_geometries(config) | {
-    job["geometry_key"]: job["geometry"] for job in CONTACT_JOBS.values()
-}
+STUDIES = PLAN.studies
+CONTACT_JOBS = PLAN.jobs
+SURFACE_CELLS = PLAN.cells
+GEOMETRIES = PLAN.geometries
 # aggregates are computed once per source ("fig12: {from: fig07}" reuses fig07's)
-AGGREGATES = sorted({study.source_name(config, name) for name in STUDIES})
-
-_infeasible = study.check_feasible(SURFACE_CELLS)
-if _infeasible:
-    raise WorkflowError(
-        "Infeasible surface cells in the config (no job was started):\n  "
-        + "\n  ".join(_infeasible)
-    )
+AGGREGATES = PLAN.aggregates
 
 
 wildcard_constraints:
@@ -140,7 +123,7 @@ def get_geometry_params(wildcards):
 def get_influence_mem_mb(wildcards):
     """Estimated peak memory of an influence build [MB], for the scheduler."""
     geometry = GEOMETRIES[wildcards.geometry]
-    return resources.influence_mem_mb(geometry, config.get("body", {}))
+    return resources.influence_mem_mb(geometry, config["body"])
 
 
 def get_surface_params(wildcards):
@@ -196,16 +179,18 @@ def get_figure_parameters(wildcards):
 
 def get_contact_runtime(wildcards, attempt):
     job = CONTACT_JOBS[wildcards.job]
-    return resources.contact_runtime(job, study.contact_settings(config), attempt)
+    return resources.contact_runtime(
+        job, study.contact_settings(config), config["body"], attempt
+    )
 
 
 def get_contact_mem_mb(wildcards):
-    return resources.contact_mem_mb(CONTACT_JOBS[wildcards.job])
+    return resources.contact_mem_mb(CONTACT_JOBS[wildcards.job], config["body"])
 
 
 def get_influence_runtime(wildcards, attempt):
     geometry = GEOMETRIES[wildcards.geometry]
-    return resources.influence_runtime(geometry, config.get("body", {}), attempt)
+    return resources.influence_runtime(geometry, config["body"], attempt)
 
 
 def get_surfaces_runtime(wildcards, attempt):
@@ -225,21 +210,25 @@ def get_audit_runtime(wildcards, attempt):
 
 
 def get_audit_mem_mb(wildcards):
-    return resources.audit_mem_mb(GEOMETRIES.values())
+    return resources.audit_mem_mb(GEOMETRIES.values(), config["body"])
 
 
 def get_audit_verify_runtime(wildcards, attempt):
     jobs, settings = CONTACT_JOBS.values(), study.contact_settings(config)
-    sample = int(config.get("audit", {}).get("verify_sample", 3))
-    return resources.audit_verify_runtime(jobs, settings, sample, attempt)
+    sample = config["audit"]["verify_sample"]
+    return resources.audit_verify_runtime(
+        jobs, settings, config["body"], sample, attempt
+    )
 
 
 def get_audit_verify_mem_mb(wildcards):
-    return resources.audit_verify_mem_mb(CONTACT_JOBS.values(), GEOMETRIES.values())
+    return resources.audit_verify_mem_mb(
+        CONTACT_JOBS.values(), GEOMETRIES.values(), config["body"]
+    )
 
 
 def _report_settings(name):
-    return config.get("reports", {}).get(name, {})
+    return config["reports"].get(name, {})  # {}: a report not configured
 
 
 def get_convergence_runtime(wildcards, attempt):
@@ -260,4 +249,4 @@ def get_speed_vs_error_runtime(wildcards, attempt):
 
 def get_speed_vs_error_mem_mb(wildcards):
     geometry, section = get_body_geometry(wildcards), _report_settings("speed_vs_error")
-    return resources.speed_vs_error_mem_mb(geometry, section, config.get("body", {}))
+    return resources.speed_vs_error_mem_mb(geometry, section, config["body"])

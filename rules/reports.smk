@@ -51,7 +51,7 @@ rule speed_vs_error:
         runtime=get_speed_vs_error_runtime,
     params:
         geometry=get_body_geometry,
-        settings=canonical(config.get("reports", {}).get("speed_vs_error", {})),
+        settings=canonical(config["reports"]["speed_vs_error"]),
         E_MPa=config["body"]["E_MPa"],
         study_seed=config["study_seed"],
     script:

@@ -3,25 +3,26 @@
 import logging
 
 from roughcontact.reports.speed import speed_vs_error_report
+from roughcontact.study.cells import block_geometry
+from roughcontact.study.config import SpeedReportSettings
 from roughcontact.study.logs import route_logging
+from roughcontact.units import MPA
 
 route_logging(snakemake.log[0])
-geometry = snakemake.params.geometry
-settings = dict(snakemake.params.settings)
-if "pressures_MPa" in settings:
-    settings["pressures"] = [p * 1e6 for p in settings.pop("pressures_MPa")]
+settings = SpeedReportSettings.from_section(snakemake.params.settings)
+body = block_geometry(snakemake.params.geometry, E=snakemake.params.E_MPa * MPA)
 speed_vs_error_report(
     snakemake.output.md,
     snakemake.output.csv,
     [snakemake.output.png, snakemake.output.counts_png],
     out_presets=snakemake.output.presets,
-    grid=geometry["grid"][0],
-    size=geometry["size_mm"][0] * 1e-3,
-    thickness=geometry["thickness_mm"] * 1e-3,
-    E=snakemake.params.E_MPa * 1e6,
-    nu=geometry["nu"],
+    grid=body.grid[0],
+    size=body.size[0],
+    thickness=body.thickness,
+    E=body.E,
+    nu=body.nu,
     mesh_table_path=snakemake.input.mesh_table,
     seed=snakemake.params.study_seed,
     progress=logging.getLogger("roughcontact.report").info,
-    **settings,
+    **settings.as_kwargs(),
 )

@@ -76,7 +76,7 @@ def approach_grid(heights: np.ndarray, pressure_end: float, steps: int,
         Strictly increasing approaches [-] (units of sigma).
     """
     end = bulk_factor * pressure_end + float(np.max(heights))
-    return np.geomspace(end / APPROACH_RANGE, end, steps)
+    return nondim.approach_grid(heights, end=end, steps=steps, start=1.0 / APPROACH_RANGE)
 
 
 def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: float, steps: int,

@@ -595,7 +595,7 @@ def approach_grid(heights, unit_influence=None, *, thickness: float | None = Non
     steps : int
         Number of approaches ``k``; first touch itself (no load) is left out.
     spacing : {"log", "linear"}
-        ``"log"``: ``end * logspace(log10(start), 0, k)``, dense at low load
+        ``"log"``: ``geomspace(start * end, end, k)``, dense at low load
         where the stiffness changes fastest; ``"linear"``:
         ``end * (1..k) / k``.
     start : float
@@ -660,12 +660,11 @@ def approach_grid(heights, unit_influence=None, *, thickness: float | None = Non
             return value >= target
 
         ends = _bisect_ends(reached, guess, rtol)
-    grid_end = ends[:, None] if per_surface else np.array([[ends.max()]])
+    grid_end = ends if per_surface else np.array([ends.max()])
     if spacing == "log":
-        fractions = np.logspace(np.log10(start), 0.0, int(steps))
+        grid = np.geomspace(grid_end * start, grid_end, int(steps), axis=1)
     else:
-        fractions = np.arange(1, int(steps) + 1) / int(steps)
-    grid = grid_end * fractions[None, :]
+        grid = grid_end[:, None] * (np.arange(1, int(steps) + 1) / int(steps))[None, :]
     return grid if per_surface else grid[0]
 
 

@@ -50,14 +50,14 @@ def cell_params(defaults: dict, **overrides) -> dict:
     """
     merged = {**defaults, **overrides}
     return {
-        "skew": float(merged.get("skew", 0.0)),
-        "kurt": float(merged.get("kurt", 3.0)),
+        "skew": float(merged["skew"]),
+        "kurt": float(merged["kurt"]),
         "b_mm": [float(v) for v in _pair(merged["b_mm"])],
         "grid": [int(v) for v in _pair(merged["grid"])],
         "size_mm": [float(v) for v in _pair(merged["size_mm"])],
-        "acf": str(merged.get("acf", "exponential")),
-        "periodic": bool(merged.get("periodic", True)),
-        "method": str(merged.get("method", "filter")),
+        "acf": str(merged["acf"]),
+        "periodic": bool(merged["periodic"]),
+        "method": str(merged["method"]),
         "count": int(merged["count"]),
     }
 
@@ -105,7 +105,7 @@ def figure_cells(config: dict, figure: str) -> list[dict]:
     fig = config["figures"][figure]
     if figure == "fig03":
         return [
-            cell_params(defaults, b_mm=b, skew=0.0, kurt=3.0, count=fig.get("count", 1))
+            cell_params(defaults, b_mm=b, skew=0.0, kurt=3.0, count=fig["count"])
             for b in fig["b_mm"]
         ]
     if figure == "fig10":  # the cumulative height distributions of the Fig 9 surfaces
@@ -167,9 +167,9 @@ def measured_options(entry: dict) -> dict:
         "file": str(entry["file"]),
         "format": str(entry["format"]),
         "height_unit": str(entry["height_unit"]),
-        "lateral_unit": str(entry.get("lateral_unit", "mm")),
+        "lateral_unit": str(entry["lateral_unit"]),
         "spacing_mm": None if spacing is None else [float(v) for v in _pair(spacing)],
-        "fill_holes": float(entry.get("fill_holes", 0.0)),
+        "fill_holes": float(entry["fill_holes"]),
     }
 
 
@@ -295,24 +295,18 @@ def geometry_params(body: dict, surfaces: dict, **overrides) -> dict:
         "size_mm": [float(v) for v in _pair(merged["size_mm"])],
         "thickness_mm": float(merged["thickness_mm"]),
         "grid": [int(v) for v in _pair(merged["grid"])],
-        "base": str(merged.get("base", "clamped")),
-        "mesh": str(merged.get("mesh", "paper")),
+        "base": str(merged["base"]),
+        "mesh": str(merged["mesh"]),
     }
     # the influence model; the dense matrix (the paper's) adds no key, so its files keep
     # their names
-    operator = str(merged.get("operator", "dense"))
+    operator = str(merged["operator"])
     if operator != "dense":
         params["operator"] = operator
     if operator == "auto":
-        tolerance = {**HALFSPACE_TOLERANCE, **(merged.get("halfspace_tolerance") or {})}
         params["halfspace_tolerance"] = {k: (None if v is None else float(v))
-                                         for k, v in sorted(tolerance.items())}
+                                         for k, v in sorted(merged["halfspace_tolerance"].items())}
     return params
-
-
-#: Default tolerances of the half-space criterion (``operator: auto``): largest
-#: relative error of the half-space model in each quantity (None: not needed).
-HALFSPACE_TOLERANCE = {"k_P": 0.02, "real_area": 0.05, "max_pressure": 0.05}
 
 
 def geometry_key(params: dict) -> str:
@@ -362,7 +356,7 @@ def influence_geometries(config: dict) -> dict[str, dict]:
 
 def convergence_presets(config: dict) -> list[str]:
     """Mesh presets of the influence-convergence report ([] when it is not configured)."""
-    report = config.get("reports", {}).get("influence_convergence")
+    report = config["reports"].get("influence_convergence")
     return [] if report is None else list(report["presets"])
 
 
@@ -372,21 +366,22 @@ def coarse_geometry(geom):
     return dataclasses.replace(geom, grid=default_coarse_grid(geom.grid), mesh=mesh)
 
 
-def planned_operator(params: dict, max_memory_gb: float = 16.0) -> str:
+def planned_operator(params: dict, max_memory_gb: float) -> str:
     """The influence model a geometry's build starts with: "dense", "hybrid" or "halfspace".
 
     ``operator: auto`` picks dense or hybrid here (by size and memory,
     :func:`roughcontact.elasticity.operators.choose_operator`); the build may then
     replace either by the half-space when the measured criterion allows.
     """
-    operator = params.get("operator", "dense")
+    operator = params.get("operator", "dense")  # a dense geometry's key has no operator
     if operator != "auto":
         return operator
     return choose_operator(block_geometry(params), max_dense_bytes=max_memory_gb * GB)
 
 
-def influence_cost(params: dict, solver: str = "auto", max_memory_gb: float = 16.0):
-    """:class:`~roughcontact.influence.CostEstimate` of the finite-element model a build solves."""
+def influence_cost(params: dict, solver: str, max_memory_gb: float):
+    """:class:`~roughcontact.influence.CostEstimate` of the finite-element model a build
+    solves with ``solver``, planned within ``max_memory_gb`` (the config's ``body``)."""
     geom = block_geometry(params)
     if planned_operator(params, max_memory_gb) in ("hybrid", "halfspace"):
         geom = coarse_geometry(geom)
@@ -408,7 +403,7 @@ def _as_list(value) -> list:
 
 def source_name(config: dict, name: str) -> str:
     """The figure or sweep whose cells ``name`` uses (itself unless ``from:``)."""
-    section = {**config.get("figures", {}), **config.get("sweeps", {})}
+    section = {**config["figures"], **config["sweeps"]}
     seen = [name]
     while "from" in section[name]:
         source = section[name]["from"]
@@ -422,7 +417,7 @@ def source_name(config: dict, name: str) -> str:
 
 def resolve_source(config: dict, name: str) -> dict:
     """A figure's (or sweep's) cell description, following ``from: other``."""
-    section = {**config.get("figures", {}), **config.get("sweeps", {})}
+    section = {**config["figures"], **config["sweeps"]}
     return section[source_name(config, name)]
 
 
@@ -476,7 +471,7 @@ def contact_cells(config: dict, name: str) -> list[dict]:
     spacing = [s / g for s, g in zip(_pair(surfaces["size_mm"]), _pair(surfaces["grid"]),
                                      strict=True)]
     cells = []
-    for mesh in _as_list(fig.get("meshes", body.get("mesh", "paper"))):
+    for mesh in _as_list(fig.get("meshes", body["mesh"])):
         for nu in _as_list(fig.get("nu", body["nu"])):
             sizes = ([[s, s] for s in _as_list(fig["size_mm"])] if "size_mm" in fig
                      else [_pair(surfaces["size_mm"])])
@@ -522,7 +517,7 @@ def measured_study_cells(config: dict, fig: dict, body: dict) -> list[dict]:
     surface_cells_ = study_surfaces(config, fig)
     first = surface_cells_[0]
     cells = []
-    for mesh in _as_list(fig.get("meshes", body.get("mesh", "paper"))):
+    for mesh in _as_list(fig.get("meshes", body["mesh"])):
         for nu in _as_list(fig.get("nu", body["nu"])):
             geom = geometry_params(body, config["surfaces"], nu=nu, mesh=mesh,
                                    size_mm=first["size_mm"], grid=first["grid"])
@@ -553,10 +548,10 @@ def check_studies(config: dict, names) -> list[str]:
 
 def _check_operator(config: dict, name: str, entry: dict) -> list[str]:
     """The hybrid operator needs a coarse model with an accurate near field."""
-    if config.get("body", {}).get("operator", "dense") != "hybrid":
+    if config["body"]["operator"] != "hybrid":
         return []
     preset = accuracy_preset(config)
-    default = preset["mesh"] if preset else config["body"].get("mesh", "paper")
+    default = preset["mesh"] if preset else config["body"]["mesh"]
     bad = [m for m in _as_list(entry.get("meshes", default)) if m not in HYBRID_MESHES]
     if not bad:
         return []
@@ -603,3 +598,53 @@ def contact_jobs(config: dict, names) -> dict[str, dict]:
             })
             job["pressure_end"] = max(job["pressure_end"], sweep_end(cell))
     return jobs
+
+
+class ConfigProblems(ValueError):
+    """The configuration passed the schema but asks for something that cannot be
+    run; ``problems`` lists one message per offending entry."""
+
+    def __init__(self, title: str, problems: list[str]):
+        super().__init__(f"{title} (no job was started):\n  " + "\n  ".join(problems))
+        self.problems = problems
+
+
+@dataclasses.dataclass(frozen=True)
+class StudyPlan:
+    """Everything a validated configuration asks the workflow to make.
+
+    ``figures`` in drawing order; ``studies`` the contact figures and the
+    user's sweeps; ``jobs``, ``cells`` and ``geometries`` by file key
+    (:func:`contact_jobs`, :func:`surface_cells`, :func:`influence_geometries`
+    plus those of the jobs); ``aggregates`` the studies whose cells are
+    aggregated (a study ``from:`` another reuses its aggregates).
+    """
+
+    figures: list[str]
+    studies: list[str]
+    jobs: dict[str, dict]
+    cells: dict[str, dict]
+    geometries: dict[str, dict]
+    aggregates: list[str]
+
+
+def study_plan(config: dict) -> StudyPlan:
+    """The :class:`StudyPlan` of a validated ``config``.
+
+    Raises :class:`ConfigProblems` naming every invalid contact study or
+    infeasible surface cell, before any job is planned to run.
+    """
+    figures = [n for n in (*SURFACE_ONLY_FIGURES, *CONTACT_FIGURES) if n in config["figures"]]
+    studies = [n for n in figures if n in CONTACT_FIGURES] + list(config["sweeps"])
+    bad = check_studies(config, studies)
+    if bad:
+        raise ConfigProblems("Invalid contact studies in the config", bad)
+    jobs = contact_jobs(config, studies)
+    cells = surface_cells(config) | {job["surface_key"]: job["surface"] for job in jobs.values()}
+    infeasible = check_feasible(cells)
+    if infeasible:
+        raise ConfigProblems("Infeasible surface cells in the config", infeasible)
+    geometries = influence_geometries(config) | {job["geometry_key"]: job["geometry"]
+                                                 for job in jobs.values()}
+    aggregates = sorted({source_name(config, name) for name in studies})
+    return StudyPlan(figures, studies, jobs, cells, geometries, aggregates)

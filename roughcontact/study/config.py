@@ -95,3 +95,37 @@ class ConvergenceSettings:
                    sigma=float(section["sigma_um"]) * UM,
                    corr_length=float(section["b_mm"]) * MM,
                    pressures=tuple(float(p) * MPA for p in section["pressures_MPa"]))
+
+
+@dataclass(frozen=True)
+class SpeedReportSettings:
+    """The speed-against-error report (``reports.speed_vs_error``), SI units.
+
+    ``surfaces`` per solver-study cell, the ``grids`` of the grid study,
+    ``count_surfaces`` and ``counts`` of the surface-count study, the
+    tolerances ``tol_kP`` and ``tol_area`` (relative) of the recommendation,
+    read at the nominal ``pressures`` [Pa].
+    """
+
+    surfaces: int
+    grids: tuple[int, ...]
+    count_surfaces: int
+    counts: tuple[int, ...]
+    tol_kP: float
+    tol_area: float
+    pressures: tuple[float, ...]
+
+    @classmethod
+    def from_section(cls, section: dict) -> SpeedReportSettings:
+        return cls(surfaces=int(section["surfaces"]), grids=tuple(int(g) for g in section["grids"]),
+                   count_surfaces=int(section["count_surfaces"]),
+                   counts=tuple(int(c) for c in section["counts"]),
+                   tol_kP=float(section["tol_kP"]), tol_area=float(section["tol_area"]),
+                   pressures=tuple(float(p) * MPA for p in section["pressures_MPa"]))
+
+    def as_kwargs(self) -> dict:
+        """Keyword arguments of :func:`roughcontact.reports.speed.speed_vs_error_report`."""
+        return {"surfaces": self.surfaces, "grids": list(self.grids),
+                "count_surfaces": self.count_surfaces, "counts": list(self.counts),
+                "tol_kP": self.tol_kP, "tol_area": self.tol_area,
+                "pressures": list(self.pressures)}

@@ -274,7 +274,7 @@ def _operator_checks(op, geom) -> dict:
     }
 
 
-def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: float = 16.0,
+def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
                     config=None) -> dict:
     """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
 
@@ -293,7 +293,7 @@ def build_influence(params: dict, path, *, solver: str = "auto", max_memory_gb: 
     """
     geom = block_geometry(params)
     key = geometry_key(params)
-    requested = params.get("operator", "dense")
+    requested = params.get("operator", "dense")  # a dense geometry's key has no operator
     operator = planned_operator(params, max_memory_gb)
     model = geom if operator == "dense" else coarse_geometry(geom)
     cost = influence.check_memory(model, max_memory_gb * 1e9, solver)

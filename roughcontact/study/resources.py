@@ -16,7 +16,6 @@ Check the model against a run's benchmarks::
 from __future__ import annotations
 
 import argparse
-import copy
 import csv
 import math
 import os
@@ -25,26 +24,21 @@ from pathlib import Path
 from types import MappingProxyType
 
 import yaml
-from snakemake.utils import validate
 
 from roughcontact.elasticity.operators import COARSE_MAX, coarsened_side
 from roughcontact.study.cells import (
-    CONTACT_FIGURES,
-    SURFACE_ONLY_FIGURES,
-    contact_jobs,
-    contact_key,
     contact_settings,
     influence_cost,
-    influence_geometries,
     planned_operator,
-    surface_cells,
+    study_plan,
 )
+from roughcontact.study.config import SCHEMA, load_config
 from roughcontact.units import GB
 
 #: The stored cost model of the source tree.
 COST_MODEL_FILE = Path(__file__).resolve().parents[2] / "config" / "cost_model.yaml"
 #: The configuration schema (its ``default:`` entries complete a config).
-SCHEMA_FILE = Path(__file__).resolve().parents[2] / "config" / "schema.yaml"
+SCHEMA_FILE = SCHEMA
 #: Bytes of one double-precision value.
 DOUBLE_BYTES = 8
 #: One megabyte [bytes] (decimal, as schedulers count memory).
@@ -125,12 +119,12 @@ def tolerance_factor(settings: dict) -> float:
     """Iterations of a solve to tolerance ``settings["tol"]`` relative to 1e-8 (the
     reference), in proportion to its digits and never below 1."""
     digits = _MODEL["contact"]["reference_tol_digits"]
-    return max(1.0, math.log10(1.0 / float(settings.get("tol", 1e-8))) / digits)
+    return max(1.0, math.log10(1.0 / float(settings["tol"])) / digits)
 
 
 def method_factor(settings: dict) -> float:
     """Matrix products per solve of ``settings["method"]`` relative to CG."""
-    return _MODEL["contact"]["method_cost"][settings.get("method", "cg")]
+    return _MODEL["contact"]["method_cost"][settings["method"]]
 
 
 def dense_solve_seconds(grid, settings: dict) -> float:
@@ -151,33 +145,34 @@ def matrix_free_solve_seconds(grid) -> float:
                per_solve / contact["matrix_free_reference_elements"])
 
 
-def contact_seconds(job: dict, settings: dict) -> float:
+def contact_seconds(job: dict, settings: dict, body: dict) -> float:
     """Wall time [s] of a contact job: surfaces x approach steps x one solve.
 
     ``job`` is a dict of :func:`roughcontact.study.cells.contact_jobs`,
-    ``settings`` :func:`roughcontact.study.cells.contact_settings`. Measured
+    ``settings`` :func:`roughcontact.study.cells.contact_settings`, ``body``
+    the validated config's ``body`` (its ``max_memory_gb`` plans the model). Measured
     35-186 s per cell of 60 surfaces x 30 steps on 60 x 60 (paper mesh; the
     converged mesh needs fewer iterations) and 4 s on 30 x 30. A sweep beyond
     P L / (E sigma) = 4 (the study's) reaches larger contact fractions, where
     CG needs more iterations: counted in proportion.
     """
-    solves = job["surface"]["count"] * int(settings.get("steps", 30))
+    solves = job["surface"]["count"] * int(settings["steps"])
     reach = max(1.0, job["pressure_end"] / _MODEL["contact"]["reference_reach"])
     grid = job["geometry"]["grid"]
-    if planned_operator(job["geometry"]) != "dense":
+    if planned_operator(job["geometry"], body["max_memory_gb"]) != "dense":
         return (solves * matrix_free_solve_seconds(grid) * tolerance_factor(settings)
                 * method_factor(settings) * reach)
     return solves * dense_solve_seconds(grid, settings) * reach
 
 
-def contact_runtime(job: dict, settings: dict, attempt: int = 1) -> int:
+def contact_runtime(job: dict, settings: dict, body: dict, attempt: int = 1) -> int:
     """Requested wall time [min] of a contact job (:func:`contact_seconds`)."""
-    return runtime_minutes(contact_seconds(job, settings), attempt)
+    return runtime_minutes(contact_seconds(job, settings, body), attempt)
 
 
 def influence_build_settings(body: dict) -> dict:
-    """``solver`` and ``max_memory_gb`` of an influence build from the config's ``body``."""
-    return {"solver": body.get("solver", "auto"), "max_memory_gb": body.get("max_memory_gb", 16)}
+    """``solver`` and ``max_memory_gb`` of an influence build from the validated ``body``."""
+    return {"solver": body["solver"], "max_memory_gb": body["max_memory_gb"]}
 
 
 def influence_seconds(geometry: dict, body: dict) -> float:
@@ -229,10 +224,10 @@ def audit_runtime(files: int, attempt: int = 1) -> int:
     return runtime_minutes(audit["base_seconds"] + audit["seconds_per_file"] * files, attempt)
 
 
-def audit_verify_runtime(jobs, settings: dict, sample: int, attempt: int = 1) -> int:
+def audit_verify_runtime(jobs, settings: dict, body: dict, sample: int, attempt: int = 1) -> int:
     """Wall time [min] of audit_verify: at most ``sample`` of the contact ``jobs``
     re-solved, each as long as the slowest."""
-    slowest = max((contact_seconds(job, settings) for job in jobs), default=0)
+    slowest = max((contact_seconds(job, settings, body) for job in jobs), default=0)
     return runtime_minutes(sample * slowest, attempt)
 
 
@@ -243,7 +238,7 @@ def convergence_runtime(geometry: dict, presets, report: dict, attempt: int = 1)
     counted as 4 s per solve, scaled as :func:`dense_scale`). ``report`` is
     the config's ``reports: influence_convergence`` section."""
     fit = _MODEL["convergence"]
-    solves = (len(presets) + 1) * report.get("surfaces", 3)
+    solves = (len(presets) + 1) * report["surfaces"]
     seconds = fit["base_seconds"] + solves * fit["solve_seconds"] * dense_scale(geometry["grid"])
     return runtime_minutes(seconds, attempt)
 
@@ -258,14 +253,14 @@ def speed_vs_error_runtime(geometry: dict, report: dict, attempt: int = 1) -> in
     the config's ``reports: speed_vs_error`` section."""
     fit = _MODEL["speed_vs_error"]
     grid = geometry["grid"]
-    surfaces = report.get("surfaces", 4)
+    surfaces = report["surfaces"]
     solver = fit["solver_seconds"] * dense_scale(grid) * surfaces / fit["reference_surfaces"]
     grids = sum(
         (fit["grid_seconds"] + fit["grid_reference_seconds"]
          * (g / fit["grid_reference_side"]) ** 2) * surfaces / fit["reference_surfaces"]
-        for g in report.get("grids", [30, 60, 120])
+        for g in report["grids"]
     )
-    counts = (fit["count_seconds"] * report.get("count_surfaces", 120) / fit["count_surfaces"]
+    counts = (fit["count_seconds"] * report["count_surfaces"] / fit["count_surfaces"]
               * grid[0] * grid[1] / fit["reference_elements"])
     return runtime_minutes(solver + grids + counts, attempt)
 
@@ -274,7 +269,7 @@ def speed_vs_error_runtime(geometry: dict, report: dict, attempt: int = 1) -> in
 # Memory
 
 
-def contact_mem_mb(job: dict) -> int:
+def contact_mem_mb(job: dict, body: dict) -> int:
     """Peak memory [MB] of a contact job.
 
     Dense model: E * C in double and single precision and the contact-set
@@ -288,7 +283,7 @@ def contact_mem_mb(job: dict) -> int:
     nx, ny = job["geometry"]["grid"]
     n = nx * ny
     count = job["surface"]["count"]
-    if planned_operator(job["geometry"]) != "dense":
+    if planned_operator(job["geometry"], body["max_memory_gb"]) != "dense":
         return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2
                    + fit["matrix_free_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
     return int(fit["memory_base_mb"] + (fit["dense_matrices"] * DOUBLE_BYTES * n**2
@@ -310,27 +305,27 @@ def surfaces_mem_mb(cell: dict) -> int:
     return int(fit["memory_base_mb"] + fit["work_arrays"] * DOUBLE_BYTES * cell["count"] * n / MB)
 
 
-def stored_bytes(geometry: dict) -> int:
+def stored_bytes(geometry: dict, body: dict) -> int:
     """Bytes of a stored influence model: the dense matrix, or a matrix-free
     operator's coarse correction (at most 64^2 x 64^2 doubles)."""
     nx, ny = geometry["grid"]
-    if planned_operator(geometry) != "dense":
+    if planned_operator(geometry, body["max_memory_gb"]) != "dense":
         return DOUBLE_BYTES * (COARSE_MAX**2) ** 2
     return DOUBLE_BYTES * (nx * ny) ** 2
 
 
-def audit_mem_mb(geometries) -> int:
+def audit_mem_mb(geometries, body: dict) -> int:
     """Peak memory [MB] of the audit: one influence model of ``geometries`` (held
     twice while hashed) at a time, plus 1 GB."""
     audit = _MODEL["audit"]
-    largest = max((stored_bytes(g) for g in geometries), default=0)
+    largest = max((stored_bytes(g, body) for g in geometries), default=0)
     return int(audit["memory_base_mb"] + audit["model_copies"] * largest / MB)
 
 
-def audit_verify_mem_mb(jobs, geometries) -> int:
+def audit_verify_mem_mb(jobs, geometries, body: dict) -> int:
     """Peak memory [MB] of audit_verify: the audit's or the largest contact job's."""
-    largest = max((contact_mem_mb(job) for job in jobs), default=0)
-    return max(audit_mem_mb(geometries), largest)
+    largest = max((contact_mem_mb(job, body) for job in jobs), default=0)
+    return max(audit_mem_mb(geometries, body), largest)
 
 
 def convergence_mem_mb(geometry: dict, presets) -> int:
@@ -354,7 +349,7 @@ def speed_vs_error_mem_mb(geometry: dict, report: dict, body: dict) -> int:
     dense = dict(geometry, operator="dense")
     builds = [dict(dense, mesh="paper")] + [
         dict(dense, mesh="refined", grid=[coarsened_side(g)] * 2)
-        for g in [*report.get("grids", [30, 60, 120]), geometry["grid"][0]]
+        for g in [*report["grids"], geometry["grid"][0]]
     ]
     settings = influence_build_settings(body)
     peak = max(influence_cost(b, **settings).peak_bytes for b in builds)
@@ -368,20 +363,15 @@ def speed_vs_error_mem_mb(geometry: dict, report: dict, body: dict) -> int:
 def predictions(config: dict) -> dict[str, dict[str, tuple[float, int]]]:
     """Rule -> wildcard -> (runtime [s] before the margin, memory [MB]) of the
     contact, influence and surfaces jobs of a validated ``config``."""
-    figures = [n for n in (*SURFACE_ONLY_FIGURES, *CONTACT_FIGURES) if n in config["figures"]]
-    studies = [n for n in figures if n in CONTACT_FIGURES] + list(config.get("sweeps", {}))
-    jobs = contact_jobs(config, studies)
-    cells = surface_cells(config) | {j["surface_key"]: j["surface"] for j in jobs.values()}
-    geometries = influence_geometries(config) | {j["geometry_key"]: j["geometry"]
-                                                 for j in jobs.values()}
+    plan = study_plan(config)
     settings = contact_settings(config)
-    body = config.get("body", {})
+    body = config["body"]
     return {
-        "contact": {contact_key(j): (contact_seconds(j, settings), contact_mem_mb(j))
-                    for j in jobs.values()},
+        "contact": {key: (contact_seconds(job, settings, body), contact_mem_mb(job, body))
+                    for key, job in plan.jobs.items()},
         "influence": {k: (influence_seconds(g, body), influence_mem_mb(g, body))
-                      for k, g in geometries.items()},
-        "surfaces": {k: (surfaces_seconds(c), surfaces_mem_mb(c)) for k, c in cells.items()},
+                      for k, g in plan.geometries.items()},
+        "surfaces": {k: (surfaces_seconds(c), surfaces_mem_mb(c)) for k, c in plan.cells.items()},
     }
 
 
@@ -422,8 +412,7 @@ def main(argv=None) -> int:
     parser.add_argument("--compare", required=True, help="results/benchmarks/rules of a run")
     parser.add_argument("--configfile", default="config/config.yaml")
     args = parser.parse_args(argv)
-    config = copy.deepcopy(yaml.safe_load(Path(args.configfile).read_text()))
-    validate(config, str(SCHEMA_FILE))  # fills the schema's defaults, as Snakemake does
+    config = load_config(args.configfile)  # fills the schema's defaults, as Snakemake does
     print("\n".join(compare(args.compare, config)))
     return 0
 

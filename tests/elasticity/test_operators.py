@@ -13,6 +13,7 @@ from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, hybrid_unit_modulus_influence
 from roughcontact.study import cells as study
 from roughcontact.study import jobs as pipeline
+from roughcontact.study.config import validated
 from roughcontact.study.storage import influence_sha256, read_influence
 
 SIZE = (9e-3, 7.5e-3)
@@ -100,31 +101,39 @@ def test_default_coarse_grid(grid, coarse):
 BODY = {"thickness_mm": 10.0, "E_MPa": 511.0, "nu": 0.0, "mesh": "refined"}
 
 
+def complete(body: dict) -> dict:
+    """``body`` completed by the schema's defaults, as the workflow sees it."""
+    minimal = {"study_seed": 0, "figures": {}, "body": body,
+               "surfaces": {"grid": 8, "size_mm": 1.0, "count": 1}}
+    return validated(minimal)["body"]
+
+
 def test_dense_geometry_keys_unchanged_and_operators_keyed():
     surfaces = {"grid": [60, 60], "size_mm": [9.0, 9.0]}
-    dense = study.geometry_params(BODY, surfaces)
+    dense = study.geometry_params(complete(BODY), surfaces)
     assert "operator" not in dense
     assert study.geometry_key(dense) == "nu0_L9x9mm_t10mm_g60x60_clamped_refined"
-    hybrid = study.geometry_params({**BODY, "operator": "hybrid"}, surfaces)
+    hybrid = study.geometry_params(complete({**BODY, "operator": "hybrid"}), surfaces)
     assert study.geometry_key(hybrid).endswith("_refined_hybrid")
-    auto = study.geometry_params({**BODY, "operator": "auto",
-                                  "halfspace_tolerance": {"k_P": None}}, surfaces)
+    auto = study.geometry_params(complete({**BODY, "operator": "auto",
+                                           "halfspace_tolerance": {"k_P": None}}), surfaces)
     assert auto["halfspace_tolerance"] == {"k_P": None, "max_pressure": 0.05,
                                            "real_area": 0.05}
     assert study.geometry_key(auto).endswith("_autox-0.05-0.05")
-    assert study.planned_operator(auto) == "dense"
-    big = study.geometry_params({**BODY, "operator": "auto"}, {**surfaces, "grid": [256, 256]})
-    assert study.planned_operator(big) == "hybrid"
+    assert study.planned_operator(auto, 16.0) == "dense"
+    big = study.geometry_params(complete({**BODY, "operator": "auto"}),
+                                {**surfaces, "grid": [256, 256]})
+    assert study.planned_operator(big, 16.0) == "hybrid"
     # the build's memory is that of the 64 x 64 coarse model, not of a 34 GB matrix
-    assert study.influence_cost(big).peak_bytes < 4e9
+    assert study.influence_cost(big, "auto", 16.0).peak_bytes < 4e9
 
 
 def _build(tmp_path, body, grid, monkeypatch, coarse_max=None):
     if coarse_max is not None:
         monkeypatch.setattr(operators, "COARSE_MAX", coarse_max)
-    params = study.geometry_params(body, {"grid": [grid, grid], "size_mm": [4.8, 4.8]})
+    params = study.geometry_params(complete(body), {"grid": [grid, grid], "size_mm": [4.8, 4.8]})
     path = tmp_path / f"{study.geometry_key(params)}.h5"
-    attrs = pipeline.build_influence(params, path)
+    attrs = pipeline.build_influence(params, path, solver="auto", max_memory_gb=16.0)
     unit, stored = read_influence(path)
     return params, attrs, unit, stored
 

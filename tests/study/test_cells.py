@@ -5,11 +5,15 @@ import pytest
 
 from roughcontact.elasticity.influence import ModelTooLarge
 from roughcontact.study.cells import block_geometry, geometry_key, geometry_params
+from roughcontact.study.config import load_config, validated
 from roughcontact.study.jobs import build_influence
 from roughcontact.study.storage import read_influence
 
-BODY = {"thickness_mm": 2.0, "E_MPa": 511.0, "nu": 0.0, "base": "clamped", "mesh": "paper"}
-SURFACES = {"grid": [8, 8], "size_mm": [1.2, 1.2], "count": 1}
+#: A minimal config completed by the schema's defaults (base clamped, mesh paper, ...).
+CONFIG = validated({"study_seed": 0, "figures": {},
+                    "surfaces": {"grid": [8, 8], "size_mm": [1.2, 1.2], "count": 1},
+                    "body": {"thickness_mm": 2.0, "E_MPa": 511.0, "nu": 0.0}})
+BODY, SURFACES = CONFIG["body"], CONFIG["surfaces"]
 
 
 def test_every_geometry_parameter_but_young_modulus_changes_the_key():
@@ -32,7 +36,7 @@ def test_block_geometry_converts_millimetres():
 def test_build_influence_writes_rows_summing_to_the_thickness(tmp_path):
     params = geometry_params(BODY, SURFACES)
     path = tmp_path / "g.h5"
-    build_influence(params, path)
+    build_influence(params, path, solver="auto", max_memory_gb=16.0)
     unit, attrs = read_influence(path)
     assert unit.shape == (64, 64)
     assert np.allclose(unit.sum(axis=1), 2e-3, rtol=1e-10)
@@ -44,17 +48,14 @@ def test_build_influence_refuses_a_model_too_large_before_building(tmp_path):
     params = geometry_params(BODY, SURFACES)
     path = tmp_path / "g.h5"
     with pytest.raises(ModelTooLarge, match=r"GB.*Options"):
-        build_influence(params, path, max_memory_gb=0.001)
+        build_influence(params, path, solver="auto", max_memory_gb=0.001)
     assert not path.exists()
 
 
 def quick_config():
     from pathlib import Path
 
-    import yaml
-
-    quick = Path(__file__).resolve().parents[2] / "config" / "quick.yaml"
-    return yaml.safe_load(quick.read_text())
+    return load_config(Path(__file__).resolve().parents[2] / "config" / "quick.yaml")
 
 
 def test_accuracy_preset_sets_mesh_count_and_solver_and_records_its_errors():

@@ -9,8 +9,13 @@ from snakemake.utils import validate
 
 from roughcontact.study import resources
 from roughcontact.study.cells import influence_cost, influence_geometries
+from roughcontact.study.config import validated
 
 CG = {"method": "cg", "tol": 1e-8, "steps": 30}
+#: The body section of a minimal config, completed by the schema's defaults.
+BODY = validated({"study_seed": 0, "figures": {},
+                  "surfaces": {"grid": 60, "size_mm": 9.0, "count": 60},
+                  "body": {"thickness_mm": 10.0, "E_MPa": 511.0, "nu": 0.0}})["body"]
 
 
 def dense_job(grid=60, count=60, pressure_end=4.0):
@@ -28,49 +33,69 @@ def hybrid_job(grid=256, count=20):
 
 def test_contact_runtime_at_the_measured_cell():
     # 60 surfaces x 30 steps x 0.11 s = 198 s; 3 x 198 / 60 = 9.9 -> 10 min, + 5 min start
-    assert resources.contact_seconds(dense_job(), CG) == pytest.approx(198.0)
-    assert resources.contact_runtime(dense_job(), CG) == 15
-    assert resources.contact_runtime(dense_job(), CG, attempt=2) == 30
+    assert resources.contact_seconds(dense_job(), CG, BODY) == pytest.approx(198.0)
+    assert resources.contact_runtime(dense_job(), CG, BODY) == 15
+    assert resources.contact_runtime(dense_job(), CG, BODY, attempt=2) == 30
 
 
 def test_contact_runtime_scales_with_surfaces_steps_grid_and_reach():
-    base = resources.contact_seconds(dense_job(), CG)
-    assert resources.contact_seconds(dense_job(count=30), CG) == pytest.approx(base / 2)
-    assert resources.contact_seconds(dense_job(), {**CG, "steps": 60}) == pytest.approx(2 * base)
+    base = resources.contact_seconds(dense_job(), CG, BODY)
+    assert resources.contact_seconds(dense_job(count=30), CG, BODY) == pytest.approx(base / 2)
+    assert resources.contact_seconds(dense_job(), {**CG, "steps": 60}, BODY) == \
+        pytest.approx(2 * base)
     # a quarter of the elements: (900 / 3600)^2.5 = 1/32
-    assert resources.contact_seconds(dense_job(grid=30), CG) == pytest.approx(base / 32)
+    assert resources.contact_seconds(dense_job(grid=30), CG, BODY) == pytest.approx(base / 32)
     # a sweep to P L / (E sigma) = 12 reaches three times the study's 4
-    assert resources.contact_seconds(dense_job(pressure_end=12.0), CG) == pytest.approx(3 * base)
-    # steepest descent: 3 times the products; tol 1e-12: 12 / 8 digits
-    assert resources.contact_seconds(dense_job(), {**CG, "method": "steepest"}) == \
+    assert resources.contact_seconds(dense_job(pressure_end=12.0), CG, BODY) == \
         pytest.approx(3 * base)
-    assert resources.contact_seconds(dense_job(), {**CG, "tol": 1e-12}) == pytest.approx(1.5 * base)
+    # steepest descent: 3 times the products; tol 1e-12: 12 / 8 digits
+    assert resources.contact_seconds(dense_job(), {**CG, "method": "steepest"}, BODY) == \
+        pytest.approx(3 * base)
+    assert resources.contact_seconds(dense_job(), {**CG, "tol": 1e-12}, BODY) == \
+        pytest.approx(1.5 * base)
 
 
 def test_matrix_free_contact_runtime_in_proportion_to_n():
     # 20 surfaces x 30 steps x 0.62 s at 256 x 256
-    assert resources.contact_seconds(hybrid_job(), CG) == pytest.approx(20 * 30 * 0.62)
+    assert resources.contact_seconds(hybrid_job(), CG, BODY) == pytest.approx(20 * 30 * 0.62)
     # 128 x 128: a quarter of n; 16 x 16 hits the 0.05 s floor
-    assert resources.contact_seconds(hybrid_job(128), CG) == pytest.approx(600 * 0.62 / 4)
-    assert resources.contact_seconds(hybrid_job(16), CG) == pytest.approx(600 * 0.05)
+    assert resources.contact_seconds(hybrid_job(128), CG, BODY) == pytest.approx(600 * 0.62 / 4)
+    assert resources.contact_seconds(hybrid_job(16), CG, BODY) == pytest.approx(600 * 0.05)
 
 
 def test_contact_memory_dense_and_matrix_free():
     n = 60 * 60
-    assert resources.contact_mem_mb(dense_job()) == int(400 + (24 * n**2 + 80 * 60 * n) / 1e6)
+    assert resources.contact_mem_mb(dense_job(), BODY) == int(400 + (24 * n**2 + 80 * 60 * n) / 1e6)
     n = 256 * 256
     # the 64 x 64 coarse correction, not a 34 GB dense matrix
-    assert resources.contact_mem_mb(hybrid_job()) == int(400 + (8 * 4096**2 + 240 * 20 * n) / 1e6)
-    assert resources.contact_mem_mb(hybrid_job()) < 1000
+    assert resources.contact_mem_mb(hybrid_job(), BODY) == \
+        int(400 + (8 * 4096**2 + 240 * 20 * n) / 1e6)
+    assert resources.contact_mem_mb(hybrid_job(), BODY) < 1000
+
+
+def test_the_body_memory_limit_plans_the_model_of_every_estimate():
+    # operator auto on 60 x 60: dense within the default 16 GB, hybrid when the
+    # body allows less than the dense build's estimated peak (about 0.9 GB)
+    job = dense_job()
+    job["geometry"]["operator"] = "auto"
+    tight = {**BODY, "max_memory_gb": 0.1}
+    assert resources.contact_mem_mb(job, BODY) == resources.contact_mem_mb(dense_job(), BODY)
+    hybrid = hybrid_job(60, 60)
+    assert resources.contact_mem_mb(job, tight) == resources.contact_mem_mb(hybrid, BODY)
+    assert resources.contact_seconds(job, CG, tight) == \
+        pytest.approx(resources.contact_seconds(hybrid, CG, BODY))
+    # stored: the dense matrix, or the coarse correction bound (64^2 x 64^2 doubles)
+    assert resources.stored_bytes(job["geometry"], BODY) == 8 * 3600**2
+    assert resources.stored_bytes(job["geometry"], tight) == 8 * 4096**2
 
 
 def test_memory_and_time_grow_with_the_grid():
     grids = [16, 30, 60, 120]
     for small, large in zip(grids, grids[1:], strict=False):
-        assert resources.contact_mem_mb(dense_job(small)) < \
-            resources.contact_mem_mb(dense_job(large))
-        assert resources.contact_seconds(dense_job(small), CG) < \
-            resources.contact_seconds(dense_job(large), CG)
+        assert resources.contact_mem_mb(dense_job(small), BODY) < \
+            resources.contact_mem_mb(dense_job(large), BODY)
+        assert resources.contact_seconds(dense_job(small), CG, BODY) < \
+            resources.contact_seconds(dense_job(large), CG, BODY)
         cell = {"method": "filter", "count": 60}
         assert resources.surfaces_mem_mb({**cell, "grid": [small] * 2}) <= \
             resources.surfaces_mem_mb({**cell, "grid": [large] * 2})
@@ -78,17 +103,17 @@ def test_memory_and_time_grow_with_the_grid():
 
 def test_influence_runtime_through_the_measured_anchor():
     geometry = dense_job()["geometry"]
-    peak_gb = influence_cost(geometry).peak_bytes / 1e9
+    peak_gb = influence_cost(geometry, "auto", 16.0).peak_bytes / 1e9
     expected = 4.2 * (peak_gb / 0.92) ** 1.56
-    assert resources.influence_seconds(geometry, {}) == pytest.approx(expected)
+    assert resources.influence_seconds(geometry, BODY) == pytest.approx(expected)
     # at the anchor itself (0.92 GB -> 4.2 s): 3 x 4.2 / 60 -> 1 min, + 5 min start
     assert resources.runtime_minutes(4.2 * (0.92 / 0.92) ** 1.56) == 6
     # 9.6 GB (converged, measured 116-132 s): 4.2 x (9.6 / 0.92)^1.56 = 162 s -> 9 + 5 min
     seconds = 4.2 * (9.6 / 0.92) ** 1.56
     assert 132 < seconds < 170
     assert resources.runtime_minutes(seconds, attempt=2) == 2 * (5 + math.ceil(3 * seconds / 60))
-    assert resources.influence_mem_mb(geometry, {}) == \
-        int(influence_cost(geometry).peak_bytes / 1e6) + 200
+    assert resources.influence_mem_mb(geometry, BODY) == \
+        int(influence_cost(geometry, "auto", 16.0).peak_bytes / 1e6) + 200
 
 
 def test_surfaces_runtime_and_memory():

@@ -23,6 +23,7 @@ from roughcontact.study.cells import (
     contact_jobs,
     measured_cell_params,
 )
+from roughcontact.study.config import validated
 from roughcontact.study.jobs import build_surface_cell
 from roughcontact.study.storage import read_surfaces
 from roughcontact.surfaces import johnson, measured
@@ -310,14 +311,15 @@ def measured_config(path, **study):
     entry = config["sweeps"]["plateau_honed"]
     entry["surface"]["file"] = str(path)
     entry.update(study)
-    return config
+    return validated(config)  # the schema's defaults, as the workflow applies them
 
 
 def test_measured_key_follows_content_and_options_not_the_name(tmp_path):
     copy = tmp_path / "elsewhere" / "example_plateau_honed.xyz"
     copy.parent.mkdir()
     copy.write_bytes(EXAMPLE.read_bytes())
-    entry = {"file": str(EXAMPLE), "format": "xyz", "height_unit": "um", "fill_holes": 0.01}
+    entry = {"file": str(EXAMPLE), "format": "xyz", "height_unit": "um", "fill_holes": 0.01,
+             "lateral_unit": "mm"}
     key = cell_key(measured_cell_params(entry))
     assert key.startswith("measured-example-plateau-honed_") and key.endswith("_n1")
     assert cell_key(measured_cell_params({**entry, "file": str(copy)})) == key

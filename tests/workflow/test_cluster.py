@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-import yaml
 
 from roughcontact.study.cells import cell_key, contact_cells, contact_key
+from roughcontact.study.config import load_config
 
 REPO = Path(__file__).resolve().parents[2]
 PROFILES = REPO / "profiles"
@@ -113,7 +113,7 @@ def fig14_runs(tmp_path_factory):
 @pytest.mark.workflow
 def test_every_job_went_through_the_submit_script(fig14_runs):
     workdir, _, log, seconds = fig14_runs
-    config = yaml.safe_load(QUICK.read_text())
+    config = load_config(QUICK)
     cells = contact_cells(config, "fig14")
     logdir = workdir / "results" / "logs" / "cluster"
     table = pd.read_csv(logdir / "submissions.tsv", sep="\t")

@@ -27,6 +27,7 @@ from roughcontact.study.cells import (
     spec_from_params,
     statistics_key,
 )
+from roughcontact.study.config import load_config
 from roughcontact.study.storage import read_contact, read_influence
 from roughcontact.surfaces import johnson
 from roughcontact.surfaces import synthetic as surface
@@ -60,7 +61,7 @@ def quick_run(tmp_path_factory):
 
 
 def quick_config():
-    return yaml.safe_load((REPO / "config" / "quick.yaml").read_text())
+    return load_config(REPO / "config" / "quick.yaml")
 
 
 def test_surface_files_hold_seeded_surfaces_with_their_moments(quick_run):
