@@ -12,7 +12,9 @@ at use (Eq 28-32 of Kumar et al. 2006). The jobs that build them are in
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
+import json
 import logging
 import math
 import re
@@ -155,32 +157,56 @@ def _round12(value: float) -> float:
 
 
 def measured_options(entry: dict) -> dict:
-    """Canonical import options of a study's ``surface:`` entry (lengths in mm).
-
-    Keys: ``file``, ``format`` (npy, text, xyz), ``height_unit`` (nm, um, mm,
-    m), ``lateral_unit`` (um, mm, m; the x, y columns of xyz files),
-    ``spacing_mm`` ([dx, dy] of npy and text grids, else None) and
-    ``fill_holes`` (largest fraction of missing points filled).
-    """
-    spacing = entry.get("spacing_mm")
+    """Canonical import and preparation options of a study's validated ``surface:``
+    entry (lengths in mm; the schema's keys, None where not given)."""
+    spacing, crop = entry.get("spacing_mm"), entry.get("crop_mm")
+    grid = entry.get("resample_grid")
     return {
         "file": str(entry["file"]),
         "format": str(entry["format"]),
-        "height_unit": str(entry["height_unit"]),
+        "height_unit": entry.get("height_unit"),
         "lateral_unit": str(entry["lateral_unit"]),
         "spacing_mm": None if spacing is None else [float(v) for v in _pair(spacing)],
         "fill_holes": float(entry["fill_holes"]),
+        "channel": entry.get("channel"),
+        "decimal": str(entry["decimal"]),
+        "crop_mm": None if crop is None else [float(v) for v in crop],
+        "form_degree": int(entry["form_degree"]),
+        "outliers_sigma": (None if entry.get("outliers_sigma") is None
+                           else float(entry["outliers_sigma"])),
+        "decimate": None if entry.get("decimate") is None else int(entry["decimate"]),
+        "resample_grid": None if grid is None else [int(v) for v in _pair(grid)],
     }
 
 
 def load_measured(options: dict) -> measured.Measurement:
-    """Import the measurement that :func:`measured_options` describe (mm to m)."""
-    spacing = options["spacing_mm"]
+    """Import and prepare the measurement that :func:`measured_options` describe (mm to m).
+
+    Kept per file content and options for the life of the process: the workflow
+    plans from it several times.
+    """
+    path = Path(options["file"])
+    try:
+        stat = path.stat()
+        stamp = (stat.st_mtime_ns, stat.st_size)
+    except OSError:
+        stamp = None  # load_measurement says the file is missing
+    return _load_measured(canonical_json(options), stamp)
+
+
+@functools.lru_cache(maxsize=16)
+def _load_measured(options_json: str, stamp) -> measured.Measurement:
+    options = json.loads(options_json)
+    spacing, crop = options["spacing_mm"], options["crop_mm"]
     return measured.load_measurement(
         options["file"], options["format"], height_unit=options["height_unit"],
         lateral_unit=options["lateral_unit"],
         spacing=None if spacing is None else tuple(v * MM for v in spacing),
-        fill_holes=options["fill_holes"],
+        fill_holes=options["fill_holes"], channel=options["channel"],
+        decimal=options["decimal"],
+        crop=None if crop is None else tuple(v * MM for v in crop),
+        form_degree=options["form_degree"], outliers_sigma=options["outliers_sigma"],
+        decimate_by=options["decimate"], resample_grid=options["resample_grid"],
     )
 
 

@@ -178,7 +178,7 @@ def build_measured_cell(params: dict, study_seed: int, path, config=None) -> dic
             f"{measurement.sha256[:12]}, planned {info['file_sha256'][:12]}); run again",
             info["file"],
         )
-    stats = measured.statistics(measurement)
+    stats = measured.statistics(measurement, spectral=True)
     sigma = stats["sigma"]
     heights = (measurement.heights / sigma)[None]
     realised = height_stats(heights)
@@ -197,6 +197,11 @@ def build_measured_cell(params: dict, study_seed: int, path, config=None) -> dic
         "stats/filled_points": (np.array([stats["filled_points"]]),
                                 one | {"description": "missing points filled by Laplace "
                                                       "interpolation"}),
+        "stats/psd_q": (np.array(stats["psd_q"]),
+                        {"units": "1/m", "description": "wavevectors of the isotropic PSD "
+                                                        "(SurfaceTopography, from the area)"}),
+        "stats/psd_C": (np.array(stats["psd_C"]),
+                        {"units": "m^4", "description": "isotropic power spectral density"}),
     }
     spec = {"grid": stats["grid"], "size": stats["size"],
             "corr_length": [stats["corr_length_x"], stats["corr_length_y"]],
@@ -208,13 +213,16 @@ def build_measured_cell(params: dict, study_seed: int, path, config=None) -> dic
         "source_file": str(info["file"]),
         "source_sha256": measurement.sha256,
         "import_options": canonical_json(options),
-        **{f"import_{k}": v for k, v in options.items() if k != "file"},
+        **{f"import_{k}": v for k, v in options.items() if k != "file" and v is not None},
+        "preparation": canonical_json(measurement.preparation),
         "measured_sigma_m": sigma,
         "measured_skew": stats["skew"],
         "measured_kurt": stats["kurt"],
         "measured_corr_length_x_m": stats["corr_length_x"],
         "measured_corr_length_y_m": stats["corr_length_y"],
         "measured_spacing_m": stats["spacing"],
+        "measured_rms_slope": stats["rms_slope"],
+        "measured_rms_curvature_per_m": stats["rms_curvature"],
         "filled_points": stats["filled_points"],
         "filled_fraction": stats["filled_fraction"],
         "plane_offset_m": stats["plane_offset"],
@@ -230,9 +238,10 @@ def build_measured_cell(params: dict, study_seed: int, path, config=None) -> dic
     }
     log.info(
         "measured cell %s from %s: %d x %d, sigma %.4g um, Sk %.4f, Ku %.4f, b %.4g x %.4g mm, "
-        "%d points filled (%.3g %%), Johnson %s; %.2f s",
-        attrs["cell"], info["file"], *stats["grid"], sigma / UM, stats["skew"], stats["kurt"],
-        stats["corr_length_x"] / MM, stats["corr_length_y"] / MM, stats["filled_points"],
+        "rms slope %.4g, rms curvature %.4g 1/mm, %d points filled (%.3g %%), Johnson %s; "
+        "%.2f s", attrs["cell"], info["file"], *stats["grid"], sigma / UM, stats["skew"],
+        stats["kurt"], stats["corr_length_x"] / MM, stats["corr_length_y"] / MM,
+        stats["rms_slope"], stats["rms_curvature"] * MM, stats["filled_points"],
         100 * stats["filled_fraction"], stats["johnson_family"], time.perf_counter() - start,
     )
     write_surfaces(path, datasets, attrs)

@@ -1,26 +1,42 @@
-"""Measured height maps: import, unit conversion, hole filling, detrending, statistics.
+"""Measured height maps: import, unit conversion, preparation, statistics.
 
-A measured surface (from a profilometer or an optical instrument) enters the
-study in place of a generated one. It is read from one of three formats:
+A measured surface (from a profilometer, an optical instrument or an AFM)
+enters the study in place of a generated one. Formats (``format``):
 
+- ``auto`` (the default): chosen by the file. ``.npy``, ``.xyz`` and ``.csv``
+  files are read as below; every other file by SurfaceTopography
+  (ContactEngineering), which recognises the instrument's own format by its
+  content (x3p, sur, opd, plu, datx, MetroPro, al3d, frt, di, Gwyddion and
+  other text exports, ...; :data:`INSTRUMENT_FORMATS`) and gives the height
+  unit, the pixel size and the instrument's mask of undefined points from
+  the file's metadata.
+- ``instrument``: through SurfaceTopography, whatever the file's name.
 - ``npy``: a NumPy ``.npy`` file holding one 2-D array of heights, axis 0 = y,
   axis 1 = x; the spacing comes from the configuration.
 - ``text``: a grid of heights as text, one row of the file per y, one column
-  per x, separated by commas, semicolons or white space; the spacing comes
-  from the configuration. Lines starting with ``#`` (and anything after a
-  ``#``) are comments.
+  per x. The separator is the first line's: ``;``, else a tab, else ``,``,
+  else white space. Decimal commas (``1,234;2,345``, as instruments set to a
+  German or French locale write them) are read with ``;`` or tab separators
+  (``decimal: auto`` or ``","``), or with white space when ``decimal: ","``
+  says so; a line that could be read two ways is refused. Lines starting
+  with ``#`` (and anything after a ``#``) are comments.
 - ``xyz``: a list of points ``x y z`` (same separators and comments), one per
   line, in any order, on a regular grid. The spacing is inferred from the
   coordinates and the grid is checked: every coordinate must lie on
   ``x0 + k dx`` within ``SPACING_RTOL`` of the spacing.
 
+The height unit and the spacing are needed only where the file does not
+carry them, and refused where they contradict it.
 Missing points are written ``nan`` in grids; in point lists a grid point may
 also be absent. Heights and lateral lengths are converted from the units the
 configuration declares to SI (metres) at import; everything after that is SI.
 
-The height map is then prepared for the contact study in this order:
+The height map is then prepared for the contact study in this order (each
+step recorded in :attr:`Measurement.preparation`):
 
-1. Holes (missing points) are refused, or, if their fraction is at most
+0. ``crop``: a window ``(x0, y0, Lx, Ly)`` [m] from the first point.
+1. Holes (missing points, or points the instrument masked as undefined) are
+   refused, or, if their fraction is at most
    ``fill_holes``, filled by a discrete Laplace (harmonic) interpolation of
    the heights less the least-squares plane of the known points: every
    missing point equals the mean of its 4 neighbours (fewer at the edges,
@@ -30,13 +46,23 @@ The height map is then prepared for the contact study in this order:
    does not invent roughness, so a filled hole is smoother than the
    measured surface around it. Known points are not changed.
 2. The least-squares plane ``a + b x + c y`` is removed (form and tilt of the
-   mounting), which also leaves heights of zero mean.
+   mounting), which also leaves heights of zero mean; with ``form_degree``
+   k >= 2, then the least-squares polynomial of total degree k in x and y
+   (k = 2 takes out a sphere's or a cylinder's form to second order).
+3. ``outliers_sigma``: points farther than k sigma from the mean plane are
+   counted, filled as holes and the form removed again.
+4. ``decimate`` (an integer: means of k x k blocks) or ``resample_grid``
+   ([nx, ny]: linear interpolation over the same plan size) gives the
+   contact grid, and the mean is removed.
 
 Its statistics are those of the generator's targets: sigma, skewness and
 kurtosis (Eq 2-5 of Kumar et al. 2006, :func:`roughcontact.surfaces.synthetic.height_stats`),
 the 10 % decay lags of the autocorrelation function (Eq 1,
-:func:`roughcontact.surfaces.synthetic.correlation_length`, non-periodic estimate) and the
-Johnson law with the same moments (:func:`roughcontact.surfaces.johnson.fit`).
+:func:`roughcontact.surfaces.synthetic.correlation_length`, non-periodic estimate; NaN,
+with a warning, where it does not fall to 10 % within half the window) and the
+Johnson law with the same moments (:func:`roughcontact.surfaces.johnson.fit`);
+with ``spectral=True`` also the rms slope, the rms curvature and the isotropic
+power spectral density, computed by SurfaceTopography.
 Arrays are ``(ny, nx)``, row-major over y then x, as everywhere in the package.
 """
 
@@ -51,6 +77,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy import sparse
+from scipy.interpolate import RegularGridInterpolator
 from scipy.sparse import linalg as sparse_linalg
 
 from roughcontact.errors import MeasurementError
@@ -60,9 +87,19 @@ from roughcontact.surfaces.synthetic import correlation_length, height_stats
 
 log = logging.getLogger(__name__)
 
-FORMATS = ("npy", "text", "xyz")
+FORMATS = ("auto", "instrument", "npy", "text", "xyz")
+#: Formats ``auto`` reads with our own readers, by the file's suffix; every
+#: other file goes to SurfaceTopography.
+OWN_SUFFIXES = {".npy": "npy", ".xyz": "xyz", ".csv": "text"}
 #: Height units a configuration may declare, in metres.
 HEIGHT_UNITS = {"nm": 1e-9, "um": 1e-6, "mm": 1e-3, "m": 1.0}
+#: Units SurfaceTopography reports for a file's heights and lengths, in metres.
+INSTRUMENT_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "\u00b5m": 1e-6, "\u03bcm": 1e-6,
+                    "nm": 1e-9, "pm": 1e-12, "\u00c5": 1e-10, "A": 1e-10}
+#: Decimal separators of text grids.
+DECIMALS = ("auto", ".", ",")
+#: A length the configuration gives for a file that carries its own must agree to this.
+CONTRADICTION_RTOL = 1e-6
 #: Lateral (x, y) units a configuration may declare, in metres.
 LATERAL_UNITS = {"um": 1e-6, "mm": 1e-3, "m": 1.0}
 #: A point-list coordinate may deviate from its grid line by this fraction of the spacing.
@@ -73,6 +110,7 @@ MIN_POINTS = 4
 MAX_POINTS = 4096
 
 _SEPARATORS = re.compile(r"[,;]")
+_NUMBER = re.compile(r"^[+-]?(\d+([.,]\d*)?|[.,]\d+)([eE][+-]?\d+)?$|^[+-]?(nan|NaN|NAN)$")
 
 
 # --------------------------------------------------------------------------- reading
@@ -91,6 +129,39 @@ def _fields(text: str) -> list[str]:
     if _SEPARATORS.search(text):
         return [token.strip() for token in _SEPARATORS.split(text)]
     return text.split()
+
+
+def _dialect(text: str, decimal: str, path, number: int) -> tuple[str | None, str]:
+    """Separator (None: white space) and decimal mark of a text grid, from its first
+    data line ``text`` and the ``decimal`` option (``auto``, ``.`` or ``,``)."""
+    if decimal not in DECIMALS:
+        raise ValueError(f"decimal must be one of {DECIMALS}; got {decimal!r}")
+    separator = ";" if ";" in text else "\t" if "\t" in text else None
+    if separator is None and "," in text:
+        if decimal == ",":
+            if re.search(r"\d\s+[+-]?\d", text):
+                return None, ","  # white space between values, commas inside them
+            raise MeasurementError(
+                f"{path}, line {number}: decimal: ',' but the values are separated by "
+                "commas too; separate them by ';', tabs or white space", path, number,
+            )
+        if re.search(r"\d\s+[+-]?\d", text):
+            raise MeasurementError(
+                f"{path}, line {number}: commas and white space both separate numbers "
+                f"({text[:40]!r}...), so the line can be read two ways (decimal commas, or "
+                "comma-separated values). Set the surface's decimal option: decimal: ',' "
+                "(white space separates values) or decimal: '.' (commas separate values).",
+                path, number,
+            )
+        return ",", "."
+    if decimal == "auto":
+        decimal = "," if separator is not None and "," in text else "."
+    return separator, decimal
+
+
+def _split(text: str, separator: str | None, decimal: str) -> list[str]:
+    tokens = text.split() if separator is None else [t.strip() for t in text.split(separator)]
+    return [t.replace(",", ".") for t in tokens] if decimal == "," else tokens
 
 
 def _numbers(tokens: list[str], path, number: int) -> list[float]:
@@ -145,17 +216,28 @@ def read_npy(path: str | os.PathLike) -> np.ndarray:
     return data
 
 
-def read_text_grid(path: str | os.PathLike) -> np.ndarray:
+def read_text_grid(path: str | os.PathLike, decimal: str = "auto") -> np.ndarray:
     """Heights ``(ny, nx)`` in the file's unit from a text grid (a row per y).
 
-    Fields are separated by commas or semicolons where a line has them, else
-    by white space. Every data row must have as many values as the first.
+    The separator and the decimal mark are the first data line's (module
+    documentation); every data row must have as many values as the first.
+    A first line that is not numbers is a header: refused with a message
+    saying so (comment it with ``#``, or read the file with ``format: auto``
+    when an instrument wrote it).
     """
-    rows, width, first = [], None, None
+    rows, width, first, dialect = [], None, None, None
     for number, text in _data_lines(path):
-        tokens = _fields(text)
+        if dialect is None:
+            dialect = _dialect(text, decimal, path, number)
+        tokens = _split(text, *dialect)
         if width is None:
             width, first = len(tokens), number
+            if not all(_NUMBER.match(t) for t in tokens):
+                raise MeasurementError(
+                    f"{path}, line {number}: the first data line is not numbers "
+                    f"({text[:60]!r}): a header? Start header lines with #, or, for an "
+                    "instrument's text export, use format: auto.", path, number,
+                )
         elif len(tokens) != width:
             raise MeasurementError(
                 f"{path}, line {number}: {len(tokens)} values, but the first data row "
@@ -258,6 +340,87 @@ def read_xyz(path: str | os.PathLike, lateral_unit: str = "mm"):
     heights[flat] = points[:, 2]
     absent = ny * nx - len(points)
     return heights.reshape(ny, nx), (dx, dy), absent
+
+
+@dataclass(frozen=True)
+class InstrumentData:
+    """A height map as SurfaceTopography reads it from an instrument's file.
+
+    ``heights`` ``(ny, nx)`` in ``unit`` (NaN where the instrument marked a
+    point undefined), ``spacing`` ``(dx, dy)`` in ``unit``; ``unit`` and
+    ``spacing`` are None where the file does not carry them. ``reader`` names
+    the format, ``channel`` the data channel read (of ``channels``).
+    """
+
+    heights: np.ndarray
+    spacing: tuple[float, float] | None
+    unit: str | None
+    masked: int
+    reader: str
+    channel: str
+    channels: tuple[str, ...]
+
+
+def read_instrument(path: str | os.PathLike, channel: int | str | None = None) -> InstrumentData:
+    """Read an instrument's file through SurfaceTopography (format by content).
+
+    ``channel``: index or name of the data channel (default: the file's
+    default channel, the height channel of most instruments). Line scans
+    (1-D profiles) are refused: the contact study needs a height map.
+    """
+    # SurfaceTopography takes 1-3 s to import: only runs that read instrument files pay it
+    from SurfaceTopography import open_topography
+    from SurfaceTopography.Exceptions import CannotDetectFileFormat
+
+    try:
+        reader = open_topography(str(path))
+    except CannotDetectFileFormat:
+        raise MeasurementError(
+            f"{path}: not a format SurfaceTopography recognises (it reads x3p, sur, opd, "
+            "plu, datx, MetroPro dat, al3d, frt, di, Gwyddion, ... by content). For a text "
+            "grid use format: text, for a point list format: xyz, for a NumPy array "
+            "format: npy.", path,
+        ) from None
+    except Exception as err:  # a reader that recognised the file but failed to parse it
+        raise MeasurementError(f"{path}: SurfaceTopography could not read it ({err})",
+                               path) from err
+    names = tuple(str(c.name) for c in reader.channels)
+    if channel is None:
+        index = reader.default_channel.index
+    elif isinstance(channel, str):
+        if channel not in names:
+            raise MeasurementError(f"{path}: no channel {channel!r}; the file has {list(names)}",
+                                   path)
+        index = names.index(channel)
+    else:
+        index = int(channel)
+        if not 0 <= index < len(names):
+            raise MeasurementError(f"{path}: channel {index} does not exist; the file has "
+                                   f"{len(names)}: {list(names)}", path)
+    info = reader.channels[index]
+    if info.dim != 2:
+        raise MeasurementError(
+            f"{path}: channel {names[index]!r} is a line scan (a 1-D profile of "
+            f"{info.nb_grid_pts[0]} points), not a height map; the contact study needs a "
+            "2-D measurement of an area", path,
+        )
+    unit = info.unit
+    sizes = info.physical_sizes
+    try:
+        topography = reader.topography(channel_index=index,
+                                       **({} if unit is not None else {"unit": "m"}),
+                                       **({} if sizes is not None else
+                                          {"physical_sizes": tuple(info.nb_grid_pts)}))
+    except Exception as err:
+        raise MeasurementError(f"{path}: SurfaceTopography could not read channel "
+                               f"{names[index]!r} ({err})", path) from err
+    raw = topography.heights()
+    mask = np.ma.getmaskarray(raw)
+    heights = np.where(mask, np.nan, np.ma.getdata(raw)).astype(float).T.copy()
+    nx, ny = topography.nb_grid_pts
+    spacing = None if sizes is None else (float(sizes[0]) / nx, float(sizes[1]) / ny)
+    return InstrumentData(heights, spacing, None if unit is None else str(unit),
+                          int(mask.sum()), type(reader).__name__, names[index], names)
 
 
 # --------------------------------------------------------------------------- preparing
@@ -379,6 +542,70 @@ def remove_plane(heights: np.ndarray, spacing) -> tuple[np.ndarray, tuple[float,
     return residual, (float(a - b * x.mean() - c * y.mean()), float(b), float(c))
 
 
+def remove_polynomial(heights: np.ndarray, spacing, degree: int) -> tuple[np.ndarray, list]:
+    """Subtract the least-squares polynomial of total degree ``degree`` in x and y.
+
+    Coordinates are centred and scaled to [-1, 1] for conditioning; returns the
+    residual (zero mean) and the coefficients of the monomials
+    ``xs^i ys^j`` (i + j <= degree, in the order i, then j) in the heights' unit.
+    """
+    z = np.asarray(heights, dtype=float)
+    ny, nx = z.shape
+    xs = np.linspace(-1.0, 1.0, nx) if nx > 1 else np.zeros(1)
+    ys = np.linspace(-1.0, 1.0, ny) if ny > 1 else np.zeros(1)
+    y, x = np.meshgrid(ys, xs, indexing="ij")
+    powers = [(i, j) for i in range(degree + 1) for j in range(degree + 1 - i)]
+    design = np.column_stack([(x**i * y**j).ravel() for i, j in powers])
+    coefficients, *_ = np.linalg.lstsq(design, z.ravel(), rcond=None)
+    residual = z - (design @ coefficients).reshape(z.shape)
+    residual -= residual.mean()
+    return residual, [float(c) for c in coefficients]
+
+
+def crop_window(heights: np.ndarray, spacing, window, source="heights"):
+    """The points of ``window = (x0, y0, Lx, Ly)`` [m] (from the first point, lengths
+    rounded to whole points) and ``(ix0, iy0, nx, ny)``; refused outside the grid."""
+    ny, nx = heights.shape
+    x0, y0, lx, ly = (float(v) for v in window)
+    ix0, iy0 = round(x0 / spacing[0]), round(y0 / spacing[1])
+    cx, cy = round(lx / spacing[0]), round(ly / spacing[1])
+    if min(x0, y0) < 0 or cx < MIN_POINTS or cy < MIN_POINTS or ix0 + cx > nx or iy0 + cy > ny:
+        raise MeasurementError(
+            f"{source}: crop window x {x0:g}..{x0 + lx:g} m, y {y0:g}..{y0 + ly:g} m "
+            f"({cx} x {cy} points from ({ix0}, {iy0})) does not lie within the "
+            f"measurement ({nx * spacing[0]:g} x {ny * spacing[1]:g} m, {nx} x {ny} points) "
+            f"or has fewer than {MIN_POINTS} points along a side", source,
+        )
+    return heights[iy0:iy0 + cy, ix0:ix0 + cx], (ix0, iy0, cx, cy)
+
+
+def decimate(heights: np.ndarray, factor: int) -> np.ndarray:
+    """Means of ``factor`` x ``factor`` blocks (a trailing partial block is dropped)."""
+    ny, nx = heights.shape
+    my, mx = ny // factor, nx // factor
+    blocks = heights[:my * factor, :mx * factor].reshape(my, factor, mx, factor)
+    return blocks.mean(axis=(1, 3))
+
+
+def resample(heights: np.ndarray, spacing, grid) -> tuple[np.ndarray, tuple[float, float]]:
+    """Linear interpolation onto ``grid = (nx, ny)`` points over the same plan size.
+
+    Points are cell centres of both grids (point k at ``(k + 1/2) L / n``);
+    returns the heights and the new spacing [m].
+    """
+    ny, nx = heights.shape
+    gx, gy = (int(v) for v in grid)
+    lx, ly = nx * spacing[0], ny * spacing[1]
+    old_x = (np.arange(nx) + 0.5) * spacing[0]
+    old_y = (np.arange(ny) + 0.5) * spacing[1]
+    new_x = np.clip((np.arange(gx) + 0.5) * lx / gx, old_x[0], old_x[-1])
+    new_y = np.clip((np.arange(gy) + 0.5) * ly / gy, old_y[0], old_y[-1])
+    interpolate = RegularGridInterpolator((old_y, old_x), heights)
+    yy, xx = np.meshgrid(new_y, new_x, indexing="ij")
+    values = interpolate(np.column_stack([yy.ravel(), xx.ravel()])).reshape(gy, gx)
+    return values, (lx / gx, ly / gy)
+
+
 # --------------------------------------------------------------------------- the measurement
 
 
@@ -389,7 +616,7 @@ class Measurement:
     Attributes
     ----------
     heights : ndarray (ny, nx)
-        Heights [m]: holes filled, least-squares plane removed (zero mean).
+        Heights [m]: holes filled, form removed, resampled (zero mean).
     spacing : (dx, dy)
         Grid spacing [m].
     source : str
@@ -397,11 +624,16 @@ class Measurement:
     sha256 : str
         SHA-256 of the file's bytes.
     options : dict
-        The import options (format, units, spacing, fill_holes) as given.
+        The import and preparation options as given.
     filled : int
         Number of missing points filled by interpolation.
     plane : (a, b, c)
         The removed plane ``a + b x + c y``: offset [m], slopes [1].
+    preparation : dict
+        What was done, for the provenance: the reader and channel, the units
+        and pixel size from the file, the crop window in points, the masked,
+        filled and outlier points, the form's polynomial coefficients, the
+        resampling.
     """
 
     heights: np.ndarray
@@ -411,6 +643,7 @@ class Measurement:
     options: dict = field(default_factory=dict)
     filled: int = 0
     plane: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    preparation: dict = field(default_factory=dict)
 
     @property
     def grid(self) -> tuple[int, int]:
@@ -434,93 +667,220 @@ def _unit(value: str, table: dict, what: str) -> float:
     return table[value]
 
 
-def load_measurement(path: str | os.PathLike, format: str, *, height_unit: str,
-                     lateral_unit: str = "mm", spacing=None,
-                     fill_holes: float = 0.0) -> Measurement:
-    """Import a measured height map and prepare it (holes, plane) in SI units.
+def _pair_m(value, what: str) -> tuple[float, float]:
+    pair = tuple(float(v) for v in np.broadcast_to(np.asarray(value, float), (2,)))
+    if not all(math.isfinite(v) and v > 0 for v in pair):
+        raise ValueError(f"{what} must be positive and finite [m]; got {value!r}")
+    return pair
+
+
+def resolve_format(path, format: str) -> str:
+    """The reader of ``path``: ``format``, or for ``auto`` the one its suffix names
+    (:data:`OWN_SUFFIXES`), else ``instrument``."""
+    if format not in FORMATS:
+        raise ValueError(f"format must be one of {FORMATS}; got {format!r}")
+    if format != "auto":
+        return format
+    return OWN_SUFFIXES.get(Path(path).suffix.lower(), "instrument")
+
+
+def _read(path: Path, kind: str, *, height_unit, lateral_unit, spacing, channel, decimal):
+    """Raw heights [m] (NaN: missing), spacing [m], absent points, and what the file said."""
+    said = {"reader": kind}
+    absent = 0
+    if kind == "instrument":
+        data = read_instrument(path, channel)
+        said.update(reader=data.reader, channel=data.channel, file_unit=data.unit,
+                    masked_points=data.masked)
+        if data.unit is not None:
+            file_scale = _unit(data.unit, INSTRUMENT_UNITS, f"{path}: the file's unit")
+            if height_unit is not None and \
+                    not math.isclose(HEIGHT_UNITS[height_unit], file_scale, rel_tol=1e-12):
+                raise ValueError(
+                    f"{path}: height_unit {height_unit!r} contradicts the file, whose heights "
+                    f"are in {data.unit}; drop height_unit (the file's unit is used)")
+            scale = file_scale
+        elif height_unit is None:
+            raise ValueError(f"{path}: the file does not say the unit of its heights; set "
+                             "height_unit (nm, um, mm or m)")
+        else:
+            scale = HEIGHT_UNITS[height_unit]
+        if data.spacing is not None:
+            file_spacing = (data.spacing[0] * scale, data.spacing[1] * scale)
+            if spacing is not None and not all(
+                    math.isclose(a, b, rel_tol=CONTRADICTION_RTOL)
+                    for a, b in zip(spacing, file_spacing, strict=True)):
+                raise ValueError(
+                    f"{path}: spacing {spacing[0]:g} x {spacing[1]:g} m contradicts the file's "
+                    f"pixel size {file_spacing[0]:g} x {file_spacing[1]:g} m; drop spacing_mm")
+            spacing = file_spacing
+        elif spacing is None:
+            raise ValueError(f"{path}: the file does not say its pixel size; set spacing_mm "
+                             "([dx, dy])")
+        said["file_spacing_m"] = list(spacing)
+        return data.heights * scale, spacing, absent, said
+    if height_unit is None:
+        raise ValueError(f"{path}: a {kind} file does not carry its height unit; set "
+                         "height_unit (nm, um, mm or m)")
+    scale = HEIGHT_UNITS[height_unit]
+    if kind == "xyz":
+        if spacing is not None:
+            raise ValueError(f"{path}: an xyz point list gives its own spacing; drop the spacing")
+        lateral = _unit(lateral_unit, LATERAL_UNITS, "lateral_unit")
+        raw, (dx, dy), absent = read_xyz(path, lateral_unit)
+        return raw * scale, (dx * lateral, dy * lateral), absent, said
+    if spacing is None:
+        raise ValueError(f"{path}: a {kind} grid needs its spacing (dx, dy)")
+    raw = read_npy(path) if kind == "npy" else read_text_grid(path, decimal)
+    return raw * scale, spacing, absent, said
+
+
+def load_measurement(path: str | os.PathLike, format: str = "auto", *,
+                     height_unit: str | None = None, lateral_unit: str = "mm", spacing=None,
+                     fill_holes: float = 0.0, channel: int | str | None = None,
+                     decimal: str = "auto", crop=None, form_degree: int = 1,
+                     outliers_sigma: float | None = None, decimate_by: int | None = None,
+                     resample_grid=None) -> Measurement:
+    """Import a measured height map and prepare it for the study, in SI units.
 
     Parameters
     ----------
     path : path-like
         The file.
-    format : {"npy", "text", "xyz"}
-        See the module documentation.
-    height_unit : {"nm", "um", "mm", "m"}
-        Unit of the heights in the file.
+    format : {"auto", "instrument", "npy", "text", "xyz"}
+        See the module documentation; ``auto`` chooses by the file.
+    height_unit : {"nm", "um", "mm", "m"}, optional
+        Unit of the heights, where the file does not say (npy, text, xyz and
+        instrument files without units); refused where it contradicts the file.
     lateral_unit : {"um", "mm", "m"}
         Unit of the x, y coordinates of an ``xyz`` file.
     spacing : (dx, dy) [m], optional
-        Grid spacing of ``npy`` and ``text`` grids (required there); not
-        allowed for ``xyz`` files, whose spacing is inferred.
+        Grid spacing, where the file does not say (npy and text grids);
+        refused for ``xyz`` files and where it contradicts an instrument file.
     fill_holes : float
-        Largest fraction of missing points to fill (:func:`fill_missing`).
+        Largest fraction of missing or masked points to fill (:func:`fill_missing`).
+    channel : int or str, optional
+        Data channel of an instrument file (default: the file's default).
+    decimal : {"auto", ".", ","}
+        Decimal mark of a text grid.
+    crop : (x0, y0, Lx, Ly) [m], optional
+        Window from the first point (:func:`crop_window`), before anything else.
+    form_degree : int
+        1: the least-squares plane is removed; k >= 2: then the polynomial of
+        total degree k (:func:`remove_polynomial`).
+    outliers_sigma : float, optional
+        Points farther than this many sigma from the mean plane are filled as
+        holes (counted in ``preparation``), and the form removed again.
+    decimate_by : int, optional
+        Means of k x k blocks (:func:`decimate`).
+    resample_grid : (nx, ny), optional
+        Linear interpolation onto this grid over the same plan size (:func:`resample`).
 
     Raises
     ------
     MeasurementError
         For a file that cannot be used, naming the file and the line, the
-        missing fraction or the non-uniform axis.
+        missing fraction, the non-uniform axis or the format.
     ValueError
-        For inconsistent options (unknown unit or format, spacing missing or
-        given where it is inferred).
+        For inconsistent options (unknown unit or format, a unit or spacing
+        missing, or contradicting the file).
     """
     path = Path(path)
-    if format not in FORMATS:
-        raise ValueError(f"format must be one of {FORMATS}; got {format!r}")
-    scale = _unit(height_unit, HEIGHT_UNITS, "height_unit")
-    lateral = _unit(lateral_unit, LATERAL_UNITS, "lateral_unit")
+    kind = resolve_format(path, format)
+    if height_unit is not None:
+        _unit(height_unit, HEIGHT_UNITS, "height_unit")
     if not 0.0 <= float(fill_holes) < 1.0:
         raise ValueError(f"fill_holes must be a fraction in [0, 1); got {fill_holes!r}")
+    if int(form_degree) != form_degree or not 1 <= form_degree <= 6:
+        raise ValueError(f"form_degree must be an integer from 1 (plane) to 6; got "
+                         f"{form_degree!r}")
+    if decimate_by is not None and resample_grid is not None:
+        raise ValueError("give decimate or resample_grid, not both")
     if not path.is_file():
         raise MeasurementError(f"{path}: no such file", path)
-    absent = 0
-    if format == "xyz":
-        if spacing is not None:
-            raise ValueError(f"{path}: an xyz point list gives its own spacing; drop the spacing")
-        raw, (dx, dy), absent = read_xyz(path, lateral_unit)
-        spacing = (dx * lateral, dy * lateral)
-    else:
-        if spacing is None:
-            raise ValueError(f"{path}: a {format} grid needs its spacing (dx, dy)")
-        raw = read_npy(path) if format == "npy" else read_text_grid(path)
-        spacing = tuple(float(v) for v in np.broadcast_to(np.asarray(spacing, float), (2,)))
-        if not all(math.isfinite(v) and v > 0 for v in spacing):
-            raise ValueError(f"spacing must be positive and finite [m]; got {spacing!r}")
+    spacing = given = None if spacing is None else _pair_m(spacing, "spacing")
+    raw, spacing, absent, said = _read(path, kind, height_unit=height_unit,
+                                       lateral_unit=lateral_unit, spacing=spacing,
+                                       channel=channel, decimal=decimal)
     ny, nx = raw.shape
     if min(nx, ny) < MIN_POINTS:
         raise MeasurementError(
             f"{path}: a {nx} x {ny} grid (nx x ny); a surface needs at least {MIN_POINTS} "
             "points along each axis", path,
         )
+    preparation = {**said, "file_grid": [nx, ny]}
+    if crop is not None:
+        raw, window = crop_window(raw, spacing, crop, str(path))
+        preparation["crop_points"] = list(window)
     filled_raw, filled = fill_missing(raw, float(fill_holes), source=str(path), absent=absent)
-    heights, plane = remove_plane(filled_raw * scale, spacing)
-    if not np.ptp(heights) > 1e-12 * max(np.ptp(filled_raw * scale), np.finfo(float).tiny):
+    heights, plane = remove_plane(filled_raw, spacing)
+    if not np.ptp(heights) > 1e-12 * max(np.ptp(filled_raw), np.finfo(float).tiny):
         raise MeasurementError(f"{path}: the heights are a plane (no roughness left)", path)
+    if form_degree > 1:
+        heights, coefficients = remove_polynomial(heights, spacing, int(form_degree))
+        preparation["form_coefficients"] = coefficients
+    if outliers_sigma is not None:
+        far = np.abs(heights) > float(outliers_sigma) * heights.std()
+        preparation["outliers"] = int(far.sum())
+        if far.any():
+            log.info("%s: %d points beyond %g sigma filled as holes", path, int(far.sum()),
+                     outliers_sigma)
+            heights, _ = fill_missing(np.where(far, np.nan, heights), 1.0 - 1e-12,
+                                      source=f"{path} (outliers)")
+            heights, _ = remove_plane(heights, spacing)
+            if form_degree > 1:
+                heights, _ = remove_polynomial(heights, spacing, int(form_degree))
+    if decimate_by is not None:
+        heights = decimate(heights, int(decimate_by))
+        spacing = (spacing[0] * decimate_by, spacing[1] * decimate_by)
+        heights = heights - heights.mean()
+        preparation["decimated_by"] = int(decimate_by)
+    elif resample_grid is not None:
+        heights, spacing = resample(heights, spacing, resample_grid)
+        heights = heights - heights.mean()
+        preparation["resampled_to"] = [int(v) for v in resample_grid]
     options = {"format": format, "height_unit": height_unit, "lateral_unit": lateral_unit,
-               "spacing": None if format == "xyz" else list(spacing),
-               "fill_holes": float(fill_holes)}
+               "spacing": None if given is None else list(given),
+               "fill_holes": float(fill_holes), "channel": channel, "decimal": decimal,
+               "crop": None if crop is None else [float(v) for v in crop],
+               "form_degree": int(form_degree), "outliers_sigma": outliers_sigma,
+               "decimate": decimate_by,
+               "resample_grid": None if resample_grid is None else list(resample_grid)}
     return Measurement(heights, (float(spacing[0]), float(spacing[1])), str(path),
-                       file_sha256(path), options, filled, plane)
+                       file_sha256(path), options, filled, plane, preparation)
 
 
-def statistics(measurement: Measurement) -> dict:
+def statistics(measurement: Measurement, spectral: bool = False) -> dict:
     """Height statistics of a measurement and the Johnson law of its moments.
 
     Returns plain values: ``sigma`` [m], ``skew``, ``kurt`` (Pearson), ``mean``
     [m] (zero after detrending), ``corr_length_x``, ``corr_length_y`` [m]
-    (lags of 10 % ACF decay, non-periodic estimate; NaN if the ACF stays
-    above 10 % over half the length), ``grid`` [nx, ny], ``size`` [Lx, Ly] [m],
+    (lags of 10 % ACF decay, non-periodic estimate; NaN, with a warning that
+    names the direction, where the ACF stays above 10 % over half the
+    window), ``grid`` [nx, ny], ``size`` [Lx, Ly] [m],
     ``spacing`` [dx, dy] [m], ``filled_points``, ``filled_fraction``, the
     removed plane (``plane_offset`` [m], ``plane_slope_x``, ``plane_slope_y``),
     and ``johnson_family`` with ``johnson_params`` ``[gamma, delta, xi, lam]``
     of the law fitted to (Sk, Ku) for heights in units of sigma (zero mean,
     unit standard deviation).
+
+    With ``spectral``, by SurfaceTopography on the prepared heights (not
+    periodic): ``rms_slope`` [1] (rms gradient), ``rms_curvature`` [1/m]
+    (from the area's Laplacian) and the isotropic power spectral density
+    ``psd_q`` [1/m] (wavevectors) and ``psd_C`` [m^4].
     """
     z = measurement.heights
     moments = height_stats(z)
     bx, by = correlation_length(z, measurement.spacing, periodic=False)
+    for name, value, side in (("x", bx, measurement.size[0]), ("y", by, measurement.size[1])):
+        if not math.isfinite(value):
+            log.warning(
+                "%s: the %s autocorrelation does not fall to 10 %% within half the window "
+                "(%.4g mm): corr_length_%s is NaN. A form or waviness is left: remove it "
+                "(form_degree: 2 or more), or measure (or crop) a window several "
+                "correlation lengths wide.", measurement.source, name, side / 2e-3, name)
     curve = johnson.fit(moments["skew"], moments["kurt"])
-    return {
+    stats = {
         "sigma": moments["sigma"],
         "skew": moments["skew"],
         "kurt": moments["kurt"],
@@ -538,19 +898,48 @@ def statistics(measurement: Measurement) -> dict:
         "johnson_family": curve.family,
         "johnson_params": [curve.gamma, curve.delta, curve.xi, curve.lam],
     }
+    if spectral:
+        stats.update(spectral_statistics(measurement))
+    return stats
+
+
+def spectral_statistics(measurement: Measurement) -> dict:
+    """``rms_slope``, ``rms_curvature``, ``psd_q`` and ``psd_C`` of :func:`statistics`."""
+    # SurfaceTopography takes 1-3 s to import: only the jobs that store these pay it
+    from SurfaceTopography import Topography
+
+    topography = Topography(np.ascontiguousarray(measurement.heights.T), measurement.size,
+                            periodic=False, unit="m")
+    q, C = (np.ma.filled(np.ma.asarray(v, dtype=float), np.nan)
+            for v in topography.power_spectrum_from_area())
+    keep = np.isfinite(q) & np.isfinite(C) & (q > 0)
+    return {
+        "rms_slope": float(topography.rms_gradient()),
+        "rms_curvature": float(topography.rms_curvature_from_area()),
+        "psd_q": [float(v) for v in q[keep]],
+        "psd_C": [float(v) for v in C[keep]],
+    }
 
 
 __all__ = [
     "FORMATS",
+    "InstrumentData",
     "HEIGHT_UNITS",
     "LATERAL_UNITS",
     "Measurement",
+    "crop_window",
+    "decimate",
     "fill_missing",
     "file_sha256",
     "load_measurement",
+    "read_instrument",
     "read_npy",
     "read_text_grid",
     "read_xyz",
     "remove_plane",
+    "remove_polynomial",
+    "resample",
+    "resolve_format",
+    "spectral_statistics",
     "statistics",
 ]

@@ -573,7 +573,7 @@ def correlation_length(z, spacing, periodic: bool = True, level: float = 0.1):
     """
     dx, dy = _pair(spacing, "spacing")
     acf = autocorrelation_map(z, periodic)
-    ny, nx = acf.shape
+    ny, nx = np.shape(z)  # half the window, not of the zero-padded ACF's lags
     bx = _decay_lag(acf[0, : nx // 2 + 1], dx, level)
     by = _decay_lag(acf[: ny // 2 + 1, 0], dy, level)
     return bx, by

@@ -314,12 +314,20 @@ def measured_config(path, **study):
     return validated(config)  # the schema's defaults, as the workflow applies them
 
 
+def surface_entry(**surface) -> dict:
+    """A study's ``surface:`` entry completed by the schema's defaults."""
+    config = validated({"study_seed": 0, "figures": {},
+                        "surfaces": {"grid": 8, "size_mm": 1.0, "count": 1},
+                        "body": {"thickness_mm": 10.0, "E_MPa": 511.0, "nu": 0.0},
+                        "sweeps": {"s": {"surface": surface, "pressure_MPa": [0.1, 1.0]}}})
+    return config["sweeps"]["s"]["surface"]
+
+
 def test_measured_key_follows_content_and_options_not_the_name(tmp_path):
     copy = tmp_path / "elsewhere" / "example_plateau_honed.xyz"
     copy.parent.mkdir()
     copy.write_bytes(EXAMPLE.read_bytes())
-    entry = {"file": str(EXAMPLE), "format": "xyz", "height_unit": "um", "fill_holes": 0.01,
-             "lateral_unit": "mm"}
+    entry = surface_entry(file=str(EXAMPLE), format="xyz", height_unit="um", fill_holes=0.01)
     key = cell_key(measured_cell_params(entry))
     assert key.startswith("measured-example-plateau-honed_") and key.endswith("_n1")
     assert cell_key(measured_cell_params({**entry, "file": str(copy)})) == key
