@@ -31,8 +31,10 @@ import scipy.stats
 from roughcontact.contact.nondim import PhysicalSweep
 
 __all__ = [
+    "COVERAGE",
     "QUANTITIES",
     "aggregate_cell",
+    "coverage",
     "covered_range",
     "mean_plane_modulus",
     "modulus_summary",
@@ -192,7 +194,8 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
         ``max_pressure`` [Pa]): ``q_mean``, ``q_half_width`` (same unit) and
         ``q_count`` (surfaces used; fewer than ``surfaces`` where the level
         lies outside some surfaces' swept range, 0 with NaN values where it
-        lies outside all); ``surfaces`` (m); ``unconverged_steps`` and
+        lies outside all); ``coverage`` (:func:`coverage`: why a count is
+        short); ``surfaces`` (m); ``unconverged_steps`` and
         ``unconverged_stiffness_steps``, the cell's totals (all surfaces and
         steps, repeated on every row) of steps excluded because the contact
         solve did not converge, respectively because the contact solve
@@ -219,16 +222,46 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
         columns[f"{quantity}_count"] = count
         units.update({f"{quantity}_mean": unit, f"{quantity}_half_width": unit,
                       f"{quantity}_count": "1"})
+    columns["coverage"] = coverage(sweep, levels)
     columns["surfaces"] = np.full(levels.size, m)
     columns["unconverged_steps"] = np.full(levels.size, int((~sweep.converged).sum()))
     columns["unconverged_stiffness_steps"] = np.full(
         levels.size, int((sweep.converged & ~sweep.stiffness_converged).sum()))
-    units.update(surfaces="1", unconverged_steps="1", unconverged_stiffness_steps="1")
+    units.update(coverage="-", surfaces="1", unconverged_steps="1",
+                 unconverged_stiffness_steps="1")
     frame = pd.DataFrame(columns)
     frame.attrs.update(units=units, confidence=confidence, interpolation=INTERPOLATION,
                        sigma=sweep.sigma, E=sweep.E, thickness=sweep.thickness,
                        nominal_area=sweep.nominal_area)
     return frame
+
+
+#: Values of the ``coverage`` column of :func:`aggregate_cell`.
+COVERAGE = ("all surfaces", "some surfaces", "below the first solved step",
+            "above the last solved step", "no converged step")
+
+
+def coverage(sweep_physical: PhysicalSweep, pressures) -> np.ndarray:
+    """Per level of ``pressures`` [Pa], which surfaces' converged steps reach it
+    (:data:`COVERAGE`): every surface, some, or none because the level lies below
+    every surface's first solved step or above every surface's last one."""
+    sweep = _check_sweep(sweep_physical)
+    levels = np.asarray(pressures, dtype=float)
+    usable = _usable(sweep, "approach")
+    P = np.where(usable, sweep.nominal_pressure, np.nan)
+    out = np.full(levels.size, COVERAGE[4], dtype=object)
+    rows = usable.any(axis=1)
+    if not rows.any():
+        return out
+    first = np.nanmin(P[rows], axis=1)
+    last = np.nanmax(P[rows], axis=1)
+    inside = (levels[:, None] >= first[None, :]) & (levels[:, None] <= last[None, :])
+    full = inside.all(axis=1) & rows.all()
+    out[inside.any(axis=1)] = COVERAGE[1]
+    out[full] = COVERAGE[0]
+    out[~inside.any(axis=1) & (levels < first.min())] = COVERAGE[2]
+    out[~inside.any(axis=1) & (levels > last.max())] = COVERAGE[3]
+    return out
 
 
 def covered_range(sweep_physical: PhysicalSweep) -> tuple[float, float]:

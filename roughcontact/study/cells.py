@@ -365,18 +365,18 @@ def block_geometry(params: dict, E: float = 1.0):
 
 
 def influence_geometries(config: dict) -> dict[str, dict]:
-    """Every influence geometry the configuration asks for, keyed by :func:`geometry_key`.
+    """The influence geometries the configuration asks for besides its contact jobs'.
 
-    The body of the config is always included (``make run`` builds it once);
-    study figures add the variants they need (another nu, mesh or area).
+    The mesh-convergence report (when configured) compares its presets on the
+    body of the config and reuses their builds; the contact jobs add the
+    geometries they solve on (:func:`study_plan`). Nothing else is built: a
+    body that no study and no report uses costs nothing.
     """
     geoms = {}
-    if "body" in config:
-        params = geometry_params(config["body"], config["surfaces"])
-        geoms[geometry_key(params)] = params
-        for mesh in convergence_presets(config):  # the mesh report reuses these builds
-            variant = {**params, "mesh": mesh}
-            geoms[geometry_key(variant)] = variant
+    params = geometry_params(config["body"], config["surfaces"])
+    for mesh in convergence_presets(config):
+        variant = {**params, "mesh": mesh}
+        geoms[geometry_key(variant)] = variant
     return geoms
 
 
@@ -672,5 +672,38 @@ def study_plan(config: dict) -> StudyPlan:
         raise ConfigProblems("Infeasible surface cells in the config", infeasible)
     geometries = influence_geometries(config) | {job["geometry_key"]: job["geometry"]
                                                  for job in jobs.values()}
+    too_large = check_memory(geometries, config["body"])
+    if too_large:
+        raise ConfigProblems("Influence models that do not fit body.max_memory_gb", too_large)
     aggregates = sorted({source_name(config, name) for name in studies})
     return StudyPlan(figures, studies, jobs, cells, geometries, aggregates)
+
+
+def memory_message(key: str, params: dict, body: dict, peak_bytes: float) -> str:
+    """Why a geometry's influence build does not fit, and the config keys that change it."""
+    nx, ny = params["grid"]
+    operator = planned_operator(params, body["max_memory_gb"])
+    options = []
+    if operator == "dense":
+        auto = influence_cost({**params, "operator": "auto"}, body["solver"],
+                              body["max_memory_gb"]).peak_bytes
+        options.append(f"body.operator: auto (matrix-free above 64 x 64 elements: about "
+                       f"{auto / GB:.3g} GB here)")
+    options += [f"raise body.max_memory_gb (now {body['max_memory_gb']:g})",
+                "a coarser body.mesh or a smaller grid (surfaces.grid; for a measured surface "
+                "surface.crop_mm, surface.decimate or surface.resample_grid)"]
+    return (f"influence geometry {key}: {nx} x {ny} elements, operator {operator}, mesh "
+            f"{params['mesh']}: estimated peak memory {peak_bytes / GB:.3g} GB, more than "
+            f"body.max_memory_gb = {body['max_memory_gb']:g} GB. Options: "
+            + "; ".join(options))
+
+
+def check_memory(geometries: dict[str, dict], body: dict) -> list[str]:
+    """Messages for the influence builds whose estimated peak memory exceeds the
+    validated ``body``'s ``max_memory_gb`` (checked when the plan is made)."""
+    problems = []
+    for key, params in geometries.items():
+        peak = influence_cost(params, body["solver"], body["max_memory_gb"]).peak_bytes
+        if peak > body["max_memory_gb"] * GB:
+            problems.append(memory_message(key, params, body, peak))
+    return problems

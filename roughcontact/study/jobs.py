@@ -38,6 +38,7 @@ from roughcontact.study.cells import (
     contact_key,
     geometry_key,
     load_measured,
+    memory_message,
     planned_operator,
     spec_from_params,
     statistics_key,
@@ -305,7 +306,12 @@ def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
     requested = params.get("operator", "dense")  # a dense geometry's key has no operator
     operator = planned_operator(params, max_memory_gb)
     model = geom if operator == "dense" else coarse_geometry(geom)
-    cost = influence.check_memory(model, max_memory_gb * 1e9, solver)
+    try:
+        cost = influence.check_memory(model, max_memory_gb * GB, solver)
+    except influence.ModelTooLarge as err:  # name the config keys, not the Python argument
+        body = {"solver": solver, "max_memory_gb": max_memory_gb}
+        peak = influence.estimate_cost(model, solver).peak_bytes
+        raise influence.ModelTooLarge(memory_message(key, params, body, peak)) from err
     log.info(
         "geometry %s: operator %s (requested %s); finite-element model %s grid %s, %d dofs, "
         "estimated peak %.2f GB (limit %.1f GB)", key, operator, requested, model.mesh,
@@ -491,6 +497,12 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
         if int(attrs["unconverged_steps"]):
             log.warning("cell %s: %d unconverged steps excluded", key,
                         int(attrs["unconverged_steps"]))
+        for reason in aggregate.COVERAGE[2:]:
+            short = frame["nominal_pressure"][frame["coverage"] == reason] / MPA
+            if len(short):
+                log.warning("cell %s: %d pressure levels (%.4g-%.4g MPa) have no values: %s; "
+                            "their rows are NaN with count 0", cell_label(cell), len(short),
+                            short.min(), short.max(), reason)
     table = pd.concat(rows, ignore_index=True)
     units = rows[0].attrs["units"] if rows else {}
     with atomic_path(table_path) as tmp:

@@ -187,6 +187,12 @@ def test_levels_beyond_a_surface_are_not_extrapolated(cell):
         axis=None)
     assert np.isnan(table["approach_half_width"].iloc[3])  # one surface: no band
     assert (table["surfaces"] == SURFACES).all()
+    # an empty row says why: below every surface's first step, above every last one
+    assert list(table["coverage"]) == ["below the first solved step", "some surfaces",
+                                       "some surfaces", "some surfaces",
+                                       "above the last solved step"]
+    inside = np.array([first.max(), np.sqrt(first.max() * order[0])])
+    assert list(aggregate.coverage(cell, inside)) == ["all surfaces"] * 2
 
 
 def test_unconverged_steps_are_excluded_and_counted(heights, block_nu0, approaches):

@@ -78,3 +78,31 @@ def test_accuracy_preset_sets_mesh_count_and_solver_and_records_its_errors():
     assert {c["geometry"]["mesh"] for c in named} == set(config["figures"]["fig07"]["meshes"])
     job = next(iter(contact_jobs(config, ["fig11"]).values()))
     assert job["accuracy"] == "fast" and job["expected_error"]
+
+
+def test_a_measured_map_too_large_for_the_dense_model_stops_when_the_plan_is_made(tmp_path):
+    from roughcontact.study.cells import ConfigProblems, planned_operator, study_plan
+
+    path = tmp_path / "big.npy"
+    np.save(path, np.random.default_rng(3).standard_normal((1024, 1024)))
+    surface = {"file": str(path), "format": "npy", "height_unit": "um",
+               "spacing_mm": [0.01, 0.01]}
+    config = {"study_seed": 0, "figures": {},
+              "surfaces": {"grid": 8, "size_mm": 1.0, "count": 1},
+              "body": {"thickness_mm": 10.0, "E_MPa": 511.0, "nu": 0.0},
+              "sweeps": {"big": {"surface": surface, "pressure_MPa": [1.0, 5.0]}}}
+    with pytest.raises(ConfigProblems) as raised:
+        study_plan(validated(config))
+    message = str(raised.value)
+    # the dense 1024 x 1024 model: tens of TB, against the 16 GB default
+    peak_tb = float(message.split("estimated peak memory ")[1].split(" GB")[0]) / 1e3
+    assert peak_tb > 10
+    for key in ("body.operator: auto", "body.max_memory_gb", "surface.crop_mm",
+                "surface.decimate", "surface.resample_grid", "1024 x 1024"):
+        assert key in message, key
+    # the matrix-free operator plans the same file within the limit
+    config["body"]["operator"] = "auto"
+    plan = study_plan(validated(config))
+    (params,) = plan.geometries.values()
+    assert params["grid"] == [1024, 1024]
+    assert planned_operator(params, 16.0) == "hybrid"

@@ -8,7 +8,7 @@ import yaml
 from snakemake.utils import validate
 
 from roughcontact.study import resources
-from roughcontact.study.cells import influence_cost, influence_geometries
+from roughcontact.study.cells import influence_cost, study_plan
 from roughcontact.study.config import validated
 
 CG = {"method": "cg", "tol": 1e-8, "steps": 30}
@@ -153,7 +153,7 @@ def test_compare_prints_predictions_against_benchmarks(tmp_path, capsys):
     quick = resources.SCHEMA_FILE.parent / "quick.yaml"
     config = yaml.safe_load(quick.read_text())
     validate(config, str(resources.SCHEMA_FILE))
-    key, geometry = sorted(influence_geometries(config).items())[0]
+    key, geometry = sorted(study_plan(config).geometries.items())[0]
     seconds = resources.influence_seconds(geometry, config["body"])
     mem_mb = resources.influence_mem_mb(geometry, config["body"])
     folder = tmp_path / "influence"
