@@ -299,7 +299,8 @@ def check_measured(config: dict, name: str, entry: dict) -> list[str]:
     if len(cells) > 1 and not all(math.isfinite(b) for b in b_mm):
         return [f"{name}: the measured autocorrelation does not decay to 10 % within half "
                 f"the measured length (b = {b_mm[0]:g} x {b_mm[1]:g} mm), so no synthetic "
-                "twin can be made; measure a larger area or drop compare_synthetic"]
+                "twin can be made; remove the form (surface.form_degree: 2 or more), measure "
+                "or crop a larger area, or drop compare_synthetic"]
     return []
 
 

@@ -9,6 +9,7 @@ are built here with NumPy.
 import functools
 import logging
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +26,11 @@ from roughcontact.surfaces.measured import (
     statistics,
 )
 
-DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "topographies"
+#: Real instrument files (SurfaceTopography's test collection), read in place: the folder
+#: ROUGHCONTACT_TOPOGRAPHIES names, else ``shared/data/topographies`` beside the checkout.
+DATA = Path(os.environ.get("ROUGHCONTACT_TOPOGRAPHIES",
+                           Path(__file__).resolve().parents[3] / "shared" / "data"
+                           / "topographies"))
 needs_data = pytest.mark.skipif(
     not DATA.is_dir(), reason=f"shared instrument files not found at {DATA}"
 )
@@ -367,3 +372,82 @@ def test_spectral_statistics_agree_with_surfacetopography():
     assert np.isfinite(q).all() and np.isfinite(c).all()
     assert (q > 0).all() and (c > 0).all()
     assert math.isfinite(stats["rms_curvature"]) and stats["rms_curvature"] > 0
+
+
+@needs_data
+def test_the_frt_dome_gives_a_nan_correlation_length_with_a_warning(caplog):
+    # the frt measurement's form is a dome: with only the plane removed its x
+    # autocorrelation stays far above 10 % over half the window
+    with caplog.at_level(logging.WARNING, logger="roughcontact.surfaces.measured"):
+        stats = statistics(loaded("frt-1.frt"))
+    assert math.isnan(stats["corr_length_x"])
+    assert any("x autocorrelation" in r.getMessage() and "form_degree" in r.getMessage()
+               for r in caplog.records)
+
+
+# ------------------------------------------------------------------ the workflow
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def instrument_config(file, grid=24, count=3):
+    """A Digital Surf measurement, cropped, form and outliers removed, resampled, beside
+    its synthetic twin on the paper's block (the measured sigma of a few nm: pressures
+    up to P L / (E sigma) of about 4)."""
+    return {
+        "study_seed": 11,
+        "surfaces": {"grid": [grid, grid], "size_mm": [1.5, 1.5], "method": "exact",
+                     "count": count},
+        "body": {"thickness_mm": 10.0, "E_MPa": 511.0, "nu": 0.0, "mesh": "paper"},
+        "contact": {"steps": 12, "pressure_levels": 6},
+        "figures": {"measured": {"from": "sur"}},
+        "sweeps": {"sur": {
+            "surface": {"file": str(file), "format": "auto", "fill_holes": 0.01,
+                        "crop_mm": [0.1, 0.1, 1.5, 1.5], "form_degree": 2,
+                        "outliers_sigma": 5, "resample_grid": [grid, grid]},
+            "compare_synthetic": True, "count": count,
+            "pressure_MPa": [5e-5, 5e-4]}},
+    }
+
+
+@needs_data
+@pytest.mark.workflow
+def test_an_instrument_file_runs_end_to_end_beside_its_twin(tmp_path):
+    import subprocess
+    import sys
+
+    import h5py
+    import pandas as pd
+    import yaml
+
+    path = tmp_path / "instrument.yaml"
+    path.write_text(yaml.safe_dump(instrument_config(DATA / "sur-2.sur")))
+    cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(REPO / "Snakefile"),
+           "--directory", str(tmp_path), "--configfile", str(path), "--cores", "2"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600,
+                          env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    (stored,) = (tmp_path / "results" / "surfaces").glob("measured-sur-2_*.h5")
+    with h5py.File(stored, "r") as f:
+        attrs = dict(f.attrs)
+        heights = f["heights"][()]
+        psd = f["stats/psd_C"][()]
+    # the file's own reader, pixel size and mask; the window, form and grid asked for
+    prep = __import__("json").loads(attrs["preparation"])
+    name, topography, metres = reference("sur-2.sur")
+    assert prep["reader"] == name and prep["file_grid"] == list(topography.nb_grid_pts)
+    assert prep["file_spacing_m"] == pytest.approx(
+        [s * metres / n for s, n in zip(topography.physical_sizes, topography.nb_grid_pts,
+                                        strict=True)], rel=1e-12)
+    assert prep["crop_points"][2:] == [round(1.5e-3 / (s * metres / n)) for s, n in
+                                       zip(topography.physical_sizes,
+                                           topography.nb_grid_pts, strict=True)]
+    assert prep["resampled_to"] == [24, 24] and prep["outliers"] > 0
+    assert heights.shape == (1, 24, 24) and (psd > 0).all()
+    assert attrs["measured_rms_slope"] > 0
+    table = pd.read_csv(tmp_path / "results" / "aggregates" / "sur.csv")
+    assert (table["unconverged_steps"] == 0).all()
+    assert table.groupby("contact_key")["surfaces"].first().sort_values().tolist() == [1, 3]
+    assert set(table["coverage"]) <= {"all surfaces", "some surfaces",
+                                      "below the first solved step"}
+    assert (tmp_path / "results" / "figures" / "measured.png").stat().st_size > 10_000
