@@ -296,12 +296,17 @@ def test_an_npy_file_needs_a_height_unit(tmp_path):
 # --------------------------------------------------------------------------- preparation
 
 
+def grid_and_spacing(name):
+    """SurfaceTopography's (nx, ny) and pixel size (dx, dy) [m] of a shared file."""
+    _, topography, scale = reference(name)
+    nx, ny = topography.nb_grid_pts
+    return (nx, ny), tuple(float(s) * scale / n for s, n in
+                           zip(topography.physical_sizes, (nx, ny), strict=True))
+
+
 @needs_data
 def test_crop_takes_the_window_rounded_to_whole_points():
-    _, topography, scale = reference("plu-1.plu")
-    nx, ny = topography.nb_grid_pts
-    dx, dy = (float(s) * scale / n for s, n in zip(topography.physical_sizes, (nx, ny),
-                                                   strict=True))
+    (nx, ny), (dx, dy) = grid_and_spacing("plu-1.plu")
     x0, y0, lx, ly = 100e-6, 50e-6, 500e-6, 300e-6
     m = load_measurement(DATA / "plu-1.plu", crop=(x0, y0, lx, ly))
     ix0, iy0, cx, cy = round(x0 / dx), round(y0 / dy), round(lx / dx), round(ly / dy)
@@ -321,10 +326,7 @@ def test_a_crop_outside_the_measurement_is_refused():
 
 @needs_data
 def test_decimate_by_4_averages_blocks_and_multiplies_the_spacing():
-    _, topography, scale = reference("matrix-3.txt")
-    nx, ny = topography.nb_grid_pts
-    dx, dy = (float(s) * scale / n for s, n in zip(topography.physical_sizes, (nx, ny),
-                                                   strict=True))
+    _, (dx, dy) = grid_and_spacing("matrix-3.txt")
     m = load_measurement(DATA / "matrix-3.txt", decimate_by=4)
     assert m.grid == (64, 64)
     assert m.spacing == pytest.approx([4 * dx, 4 * dy], rel=1e-12)
