@@ -24,3 +24,15 @@ class MeasurementError(ValueError):
         super().__init__(message)
         self.path = None if path is None else str(path)
         self.line = line
+
+
+class StoredFileError(RuntimeError):
+    """A stored result cannot be used: unreadable (truncated, not HDF5), written
+    without a content hash, or its content no longer matches the hash written
+    with it (changed or damaged since). The message names the file and what to
+    do (delete it: the workflow rebuilds it). ``path`` is kept as an attribute.
+    """
+
+    def __init__(self, message: str, path=None):
+        super().__init__(message)
+        self.path = None if path is None else str(path)

@@ -7,8 +7,9 @@ rule audit:
     input:
         get_audit_inputs,
     output:
-        csv="results/audit/audit.csv",
-        md=report("results/audit/audit.md", category="Audit"),
+        # update(): the previous audit stays until the new one replaces it (atomically)
+        csv=update("results/audit/audit.csv"),
+        md=update(report("results/audit/audit.md", category="Audit")),
     log:
         "results/logs/audit/audit.log",
     group:
@@ -18,8 +19,23 @@ rule audit:
         runtime=get_audit_runtime,
     params:
         studies=get_audit_studies,
+        # size, mtime and ctime of every file read: any change reruns the audit, also an
+        # edit that restores the mtime (touch -r)
+        stamp=get_audit_stamp,
     script:
         "../scripts/audit.py"
+
+
+# audit: {strict: true} (or this target): fail the run when any cell is flagged
+rule audit_strict:
+    input:
+        "results/audit/audit.csv",
+    output:
+        "results/audit/strict.ok",
+    log:
+        "results/logs/audit/strict.log",
+    script:
+        "../scripts/audit_strict.py"
 
 
 rule audit_verify:

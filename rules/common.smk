@@ -1,5 +1,6 @@
 # Shared workflow logic: environment, the study grid from the config, input
 # functions (get_*) and wildcard constraints.
+import hashlib
 import json
 import os
 import re
@@ -54,6 +55,8 @@ def get_final_outputs():
         ext=("csv", "moduli.csv", "json"),
     )
     audit = ["results/audit/audit.csv", "results/audit/audit.md"] if STUDIES else []
+    if STUDIES and config["audit"]["strict"]:
+        audit.append("results/audit/strict.ok")
     if STUDIES and config["audit"]["verify"]:
         audit.append("results/audit/verify.csv")
     reports = []
@@ -86,6 +89,20 @@ def get_audit_studies(wildcards):
     # each cell once: a study "from:" another (fig12 from fig07, the measured figure
     # from its sweep) has the same cells
     return {name: study.contact_cells(config, name) for name in AGGREGATES}
+
+
+def get_audit_stamp(wildcards):
+    """A hash of the size, mtime and ctime of every file the audit reads."""
+    digest = hashlib.sha256()
+    for path in get_audit_inputs(wildcards):
+        try:
+            st = os.stat(path)
+            digest.update(
+                f"{path}|{st.st_size}|{st.st_mtime_ns}|{st.st_ctime_ns}\n".encode()
+            )
+        except FileNotFoundError:
+            digest.update(f"{path}|missing\n".encode())
+    return digest.hexdigest()
 
 
 def get_audit_inputs(wildcards):

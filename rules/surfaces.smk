@@ -20,5 +20,8 @@ rule surfaces:
     params:
         cell=get_surface_params,
         study_seed=config["study_seed"],
+        # version of the stored layout: files of an older layout (no content hash) are
+        # rebuilt instead of refused
+        layout=2,
     script:
         "../scripts/generate_surfaces.py"

@@ -20,13 +20,11 @@ import pandas as pd
 
 from roughcontact import __version__
 from roughcontact.contact.cell import sweep_cell
-from roughcontact.hashes import file_sha256
+from roughcontact.errors import StoredFileError
 from roughcontact.study.cells import block_geometry, contact_key
 from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.study.storage import (
     CONTACT_ARRAYS,
-    contact_sha256,
-    influence_sha256,
     read_contact,
     read_influence,
     read_surfaces,
@@ -95,11 +93,20 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
         "contact_job": key,
         **{f"expected_{k}": v for k, v in cell.get("expected_error", {}).items()},
     }
-    flags = []
     missing = [p.name for p in (surf_path, infl_path, cont_path) if not p.exists()]
     if missing:
         row["flags"] = "missing: " + ", ".join(missing)
         return row
+    try:
+        return _checked_cell(row, s, g, surf_path, infl_path, cont_path)
+    except StoredFileError as err:  # unreadable, or changed since it was written
+        log.warning("%s", err)
+        row["flags"] = f"unusable file: {err}"
+        return row
+
+
+def _checked_cell(row: dict, s: dict, g: dict, surf_path, infl_path, cont_path) -> dict:
+    flags = []
     surfaces = read_surfaces(surf_path)
     row["study_seed"] = int(surfaces["attrs"]["study_seed"])
     row["seeds"] = " ".join(str(int(v)) for v in surfaces["seeds"])
@@ -107,12 +114,10 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
     row.update(moments)
     flags += moment_flags
 
-    unit, geometry_attrs = read_influence(infl_path)
-    influence_hash = influence_sha256(unit)
+    unit, geometry_attrs = read_influence(infl_path)  # verified against its content hash
+    influence_hash = geometry_attrs["content_sha256"]
     row["operator"] = geometry_attrs.get("operator", "dense")
     row["influence_sha256"] = influence_hash
-    if influence_hash != geometry_attrs.get("content_sha256"):
-        flags.append("influence file changed since it was built")
     row["mesh_diagonal_error"] = (
         MESH_DIAGONAL_ERROR.get(g["mesh"], float("nan")) if row["operator"] == "dense"
         else OPERATOR_DIAGONAL_ERROR.get(row["operator"], float("nan")))
@@ -136,11 +141,9 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
         flags.append("converged flag inconsistent with residual")
     if row["unconverged_steps"] or not arrays["converged"].all():
         flags.append(f"{int((~arrays['converged']).sum())} unconverged solves")
-    if contact_sha256(stored) != attrs.get("content_sha256"):
-        flags.append("contact result changed since it was solved")
     if attrs.get("influence_content_sha256") != influence_hash:
         flags.append("solved on another influence matrix")
-    if attrs.get("surfaces_sha256") != file_sha256(surf_path):
+    if attrs.get("surfaces_content_sha256") != surfaces["content_sha256"]:
         flags.append("solved on other surfaces")
     row["flags"] = "; ".join(flags)
     return row

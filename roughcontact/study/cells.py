@@ -590,8 +590,15 @@ def _check_operator(config: dict, name: str, entry: dict) -> list[str]:
 
 
 def contact_key(cell: dict) -> str:
-    """File key of a contact job: one surface cell solved on one geometry."""
-    return f"{cell['surface_key']}__{cell['geometry_key']}"
+    """File key of a contact job: one surface cell solved on one geometry to one sweep end.
+
+    The end (:func:`sweep_end`, a power of 2 of P L / (E sigma)) is part of the
+    key: a file's content depends on its key alone, so a study that needs a
+    longer sweep gets its own file, and no result is ever re-solved or
+    rewritten because another study was added, changed or removed.
+    """
+    end = cell["pressure_end"] if "pressure_end" in cell else sweep_end(cell)
+    return f"{cell['surface_key']}__{cell['geometry_key']}__end{end:g}"
 
 
 def sweep_end(cell: dict) -> float:
@@ -609,21 +616,19 @@ def sweep_end(cell: dict) -> float:
 def contact_jobs(config: dict, names) -> dict[str, dict]:
     """Every contact job the named figures and sweeps need, with its sweep end.
 
-    A job is shared by every cell on the same surfaces and geometry; it
-    sweeps as far as the most demanding of them needs.
+    A job is shared by every cell on the same surfaces and geometry that needs
+    the same sweep end (:func:`contact_key`).
     """
     jobs = {}
     for name in names:
         for cell in contact_cells(config, name):
-            key = contact_key(cell)
-            job = jobs.setdefault(key, {
+            jobs.setdefault(contact_key(cell), {
                 "surface": cell["surface"], "geometry": cell["geometry"],
                 "surface_key": cell["surface_key"], "geometry_key": cell["geometry_key"],
-                "pressure_end": 0.0,
+                "pressure_end": sweep_end(cell),
                 "accuracy": cell.get("accuracy", "as configured"),
                 "expected_error": cell.get("expected_error", {}),
             })
-            job["pressure_end"] = max(job["pressure_end"], sweep_end(cell))
     return jobs
 
 

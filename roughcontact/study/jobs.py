@@ -30,7 +30,6 @@ from roughcontact.contact import aggregate, halfspace_criterion
 from roughcontact.contact import cell as cell_module
 from roughcontact.elasticity import influence, operators
 from roughcontact.errors import MeasurementError
-from roughcontact.hashes import file_sha256
 from roughcontact.study.cells import (
     block_geometry,
     cell_key,
@@ -443,8 +442,8 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
         "batch_size": min(m, BATCH_SIZE),
         "job": canonical_json(job),
         **stats,
-        "surfaces_sha256": file_sha256(surfaces_path),
-        "influence_content_sha256": geometry_attrs.get("content_sha256", ""),
+        "surfaces_content_sha256": surfaces["content_sha256"],
+        "influence_content_sha256": geometry_attrs["content_sha256"],
         "seeds": surfaces["seeds"].tolist(),
         **provenance(config),
     }

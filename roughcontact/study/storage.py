@@ -1,7 +1,10 @@
 """HDF5 files of the pipeline: one reader and one writer per file kind, each with its hash.
 
-Every file is written atomically (temporary name, then rename), with units
-and provenance.
+Every file is written atomically (temporary name, then rename), with units,
+provenance and the SHA-256 of its datasets (``content_sha256``), and every
+read checks that hash first: a file that is unreadable, has no hash or no
+longer matches it raises :class:`~roughcontact.errors.StoredFileError` naming
+the file (delete it, and the workflow rebuilds it), never a silent use.
 
 Layout of a surface file (``results/surfaces/<cell>.h5``)::
 
@@ -32,6 +35,7 @@ influence matrices.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 
@@ -40,6 +44,7 @@ import numpy as np
 
 from roughcontact.contact.nondim import NondimSweep
 from roughcontact.elasticity.operators import BlockOperator
+from roughcontact.errors import StoredFileError
 from roughcontact.hashes import array_sha256, arrays_sha256
 from roughcontact.study.provenance import atomic_path
 
@@ -67,13 +72,64 @@ def _decoded(attrs) -> dict:
     return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in attrs.items()}
 
 
+REBUILD = "delete it and run the workflow again to rebuild it"
+
+
+@contextlib.contextmanager
+def open_h5(path: str | os.PathLike):
+    """``h5py.File(path, "r")``; an unreadable file raises :class:`StoredFileError`."""
+    try:
+        f = h5py.File(path, "r")
+    except FileNotFoundError:
+        raise
+    except OSError as err:
+        raise StoredFileError(f"{path}: not a readable HDF5 file (truncated or damaged: "
+                              f"{err}); {REBUILD}", path) from None
+    try:
+        yield f
+    except (OSError, KeyError) as err:
+        raise StoredFileError(f"{path}: a dataset cannot be read (truncated or damaged: "
+                              f"{err}); {REBUILD}", path) from None
+    finally:
+        f.close()
+
+
+def datasets_sha256(datasets: dict) -> str:
+    """``content_sha256`` of a file's datasets (name -> array; :func:`arrays_sha256`)."""
+    return arrays_sha256({name: np.asarray(item[0] if isinstance(item, tuple) else item)
+                          for name, item in datasets.items()})
+
+
+def _all_datasets(f) -> dict:
+    arrays = {}
+    f.visititems(lambda name, obj: arrays.__setitem__(name, obj[()])
+                 if isinstance(obj, h5py.Dataset) else None)
+    return arrays
+
+
+def verify(path, attrs: dict, computed: str) -> None:
+    """Raise :class:`StoredFileError` unless ``computed`` is the file's ``content_sha256``."""
+    stored = attrs.get("content_sha256")
+    if not stored:
+        raise StoredFileError(f"{path}: no content hash (written by an older version of "
+                              f"roughcontact, or not by it); {REBUILD}", path)
+    if stored != computed:
+        raise StoredFileError(
+            f"{path}: its datasets no longer match the hash written with them (sha256 "
+            f"{computed[:12]}, written {stored[:12]}): the file was changed or damaged after "
+            f"it was made; {REBUILD}", path)
+
+
 def write_h5(path: str | os.PathLike, datasets: dict, attrs: dict) -> None:
     """Write datasets and root attributes to ``path`` atomically.
 
     ``datasets`` maps a name (``"stats/skew"`` makes a group) to an array or to
     ``(array, {attribute: value})``; nested dicts and lists in attributes are
-    stored as JSON text.
+    stored as JSON text. Without a ``content_sha256`` in ``attrs``, the hash of
+    every dataset (:func:`datasets_sha256`) is added.
     """
+    if "content_sha256" not in attrs:
+        attrs = {**attrs, "content_sha256": datasets_sha256(datasets)}
     with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as f:
             for name, item in datasets.items():
@@ -86,8 +142,8 @@ def write_h5(path: str | os.PathLike, datasets: dict, attrs: dict) -> None:
 
 
 def read_attrs(path: str | os.PathLike) -> dict:
-    """Root attributes of an HDF5 file (JSON text left as text)."""
-    with h5py.File(path, "r") as f:
+    """Root attributes of an HDF5 file (JSON text left as text; datasets not verified)."""
+    with open_h5(path) as f:
         return _decoded(f.attrs)
 
 
@@ -108,15 +164,20 @@ def read_surfaces(path: str | os.PathLike, count: int | None = None) -> dict:
     ``count`` limits how many surfaces are read (the first ``count``).
     """
     sl = slice(None) if count is None else slice(0, count)
-    with h5py.File(path, "r") as f:
-        out = {
-            "heights": f["heights"][sl],
-            "seeds": f["seeds"][sl],
-            "stats": {k: f["stats"][k][sl] for k in f["stats"]},
-            "attrs": _decoded(f.attrs),
-        }
-    out["spec"] = json.loads(out["attrs"]["spec"])
-    return out
+    with open_h5(path) as f:
+        arrays = _all_datasets(f)
+        attrs = _decoded(f.attrs)
+    verify(path, attrs, arrays_sha256(arrays))
+    stats = {name.split("/", 1)[1]: value for name, value in arrays.items()
+             if name.startswith("stats/")}
+    return {
+        "heights": arrays["heights"][sl],
+        "seeds": arrays["seeds"][sl],
+        "stats": {k: (v if k.startswith("psd_") else v[sl]) for k, v in stats.items()},
+        "attrs": attrs,
+        "content_sha256": attrs["content_sha256"],
+        "spec": json.loads(attrs["spec"]),
+    }
 
 
 # ---------------------------------------------------------------------------
@@ -165,10 +226,12 @@ def read_influence(path: str | os.PathLike):
 
     Divide by Young's modulus for C [m/Pa].
     """
-    with h5py.File(path, "r") as f:
+    with open_h5(path) as f:
         attrs = _decoded(f.attrs)
         if "unit_influence" in f:
-            return f["unit_influence"][...], attrs
+            unit = f["unit_influence"][...]
+            verify(path, attrs, influence_sha256(unit))
+            return unit, attrs
         correction = f["correction"][...] if "correction" in f else None
 
     def pair(value):
@@ -181,6 +244,7 @@ def read_influence(path: str | os.PathLike):
     coarse = pair(attrs["coarse_grid"]) if correction is not None else None
     op = BlockOperator(grid=pair(attrs["operator_grid"]), size=pair(attrs["operator_size_m"]),
                        nu=float(attrs["operator_nu"]), correction=correction, coarse_grid=coarse)
+    verify(path, attrs, influence_sha256(op))
     return op, attrs
 
 
@@ -212,9 +276,10 @@ def write_contact(path: str | os.PathLike, sweep: NondimSweep, attrs: dict) -> d
 
 def read_contact(path: str | os.PathLike) -> tuple[NondimSweep, dict]:
     """The :class:`~roughcontact.contact.nondim.NondimSweep` and attributes of a contact file."""
-    with h5py.File(path, "r") as f:
+    with open_h5(path) as f:
         arrays = {name: f[name][...] for name in CONTACT_ARRAYS}
         attrs = _decoded(f.attrs)
+    verify(path, attrs, arrays_sha256(arrays))
     settings = {k: attrs[f"sweep_{k}"] for k in SWEEP_SETTINGS}
     settings["n_elements"] = int(settings["n_elements"])
     for key in ("method", "precision"):
