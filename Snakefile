@@ -2,7 +2,10 @@
 # Data flows surfaces -> influence -> contact -> aggregate -> figures.
 import os
 
-from snakemake.utils import min_version, validate
+from snakemake.exceptions import WorkflowError
+from snakemake.utils import min_version
+
+from roughcontact.study.config import ConfigError, apply_schema
 
 min_version("8.0")
 
@@ -13,7 +16,10 @@ if not config:
     configfile: os.path.join(workflow.basedir, "config", "config.yaml")
 
 
-validate(config, "config/schema.yaml")
+try:
+    apply_schema(config)  # every default filled in; one line per offending key
+except ConfigError as err:
+    raise WorkflowError(str(err)) from None
 
 
 report: "report/workflow.rst"

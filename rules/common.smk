@@ -6,6 +6,7 @@ import os
 import re
 
 from snakemake.exceptions import WorkflowError
+from snakemake.logging import logger
 
 from roughcontact.study import cells as study
 from roughcontact.study import resources
@@ -19,6 +20,8 @@ try:
     PLAN = study.study_plan(config)
 except study.ConfigProblems as err:
     raise WorkflowError(str(err)) from None
+for _problem in resources.machine_problems(config):
+    logger.warning(f"Warning: {_problem}")
 FIGURES = PLAN.figures
 # contact studies: the paper's figures and the user's own sweeps
 STUDIES = PLAN.studies

@@ -671,6 +671,11 @@ def study_plan(config: dict) -> StudyPlan:
     bad = check_studies(config, studies)
     if bad:
         raise ConfigProblems("Invalid contact studies in the config", bad)
+    if config["plausibility_check"]:
+        implausible = check_plausible(config, studies)
+        if implausible:
+            raise ConfigProblems("Values that are almost surely a unit slip (set "
+                                 "plausibility_check: false if they are meant)", implausible)
     jobs = contact_jobs(config, studies)
     cells = surface_cells(config) | {job["surface_key"]: job["surface"] for job in jobs.values()}
     infeasible = check_feasible(cells)
@@ -683,6 +688,45 @@ def study_plan(config: dict) -> StudyPlan:
         raise ConfigProblems("Influence models that do not fit body.max_memory_gb", too_large)
     aggregates = sorted({source_name(config, name) for name in studies})
     return StudyPlan(figures, studies, jobs, cells, geometries, aggregates)
+
+
+#: Accepted ranges of the plausibility check: sigma [um], E [MPa], and the largest
+#: nominal pressure over E of a sweep (beyond it linear elasticity has no meaning).
+PLAUSIBLE = {"sigma_um": (1e-3, 1e3), "E_MPa": (1e-3, 1e7), "pressure_over_E": 0.1}
+#: Units a value is likely typed in by mistake: name, factor to the key's unit.
+_SLIPS = {"sigma_um": (("m", 1e6), ("mm", 1e3), ("nm", 1e-3)),
+          "E_MPa": (("Pa", 1e-6), ("kPa", 1e-3), ("GPa", 1e3))}
+
+
+def _slip(key: str, value: float) -> str:
+    """A sentence naming the unit ``value`` was likely typed in, if one puts it in range."""
+    low, high = PLAUSIBLE[key]
+    for unit, factor in _SLIPS[key]:
+        if low <= value * factor <= high:
+            return (f"; typed in {unit}? then write {value * factor:.6g} "
+                    f"({key.split('_')[-1]})")
+    return ""
+
+
+def check_plausible(config: dict, names) -> list[str]:
+    """Messages for study values that are almost surely a unit slip (:data:`PLAUSIBLE`)."""
+    problems = set()
+    for name in names:
+        for cell in contact_cells(config, name):
+            for key in ("sigma_um", "E_MPa"):
+                value = float(cell[key])
+                low, high = PLAUSIBLE[key]
+                if not low <= value <= high:
+                    problems.add(f"{name}: {key} = {value:g} lies outside {low:g}-{high:g}"
+                                 f"{_slip(key, value)}")
+            ratio = cell["pressure_MPa"][1] / cell["E_MPa"]
+            if ratio > PLAUSIBLE["pressure_over_E"]:
+                problems.add(
+                    f"{name}: pressure_MPa up to {cell['pressure_MPa'][1]:g} on E_MPa = "
+                    f"{cell['E_MPa']:g} is P / E = {ratio:.3g}, beyond "
+                    f"{PLAUSIBLE['pressure_over_E']:g}, where the linear elastic model has no "
+                    "meaning; check the units of pressure_MPa and E_MPa")
+    return sorted(problems)
 
 
 def memory_message(key: str, params: dict, body: dict, peak_bytes: float) -> str:

@@ -15,6 +15,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+import jsonschema
 import yaml
 from snakemake.utils import validate
 
@@ -24,14 +25,48 @@ from roughcontact.units import GB, MM, MPA, UM
 SCHEMA = Path(__file__).resolve().parents[2] / "config" / "schema.yaml"
 
 
+class ConfigError(ValueError):
+    """A configuration the schema refuses: one line per offending key (its path in
+    the configuration, the value and what was expected)."""
+
+
+def schema_errors(config: dict) -> list[str]:
+    """``key.path: message`` of every schema violation of ``config`` (none: [])."""
+    schema = yaml.safe_load(SCHEMA.read_text())
+    validator = jsonschema.validators.validator_for(schema)(schema)
+    lines = []
+    for error in sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.path))):
+        where = ".".join(str(p) for p in error.absolute_path) or "(top level)"
+        # of a oneOf's branches, the error of a value of the right type says most
+        specific = [e for e in error.context if e.validator != "type"]
+        detail = jsonschema.exceptions.best_match(specific or error.context) \
+            if error.context else error
+        lines.append(f"{where}: {detail.message}")
+    return lines
+
+
+def apply_schema(config: dict) -> dict:
+    """Validate ``config`` in place against the schema and fill in every default.
+
+    Raises :class:`ConfigError` with one line per offending key (not the
+    schema's text).
+    """
+    problems = schema_errors(config)
+    if problems:
+        raise ConfigError("Invalid configuration (no job was started):\n  "
+                          + "\n  ".join(problems)
+                          + "\nKeys, units and defaults: config/schema.yaml; a complete "
+                            "example: config/config.yaml.")
+    validate(config, str(SCHEMA))  # fills the defaults, as Snakemake does
+    return config
+
+
 def validated(config: dict) -> dict:
     """A copy of ``config`` validated against the schema, with every default applied.
 
-    Raises ``snakemake.exceptions.WorkflowError`` naming the offending key.
+    Raises :class:`ConfigError` naming each offending key.
     """
-    config = copy.deepcopy(config)
-    validate(config, str(SCHEMA))
-    return config
+    return apply_schema(copy.deepcopy(config))
 
 
 def load_config(path: str | os.PathLike) -> dict:

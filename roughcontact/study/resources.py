@@ -375,6 +375,32 @@ def predictions(config: dict) -> dict[str, dict[str, tuple[float, int]]]:
     }
 
 
+def machine_memory_mb() -> float:
+    """Physical memory of this machine [MB] (nan where the system does not say)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / MB
+    except (ValueError, OSError, AttributeError):
+        return math.nan
+
+
+def machine_problems(config: dict, total_mb: float | None = None) -> list[str]:
+    """The contact, influence and surfaces jobs of a validated ``config`` whose planned
+    memory exceeds ``total_mb`` (default: this machine's), with the keys to change."""
+    total_mb = machine_memory_mb() if total_mb is None else total_mb
+    if not math.isfinite(total_mb):
+        return []
+    problems = []
+    for rule, jobs in predictions(config).items():
+        for key, (_, mem_mb) in jobs.items():
+            if mem_mb > total_mb:
+                problems.append(
+                    f"{rule} job {key}: planned {mem_mb / 1e3:.3g} GB, this machine has "
+                    f"{total_mb / 1e3:.3g} GB (fine on cluster nodes with more; else "
+                    "body.operator: auto, body.max_memory_gb, a coarser body.mesh or a "
+                    "smaller grid)")
+    return problems
+
+
 def _number(text: str) -> float:
     """A benchmark column's value ("NA" or "-" when Snakemake could not measure it: nan)."""
     try:
