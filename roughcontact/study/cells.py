@@ -27,7 +27,7 @@ from roughcontact.elasticity.influence import BlockGeometry, estimate_cost
 from roughcontact.elasticity.operators import HYBRID_MESHES, choose_operator, default_coarse_grid
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.provenance import canonical_json
-from roughcontact.surfaces import measured
+from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.synthetic import SurfaceSpec, input_moments
 from roughcontact.units import GB, MM, MPA, UM
 
@@ -135,14 +135,19 @@ def surface_cells(config: dict, figures=SURFACE_FIGURES) -> dict[str, dict]:
 
 
 def check_feasible(cells: dict[str, dict]) -> list[str]:
-    """Messages for cells whose (skew, kurt) the filter cannot reach."""
+    """Messages for cells whose (skew, kurt) the generator cannot reach, and for any
+    Johnson law the generator would fit that cannot be fitted (each law is fitted
+    here, before any job: the white noise's of the filter, the target's of exact)."""
     problems = []
     for key, params in cells.items():
-        if params["method"] != "filter":
+        if params["method"] == "measured":
             continue
         try:
-            input_moments(spec_from_params(params))
-        except ValueError as err:
+            if params["method"] == "filter":
+                johnson.fit(*input_moments(spec_from_params(params)))
+            else:
+                johnson.fit(params["skew"], params["kurt"])
+        except (ValueError, RuntimeError, FloatingPointError) as err:
             problems.append(f"{key}: {err}")
     return problems
 

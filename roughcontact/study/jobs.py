@@ -30,6 +30,7 @@ from roughcontact.contact import aggregate, halfspace_criterion
 from roughcontact.contact import cell as cell_module
 from roughcontact.elasticity import influence, operators
 from roughcontact.errors import MeasurementError
+from roughcontact.hashes import file_sha256
 from roughcontact.study.cells import (
     block_geometry,
     cell_key,
@@ -518,6 +519,9 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
         "mean_plane_modulus": summaries,
         "config_hash": config_hash(config) if config is not None else "",
         **{k: v for k, v in provenance(config).items() if k != "config_hash"},
+        # what the figures check before they read the tables
+        "table_sha256": file_sha256(table_path),
+        "moduli_sha256": file_sha256(moduli_path),
     }
     with atomic_path(meta_path) as tmp:
         Path(tmp).write_text(json.dumps(meta, indent=1, default=float))

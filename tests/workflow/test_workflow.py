@@ -341,7 +341,7 @@ def test_audit_lists_every_cell_and_flags_a_corrupted_result(quick_run, tmp_path
     # a study "from:" another is not listed again (its cells are the same)
     assert set(audit["study"]) == set(sources) and "fig12" not in sources
     assert not audit.duplicated(subset=["study", "cell"]).any()
-    assert not audit["flags"].fillna("").str.contains("changed|unconverged|another").any()
+    assert not audit["flags"].fillna("").str.contains("unusable|unconverged|another").any()
     assert (audit["worst_residual"] <= audit["tol"]).all()
     # corrupt one value of one stored result in a copy of the run
     copy = tmp_path / "run"
@@ -353,8 +353,8 @@ def test_audit_lists_every_cell_and_flags_a_corrupted_result(quick_run, tmp_path
     assert proc.returncode == 0, proc.stderr[-3000:]
     audit = pd.read_csv(copy / "results" / "audit" / "audit.csv", dtype={"flags": str})
     hit = audit["contact_job"] == victim.stem
-    assert audit.loc[hit, "flags"].str.contains("contact result changed").all()
-    assert not audit.loc[~hit, "flags"].fillna("").str.contains("changed").any()
+    assert audit.loc[hit, "flags"].str.contains("no longer match").all()
+    assert not audit.loc[~hit, "flags"].fillna("").str.contains("no longer match").any()
     md = (copy / "results" / "audit" / "audit.md").read_text()
     flagged_part = md.split("## All cells")[0]
     assert victim.stem in flagged_part
