@@ -30,6 +30,28 @@ rule figure:
         "../scripts/render_figure.py"
 
 
+# A table (table_*) is rendered as a figure too, and its numbers are written
+# as CSV beside it; the notebook gets the CSV's path as parameter `csv`.
+use rule figure as table with:
+    output:
+        png=report(
+            "results/figures/{fig}.png",
+            caption="../report/figure.rst",
+            category="Figures",
+        ),
+        pdf="results/figures/{fig}.pdf",
+        notebook="results/figures/{fig}.ipynb",
+        csv="results/figures/{fig}.csv",
+    wildcard_constraints:
+        fig=r"table_\w+",
+    params:
+        parameters=lambda wildcards, output: get_figure_parameters(wildcards)
+        | {"csv": output.csv},
+
+
+ruleorder: table > figure
+
+
 rule config_snapshot:
     output:
         report("results/config.yaml", category="Configuration"),

@@ -95,9 +95,14 @@ def main(task_path: str, result_path: str) -> None:
         pickle.dump(outcome, fh)
 
 
-def run_isolated(task: dict) -> tuple[np.ndarray, dict]:
-    """:func:`build` in a fresh interpreter, so that its peak memory is its own."""
-    with tempfile.TemporaryDirectory(prefix="roughcontact-convergence-") as tmp:
+def run_isolated(task: dict, prefix: str = "roughcontact-convergence-"
+                 ) -> tuple[np.ndarray, dict]:
+    """:func:`build` in a fresh interpreter, so that its peak memory is its own.
+
+    The task and result files live in a folder ``<prefix><random>`` of the
+    system's temporary folder, removed when the build ends.
+    """
+    with tempfile.TemporaryDirectory(prefix=prefix) as tmp:
         task_path, result_path = Path(tmp) / "task.pkl", Path(tmp) / "result.pkl"
         with open(task_path, "wb") as fh:
             pickle.dump(task, fh)

@@ -46,8 +46,13 @@ import dataclasses
 import logging
 import math
 import os
+import re
+import shutil
+import socket
+import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -57,7 +62,7 @@ from matplotlib.figure import Figure
 from roughcontact.contact.cell import sweep_and_aggregate
 from roughcontact.elasticity.influence import GB, BlockGeometry, MeshSpec
 from roughcontact.reports.build_worker import HALFSPACE, build, centre_entries, run_isolated
-from roughcontact.reports.plotting import save_figure
+from roughcontact.reports.plotting import process_running, save_figure
 from roughcontact.study.storage import read_influence
 from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
 
@@ -67,9 +72,11 @@ __all__ = [
     "CONTACT_QUANTITIES",
     "ENTRY_QUANTITIES",
     "HALFSPACE",
+    "SCRATCH_PREFIX",
     "influence_convergence",
     "mesh_label",
     "plot_influence_convergence",
+    "remove_stale_scratch",
     "richardson",
 ]
 
@@ -132,6 +139,46 @@ COLUMNS = {
 #: Rigid approaches per sweep (``pipeline.sweep_approaches``: geometric up to the end).
 _SWEEP_STEPS = 40
 
+#: Scratch folders of the isolated builds (task and result files), in the system's
+#: temporary folder: ``<SCRATCH_PREFIX><host>-<pid>-<random>``, one per build.
+SCRATCH_PREFIX = "roughcontact-convergence-"
+
+
+# ---------------------------------------------------------------------------
+# Scratch folders of the isolated builds
+
+
+def _scratch_owner() -> str:
+    """``<host>-<pid>`` of this process, as it appears in its scratch folders' names."""
+    return f"{socket.gethostname()}-{os.getpid()}"
+
+
+def remove_stale_scratch(root: str | os.PathLike | None = None) -> list[Path]:
+    """Remove the scratch folders that killed reports left in ``root``.
+
+    An isolated build keeps its task and result files in a folder
+    ``<SCRATCH_PREFIX><host>-<pid>-<random>`` of ``root`` (default: the
+    system's temporary folder, ``tempfile.gettempdir()``, which honours
+    ``TMPDIR``) and removes it when the build ends; a report killed with
+    SIGKILL (``kill -9``, the out-of-memory killer, a cluster's wall-time
+    limit) cannot. Folders of this machine whose process no longer runs are
+    removed; those of running processes, and of other machines (a shared
+    ``TMPDIR``), are kept. Returns the removed folders.
+    """
+    root = Path(tempfile.gettempdir() if root is None else root)
+    pattern = re.compile(rf"{re.escape(SCRATCH_PREFIX)}{re.escape(socket.gethostname())}"
+                         r"-(\d+)-\w+")
+    removed = []
+    for path in root.glob(SCRATCH_PREFIX + "*"):
+        match = pattern.fullmatch(path.name)
+        if match is None or not path.is_dir() or process_running(int(match.group(1))):
+            continue
+        shutil.rmtree(path, ignore_errors=True)
+        log.warning("removed %s, left by an interrupted report (process %s, no longer "
+                    "running)", path, match.group(1))
+        removed.append(path)
+    return removed
+
 
 # ---------------------------------------------------------------------------
 # One mesh: build, entries, contact (runs in a fresh process)
@@ -191,7 +238,9 @@ def _run_task(task: dict) -> dict:
         }
     else:
         build_task = {k: v for k, v in task.items() if k not in ("heights", "pressures")}
-        ec, row = run_isolated(build_task) if task["isolated"] else build(build_task)
+        # isolated: its scratch folder is named after this process (remove_stale_scratch)
+        ec, row = (run_isolated(build_task, prefix=f"{SCRATCH_PREFIX}{_scratch_owner()}-")
+                   if task["isolated"] else build(build_task))
     if task.get("heights") is not None:
         start = time.perf_counter()
         row |= _contact_response(ec, task["geometry"], task)
@@ -351,6 +400,7 @@ def influence_convergence(
         reference = "converged" if "converged" in labels else labels[-1]
     if reference not in labels and not (halfspace and reference == HALFSPACE):
         raise ValueError(f"reference {reference!r} is not one of the meshes {labels}")
+    remove_stale_scratch()
 
     heights = None
     if surfaces:

@@ -1,9 +1,19 @@
-"""Figure output: atomic saving and papermill execution of figure notebooks."""
+"""Figure output: atomic saving and papermill execution of figure notebooks.
+
+Every file is written under a temporary name beside it and renamed when
+complete (:func:`roughcontact.study.provenance.atomic_path`:
+``.<stem>.tmp<PID><suffix>``). A writer killed with SIGKILL (``kill -9``,
+the out-of-memory killer, a cluster's wall-time limit) cannot remove its
+temporary file, so every writer here first removes those that processes no
+longer running left beside its output (:func:`remove_stale_temporaries`):
+the next run of the interrupted job cleans up after it.
+"""
 
 from __future__ import annotations
 
 import logging
 import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -13,12 +23,119 @@ from roughcontact.study.provenance import atomic_path
 log = logging.getLogger(__name__)
 
 
+def process_running(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this machine (a zombie counts as running)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # runs, as another user
+        return True
+    return True
+
+
+def remove_stale_temporaries(path: str | os.PathLike) -> list[Path]:
+    """Remove the temporary files of ``path`` that killed writers left behind.
+
+    ``atomic_path`` writes ``path`` as ``.<stem>.tmp<PID><suffix>`` in the
+    same folder. Those whose process no longer runs on this machine are
+    removed; those of running processes (this one, or another writer of the
+    same file) are kept. The workflow never runs two jobs for one output at
+    once, so on a cluster's shared file system a temporary file of a job on
+    another node is a dead one too; it is kept only while its PID happens to
+    run here, which costs a file, never an output. Returns the removed paths.
+    """
+    path = Path(path)
+    pattern = re.compile(rf"\.{re.escape(path.stem)}\.tmp(\d+){re.escape(path.suffix)}")
+    removed = []
+    if not path.parent.is_dir():
+        return removed
+    for candidate in path.parent.iterdir():
+        match = pattern.fullmatch(candidate.name)
+        if match is None or process_running(int(match.group(1))):
+            continue
+        candidate.unlink(missing_ok=True)
+        log.warning("removed %s, left by an interrupted writer (process %s, no longer "
+                    "running)", candidate, match.group(1))
+        removed.append(candidate)
+    return removed
+
+
 def save_figure(fig, *paths, dpi: int = 150) -> None:
     """Save a matplotlib figure to each path (format from the suffix), atomically."""
     for path in paths:
         path = Path(path)
+        remove_stale_temporaries(path)
         with atomic_path(path) as tmp:
             fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format=path.suffix.lstrip("."))
+
+
+def save_table(frame, path: str | os.PathLike) -> None:
+    """Write a table as CSV (no index), atomically; stale temporaries removed first."""
+    remove_stale_temporaries(path)
+    with atomic_path(path) as tmp:
+        frame.to_csv(tmp, index=False)
+
+
+def draw_table(frame, *, title: str | None = None, fontsize: float = 9):
+    """A figure holding ``frame`` as a table; headers and cells may use mathtext.
+
+    The cells show ``frame`` as it is (format the numbers as strings first);
+    each column is as wide as its widest entry. Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+
+    rows, columns = frame.shape
+    fig, ax = plt.subplots(figsize=(1.0 * columns, 0.3 * (rows + 1)))
+    ax.axis("off")
+    table = ax.table(cellText=frame.astype(str).to_numpy(), colLabels=list(frame.columns),
+                     cellLoc="center", loc="upper center")
+    table.auto_set_font_size(False)
+    table.set_fontsize(fontsize)
+    table.auto_set_column_width(list(range(columns)))
+    for (row, _), cell in table.get_celld().items():
+        cell.set_height(1.0 / (rows + 1))
+        cell.PAD = 0.4
+        if row == 0:
+            cell.set_facecolor("0.9")
+    if title:
+        ax.set_title(title, fontsize=fontsize + 1)
+    return fig
+
+
+def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3):
+    """3-D views of the first surface of each surface file, ``columns`` per row.
+
+    Heights [µm] are the stored unit heights times ``sigma_um``; plan
+    coordinates in mm. ``titles`` (one per file, may hold line breaks and
+    mathtext) go above the panels with room kept for them. Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from roughcontact.study.storage import read_surfaces
+
+    files = list(files)
+    columns = max(1, min(columns, len(files)))
+    rows = -(-len(files) // columns)
+    fig = plt.figure(figsize=(4.2 * columns, 4.0 * rows))
+    for k, (path, title) in enumerate(zip(files, titles, strict=True)):
+        data = read_surfaces(path, count=1)
+        spec = data["spec"]
+        z = data["heights"][0] * sigma_um
+        ny, nx = z.shape
+        x = (np.arange(nx) + 0.5) * spec["size"][0] / nx * 1e3
+        y = (np.arange(ny) + 0.5) * spec["size"][1] / ny * 1e3
+        X, Y = np.meshgrid(x, y)
+        ax = fig.add_subplot(rows, columns, k + 1, projection="3d")
+        ax.plot_surface(X, Y, z, cmap="viridis", linewidth=0, antialiased=False,
+                        rstride=1, cstride=1)
+        ax.set(xlabel="$x$ [mm]", ylabel="$y$ [mm]")
+        ax.set_zlabel("$z$ [µm]", labelpad=8)
+        ax.set_box_aspect(None, zoom=0.9)
+        ax.set_title(title, fontsize=10, pad=0, y=1.0)
+    fig.subplots_adjust(left=0.0, right=0.95, bottom=0.03, top=0.9, wspace=0.05, hspace=0.2)
+    return fig
 
 
 def _kernel_name() -> str:
@@ -48,7 +165,9 @@ def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
     ``parameters`` that it declares there are injected after it (the workflow
     passes one set to every figure; the others are logged, not passed). The
     executed notebook is kept so a reader sees the code beside the figure. A
-    failing cell raises with the notebook's traceback.
+    failing cell raises with the notebook's traceback. Temporary notebooks
+    that an earlier, killed execution left beside ``output`` are removed
+    first (:func:`remove_stale_temporaries`).
     """
     import papermill
 
@@ -58,6 +177,7 @@ def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
     parameters = {k: v for k, v in parameters.items() if k in declared}
     log.info("executing %s with parameters %s%s", notebook, sorted(parameters),
              f" (not declared there, not passed: {unused})" if unused else "")
+    remove_stale_temporaries(output)
     with atomic_path(output) as tmp:
         papermill.execute_notebook(
             str(notebook),
