@@ -50,7 +50,7 @@ def canonical(obj):
 def get_final_outputs():
     figures = expand(
         "results/figures/{fig}.{ext}", fig=FIGURES, ext=("png", "pdf", "ipynb")
-    )
+    ) + [f"results/figures/{fig}.csv" for fig in FIGURES if fig.startswith("table_")]
     influence = expand("results/influence/{geometry}.h5", geometry=GEOMETRIES)
     aggregates = expand(
         "results/aggregates/{study}.{ext}",

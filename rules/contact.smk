@@ -41,5 +41,7 @@ rule aggregate:
     params:
         cells=get_aggregate_cells,
         levels=config["contact"]["pressure_levels"],
+        # version of the stored layout (2: the sidecar holds the tables' SHA-256)
+        layout=2,
     script:
         "../scripts/aggregate.py"

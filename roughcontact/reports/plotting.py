@@ -18,6 +18,8 @@ import sys
 import time
 from pathlib import Path
 
+from roughcontact.errors import StoredFileError
+from roughcontact.hashes import file_sha256
 from roughcontact.study.provenance import atomic_path
 
 log = logging.getLogger(__name__)
@@ -191,14 +193,24 @@ def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
 
 
 def load_aggregates(paths) -> tuple:
-    """The aggregate table, per-surface moduli and sidecar of a study (``aggregate_files``)."""
+    """The aggregate table, per-surface moduli and sidecar of a study (``aggregate_files``).
+
+    Both tables are checked against the SHA-256 their sidecar records: an edited
+    or damaged table raises :class:`~roughcontact.errors.StoredFileError`.
+    """
     import json
 
     import pandas as pd
 
     table_path, moduli_path, meta_path = paths
-    return (pd.read_csv(table_path), pd.read_csv(moduli_path),
-            json.loads(Path(meta_path).read_text()))
+    meta = json.loads(Path(meta_path).read_text())
+    for path, key in ((table_path, "table_sha256"), (moduli_path, "moduli_sha256")):
+        if meta.get(key) != file_sha256(path):
+            raise StoredFileError(
+                f"{path}: does not match the SHA-256 in {meta_path} (changed or damaged after "
+                f"the aggregation, or written by an older version); delete it and run the "
+                "workflow again to rebuild it", path)
+    return pd.read_csv(table_path), pd.read_csv(moduli_path), meta
 
 
 def plot_band(ax, frame, quantity: str, *, y_scale: float = 1.0, label=None, color=None,
