@@ -570,6 +570,45 @@ def _fast_product(fast, direction: np.ndarray) -> np.ndarray:
     return (direction.astype(np.float32) @ fast).astype(float)
 
 
+def _check_curvature(op: _Operator, direction, curvature, surfaces, method, iteration,
+                     fast=None) -> None:
+    """Refuse a non-convex problem: a search direction with ``s . C s <= 0``.
+
+    Eq 27 is a convex problem only for a positive definite ``C``; a non-zero
+    direction ``s`` with non-positive curvature proves that ``C`` is not,
+    and the line search along it has no minimum (``"exact"`` refuses such a
+    ``C`` when its Cholesky factorization fails). Called only when some
+    curvature is ``<= 0``, so the normal iteration pays nothing: zero
+    directions (nothing left to move) pass, and with ``fast`` the
+    single-precision curvature is confirmed with a double-precision product
+    before refusing.
+
+    Raises
+    ------
+    ValueError
+        Naming the surface (row of the batch), the iteration and the curvature.
+    """
+    rows = np.flatnonzero((curvature <= 0.0) & direction.any(axis=1))
+    if not rows.size:
+        return
+    if fast is not None:
+        exact = np.einsum("ij,ij->i", op.apply(direction[rows]), direction[rows])
+        bent = exact <= 0.0
+        rows, values = rows[bent], exact[bent]
+        if not rows.size:
+            return
+    else:
+        values = curvature[rows]
+    norm = float(np.einsum("i,i->", direction[rows[0]], direction[rows[0]]))
+    raise ValueError(
+        f"operator must be positive definite: the {method} search direction s of surface "
+        f"{int(surfaces[rows[0]])} at iteration {iteration} has non-positive curvature "
+        f"s.C s / s.s = {values[0] / norm:.6g} m/Pa <= 0, so C has a negative or zero "
+        f"eigenvalue and Eq 27 has no unique minimum; check the influence matrix "
+        f"(symmetric positive definite, Eq 39)"
+    )
+
+
 def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast) -> _Batch:
     """Projected steepest descent or constrained CG on the rows of ``gaps``.
 
@@ -653,6 +692,8 @@ def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast) -> _
         cost += 1.0
         numerator = np.einsum("ij,ij->i", gap_active, direction)
         denominator = np.einsum("ij,ij->i", product, direction)
+        if (denominator <= 0.0).any():
+            _check_curvature(op, direction, denominator, surfaces, method, iteration, fast)
         step = np.divide(numerator, denominator, out=np.zeros_like(numerator),
                          where=denominator > 0.0)
         step[~(np.isfinite(step) & (step > 0.0))] = 0.0

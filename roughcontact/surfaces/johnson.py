@@ -42,6 +42,11 @@ BOUNDARY_RTOL = 1e-12
 FIT_ATOL = 1e-8
 #: AS 99 results further than this from the target go to the robust solver.
 FIRST_TRY_ATOL = 1e-10
+#: Near-normal region (see :func:`_near_normal_excess`): for |Sk| <= NEAR_NORMAL_SKEW and
+#: -NEAR_NORMAL_EXCESS < Ku - 3 < K*(Sk) the fit targets Ku = 3 + K*(Sk), because the exact
+#: curves there cannot be stored in double precision.
+NEAR_NORMAL_SKEW = 1e-6
+NEAR_NORMAL_EXCESS = 1e-10
 
 # AS 99 double-precision settings (Hill, Hill & Holder 1976; see module doc).
 _AS99_TOL_SU = 1e-12  # SU iteration: |beta1 - z| stopping tolerance
@@ -134,6 +139,34 @@ def lognormal_kurt(skew):
     return float(result) if np.ndim(result) == 0 else result
 
 
+def _near_normal_excess(skew, kurt):
+    """Excess kurtosis ``Ku - 3`` that :func:`fit` targets (exact for Ku near 3). Vectorised.
+
+    Near the normal point every Johnson curve but the nearly symmetric SU one
+    stores a law of standard deviation ``std`` as ``x = xi + lam f(u)`` with
+    ``|xi|, |lam| ~ std / |Sk|`` (SB at any Ku, SL, SU with ``|Omega| ~ 1``;
+    ``delta ~ 1/|Sk|``): in double precision its mean is then known only to
+    about ``eps / |Sk|`` times std (3e-8 at ``Sk = 1e-8``, 3e-6 at 1e-10;
+    the SL fit missed ``FIT_ATOL`` there). A nearly symmetric SU curve with the
+    same skewness and excess kurtosis ``K`` has ``|xi| ~ 4 |Sk| std / (3 K)``
+    instead. For ``|Sk| <= NEAR_NORMAL_SKEW`` and
+    ``-NEAR_NORMAL_EXCESS < Ku - 3 < K*`` the target excess is therefore
+    raised to ``K* = sqrt(4 eps |Sk| / 3)``, where the rounding of the curve
+    (``~ K*``) and the change of the kurtosis balance: at most
+    ``1e-10 + 1.7e-11`` (``K*(1e-6)``), the skewness kept. ``K*/Sk^2 >= 17``
+    there, so the curve is SU far from the lognormal line (``16/9``), or SN
+    for ``|Sk| <= BOUNDARY_RTOL``. Outside this region the exact curve is
+    kept: its mean rounds to at most about 6e-9 std (SL just above
+    ``|Sk| = 1e-6``), within ``FIT_ATOL``.
+    """
+    sk = np.asarray(skew, dtype=float)
+    excess = np.asarray(kurt, dtype=float) - 3.0
+    floor = np.sqrt(4.0 / 3.0 * np.finfo(float).eps * np.abs(sk))
+    near = (np.abs(sk) <= NEAR_NORMAL_SKEW) & (excess > -NEAR_NORMAL_EXCESS) & (excess < floor)
+    result = np.where(near, floor, excess)
+    return float(result) if np.ndim(result) == 0 else result
+
+
 def family_of(skew, kurt):
     """Johnson family that :func:`fit` chooses for a target (Sk, Ku).
 
@@ -148,7 +181,10 @@ def family_of(skew, kurt):
         ``"ST"`` within a relative ``BOUNDARY_RTOL`` of ``Ku = Sk^2 + 1``
         (Eq 14), ``"infeasible"`` below it, ``"SN"`` within that tolerance of
         (0, 3), ``"SL"`` within it of the lognormal line, ``"SU"`` above the
-        line and ``"SB"`` between the line and the ST limit.
+        line and ``"SB"`` between the line and the ST limit. Near the normal
+        point the class is that of the kurtosis :func:`fit` targets there
+        (:func:`_near_normal_excess`): SU or SN, never SL for
+        ``|Sk| <= NEAR_NORMAL_SKEW``.
 
     Raises
     ------
@@ -163,10 +199,17 @@ def family_of(skew, kurt):
         raise ValueError("kurt must be finite")
     sk, ku = np.broadcast_arrays(sk, ku)
     st_limit = sk * sk + 1.0
-    sl_line = _lognormal_kurt_from_wm1(_lognormal_wm1(sk))
-    family = np.where(ku > sl_line, "SU", "SB").astype("<U10")
-    family[np.abs(ku - sl_line) <= BOUNDARY_RTOL * sl_line] = "SL"
-    normal = (np.abs(sk) <= BOUNDARY_RTOL) & (np.abs(ku - 3.0) <= 3.0 * BOUNDARY_RTOL)
+    wm1 = _lognormal_wm1(sk)
+    sl_line = _lognormal_kurt_from_wm1(wm1)
+    # Compared as excess kurtosis (exact near 3, where Ku itself rounds the line away).
+    excess = _near_normal_excess(sk, ku)
+    sl_excess = wm1 * (16.0 + wm1 * (15.0 + wm1 * (6.0 + wm1)))
+    family = np.where(excess > sl_excess, "SU", "SB").astype("<U10")
+    on_line = (np.abs(excess - sl_excess) <= BOUNDARY_RTOL * sl_line) & (
+        np.abs(sk) > NEAR_NORMAL_SKEW
+    )
+    family[on_line] = "SL"
+    normal = (np.abs(sk) <= BOUNDARY_RTOL) & (np.abs(excess) <= 3.0 * BOUNDARY_RTOL)
     family[normal] = "SN"
     on_limit = np.abs(ku - st_limit) <= BOUNDARY_RTOL * st_limit
     family[on_limit] = "ST"
@@ -422,6 +465,26 @@ def _su_shape(wm1, abs_omega):
         + 6.0 * (2.0 * w + 1.0) * t * t
     )
     return var_scaled, skew, numerator / (base * base)
+
+
+def _su_excess(wm1, abs_omega):
+    """Excess kurtosis ``kurt U - 3`` of :func:`_su_shape`, free of cancellation near normal.
+
+    ``numerator - 3 base^2`` of :func:`_su_shape` simplifies (``e = w - 1``,
+    ``L = beta2_L - 3`` of the lognormal line) to
+    ``w^2 L (1 + t^4) + 4 w e (4 + e) t (1 + t^2) - 6 e^2 t^2``, every term
+    ``O(e)``, so the excess keeps its relative accuracy as ``w -> 1``.
+    """
+    w = 1.0 + wm1
+    t = math.exp(-2.0 * abs_omega)
+    base = w * (1.0 + t * t) + 2.0 * t
+    excess_l = wm1 * (16.0 + wm1 * (15.0 + wm1 * (6.0 + wm1)))
+    numerator = (
+        w * w * excess_l * (1.0 + t**4)
+        + 4.0 * w * wm1 * (4.0 + wm1) * t * (1.0 + t * t)
+        - 6.0 * wm1 * wm1 * t * t
+    )
+    return numerator / (base * base)
 
 
 def _su_shape_moments(wm1, omega):
@@ -775,39 +838,42 @@ def _brent(func, lo, hi, f_lo=None, f_hi=None, xtol=1e-15, ftol=0.0):
 def _su_robust(abs_skew, kurt):
     """SU shape ``(w - 1, |Omega|)`` by nested bracketing on the closed forms.
 
-    Outer loop on ``log(w - 1)`` between the lognormal ``w`` of this kurtosis
-    (``|Omega| -> inf``) and the symmetric ``w`` (``Omega = 0``), matching the
-    skewness; inner loop on ``|Omega|`` matching the kurtosis.
+    Outer loop on ``|Omega|`` in ``[0, 40]`` matching the skewness (zero at
+    ``Omega = 0``, the lognormal one as ``|Omega| -> inf``; ``t = exp(-80)``
+    is that limit to double precision); inner loop on ``log(w - 1)`` between
+    the lognormal ``w`` of this kurtosis and the symmetric one, matching the
+    excess kurtosis (:func:`_su_excess`). Both match to relative accuracy, so
+    a tiny skewness near the normal point is reproduced, not rounded to zero.
     """
+    excess = kurt - 3.0
     wm1_sym = _su_symmetric_wm1(kurt)
     if abs_skew == 0.0:
         return wm1_sym, 0.0
-    wm1_l = _lognormal_wm1_from_kurt(kurt)
-    omega_cap = 40.0  # t = exp(-80): the lognormal limit to double precision
+    log_lo = math.log(_lognormal_wm1_from_kurt(kurt))
+    log_hi = math.log(wm1_sym)
+    omega_cap = 40.0
 
-    def abs_omega_for(wm1):
-        def kurt_gap(a):
-            return _su_shape(wm1, a)[2] - kurt
+    def wm1_for(abs_omega):
+        def excess_gap(log_wm1):
+            return _su_excess(math.exp(log_wm1), abs_omega) - excess
 
-        hi = 1.0
-        while kurt_gap(hi) < 0.0:
-            if hi >= omega_cap:
-                return omega_cap
-            hi = min(2.0 * hi, omega_cap)
-        gap0 = _su_shape(wm1, 0.0)[2] - kurt
-        if gap0 >= 0.0:
-            return 0.0
-        return _brent(kurt_gap, 0.0, hi, f_lo=gap0)
+        f_lo, f_hi = excess_gap(log_lo), excess_gap(log_hi)
+        if f_lo >= 0.0:
+            return math.exp(log_lo)
+        if f_hi <= 0.0:
+            return math.exp(log_hi)
+        return math.exp(_brent(excess_gap, log_lo, log_hi, f_lo=f_lo, f_hi=f_hi,
+                               xtol=1e-15 * (1.0 + abs(log_lo))))
 
-    def skew_gap(log_wm1):
-        wm1 = math.exp(log_wm1)
-        return _su_shape(wm1, abs_omega_for(wm1))[1] - abs_skew
+    def skew_gap(abs_omega):
+        return _su_shape(wm1_for(abs_omega), abs_omega)[1] - abs_skew
 
-    lo, hi = math.log(wm1_l), math.log(wm1_sym)
-    f_lo = (2.0 + 1.0 + wm1_l) * math.sqrt(wm1_l) - abs_skew  # lognormal skewness
-    root = _brent(skew_gap, lo, hi, f_lo=f_lo, f_hi=-abs_skew, xtol=1e-15 * (1.0 + abs(lo)))
-    wm1 = math.exp(root)
-    return wm1, abs_omega_for(wm1)
+    f_cap = skew_gap(omega_cap)
+    if f_cap <= 0.0:
+        return wm1_for(omega_cap), omega_cap
+    abs_omega = _brent(skew_gap, 0.0, omega_cap, f_lo=-abs_skew, f_hi=f_cap, xtol=1e-300,
+                       ftol=_SOLVER_FTOL * min(1.0, abs_skew))
+    return wm1_for(abs_omega), abs_omega
 
 
 def _sb_robust(abs_skew, kurt):
@@ -953,8 +1019,15 @@ def _fit_sl(skew, mean, std):
 
 
 def _su_misfit(wm1, abs_omega, abs_skew, kurt):
-    _, skew, ku = _su_shape(wm1, abs_omega)
-    return max(abs(skew - abs_skew), abs(ku - kurt))
+    """Misfit of an SU shape, relative to ``min(1, |Sk|)`` and ``min(1, Ku - 3)``.
+
+    Relative near the normal point, where AS 99's tolerance on ``beta1`` does
+    not resolve the skewness.
+    """
+    skew = _su_shape(wm1, abs_omega)[1]
+    excess = kurt - 3.0
+    return max(abs(skew - abs_skew) / min(1.0, abs_skew) if abs_skew > 0.0 else skew,
+               abs(_su_excess(wm1, abs_omega) - excess) / min(1.0, excess))
 
 
 def _fit_su(skew, kurt, mean, std):
@@ -1027,7 +1100,13 @@ def fit(skew, kurt, mean=0.0, std=1.0):
         ``Ku = Sk^2 + 1`` (Eq 14-15), SN at (0, 3), SL on the lognormal line,
         SU above it and SB between. Its moments (:meth:`JohnsonCurve.moments`)
         equal the target within ``FIT_ATOL = 1e-8`` (mean and std relative to
-        std); this is verified before returning.
+        std); this is verified before returning. The fit is continuous through
+        the normal point: for ``|Sk| <= 1e-6`` and ``-1e-10 < Ku - 3 < K*``,
+        ``K* = sqrt(4 eps |Sk| / 3) <= 1.7e-11``, it is the SU curve (SN for
+        ``|Sk| <= 1e-12``) of kurtosis ``3 + K*``, whose parameters round to
+        about ``K*`` std in double precision (those of the exact SB, SL or SU
+        curve there round to ``eps / |Sk|`` std); see
+        :func:`_near_normal_excess`.
 
     Raises
     ------
@@ -1057,6 +1136,10 @@ def fit(skew, kurt, mean=0.0, std=1.0):
     family = family_of(skew, kurt)
     if family == "infeasible":
         raise InfeasibleMoments(_infeasible_message(skew, kurt))
+    # Near the normal point the fit aims at a kurtosis within 1.2e-10 of the
+    # target that double precision can represent (see _near_normal_excess).
+    excess = _near_normal_excess(skew, kurt)
+    fitted_kurt = kurt if excess == kurt - 3.0 else 3.0 + excess
     if family == "ST":
         curve = _fit_st(skew, mean, std)
     elif family == "SN":
@@ -1064,9 +1147,9 @@ def fit(skew, kurt, mean=0.0, std=1.0):
     elif family == "SL":
         curve = _fit_sl(skew, mean, std)
     elif family == "SU":
-        curve = _fit_su(skew, kurt, mean, std)
+        curve = _fit_su(skew, fitted_kurt, mean, std)
     else:
-        curve = _fit_sb(skew, kurt, mean, std)
+        curve = _fit_sb(skew, fitted_kurt, mean, std)
     _check_fit(curve, (mean, std, skew, kurt))
     return curve
 

@@ -476,6 +476,18 @@ def fill_missing(heights: np.ndarray, max_fraction: float = 0.0, *, source="heig
         return z, 0
     fraction = count / z.size
     if fraction > max_fraction or count == z.size:
+        most = 0.5  # the largest fill_holes the config allows (config/schema.yaml)
+        if count == z.size or fraction > most:
+            reason = ("no point is known, so there is nothing to interpolate from"
+                      if count == z.size else
+                      f"more than {100 * most:g} % of the map would be interpolated, beyond "
+                      f"the largest fill_holes the study accepts ({most:g}, config/schema.yaml)")
+            raise MeasurementError(
+                f"{missing_message(source, count, z.size, absent)}: {reason}. The data "
+                f"cannot be filled; repair {source} or re-export it from the instrument "
+                "software (with the missing points measured or cropped away).",
+                source,
+            )
         allowed = (f"fill_holes = {max_fraction:g} allows at most {100 * max_fraction:.3g} %"
                    if max_fraction > 0 else "fill_holes is 0, so none may be missing")
         raise MeasurementError(
