@@ -465,7 +465,7 @@ def test_measured_surface_runs_end_to_end_beside_its_twin(tmp_path):
     assert (tmp_path / "results" / "figures" / "measured.png").stat().st_size > 1000
     audit = pd.read_csv(tmp_path / "results" / "audit" / "audit.csv", dtype={"flags": str})
     assert not audit["flags"].fillna("").str.contains("changed|unconverged|missing").any()
-    # the twins come from the exact generator: their fixed quantile bias is not a flag
+    # the twins come from the exact generator: their moments are the targets
     assert not audit["flags"].fillna("").str.contains("off target").any()
     # legends tell the measurement from its twin
     labels = {key.startswith("measured-"): part["label"].iloc[0]

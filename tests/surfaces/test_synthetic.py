@@ -218,8 +218,9 @@ def test_exact_method_height_distribution_is_exact():
     assert np.allclose(np.sort(z, axis=None), surface.target_heights(spec), rtol=0, atol=1e-12)
     st = surface.height_stats(z)
     assert st["sigma"] == pytest.approx(2.0, rel=1e-12)
-    # the quantile sample's moments approach the Johnson law's
-    assert st["kurt"] == pytest.approx(2.6, abs=0.02)
+    # the corrected quantile set has exactly the target moments
+    assert st["kurt"] == pytest.approx(2.6, abs=1e-9)
+    assert st["skew"] == pytest.approx(0.0, abs=1e-9)
     assert info.spectral_error < 0.35
     assert info.iterations >= 1
 
@@ -228,8 +229,9 @@ def test_exact_method_spectrum_close_to_filter():
     spec = paper_spec(skew=-0.8, kurt=4.0)
     z, info = surface.generate_exact(spec, 3)
     st = surface.height_stats(z)
-    assert st["skew"] == pytest.approx(-0.8, abs=0.02)
-    assert info.spectral_error < 0.35
+    assert st["skew"] == pytest.approx(-0.8, abs=1e-9)
+    assert st["kurt"] == pytest.approx(4.0, abs=1e-9)
+    assert info.spectral_error < 0.01
     bx, by = surface.correlation_length(z, spec.spacing)
     assert 0.6 * MM < bx < 1.4 * MM
 
