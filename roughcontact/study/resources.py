@@ -199,8 +199,8 @@ def influence_runtime(geometry: dict, body: dict, attempt: int = 1) -> int:
 
 def surfaces_seconds(cell: dict) -> float:
     """Wall time [s] of a surface cell: 60 surfaces of 60 x 60 take 0.01 s by the
-    filter and 1.3 s by IAAFT (``exact``); 120 x 120: 0.04 s, 7.7 s. Counted
-    as 0.001 s (filter) or 0.03 s (IAAFT) per surface times (n / 3600)^1.5."""
+    filter and 0.15-0.30 s by IAAFT (``exact``); 120 x 120: 0.04 s, 0.47-0.92 s.
+    Counted as 0.001 s (filter) or 0.01 s (IAAFT) per surface times (n / 3600)^1.5."""
     fit = _MODEL["surfaces"]
     per_surface = fit["exact_seconds"] if cell["method"] == "exact" else fit["filter_seconds"]
     size = cell["grid"][0] * cell["grid"][1] / fit["reference_elements"]
