@@ -110,7 +110,8 @@ MIN_POINTS = 4
 MAX_POINTS = 4096
 
 _SEPARATORS = re.compile(r"[,;]")
-_NUMBER = re.compile(r"^[+-]?(\d+([.,]\d*)?|[.,]\d+)([eE][+-]?\d+)?$|^[+-]?(nan|NaN|NAN)$")
+_NUMBER = re.compile(r"^[+-]?(\d+([.,]\d*)?|[.,]\d+)([eE][+-]?\d+)?$|^[+-]?(nan|inf|infinity)$",
+                     re.IGNORECASE)
 
 
 # --------------------------------------------------------------------------- reading
