@@ -20,7 +20,7 @@ try:
     PLAN = study.study_plan(config)
 except study.ConfigProblems as err:
     raise WorkflowError(str(err)) from None
-for _problem in resources.machine_problems(config):
+for _problem in resources.machine_problems(config, plan=PLAN):
     logger.warning(f"Warning: {_problem}")
 FIGURES = PLAN.figures
 # contact studies: the paper's figures and the user's own sweeps

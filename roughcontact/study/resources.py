@@ -360,10 +360,11 @@ def speed_vs_error_mem_mb(geometry: dict, report: dict, body: dict) -> int:
 # Drift: the model against a run's benchmarks
 
 
-def predictions(config: dict) -> dict[str, dict[str, tuple[float, int]]]:
+def predictions(config: dict, plan=None) -> dict[str, dict[str, tuple[float, int]]]:
     """Rule -> wildcard -> (runtime [s] before the margin, memory [MB]) of the
-    contact, influence and surfaces jobs of a validated ``config``."""
-    plan = study_plan(config)
+    contact, influence and surfaces jobs of a validated ``config`` (of its
+    :func:`~roughcontact.study.cells.study_plan`, made here unless given)."""
+    plan = study_plan(config) if plan is None else plan
     settings = contact_settings(config)
     body = config["body"]
     return {
@@ -383,14 +384,15 @@ def machine_memory_mb() -> float:
         return math.nan
 
 
-def machine_problems(config: dict, total_mb: float | None = None) -> list[str]:
-    """The contact, influence and surfaces jobs of a validated ``config`` whose planned
-    memory exceeds ``total_mb`` (default: this machine's), with the keys to change."""
+def machine_problems(config: dict, total_mb: float | None = None, plan=None) -> list[str]:
+    """The contact, influence and surfaces jobs of a validated ``config`` (its ``plan``)
+    whose planned memory exceeds ``total_mb`` (default: this machine's), with the keys
+    to change."""
     total_mb = machine_memory_mb() if total_mb is None else total_mb
     if not math.isfinite(total_mb):
         return []
     problems = []
-    for rule, jobs in predictions(config).items():
+    for rule, jobs in predictions(config, plan).items():
         for key, (_, mem_mb) in jobs.items():
             if mem_mb > total_mb:
                 problems.append(

@@ -169,3 +169,16 @@ def test_compare_prints_predictions_against_benchmarks(tmp_path, capsys):
     assert float(fields[1]) == pytest.approx(seconds, abs=0.01)
     assert float(fields[3]) == pytest.approx(seconds / 2.0, abs=0.01)
     assert int(fields[4]) == mem_mb and float(fields[6]) == pytest.approx(mem_mb / 100, abs=0.01)
+
+
+def test_jobs_planned_beyond_the_machine_are_named_with_the_keys_to_change():
+    quick = resources.SCHEMA_FILE.parent / "quick.yaml"
+    config = yaml.safe_load(quick.read_text())
+    validate(config, str(resources.SCHEMA_FILE))
+    plan = study_plan(config)
+    largest = max(mem for jobs in resources.predictions(config, plan).values()
+                  for _, mem in jobs.values())
+    assert resources.machine_problems(config, total_mb=largest, plan=plan) == []
+    problems = resources.machine_problems(config, total_mb=largest - 1, plan=plan)
+    assert problems and all("this machine has" in p and "body.operator: auto" in p
+                            for p in problems)
