@@ -22,6 +22,13 @@ adjustment (Perez-Rafols & Almqvist 2019, Tribol. Int. 131, 591-604) to give
 every realisation a height set whose sample sigma, Sk and Ku are exactly the
 targets (corrected Johnson quantiles), with a spectrum matched as closely as
 the rank constraint allows; it is not limited by the Fig 2 bound.
+
+Also beyond the paper, ``SurfaceSpec(acf="self-affine", hurst=...,
+rolloff_wavelength=..., cutoff_wavelength=...)`` replaces the ACF of Eq 1 by
+an isotropic self-affine power spectrum with roll-off and short-wavelength
+cut-off (:func:`self_affine_psd`), usable with both methods and any Johnson
+height law: with the cut-off resolved, the surface has no roughness at the
+grid scale and contact results converge as the grid is refined.
 """
 
 from __future__ import annotations
@@ -42,7 +49,10 @@ log = logging.getLogger(__name__)
 ACF_DECAY = 2.3
 """Decay constant of Eq 1: the ACF falls to exp(-2.3) ~ 10 % at lag b."""
 
-ACF_KINDS = ("exponential", "gaussian")
+ACF_KINDS = ("exponential", "gaussian", "self-affine")
+"""Spectrum kinds of :class:`SurfaceSpec`: two ACFs (Eq 1) and a self-affine PSD."""
+
+_SELF_AFFINE_FIELDS = ("hurst", "rolloff_wavelength", "cutoff_wavelength")
 
 
 def _pair(value, name: str) -> tuple:
@@ -72,26 +82,64 @@ class SurfaceSpec:
     skew, kurt : float
         Target skewness Sk and Pearson kurtosis Ku (normal: 0 and 3) of the
         heights (Eq 4-5).
-    acf : {"exponential", "gaussian"}
+    acf : {"exponential", "gaussian", "self-affine"}
         ``exp(-2.3 r)`` (Eq 1) or ``exp(-2.3 r^2)``, with
-        ``r = sqrt((x/bx)^2 + (y/by)^2)``.
+        ``r = sqrt((x/bx)^2 + (y/by)^2)``; or ``"self-affine"``: the isotropic
+        power spectral density of :func:`self_affine_psd` (constant below the
+        roll-off wavenumber, ``q^(-2(1+H))`` up to the cut-off, zero above),
+        set by ``hurst``, ``rolloff_wavelength`` and ``cutoff_wavelength``.
     periodic : bool
         True: circular convolution, the surface tiles the plane. False: the
-        paper's moving average over padded noise, no wrap-around.
+        paper's moving average over padded noise, no wrap-around
+        (``"self-affine"`` is periodic only).
+    hurst : float, optional
+        Hurst exponent H in (0, 1) of the self-affine band (``"self-affine"``
+        only).
+    rolloff_wavelength : float, optional
+        Roll-off wavelength ``lambda_r = 2 pi / q_r`` [m]: the PSD is flat at
+        longer wavelengths (``"self-affine"`` only). Must exceed
+        ``cutoff_wavelength``.
+    cutoff_wavelength : float, optional
+        Short-wavelength cut-off ``lambda_s = 2 pi / q_s`` [m]: no power at
+        shorter wavelengths, so the surface is smooth below it and contact
+        results converge with the grid once it is resolved. At least two grid
+        spacings along each axis (``"self-affine"`` only).
+
+    For ``"self-affine"``, ``corr_length`` may be left out (None): it is then
+    set to the roll-off wavelength along both axes, the scale beyond which
+    heights decorrelate; it enters only the domain checks and messages.
     """
 
     grid: tuple[int, int]
     size: tuple[float, float]
-    corr_length: tuple[float, float]
+    corr_length: tuple[float, float] | None = None
     sigma: float = 1.0
     skew: float = 0.0
     kurt: float = 3.0
     acf: str = "exponential"
     periodic: bool = True
+    hurst: float | None = None
+    rolloff_wavelength: float | None = None
+    cutoff_wavelength: float | None = None
 
     def __post_init__(self):
         grid = _pair(self.grid, "grid")
         size = _pair(self.size, "size")
+        if self.acf not in ACF_KINDS:
+            raise ValueError(f"SurfaceSpec.acf must be one of {ACF_KINDS}; got {self.acf!r}")
+        if self.acf == "self-affine":
+            self._check_self_affine(grid, size)
+            if self.corr_length is None:
+                object.__setattr__(self, "corr_length", float(self.rolloff_wavelength))
+        else:
+            for name in _SELF_AFFINE_FIELDS:
+                if getattr(self, name) is not None:
+                    raise ValueError(
+                        f"SurfaceSpec.{name} applies to acf='self-affine' only; got "
+                        f"{name}={getattr(self, name)!r} with acf={self.acf!r}"
+                    )
+            if self.corr_length is None:
+                raise ValueError(f"SurfaceSpec.corr_length [m] is required for acf={self.acf!r}")
         corr = _pair(self.corr_length, "corr_length")
         for name, pair in (("size", size), ("corr_length", corr)):
             for v in pair:
@@ -112,14 +160,43 @@ class SurfaceSpec:
         for name in ("skew", "kurt"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"SurfaceSpec.{name} must be finite; got {getattr(self, name)!r}")
-        if self.acf not in ACF_KINDS:
-            raise ValueError(f"SurfaceSpec.acf must be one of {ACF_KINDS}; got {self.acf!r}")
         object.__setattr__(self, "grid", (int(grid[0]), int(grid[1])))
         object.__setattr__(self, "size", (float(size[0]), float(size[1])))
         object.__setattr__(self, "corr_length", (float(corr[0]), float(corr[1])))
         object.__setattr__(self, "sigma", float(self.sigma))
         object.__setattr__(self, "skew", float(self.skew))
         object.__setattr__(self, "kurt", float(self.kurt))
+
+    def _check_self_affine(self, grid, size) -> None:
+        hurst, rolloff, cutoff = (getattr(self, name) for name in _SELF_AFFINE_FIELDS)
+        if hurst is None or not (math.isfinite(hurst) and 0.0 < hurst < 1.0):
+            raise ValueError(
+                f"SurfaceSpec.hurst must be in (0, 1) for acf='self-affine'; got {hurst!r}"
+            )
+        for name, value in (("rolloff_wavelength", rolloff), ("cutoff_wavelength", cutoff)):
+            if value is None or not (math.isfinite(value) and value > 0):
+                raise ValueError(
+                    f"SurfaceSpec.{name} must be positive and finite [m] for "
+                    f"acf='self-affine'; got {value!r}"
+                )
+        spacing = max(float(size[0]) / int(grid[0]), float(size[1]) / int(grid[1]))
+        if cutoff < 2.0 * spacing * (1.0 - 1e-12):
+            raise ValueError(
+                f"SurfaceSpec.cutoff_wavelength = {cutoff:.4g} m is shorter than two grid "
+                f"spacings (2 x {spacing:.4g} m): the grid cannot carry it (Nyquist). Refine "
+                "the grid or lengthen the cut-off."
+            )
+        if not rolloff > cutoff:
+            raise ValueError(
+                f"SurfaceSpec.rolloff_wavelength = {rolloff:.4g} m must be longer than "
+                f"cutoff_wavelength = {cutoff:.4g} m"
+            )
+        if not self.periodic:
+            raise ValueError("acf='self-affine' generates periodic surfaces only; "
+                             "set periodic=True")
+        object.__setattr__(self, "hurst", float(hurst))
+        object.__setattr__(self, "rolloff_wavelength", float(rolloff))
+        object.__setattr__(self, "cutoff_wavelength", float(cutoff))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -142,14 +219,51 @@ class SurfaceSpec:
             "kurt": self.kurt,
             "acf": self.acf,
             "periodic": self.periodic,
-        }
+        } | {name: getattr(self, name) for name in _SELF_AFFINE_FIELDS
+             if getattr(self, name) is not None}
 
 
 # --------------------------------------------------------------------------- filter
 
 
+def self_affine_psd(q, hurst: float, rolloff_wavelength: float, cutoff_wavelength: float):
+    """Isotropic self-affine PSD with roll-off and cut-off, up to a constant factor.
+
+    ``C(q) = 1`` for ``q < q_r``, ``(q / q_r)^(-2 (1 + H))`` for
+    ``q_r <= q <= q_s`` and ``0`` for ``q > q_s``, with ``q_r = 2 pi / lambda_r``
+    and ``q_s = 2 pi / lambda_s`` (the form generated by Tamaas,
+    SurfaceTopography and SlipPY; Persson et al. 2005, J. Phys. Condens.
+    Matter 17, R1, Eq 4; Jacobs, Junge & Pastewka 2017, Surf. Topogr. Metrol.
+    Prop. 5, 013001). ``q`` is the wavenumber magnitude [1/m]; the result is
+    dimensionless (relative to the plateau ``C(0)``): :class:`SurfaceSpec`
+    sets the amplitude through ``sigma``.
+    """
+    q = np.asarray(q, dtype=float)
+    q_r = 2.0 * math.pi / rolloff_wavelength
+    q_s = 2.0 * math.pi / cutoff_wavelength
+    band = (np.maximum(q, q_r) / q_r) ** (-2.0 * (1.0 + hurst))
+    return np.where(q > q_s * (1.0 + 1e-12), 0.0, band)
+
+
+def _grid_wavenumber(spec: SurfaceSpec) -> np.ndarray:
+    """Wavenumber magnitude ``|q|`` [1/m] of each full-FFT bin, shape ``(ny, nx)``."""
+    ny, nx = spec.shape
+    dx, dy = spec.spacing
+    qx = 2.0 * math.pi * np.fft.fftfreq(nx, dx)
+    qy = 2.0 * math.pi * np.fft.fftfreq(ny, dy)
+    return np.hypot(qx[None, :], qy[:, None])
+
+
 def autocorrelation(spec: SurfaceSpec, lag_x, lag_y):
-    """Target ACF R(x, y) of Eq 1 [m^2] at lags ``lag_x``, ``lag_y`` [m]."""
+    """Target ACF R(x, y) of Eq 1 [m^2] at lags ``lag_x``, ``lag_y`` [m].
+
+    Exponential and Gaussian kinds only; a self-affine spec is defined by its
+    PSD (:func:`self_affine_psd`), whose ACF on the grid is the inverse FFT of
+    :func:`filter_kernel`'s power.
+    """
+    if spec.acf == "self-affine":
+        raise ValueError("autocorrelation: acf='self-affine' is defined by its PSD, "
+                         "see self_affine_psd")
     bx, by = spec.corr_length
     r2 = (np.asarray(lag_x) / bx) ** 2 + (np.asarray(lag_y) / by) ** 2
     shape = np.sqrt(r2) if spec.acf == "exponential" else r2
@@ -212,7 +326,17 @@ def filter_kernel(spec: SurfaceSpec) -> FilterKernel:
 
     Lengths in ``spec`` are in metres; ``spec.sigma`` does not enter (the
     kernel is normalised to unit variance, sigma scales the output).
+
+    For ``acf="self-affine"`` S_z is :func:`self_affine_psd` at each bin's
+    wavenumber ``|q|`` on the (periodic) surface grid, with no clipping needed.
     """
+    if spec.acf == "self-affine":
+        spectrum = self_affine_psd(_grid_wavenumber(spec), spec.hurst, spec.rolloff_wavelength,
+                                   spec.cutoff_wavelength)
+        transfer = np.sqrt(spectrum)
+        weights = np.fft.ifft2(transfer).real
+        norm = math.sqrt(float(np.sum(weights**2)))
+        return FilterKernel(weights / norm, transfer / norm, 0, 0.0)
     ky, kx = kernel_shape(spec)
     dx, dy = spec.spacing
     lag_x = np.fft.fftfreq(kx, 1.0 / kx) * dx

@@ -189,6 +189,21 @@ def test_grid_study_nested_is_zero_change_on_the_finest(tmp_path):
     assert np.isfinite(table["k_P_change"]).all()
 
 
+def test_grid_study_self_affine_spectrum_and_fft_halfspace_match_dense():
+    spectrum = dict(acf="self-affine", hurst=0.8, rolloff_wavelength=0.9e-3,
+                    cutoff_wavelength=0.6e-3)
+    common = dict(grids=(6, 12), size=12 * H, thickness=2e-3, surfaces=2, steps=8,
+                  pressures=(1e6,), seed=1, spectrum=spectrum, tol=1e-10, precision="double")
+    dense = speed.grid_study([(0.0, 3.0)], influence="halfspace", **common)
+    fft = speed.grid_study([(0.0, 3.0)], influence="halfspace_fft", **common)
+    assert fft.attrs["spectrum"] == spectrum
+    for column in ("k_P_Pa", "real_area_fraction", "max_pressure_Pa"):
+        np.testing.assert_allclose(fft[column], dense[column], rtol=1e-6)
+    exponential = speed.grid_study([(0.0, 3.0)], influence="halfspace",
+                                   **(common | dict(spectrum=None)))
+    assert not np.allclose(exponential["k_P_Pa"], dense["k_P_Pa"])
+
+
 def test_report_files_have_the_expected_sections(tmp_path, solver_table):
     _, mesh, grid, _ = synthetic_tables()
     counts = speed.band_vs_count(sweep_with_spread(m=20), PRESSURES, (5, 10, 20), draws=5)

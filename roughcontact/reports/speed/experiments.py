@@ -102,14 +102,21 @@ def _cell_key(skew: float, kurt: float) -> str:
 
 
 def _cell_heights(grid, size, b: float, skew: float, kurt: float, count: int, seed: int,
-                  tag: str) -> np.ndarray:
+                  tag: str, spectrum: Mapping | None = None) -> np.ndarray:
     """``count`` surfaces of one cell in units of sigma, shape (count, ny, nx).
 
     Exponential ACF (Eq 1) with 10 % correlation length ``b`` [m], periodic
     filter of the pipeline; seeds from ``derive_seeds(seed, tag|cell, count)``.
+    ``spectrum``: :class:`SurfaceSpec` fields replacing the ACF (e.g.
+    ``acf="self-affine"``, ``hurst``, ``rolloff_wavelength``,
+    ``cutoff_wavelength``); ``b`` is then unused.
     """
-    spec = SurfaceSpec(grid=tuple(grid), size=tuple(size), corr_length=(b, b), sigma=1.0,
-                       skew=float(skew), kurt=float(kurt))
+    if spectrum:
+        spec = SurfaceSpec(grid=tuple(grid), size=tuple(size), sigma=1.0, skew=float(skew),
+                           kurt=float(kurt), **spectrum)
+    else:
+        spec = SurfaceSpec(grid=tuple(grid), size=tuple(size), corr_length=(b, b), sigma=1.0,
+                           skew=float(skew), kurt=float(kurt))
     seeds = derive_seeds(seed, f"{tag}|{_cell_key(skew, kurt)}", count)
     return generate_many(spec, seeds)
 
@@ -395,9 +402,12 @@ def _grid_influence(geometry: BlockGeometry, influence: str, coarsening: int):
         return operators.block_operator(geometry, coarse_grid=(coarse, coarse))
     if influence == "halfspace":
         return halfspace_influence(geometry.grid, geometry.size, 1.0, geometry.nu)
+    if influence == "halfspace_fft":
+        return operators.halfspace_operator(geometry.grid, geometry.size, geometry.nu)
     if influence == "fe":
         return unit_modulus_influence(geometry)
-    raise ValueError(f"influence must be 'hybrid', 'halfspace' or 'fe', got {influence!r}")
+    raise ValueError("influence must be 'hybrid', 'halfspace', 'halfspace_fft' or 'fe', "
+                     f"got {influence!r}")
 
 
 def grid_study(
@@ -423,6 +433,7 @@ def grid_study(
     steps: int = 30,
     seed: int = 2006,
     progress: Callable[[str], None] | None = None,
+    spectrum: Mapping | None = None,
 ) -> pd.DataFrame:
     """k_P, real area and peak pressure of the same statistics on several contact grids.
 
@@ -441,6 +452,9 @@ def grid_study(
       120 x 120 would be four times the 60 x 60 model (about 0.5 M dofs).
     - ``"halfspace"``: Love's half-space (no finite-body bulk: k_P about
       11-17 % high at 60 x 60, fine for the *change* between grids only).
+    - ``"halfspace_fft"``: the same Love half-space, matrix-free
+      (:func:`roughcontact.elasticity.operators.halfspace_operator`, FFT
+      convolution, no n^2 matrix), for grids of 240 x 240 and more.
     - ``"fe"``: :func:`~roughcontact.elasticity.influence.unit_modulus_influence` with ``mesh``.
 
     Surfaces (exponential ACF, Eq 1; ``sigma``, ``b``): with
@@ -449,7 +463,12 @@ def grid_study(
     the same random field, the same statistics, a coarser grid), so the change
     between grids is the discretization alone; with ``"independent"`` each
     grid gets its own surfaces (seeds per grid) and the change also holds
-    sampling noise (see the ``*_half_width`` columns). Each grid is swept as a
+    sampling noise (see the ``*_half_width`` columns). ``spectrum``, a mapping
+    of :class:`~roughcontact.surfaces.synthetic.SurfaceSpec` fields such as
+    ``{"acf": "self-affine", "hurst": 0.8, "rolloff_wavelength": 3e-3,
+    "cutoff_wavelength": 0.6e-3}``, replaces the exponential ACF (``b`` is then
+    unused): with the cut-off resolved, real area and peak pressure converge
+    with the grid, which they do not for Eq 1. Each grid is swept as a
     contact job (:func:`roughcontact.contact.cell.sweep_cell`, ``method``, ``tol``,
     ``precision``, ``steps``) and averaged at equal P
     (:func:`roughcontact.contact.cell.aggregate_sweep`).
@@ -475,14 +494,15 @@ def grid_study(
         raise ValueError(f"nested pairing needs every grid to divide the finest, got {grids}")
     say = progress or (lambda message: log.info("%s", message))
     model = (f"hybrid ({mesh}, coarsening {coarsening})" if influence == "hybrid"
-             else (influence if influence == "halfspace" else f"fe ({mesh})"))
+             else (influence if influence.startswith("halfspace") else f"fe ({mesh})"))
     levels = np.asarray(pressures, dtype=float)
     rows = []
     fine_heights = {}
     if pairing == "nested":
         for skew, kurt in cells:
             fine_heights[(skew, kurt)] = _cell_heights((finest, finest), (size, size), b, skew,
-                                                       kurt, surfaces, seed, "grid_study")
+                                                       kurt, surfaces, seed, "grid_study",
+                                                       spectrum)
     for g in reversed(grids):
         geometry = BlockGeometry(size=(size, size), thickness=thickness, grid=(g, g), E=E,
                                  nu=nu, base=base, mesh=mesh)
@@ -496,7 +516,7 @@ def grid_study(
                 heights = heights / heights.std(axis=(1, 2), keepdims=True)
             else:
                 heights = _cell_heights((g, g), (size, size), b, skew, kurt, surfaces, seed,
-                                        f"grid_study|{g}")
+                                        f"grid_study|{g}", spectrum)
             end = nondim_pressure(levels.max(), thickness=thickness, E=E, sigma=sigma)
             nd, solve_s = _timed_sweep(unit, heights, geometry, end, steps, method=method,
                                        tol=tol, precision=precision, stiffness_tol=1e-6,
@@ -528,6 +548,7 @@ def grid_study(
         reference = finest_rows[column].reindex(pd.MultiIndex.from_frame(table[keys]))
         table[f"{name}_change"] = table[column].to_numpy() / reference.to_numpy() - 1.0
     table.attrs.update(influence_model=model, pairing=pairing, method=method, tol=tol,
+                       spectrum=dict(spectrum or {}),
                        machine=describe_machine())
     return table
 
