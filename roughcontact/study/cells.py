@@ -190,13 +190,23 @@ def load_measured(options: dict) -> measured.Measurement:
     Kept per file content and options for the life of the process: the workflow
     plans from it several times.
     """
-    path = Path(options["file"])
+    return _load_measured(canonical_json(options), _stamp(options["file"]))
+
+
+def _stamp(path) -> tuple | None:
+    """Modification time and size of a file: a changed file is loaded again."""
     try:
-        stat = path.stat()
-        stamp = (stat.st_mtime_ns, stat.st_size)
+        stat = Path(path).stat()
     except OSError:
-        stamp = None  # load_measurement says the file is missing
-    return _load_measured(canonical_json(options), stamp)
+        return None  # load_measurement says the file is missing
+    return (stat.st_mtime_ns, stat.st_size)
+
+
+@functools.lru_cache(maxsize=16)
+def _measured_statistics(options_json: str, stamp) -> dict:
+    """:func:`roughcontact.surfaces.measured.statistics` of a loaded measurement, kept
+    like the measurement (the plan reads every measured cell several times)."""
+    return measured.statistics(_load_measured(options_json, stamp))
 
 
 @functools.lru_cache(maxsize=16)
@@ -229,7 +239,7 @@ def measured_cell_params(entry: dict) -> dict:
     """
     options = measured_options(entry)
     measurement = load_measured(options)
-    stats = measured.statistics(measurement)
+    stats = _measured_statistics(canonical_json(options), _stamp(options["file"]))
     return {
         "skew": _round12(stats["skew"]),
         "kurt": _round12(stats["kurt"]),
