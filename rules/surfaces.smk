@@ -20,8 +20,8 @@ rule surfaces:
     params:
         cell=get_surface_params,
         study_seed=config["study_seed"],
-        # version of the stored layout: files of an older layout (no content hash) are
-        # rebuilt instead of refused
-        layout=2,
+        # version of the stored layout: files of an older layout are rebuilt instead of
+        # refused (2: content hashes; 3: `filter` calibrated to the sample moments)
+        layout=3,
     script:
         "../scripts/generate_surfaces.py"

@@ -61,6 +61,7 @@ from roughcontact.study.storage import (
 )
 from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.synthetic import (
+    calibrate_filter,
     correlation_length,
     derive_seeds,
     filter_kernel,
@@ -103,10 +104,20 @@ def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict
     seeds = derive_seeds(study_seed, statistics_key(params), params["count"])
     attrs = {"cell": cell_key(params), "study_seed": int(study_seed), "method": params["method"]}
     extra = {}
-    if params["method"] == "filter":
+    if params["method"] in ("filter", "paper"):
         kern = filter_kernel(spec)
         s3, s4 = moment_transfer(spec)
-        skew_x, kurt_x = input_moments(spec)
+        process = spec
+        if params["method"] == "filter":  # targets = expected sample moments of a window
+            cal = calibrate_filter(spec)
+            attrs |= cal.as_attrs()
+            process = dataclasses.replace(spec, skew=cal.skew, kurt=cal.kurt)
+            log.info(
+                "cell %s: calibrated process moments (%.4f, %.4f) for expected sample "
+                "moments (%g, %g) (the paper's method would give %.4f, %.4f); %d surfaces, "
+                "%.2f s", attrs["cell"], cal.skew, cal.kurt, params["skew"], params["kurt"],
+                cal.paper_skew, cal.paper_kurt, cal.samples, cal.seconds)
+        skew_x, kurt_x = input_moments(process)
         curve = johnson.fit(skew_x, kurt_x)
         attrs |= {
             "filter_S3": s3,
@@ -121,7 +132,7 @@ def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict
             "cell %s: S3 = %.4f, S4 = %.4f, white noise Sk_x = %.4f, Ku_x = %.4f (%s)",
             attrs["cell"], s3, s4, skew_x, kurt_x, curve.family,
         )
-        heights = generate_many(spec, seeds)
+        heights = generate_many(spec, seeds, method=params["method"])
     else:
         results = [generate_exact(spec, s) for s in seeds]
         heights = np.stack([z for z, _ in results])

@@ -53,6 +53,7 @@ _REQUIRED = {
                 "dense_batch_arrays", "matrix_free_batch_arrays"),
     "influence": ("anchor_seconds", "anchor_peak_gb", "exponent", "memory_margin_mb"),
     "surfaces": ("reference_elements", "exact_seconds", "filter_seconds", "exponent",
+                 "calibration_seconds",
                  "memory_base_mb", "work_arrays"),
     "summaries": ("seconds",),
     "audit": ("base_seconds", "seconds_per_file", "memory_base_mb", "model_copies"),
@@ -200,11 +201,13 @@ def influence_runtime(geometry: dict, body: dict, attempt: int = 1) -> int:
 def surfaces_seconds(cell: dict) -> float:
     """Wall time [s] of a surface cell: 60 surfaces of 60 x 60 take 0.01 s by the
     filter and 0.15-0.30 s by IAAFT (``exact``); 120 x 120: 0.04 s, 0.47-0.92 s.
-    Counted as 0.001 s (filter) or 0.01 s (IAAFT) per surface times (n / 3600)^1.5."""
+    Counted as 0.001 s (filter, paper) or 0.01 s (IAAFT) per surface times
+    (n / 3600)^1.5, plus the calibration of ``filter`` (at most about 15 s a cell)."""
     fit = _MODEL["surfaces"]
     per_surface = fit["exact_seconds"] if cell["method"] == "exact" else fit["filter_seconds"]
     size = cell["grid"][0] * cell["grid"][1] / fit["reference_elements"]
-    return cell["count"] * per_surface * size ** fit["exponent"]
+    calibration = fit["calibration_seconds"] if cell["method"] == "filter" else 0.0
+    return calibration + cell["count"] * per_surface * size ** fit["exponent"]
 
 
 def surfaces_runtime(cell: dict, attempt: int = 1) -> int:

@@ -33,10 +33,12 @@ grid scale and contact results converge as the grid is refined.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import logging
 import math
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import fft, signal, special
@@ -519,6 +521,10 @@ def estimate_generation_bytes(spec: SurfaceSpec, count: int = 1, method: str = "
       periodic; the centred kernel ``8 K`` plus two half-spectra, their
       product and the output ``32 F`` when padded).
 
+    ``method="filter"`` first calibrates (:func:`calibrate_filter`) on batches
+    of about 2^19 noise points ``B``: ``16 K + 60 B`` (periodic) or
+    ``16 K + 90 B`` (padded), if larger than the generation's peak.
+
     ``method="exact"`` (:func:`generate_exact`, periodic): ``120 N`` (the
     filter's 65 N, the moment correction of the height set and the
     iterations' surfaces, rankings and half spectra stay below it) plus ``8 N`` for each
@@ -532,15 +538,14 @@ def estimate_generation_bytes(spec: SurfaceSpec, count: int = 1, method: str = "
     spec : SurfaceSpec
     count : int
         Number of surfaces generated in one call (seeds of :func:`generate_many`).
-    method : {"filter", "exact"}
+    method : {"filter", "paper", "exact"}
 
     Returns
     -------
     int
         Bytes.
     """
-    if method not in ("filter", "exact"):
-        raise ValueError(f"method must be 'filter' or 'exact'; got {method!r}")
+    _check_method(method)
     count = max(int(count), 1)
     ny, nx = spec.shape
     points = ny * nx
@@ -557,7 +562,11 @@ def estimate_generation_bytes(spec: SurfaceSpec, count: int = 1, method: str = "
                   * fft.next_fast_len(nx + 2 * kx - 2, True))
         convolution = 8 * kernel + 32 * padded
     per_surface = 8 * count * points + 16 * kernel + max(32 * noise, 8 * noise + convolution)
-    return int(max(81 * kernel, per_surface))
+    peak = max(81 * kernel, per_surface)
+    if method == "filter":  # the calibration runs first, on batches of surfaces
+        batch = max(1, _CALIBRATION_BATCH_POINTS // noise) * noise
+        peak = max(peak, 16 * kernel + (60 if spec.periodic else 90) * batch)
+    return int(peak)
 
 
 def _check_memory(spec: SurfaceSpec, count: int, method: str, max_bytes) -> None:
@@ -614,9 +623,15 @@ def _noise_shape(spec: SurfaceSpec, kernel: np.ndarray) -> tuple[int, int]:
 
 
 def _apply_filter(spec: SurfaceSpec, kern: FilterKernel, x: np.ndarray) -> np.ndarray:
-    """z = h * x (Eq 9) for a stack of noise fields x (..., rows, cols)."""
+    """z = h * x (Eq 9) for a stack of noise fields x (..., rows, cols).
+
+    Periodic: real FFTs (the transfer function is real and even), 13 times
+    faster than complex ones on 60 x 60 and equal to 4e-15.
+    """
     if spec.periodic:
-        return np.fft.ifft2(np.fft.fft2(x) * kern.transfer).real
+        nx = x.shape[-1]
+        half = kern.transfer[:, : nx // 2 + 1]
+        return np.fft.irfft2(np.fft.rfft2(x) * half, s=x.shape[-2:])
     centred = np.fft.fftshift(kern.weights)
     centred = centred.reshape((1,) * (x.ndim - 2) + centred.shape)
     return signal.fftconvolve(x, centred, mode="valid", axes=(-2, -1))
@@ -625,6 +640,16 @@ def _apply_filter(spec: SurfaceSpec, kern: FilterKernel, x: np.ndarray) -> np.nd
 def _fit_input(spec: SurfaceSpec) -> johnson.JohnsonCurve:
     skew_x, kurt_x = input_moments(spec)
     return johnson.fit(skew_x, kurt_x)
+
+
+GENERATION_METHODS = ("filter", "paper", "exact")
+"""Generators of :func:`generate_many`: the calibrated filter (default), the
+paper's uncorrected filter, and iterative amplitude adjustment."""
+
+
+def _check_method(method: str) -> None:
+    if method not in GENERATION_METHODS:
+        raise ValueError(f"method must be one of {GENERATION_METHODS}; got {method!r}")
 
 
 def generate(spec: SurfaceSpec, seed: int, method: str = "filter", *,
@@ -637,9 +662,16 @@ def generate(spec: SurfaceSpec, seed: int, method: str = "filter", *,
     seed : int
         Seed of the Gaussian white noise (``numpy.random.default_rng``); the
         same seed gives the same bits for the same library versions.
-    method : {"filter", "exact"}
-        "filter": the paper's Johnson translator and linear filter (Eq 6-13).
-        "exact": iterative amplitude adjustment, see :func:`generate_exact`.
+    method : {"filter", "paper", "exact"}
+        "filter": the Johnson translator and linear filter (Eq 6-13) with the
+        white noise's moments calibrated so that the *expected sample*
+        skewness and kurtosis of a surface on this grid are the targets
+        (:func:`calibrate_filter`). "paper": the same filter with Eq 12-13 as
+        the paper uses them: the targets are the moments of the infinite
+        process, and a finite window's sample kurtosis is biased (-1.4 % at
+        (0, 4.5) on 60 x 60 over 9 mm with b = 1 mm, -3 % on 30 x 30 over
+        4.5 mm). "exact": iterative amplitude adjustment, see
+        :func:`generate_exact`.
     max_bytes : float
         Memory budget [bytes], default :data:`MAX_GENERATION_BYTES` (8 GB).
 
@@ -657,23 +689,27 @@ def generate_many(spec: SurfaceSpec, seeds, method: str = "filter", *,
     """Surfaces for each seed, shape ``(len(seeds), ny, nx)`` [m], zero mean each.
 
     Equivalent to stacking :func:`generate` per seed (bit for bit), but the
-    Johnson fit and the filter are computed once and the FFTs are batched.
-    Refuses with :class:`SurfaceTooLarge` before allocating when the
-    estimated peak memory of all the surfaces (:func:`estimate_generation_bytes`)
-    exceeds ``max_bytes`` [bytes] (default :data:`MAX_GENERATION_BYTES`).
+    Johnson fit, the calibration and the filter are computed once and the
+    FFTs are batched. Refuses with :class:`SurfaceTooLarge` before allocating
+    when the estimated peak memory of all the surfaces
+    (:func:`estimate_generation_bytes`) exceeds ``max_bytes`` [bytes]
+    (default :data:`MAX_GENERATION_BYTES`).
     """
     seeds = [int(s) for s in np.atleast_1d(np.asarray(seeds, dtype=np.uint64))]
-    if method not in ("filter", "exact"):
-        raise ValueError(f"method must be 'filter' or 'exact'; got {method!r}")
+    _check_method(method)
     _check_memory(spec, len(seeds), method, max_bytes)
     if method == "exact":
         return np.stack([generate_exact(spec, s, max_bytes=max_bytes, **options)[0]
                          for s in seeds])
     if options:
-        raise TypeError(f"unexpected options for method='filter': {sorted(options)}")
+        raise TypeError(f"unexpected options for method={method!r}: {sorted(options)}")
     _check_domain(spec)
+    process = spec
+    if method == "filter":
+        cal = calibrate_filter(spec)
+        process = replace(spec, skew=cal.skew, kurt=cal.kurt)
     kern = filter_kernel(spec)
-    curve = _fit_input(spec)
+    curve = _fit_input(process)
     mean_x, std_x, _, _ = curve.moments()
     shape = _noise_shape(spec, kern.weights)
     out = np.empty((len(seeds), *spec.shape))
@@ -685,6 +721,315 @@ def generate_many(spec: SurfaceSpec, seeds, method: str = "filter", *,
     if not np.all(np.isfinite(out)):
         raise FloatingPointError(f"non-finite surface heights generated for {spec!r}")
     return out
+
+
+# --------------------------------------------------------------------------- calibration
+
+#: Seed of the calibration's white noise: one fixed stream, so a spec's
+#: calibration (and so its surfaces) is the same on every run.
+CALIBRATION_SEED = 20061124
+#: Standard error of the estimated expected sample moments at which the
+#: calibration stops adding surfaces: relative to Ku, and to max(1, |Sk|).
+CALIBRATION_RSE = 1e-3
+#: Most surface points (surfaces x nx x ny) one calibration evaluation reads.
+CALIBRATION_MAX_POINTS = 1e8
+#: Fewest calibration surfaces.
+CALIBRATION_MIN_SAMPLES = 2000
+#: Relative distance of the estimated expected moments from the targets at
+#: which the calibration's solve stops (far below its standard error).
+CALIBRATION_SOLVE_TOL = 1e-5
+_CALIBRATION_BATCH_POINTS = 2**19
+_CALIBRATION_MAX_EVALUATIONS = 12
+
+
+@dataclass(frozen=True)
+class FilterCalibration:
+    """The process moments that give a window the target sample moments (:func:`calibrate_filter`).
+
+    Attributes
+    ----------
+    skew, kurt : float
+        Moments of the infinite process fed to Eq 12-13 (``SurfaceSpec.skew``,
+        ``.kurt`` of the paper's method) so that the expected sample moments
+        of one window equal the spec's targets.
+    expected_skew, expected_kurt : float
+        Estimated expected sample skewness and kurtosis of a window at the
+        solution (control-variate mean over ``samples`` fixed-seed surfaces).
+    skew_se, kurt_se : float
+        Their standard errors: the calibration's own error.
+    paper_skew, paper_kurt : float
+        The same estimate for the paper's method (process moments = targets):
+        its bias is ``paper_kurt - spec.kurt``.
+    samples : int
+        Calibration surfaces (fixed seed :data:`CALIBRATION_SEED`).
+    evaluations : int
+        Estimates made (each over the same ``samples`` surfaces).
+    converged : bool
+        The estimate met the targets to :data:`CALIBRATION_SOLVE_TOL`.
+    seconds : float
+        Wall time.
+    """
+
+    skew: float
+    kurt: float
+    expected_skew: float
+    expected_kurt: float
+    skew_se: float
+    kurt_se: float
+    paper_skew: float
+    paper_kurt: float
+    samples: int
+    evaluations: int
+    converged: bool
+    seconds: float
+
+    def as_attrs(self) -> dict:
+        """Plain-type dictionary with ``calibration_`` keys (for HDF5 attributes)."""
+        return {f"calibration_{k}": (v if isinstance(v, bool | int) else float(v))
+                for k, v in self.__dict__.items()}
+
+
+def _control_variate_mean(values: np.ndarray, controls: np.ndarray) -> tuple[float, float]:
+    """Mean of ``values`` corrected by zero-mean ``controls`` (columns), and its SE."""
+    centred = controls - controls.mean(axis=0)
+    beta = np.linalg.lstsq(centred, values - values.mean(), rcond=None)[0]
+    corrected = values - controls @ beta
+    return float(corrected.mean()), float(corrected.std(ddof=1) / math.sqrt(len(values)))
+
+
+class _SampleMoments:
+    """Sample moments of fixed-seed filter surfaces for any process moments.
+
+    The same white noise (common random numbers: batch ``k`` is seeded
+    ``(CALIBRATION_SEED, k)``) is used for every (Sk, Ku), so the estimate is
+    a smooth, deterministic function of them that a root finder can solve.
+    """
+
+    def __init__(self, spec: SurfaceSpec, seed: int):
+        self.spec = replace(spec, sigma=1.0)
+        self.seed = int(seed)
+        self.kernel = filter_kernel(self.spec)
+        self.noise_shape = _noise_shape(self.spec, self.kernel.weights)
+        self.batch = max(1, _CALIBRATION_BATCH_POINTS // math.prod(self.noise_shape))
+        self.s3, self.s4 = moment_transfer(self.spec)
+        self._cache = None
+
+    def draws(self, skew: float, kurt: float, count: int) -> np.ndarray:
+        """Per-surface (Sk, Ku, z^3, z^4, z^2) of the first ``count`` surfaces, shape (count, 5).
+
+        The last three are the raw moments minus their exact expectations
+        (controls of zero mean). Batches already drawn for the same (Sk, Ku)
+        are reused.
+        """
+        key = (float(skew), float(kurt))
+        done = self._cache[1] if self._cache and self._cache[0] == key else np.empty((0, 5))
+        batches = math.ceil(count / self.batch)
+        have = len(done) // self.batch
+        if batches > have:
+            curve = _fit_input(replace(self.spec, skew=skew, kurt=kurt))
+            mean_x, std_x, skew_x, kurt_x = curve.moments()
+            # the fitted law's own moments, so the controls have exactly zero mean
+            means = np.array([self.s3 * skew_x, 3.0 + self.s4 * (kurt_x - 3.0), 1.0])
+            rows = [done]
+            for k in range(have, batches):
+                eta = np.random.default_rng([self.seed, k]).standard_normal(
+                    (self.batch, *self.noise_shape))
+                z = _apply_filter(self.spec, self.kernel,
+                                  (curve.transform(eta) - mean_x) / std_x)
+                axes = (-2, -1)
+                z2 = z * z
+                raw = np.stack([(z2 * z).mean(axis=axes), (z2 * z2).mean(axis=axes),
+                                z2.mean(axis=axes)], axis=1) - means
+                stats = height_stats(z)
+                rows.append(np.column_stack([stats["skew"], stats["kurt"], raw]))
+            done = np.concatenate(rows)
+            self._cache = (key, done)
+        return done[:count]
+
+    def estimate(self, skew: float, kurt: float, count: int):
+        """Expected sample (Sk, Ku) and their standard errors over ``count`` surfaces."""
+        d = self.draws(skew, kurt, count)
+        sk, sk_se = _control_variate_mean(d[:, 0], d[:, 2:])
+        ku, ku_se = _control_variate_mean(d[:, 1], d[:, 2:])
+        return np.array([sk, ku]), np.array([sk_se, ku_se])
+
+
+def expected_sample_moments(spec: SurfaceSpec, count: int = 2000, *,
+                            seed: int = CALIBRATION_SEED) -> tuple[np.ndarray, np.ndarray]:
+    """Expected sample (Sk, Ku) of one window of the paper's filter generator.
+
+    The process moments are ``spec.skew``, ``spec.kurt`` (Eq 12-13, as the
+    paper uses them). Estimated over ``count`` fixed-seed surfaces with
+    control variates (the raw third and fourth moments and the variance,
+    whose expectations are known exactly from Eq 12-13): 2-5 times smaller
+    standard errors than the plain mean. Returns ``(means, standard_errors)``,
+    each ``[Sk, Ku]``.
+    """
+    return _SampleMoments(spec, seed).estimate(spec.skew, spec.kurt, int(count))
+
+
+def sample_bound(spec: SurfaceSpec, skew, count: int = 1000, *,
+                 seed: int = CALIBRATION_SEED) -> tuple[np.ndarray, np.ndarray]:
+    """The reachable region's edge for a window's expected sample moments (Fig 2, same rule).
+
+    For each process skewness in ``skew``, the process on the filter's bound
+    (Eq 15: ``Ku = kurt_min(spec, skew)``, a two-point white noise) is
+    sampled on ``spec``'s grid and its expected sample (Sk, Ku) estimated over
+    ``count`` fixed-seed surfaces (:func:`expected_sample_moments`). The
+    calibrated filter (``method="filter"``) reaches every target above the
+    returned curve; the paper's method, every target above
+    :func:`kurt_min`. Returns ``(sample_skew, sample_kurt)``, arrays like
+    ``skew``.
+    """
+    skew = np.atleast_1d(np.asarray(skew, dtype=float))
+    sampler = _SampleMoments(spec, seed)
+    out = np.array([sampler.estimate(s, float(kurt_min(spec, s)) * (1.0 + 1e-9) + 1e-12,
+                                     int(count))[0] for s in skew])
+    return out[:, 0], out[:, 1]
+
+
+def _moment_scale(target: np.ndarray) -> np.ndarray:
+    return np.array([max(1.0, abs(target[0])), abs(target[1])])
+
+
+def calibrate_filter(spec: SurfaceSpec, *, rse: float = CALIBRATION_RSE,
+                     max_points: float = CALIBRATION_MAX_POINTS,
+                     seed: int = CALIBRATION_SEED) -> FilterCalibration:
+    """Process moments whose windows have the target *sample* moments in expectation.
+
+    Eq 12-13 give the skewness and kurtosis of the infinite filtered process.
+    The sample moments of one finite window are biased: the window's mean is
+    removed, and a ratio of sample moments is not the ratio of their
+    expectations; the fewer correlation lengths the window holds, the larger
+    the bias (kurtosis -1.4 % at (0, 4.5) on 60 x 60 over 9 mm with
+    b = 1 mm, -3.1 % on 30 x 30 over 4.5 mm, +0.6 % at (2, 10)). This finds
+    the process moments (Sk_p, Ku_p) for which the expected sample (Sk, Ku) of
+    a window of ``spec`` equal ``(spec.skew, spec.kurt)``:
+
+    1. The expectation is estimated over fixed-seed surfaces of the paper's
+       generator with control variates (:func:`expected_sample_moments`);
+       surfaces are added in batches until both standard errors are below
+       ``rse`` (relative to Ku, and to max(1, |Sk|)), with at least
+       :data:`CALIBRATION_MIN_SAMPLES` and at most ``max_points`` surface
+       points.
+    2. Broyden's method on the 2 x 2 system, starting from the targets, with
+       the same surfaces for every estimate (a smooth, deterministic
+       function), until the estimate is within :data:`CALIBRATION_SOLVE_TOL`
+       (relative) of the targets; steps that would leave the filter's
+       reachable region (Eq 15) stop on its edge.
+
+    The result depends only on the spec's moments, grid, size, correlation
+    length, ACF and periodicity (not on sigma), and is cached per process.
+    Costs 0.1 ms per 60 x 60 surface and estimate: about 1-4 s per cell.
+
+    Raises
+    ------
+    InfeasibleMoments
+        When the target is below the absolute bound Ku >= Sk^2 + 1, or the
+        expected sample moments cannot reach it without a process beyond the
+        filter's bound (Eq 15): the message gives the nearest reachable
+        kurtosis.
+    """
+    return _calibrate(replace(spec, sigma=1.0), float(rse), float(max_points), int(seed))
+
+
+@functools.lru_cache(maxsize=256)
+def _calibrate(spec: SurfaceSpec, rse: float, max_points: float, seed: int) -> FilterCalibration:
+    start = time.perf_counter()
+    absolute = spec.skew**2 + 1.0
+    if spec.kurt < absolute:
+        input_moments(spec)  # raises the absolute-bound message
+    target = np.array([spec.skew, spec.kurt])
+    scale = _moment_scale(target)
+    sampler = _SampleMoments(spec, seed)
+    # Sk = 0: the law and the filter are symmetric, so the expected sample
+    # skewness is 0 exactly; only the kurtosis is estimated and solved
+    symmetric = spec.skew == 0.0
+
+    def estimate(theta, count):
+        g, se = sampler.estimate(*theta, count)
+        if symmetric:
+            g[0], se[0] = 0.0, 0.0
+        return g, se
+
+    def bound(skew):
+        return float(kurt_min(spec, skew)) * (1.0 + 1e-9) + 1e-12
+
+    theta = np.array([spec.skew, max(spec.kurt, bound(spec.skew))])
+    # 1. grow the sample at the targets until the standard errors are small enough
+    most = max(sampler.batch, int(max_points // math.prod(spec.shape)) // sampler.batch
+               * sampler.batch)
+    count = min(most, math.ceil(CALIBRATION_MIN_SAMPLES / sampler.batch) * sampler.batch)
+    while True:
+        g, se = estimate(theta, count)
+        if np.all(se <= rse * scale) or count >= most:
+            break
+        needed = 1.1 * float(np.max((se / (rse * scale)) ** 2)) * count
+        count = min(most, max(count + sampler.batch,
+                              math.ceil(needed / sampler.batch) * sampler.batch))
+    if theta[1] == spec.kurt:
+        paper = g
+    else:  # the paper's method cannot make this target at all
+        paper = np.array([math.nan, math.nan])
+    # 2. Broyden on g(theta) = target with the same surfaces; a step below the
+    # filter's bound stops on it, and the skewness is then solved along the bound
+    jac = np.eye(2)
+    evaluations, converged, on_edge, slope = 1, False, False, 1.0
+    tol = CALIBRATION_SOLVE_TOL * scale
+    while True:
+        residual = target - g
+        if np.all(np.abs(residual) <= tol):
+            converged = True
+            break
+        if on_edge and abs(residual[0]) <= tol[0]:
+            if residual[1] < 0:  # the skewness is right, the kurtosis cannot go lower
+                raise InfeasibleMoments(
+                    f"kurtosis {spec.kurt:g} at skewness {spec.skew:g} is not reachable in "
+                    f"expectation by the filter generator for the {spec.acf} ACF with "
+                    f"corr_length = {_mm(spec.corr_length)} mm on a {spec.grid[0]} x "
+                    f"{spec.grid[1]} grid over {_mm(spec.size)} mm: on the filter's bound "
+                    f"(Eq 15) a window's expected sample kurtosis at this skewness is "
+                    f"{g[1]:.4f}. Raise kurt to at least {g[1]:.4f}, or use method='exact', "
+                    "which is limited only by Ku >= Sk^2 + 1."
+                )
+            on_edge = False  # the target lies above the bound: leave it
+        if evaluations >= _CALIBRATION_MAX_EVALUATIONS:
+            break
+        if on_edge:
+            skew = theta[0] + residual[0] / slope
+            proposal = np.array([skew, bound(skew)])
+        else:
+            proposal = theta + np.linalg.solve(jac, residual)
+            if proposal[1] < bound(proposal[0]):
+                proposal[1] = bound(proposal[0])
+                on_edge = True
+        new_g, se = estimate(proposal, count)
+        evaluations += 1
+        d_theta, d_g = proposal - theta, new_g - g
+        if np.dot(d_theta, d_theta) > 0:
+            jac = jac + np.outer(d_g - jac @ d_theta, d_theta) / np.dot(d_theta, d_theta)
+        if d_theta[0] != 0 and d_g[0] != 0:
+            slope = d_g[0] / d_theta[0]
+        theta, g = proposal, new_g
+    result = FilterCalibration(
+        skew=float(theta[0]), kurt=float(theta[1]),
+        expected_skew=float(g[0]), expected_kurt=float(g[1]),
+        skew_se=float(se[0]), kurt_se=float(se[1]),
+        paper_skew=float(paper[0]), paper_kurt=float(paper[1]),
+        samples=int(count), evaluations=evaluations, converged=converged,
+        seconds=time.perf_counter() - start,
+    )
+    if not converged:
+        log.warning(
+            "calibrate_filter: the expected sample moments (%.5f, %.5f) did not reach the "
+            "targets (%g, %g) to %.0e in %d estimates; using the closest", g[0], g[1],
+            spec.skew, spec.kurt, CALIBRATION_SOLVE_TOL, evaluations)
+    log.info(
+        "calibrate_filter: targets (%g, %g) -> process (%.5f, %.5f); paper's method gives "
+        "(%.4f, %.4f); %d surfaces x %d estimates, SE (%.1e, %.1e), %.2f s",
+        spec.skew, spec.kurt, theta[0], theta[1], paper[0], paper[1], count,
+        evaluations, se[0], se[1], result.seconds)
+    return result
 
 
 #: Largest |error| of the standardized sample moments (mean, variance, Sk, Ku) of
@@ -920,9 +1265,10 @@ def height_stats(z) -> dict:
     z = np.asarray(z, dtype=float)
     mean = z.mean(axis=(-2, -1))
     dev = z - mean[..., None, None]
-    m2 = np.mean(dev**2, axis=(-2, -1))
-    m3 = np.mean(dev**3, axis=(-2, -1))
-    m4 = np.mean(dev**4, axis=(-2, -1))
+    dev2 = dev * dev  # products, not float powers: 20 times faster
+    m2 = np.mean(dev2, axis=(-2, -1))
+    m3 = np.mean(dev2 * dev, axis=(-2, -1))
+    m4 = np.mean(dev2 * dev2, axis=(-2, -1))
     with np.errstate(divide="ignore", invalid="ignore"):
         skew = np.where(m2 > 0, m3 / np.where(m2 > 0, m2, 1.0) ** 1.5, np.nan)
         kurt = np.where(m2 > 0, m4 / np.where(m2 > 0, m2, 1.0) ** 2, np.nan)

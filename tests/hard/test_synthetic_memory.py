@@ -76,7 +76,10 @@ def test_refusal_follows_max_bytes():
     default = synthetic.generate(SMALL, 3)
     assert np.array_equal(allowed, default) and np.array_equal(unlimited, default)
     # more surfaces per call need more
-    assert synthetic.estimate_generation_bytes(SMALL, 10) > estimate
+    one = synthetic.estimate_generation_bytes(SMALL, 1, "paper")
+    assert synthetic.estimate_generation_bytes(SMALL, 10, "paper") > one
+    # the calibration's batches are the calibrated filter's peak at small counts
+    assert estimate > one
 
 
 def test_normal_surface_still_generated():
@@ -94,11 +97,15 @@ def test_normal_surface_still_generated():
     [(synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 1, "filter"),
      (synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 3, "filter"),
      (synthetic.SurfaceSpec(grid=64, size=1e-3, corr_length=1e-4, periodic=False), 2, "filter"),
+     (synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 1, "paper"),
+     (synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 3, "paper"),
+     (synthetic.SurfaceSpec(grid=64, size=1e-3, corr_length=1e-4, periodic=False), 2, "paper"),
      (synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 2, "exact")],
-    ids=["periodic", "periodic-3", "padded-2", "exact-2"],
+    ids=["periodic", "periodic-3", "padded-2", "paper", "paper-3", "paper-padded-2", "exact-2"],
 )
 def test_estimate_matches_the_traced_peak(spec, count, method, caplog):
     seeds = list(range(count))
+    synthetic._calibrate.cache_clear()  # the calibration's batches are part of the peak
     options = {"max_iter": 5} if method == "exact" else {}
     with caplog.at_level(logging.ERROR):
         peak, error = _traced_peak(

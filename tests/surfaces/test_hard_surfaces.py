@@ -8,6 +8,7 @@ import pytest
 from roughcontact import InfeasibleMoments
 from roughcontact.surfaces.synthetic import (
     SurfaceSpec,
+    calibrate_filter,
     correlation_length,
     generate,
     generate_many,
@@ -31,7 +32,7 @@ def test_just_above_the_reachable_kurtosis():
     ok = spec(skew=-1.0, kurt=bound + 1e-3)
     skew_x, kurt_x = input_moments(ok)
     assert kurt_x >= skew_x**2 + 1  # the white noise is a valid (near two-point) law
-    z = generate_many(ok, range(40))
+    z = generate_many(ok, range(40), method="paper")
     assert np.all(np.isfinite(z))
     stats = height_stats(z)
     # ensemble means within 3 standard errors of the targets
@@ -39,7 +40,23 @@ def test_just_above_the_reachable_kurtosis():
         se = stats[name].std(ddof=1) / np.sqrt(len(z))
         assert abs(stats[name].mean() - target) < 3 * se + 1e-9, name
     with pytest.raises(InfeasibleMoments, match="minimum kurtosis"):
-        generate(spec(skew=-1.0, kurt=bound - 1e-3), 0)
+        generate(spec(skew=-1.0, kurt=bound - 1e-3), 0, method="paper")
+
+
+def test_the_calibrated_bound_lies_below_the_process_bound():
+    """A window's sample kurtosis is biased low on the filter's bound (Eq 15), so the
+    calibrated filter reaches targets a little below it, and refuses, naming the
+    reachable kurtosis, further down."""
+    bound = float(kurt_min(spec(skew=-1.0), -1.0))
+    near = spec(skew=-1.0, kurt=bound - 1e-3)
+    cal = calibrate_filter(near)
+    assert cal.converged
+    assert cal.kurt >= float(kurt_min(near, cal.skew))  # a valid process
+    assert cal.expected_kurt == pytest.approx(bound - 1e-3, rel=1e-4)
+    with pytest.raises(InfeasibleMoments, match="not reachable in expectation") as err:
+        generate(spec(skew=-1.0, kurt=bound - 0.3), 0)
+    reachable = float(str(err.value).split("Raise kurt to at least ")[1].split(",")[0])
+    assert bound - 0.3 < reachable < bound
 
 
 def test_correlation_length_shorter_than_the_spacing_warns_and_stays_finite(caplog):

@@ -85,10 +85,14 @@ def test_surface_files_hold_seeded_surfaces_with_their_moments(quick_run):
         # the seeds derive from the study seed and the cell's statistics
         expected = surface.derive_seeds(config["study_seed"], statistics_key(params), len(seeds))
         assert np.array_equal(seeds.astype(np.uint64), expected)
-        # the recorded white-noise moments transfer to the target (Eq 12-13)
+        # the recorded white-noise moments transfer to the calibrated process
+        # moments (Eq 12-13), whose windows have the target sample moments
         s3, s4 = attrs["filter_S3"], attrs["filter_S4"]
-        assert s3 * attrs["input_skew"] == pytest.approx(params["skew"], abs=1e-12)
-        assert 3 + s4 * (attrs["input_kurt"] - 3) == pytest.approx(params["kurt"], abs=1e-12)
+        skew_p, kurt_p = attrs["calibration_skew"], attrs["calibration_kurt"]
+        assert s3 * attrs["input_skew"] == pytest.approx(skew_p, abs=1e-12)
+        assert 3 + s4 * (attrs["input_kurt"] - 3) == pytest.approx(kurt_p, abs=1e-12)
+        assert attrs["calibration_converged"]
+        assert attrs["calibration_expected_kurt"] == pytest.approx(params["kurt"], rel=1e-4)
         curve = johnson.fit(attrs["input_skew"], attrs["input_kurt"])
         assert curve.family == attrs["johnson_family"]
         for key in ("package_version", "git_commit", "config_hash", "created"):
@@ -169,7 +173,8 @@ def test_infeasible_cell_is_listed_with_its_bound(tmp_path):
     proc = run_snakemake(tmp_path, "--dry-run", config=path)
     out = proc.stdout + proc.stderr
     assert proc.returncode != 0
-    assert "sk1.5_ku3.3" in out and "minimum kurtosis" in out
+    assert "sk1.5_ku3.3" in out and "not reachable in expectation" in out
+    assert "Raise kurt to at least" in out
 
 
 def test_lint_is_clean():
