@@ -29,7 +29,27 @@ Methods
     Block principal pivoting (Kim & Park 2011, after Judice & Pires 1994) for
     the linear complementarity problem, with a Cholesky factorization of
     ``C`` on the contact set at every pivot; finite, for up to a few thousand
-    unknowns; the reference.
+    unknowns; the reference. One surface at a time.
+``"pivot"``
+    The same pivoting, for dense matrices, with every surface in flight at
+    once (:func:`sweep`): each round factors each surface's ``C_AA`` on its
+    current contact guess, and one product ``P C`` gives the gaps of all of
+    them, whatever approach step each is at; a surface whose step is solved
+    starts its next step at once from the predicted contact set, and takes
+    its tangent ``(C_AA)^-1 1`` from the same factor. It needs about two
+    rounds per step at the study's loads (1-15 % contact). Why it is the
+    default for dense matrices: the products ``C p`` are the cost of an
+    iterative method, and the paper's and the graded meshes have near-null
+    checkerboard modes (one trilinear face per contact element: the
+    consistent nodal loads of a checkerboard pressure nearly cancel;
+    condition number 7e8 at 60 x 60 against about 1e2 for ``refined``), so
+    CG needs hundreds of products per step on them. A Cholesky factorization
+    is backward stable whatever the condition number: the KKT residual stays
+    at rounding (1e-15) and a paper-mesh cell costs what a refined-mesh cell
+    costs. ``benchmarks/bench_contact.py`` measures both.
+``"auto"``
+    ``"pivot"`` for a dense matrix, ``"cg"`` for a matrix-free operator
+    (:func:`resolve_method`).
 
 Convergence
 -----------
