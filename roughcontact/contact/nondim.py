@@ -498,6 +498,7 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         raise ValueError(f"batch_size must be a positive integer or None, got {batch_size!r}")
     batch_size = int(batch_size)
     operator = dimensionless_operator(unit_influence, thickness)
+    method = solver.resolve_method(method, operator)  # recorded as solved
     names = ("approach", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
              "max_pressure", "stiffness", "residual")
     table = {name: np.empty((m, k)) for name in names}
