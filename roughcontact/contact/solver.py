@@ -1153,13 +1153,58 @@ def _predict(pressure, approach, last_approach, rate) -> np.ndarray:
 class _PivotState:
     """Block principal pivoting of one surface through its approach steps (:func:`_pivot_sweep`)."""
 
-    __slots__ = ("step", "passive", "best", "budget", "rounds", "factor", "index", "x")
+    __slots__ = ("step", "passive", "best", "budget", "rounds", "factor", "index", "members")
 
     def __init__(self, passive: np.ndarray):
         self.step = 0
         self.passive = passive
         self.best, self.budget, self.rounds = passive.size + 1, 3, 0
-        self.factor, self.index, self.x = None, None, None
+        # lower Cholesky factor of C on the elements ``index`` (in that order),
+        # and the same set as a mask
+        self.factor, self.index, self.members = None, None, None
+
+    def refactor(self, matrix: np.ndarray) -> str:
+        """Bring the factor to the current contact guess: keep it if the set is
+        unchanged, extend it if elements were only added, else factor anew.
+        Returns which of ``"kept"``, ``"extended"``, ``"new"`` it did."""
+        if self.members is not None and np.array_equal(self.passive, self.members):
+            return "kept"
+        idx = np.flatnonzero(self.passive)
+        grown = (self.members is not None and self.index.size
+                 and not (self.members & ~self.passive).any())
+        try:
+            if grown:
+                added = np.flatnonzero(self.passive & ~self.members)
+                coupling = scipy.linalg.solve_triangular(
+                    self.factor, matrix[np.ix_(self.index, added)], lower=True,
+                    check_finite=False)
+                corner = scipy.linalg.cholesky(
+                    matrix[np.ix_(added, added)] - coupling.T @ coupling, lower=True,
+                    check_finite=False)
+                size = self.index.size
+                factor = np.zeros((size + added.size, size + added.size))
+                factor[:size, :size] = self.factor
+                factor[size:, :size] = coupling.T
+                factor[size:, size:] = corner
+                self.factor, self.index = factor, np.concatenate([self.index, added])
+                kind = "extended"
+            elif idx.size:
+                self.factor = scipy.linalg.cholesky(matrix[np.ix_(idx, idx)], lower=True,
+                                                    check_finite=False)
+                self.index, kind = idx, "new"
+            else:
+                self.factor, self.index, kind = None, idx, "new"
+        except np.linalg.LinAlgError:
+            raise ValueError(
+                "operator must be positive definite: Cholesky factorization of C on "
+                "the contact set failed"
+            ) from None
+        self.members = self.passive.copy()
+        return kind
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """``(C_AA)^-1 rhs_A`` in the factor's element order."""
+        return scipy.linalg.cho_solve((self.factor, True), rhs, check_finite=False)
 
     def exchange(self, infeasible: np.ndarray) -> None:
         """Kim & Park (2011), Algorithm 2: block exchanges while they reduce the
@@ -1208,20 +1253,10 @@ def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, co
         x = np.zeros((rows, n))
         for r, j in enumerate(flight):
             state = states[j]
-            idx = np.flatnonzero(state.passive)
-            state.index, state.factor = idx, None
-            if idx.size:
-                try:
-                    state.factor = scipy.linalg.cho_factor(matrix[np.ix_(idx, idx)], lower=True,
-                                                           check_finite=False)
-                except np.linalg.LinAlgError:
-                    raise ValueError(
-                        "operator must be positive definite: Cholesky factorization of C on "
-                        "the contact set failed"
-                    ) from None
-                d = steps[j, state.step]
-                x[r, idx] = scipy.linalg.cho_solve(state.factor, d - gaps[j, idx],
-                                                   check_finite=False)
+            state.refactor(matrix)
+            if state.index.size:
+                idx = state.index
+                x[r, idx] = state.solve(steps[j, state.step] - gaps[j, idx])
         gap = x @ matrix  # C is symmetric: the rows are C p
         for r, j in enumerate(flight):
             state = states[j]
@@ -1249,9 +1284,8 @@ def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, co
             counts["matvecs"][j, step] = state.rounds
             flags["converged"][j, step] = residual <= tol
             rate = np.zeros(n)
-            if state.factor is not None and (stiffness or step + 1 < k):
-                rate[state.index] = scipy.linalg.cho_solve(state.factor, ones[: state.index.size],
-                                                           check_finite=False)
+            if state.index.size and (stiffness or step + 1 < k):
+                rate[state.index] = state.solve(ones[: state.index.size])
             if stiffness:
                 table["tangent_stiffness"][j, step] = op.element_area * rate.sum()
                 flags["stiffness_converged"][j, step] = True
