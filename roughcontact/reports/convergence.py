@@ -213,7 +213,7 @@ def _contact_response(ec: np.ndarray, geom: BlockGeometry, task: dict) -> dict:
     pressures = np.asarray(task["pressures"], dtype=float)
     sweep, physical, frame = sweep_and_aggregate(
         ec, heights, geom, sigma=sigma, pressures=pressures, steps=_SWEEP_STEPS, reach=1.1,
-        method="cg", tol=task["tol"], precision="double")
+        method="auto", tol=task["tol"], precision="double")
     if not sweep.converged.all():
         log.warning("contact sweep: %d of %d solves did not converge",
                     int((~sweep.converged).sum()), sweep.converged.size)

@@ -736,8 +736,11 @@ CALIBRATION_MAX_POINTS = 1e8
 #: Fewest calibration surfaces.
 CALIBRATION_MIN_SAMPLES = 2000
 #: Relative distance of the estimated expected moments from the targets at
-#: which the calibration's solve stops (far below its standard error).
+#: which the calibration's solve stops ...
 CALIBRATION_SOLVE_TOL = 1e-5
+#: ... or this fraction of the estimate's standard error, if larger (the
+#: solve's error is then negligible against the calibration's own).
+CALIBRATION_SOLVE_SE = 0.05
 _CALIBRATION_BATCH_POINTS = 2**19
 _CALIBRATION_MAX_EVALUATIONS = 12
 
@@ -915,7 +918,7 @@ def calibrate_filter(spec: SurfaceSpec, *, rse: float = CALIBRATION_RSE,
     2. Broyden's method on the 2 x 2 system, starting from the targets, with
        the same surfaces for every estimate (a smooth, deterministic
        function), until the estimate is within :data:`CALIBRATION_SOLVE_TOL`
-       (relative) of the targets; steps that would leave the filter's
+       (relative) or 5 % of its standard error of the targets; steps that would leave the filter's
        reachable region (Eq 15) stop on its edge.
 
     The result depends only on the spec's moments, grid, size, correlation
@@ -975,7 +978,7 @@ def _calibrate(spec: SurfaceSpec, rse: float, max_points: float, seed: int) -> F
     # filter's bound stops on it, and the skewness is then solved along the bound
     jac = np.eye(2)
     evaluations, converged, on_edge, slope = 1, False, False, 1.0
-    tol = CALIBRATION_SOLVE_TOL * scale
+    tol = np.maximum(CALIBRATION_SOLVE_TOL * scale, CALIBRATION_SOLVE_SE * se)
     while True:
         residual = target - g
         if np.all(np.abs(residual) <= tol):
