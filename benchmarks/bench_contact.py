@@ -26,15 +26,47 @@ Cases
     libraries solve the identical discrete problem; ours by displacement
     control, the others by load control at our solution's mean pressure.
     Every returned pressure is scored with our KKT residual.
+``units``
+    The sweep of issue 17 in units of one dense product, measured in the same
+    process, so that machines and loads compare. Workload: 60 Gaussian
+    surfaces from ``generate_many`` (sigma 30 um, Sk 0, Ku 3, exponential ACF
+    b = 1 mm, 60 x 60 over 9 mm), gaps ``f = max z - z``, 30 approaches evenly
+    spaced from 0.1 to 3 sigma after first touch (``--approach-range``), tol
+    1e-8, the study's precision (``mixed``), tangent stiffness at every step,
+    on the influence matrices of the paper's block (9 mm x 9 mm x 10 mm, nu 0,
+    clamped base) built with the ``paper`` and the ``refined`` mesh presets
+    (cached in /tmp). One child process per method (``--methods``, default
+    ``cg``; any name ``sweep`` accepts) measures:
+
+    - the GEMM unit: the best of 5 products ``C @ P``, C the paper matrix
+      (3600 x 3600), P 3600 x 60, float64, one BLAS thread, taken before every
+      round; the smallest over the rounds is used;
+    - the sweep's wall time on each mesh, the minimum of ``--repeats`` rounds
+      (default 3) run alternately paper, refined, paper, refined, ...;
+    - ``units`` = sweep wall / GEMM unit per mesh, and their ratio paper /
+      refined (issue 17: at most 500 units each, ratio at most 1.2);
+    - the work from ``SweepResult``: total ``matvecs`` (products charged per
+      surface, contact solves only: the stiffness CG's are not in the result),
+      products and iterations per surface and step, and both at the steps
+      whose mean real area fraction is nearest 1 %, 10 % and 30 % (the actual
+      fractions are reported: this workload may not reach them);
+    - whether every step converged, the worst KKT residual, the range of
+      mean real area fraction and the final nominal pressure.
+
+    Rows go to ``results/benchmarks/contact_units.csv`` and ``contact_units.md``.
 
 Usage::
 
-    .venv/bin/python benchmarks/bench_contact.py            # everything (~25 min)
+    .venv/bin/python benchmarks/bench_contact.py            # everything (~35 min)
     .venv/bin/python benchmarks/bench_contact.py --quick    # small smoke run
+    .venv/bin/python benchmarks/bench_contact.py --only units --methods cg exact
+    .venv/bin/python benchmarks/bench_contact.py --only units --quick   # 4 surfaces
 
-Writes ``results/benchmarks/contact.csv`` and ``contact.md``. Each case runs in
-a child process with the BLAS thread count set in its environment, because
-OpenBLAS reads it only at start-up.
+``--only`` runs the named cases alone (e.g. ``--only units paper-subset``).
+Writes ``results/benchmarks/contact.csv`` and ``contact.md`` (all cases but
+``units``), ``contact_units.csv`` and ``contact_units.md`` (``units``). Each
+case runs in a child process with the BLAS thread count set in its
+environment, because OpenBLAS reads it only at start-up.
 """
 
 from __future__ import annotations
@@ -71,6 +103,14 @@ APPROACH_END = 1600.0
 MATRIX_CACHE = Path("/tmp/roughcontact_bench_block_influence.npy")
 #: Half-space dense baseline: largest approach [sigma], about 60 % contact.
 APPROACH_MAX = 28.0
+#: ``units`` case (issue 17): surface standard deviation [m], approaches
+#: after first touch [sigma], mesh presets and the GEMM unit's columns.
+UNITS_SIGMA = 30e-6
+UNITS_APPROACH = (0.1, 3.0)
+UNITS_MESHES = ("paper", "refined")
+UNITS_COLUMNS = 60
+#: Mean real area fractions at which iterations and products per step are reported.
+CONTACT_LEVELS = (0.01, 0.10, 0.30)
 
 
 def gaussian_surfaces(count: int, grid: int, size: float, seed: int) -> np.ndarray:
@@ -95,23 +135,42 @@ def initial_gaps(z: np.ndarray) -> np.ndarray:
     return z.max(axis=(-2, -1), keepdims=True) - z
 
 
-def paper_problem(count: int):
-    """The paper's block influence matrix [m/Pa], element area [m^2] and gaps [m]."""
+def block_matrix(mesh: str = "paper"):
+    """Influence matrix [m/Pa] of the paper's block with a mesh preset, and its geometry.
+
+    The block of Table 1 (9 mm x 9 mm, 10 mm thick, 60 x 60, E 511 MPa, nu 0,
+    clamped base); cached in /tmp (``MATRIX_CACHE`` for the paper's mesh).
+    """
     from roughcontact.elasticity.influence import BlockGeometry, influence_matrix
+
+    geometry = BlockGeometry(mesh=mesh)
+    cache = (MATRIX_CACHE if mesh == "paper"
+             else MATRIX_CACHE.with_name(f"{MATRIX_CACHE.stem}_{mesh}.npy"))
+    if cache.exists():
+        return np.load(cache), geometry
+    matrix = influence_matrix(geometry)
+    np.save(cache.with_suffix(".tmp.npy"), matrix)
+    os.replace(cache.with_suffix(".tmp.npy"), cache)
+    return matrix, geometry
+
+
+def study_gaps(count: int, sigma: float) -> np.ndarray:
+    """Gaps f = max z - z [m] of ``count`` Gaussian surfaces of the library generator.
+
+    ``generate_many`` with seeds 0..count-1: sigma [m], Sk 0, Ku 3, exponential
+    ACF with b = 1 mm, 60 x 60 over 9 mm x 9 mm.
+    """
     from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many
 
-    geometry = BlockGeometry()
-    if MATRIX_CACHE.exists():
-        matrix = np.load(MATRIX_CACHE)
-    else:
-        matrix = influence_matrix(geometry)
-        np.save(MATRIX_CACHE.with_suffix(".tmp.npy"), matrix)
-        os.replace(MATRIX_CACHE.with_suffix(".tmp.npy"), MATRIX_CACHE)
-    spec = SurfaceSpec(grid=(60, 60), size=(SIZE, SIZE), sigma=SIGMA, skew=0, kurt=3,
+    spec = SurfaceSpec(grid=(60, 60), size=(SIZE, SIZE), sigma=sigma, skew=0, kurt=3,
                        corr_length=(CORRELATION, CORRELATION))
-    gaps = initial_gaps(generate_many(spec, np.arange(count)))
-    area = geometry.size[0] * geometry.size[1] / (geometry.grid[0] * geometry.grid[1])
-    return matrix, area, gaps
+    return initial_gaps(generate_many(spec, np.arange(count)))
+
+
+def paper_problem(count: int):
+    """The paper's block influence matrix [m/Pa], element area [m^2] and gaps [m]."""
+    matrix, geometry = block_matrix("paper")
+    return matrix, geometry.element_area, study_gaps(count, SIGMA)
 
 
 def case_paper_sweep(args, surfaces: int, steps: int, extrapolate: bool) -> dict:
@@ -298,24 +357,91 @@ def case_blas_kernels(args) -> dict:
     single = matrix.astype(np.float32)
     batch = np.random.default_rng(0).random((args.surfaces, matrix.shape[0]))
 
-    def best(function):
-        function()
-        times = []
-        for _ in range(5):
-            start = time.perf_counter()
-            function()
-            times.append(time.perf_counter() - start)
-        return min(times)
-
     return dict(
-        wall_s=best(lambda: batch @ matrix),
-        gemm_double_s=best(lambda: batch @ matrix),
-        gemm_single_s=best(lambda: batch.astype(np.float32) @ single),
-        gemv_single_s=best(lambda: batch[0].astype(np.float32) @ single),
+        wall_s=best_time(lambda: batch @ matrix),
+        gemm_double_s=best_time(lambda: batch @ matrix),
+        gemm_single_s=best_time(lambda: batch.astype(np.float32) @ single),
+        gemv_single_s=best_time(lambda: batch[0].astype(np.float32) @ single),
         solves=0,
         matvecs_per_solve=float("nan"),
         converged=True,
     )
+
+
+def best_time(function, repeats: int = 5) -> float:
+    """Smallest wall time [s] of ``repeats`` calls of ``function``, after one warm-up."""
+    function()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def at_contact_level(result, level: float) -> dict:
+    """Work at the step whose mean real area fraction is nearest ``level``.
+
+    Returns the step (1-based), that fraction and the mean iterations and
+    products (``matvecs``) per surface at that step.
+    """
+    fraction = result.real_area_fraction.mean(axis=0)
+    step = int(np.argmin(np.abs(fraction - level)))
+    return dict(step=step + 1, contact=float(fraction[step]),
+                iterations=float(result.iterations[:, step].mean()),
+                matvecs=float(result.matvecs[:, step].mean()))
+
+
+def case_units(args) -> dict:
+    """The issue-17 sweep on the paper and refined meshes, in GEMM units (module docstring).
+
+    Everything is measured in this process: the GEMM unit before every round,
+    then one sweep per mesh, the meshes alternating.
+    """
+    problems = {mesh: block_matrix(mesh) for mesh in UNITS_MESHES}
+    gaps = study_gaps(args.surfaces, UNITS_SIGMA)
+    start, end = args.approach_range
+    approaches = np.linspace(start, end, args.steps) * UNITS_SIGMA
+    unit_matrix = problems["paper"][0]
+    block = np.random.default_rng(0).random((unit_matrix.shape[1], UNITS_COLUMNS))
+    units, walls, results = [], {mesh: [] for mesh in UNITS_MESHES}, {}
+    for _ in range(args.repeats):
+        units.append(best_time(lambda: unit_matrix @ block))
+        for mesh, (matrix, geometry) in problems.items():
+            begin = time.perf_counter()
+            results[mesh] = sweep(matrix, gaps, approaches, method=args.method,
+                                  element_area=geometry.element_area, tol=args.tol,
+                                  precision=args.precision, stiffness=True)
+            walls[mesh].append(time.perf_counter() - begin)
+    unit = min(units)
+    rows = []
+    for mesh, result in results.items():
+        fraction = result.real_area_fraction.mean(axis=0)
+        row = dict(
+            method=args.method, mesh=mesh, surfaces=args.surfaces, steps=args.steps,
+            approach_sigma=f"{start:g}-{end:g}", precision=args.precision, tol=args.tol,
+            repeats=args.repeats, gemm_unit_s=unit, wall_s=min(walls[mesh]),
+            wall_max_s=max(walls[mesh]), units=min(walls[mesh]) / unit,
+            matvecs_total=int(result.matvecs.sum()),
+            products_per_step=float(result.matvecs.mean()),
+            iterations_per_step=float(result.iterations.mean()),
+            contact_first=float(fraction[0]), contact_last=float(fraction[-1]),
+            final_pressure_MPa=float(result.nominal_pressure[:, -1].mean() / 1e6),
+            converged=bool(result.converged.all()),
+            stiffness_converged=bool(result.stiffness_converged.all()),
+            max_residual=float(result.residual.max()),
+        )
+        for level in CONTACT_LEVELS:
+            found = at_contact_level(result, level)
+            tag = f"{level:.0%}".replace("%", "pct")
+            row.update({f"contact_at_{tag}": found["contact"],
+                        f"iterations_at_{tag}": found["iterations"],
+                        f"products_at_{tag}": found["matvecs"]})
+        rows.append(row)
+    refined = next(row for row in rows if row["mesh"] == "refined")
+    for row in rows:
+        row["units_over_refined"] = row["units"] / refined["units"]
+    return dict(rows=rows)
 
 
 CASES = {
@@ -334,6 +460,7 @@ CASES = {
     "periodic-ours": lambda a: case_periodic(a, "cg", a.periodic_grid, 1e-10, True),
     "periodic-tamaas": lambda a: case_external(a, "tamaas", 1e-10),
     "periodic-contactmechanics": lambda a: case_external(a, "contactmechanics", 1e-10),
+    "units": case_units,
 }
 
 
@@ -349,10 +476,15 @@ def plan(args) -> list[tuple[str, int]]:
     return runs
 
 
-def run_child(name: str, threads: int, args) -> dict:
+def run_child(name: str, threads: int, args, extra=()) -> dict:
+    """Run case ``name`` in a child process with ``threads`` BLAS threads.
+
+    Returns the case's record with ``case`` and ``blas_threads`` added, or a
+    record with the child's last error line in ``error``.
+    """
     env = dict(os.environ, OPENBLAS_NUM_THREADS=str(threads), OMP_NUM_THREADS=str(threads),
                MKL_NUM_THREADS=str(threads))
-    command = [sys.executable, __file__, "--child", name, *args.forward]
+    command = [sys.executable, __file__, "--child", name, *args.forward, *extra]
     done = subprocess.run(command, env=env, capture_output=True, text=True)
     if done.returncode:
         message = (done.stderr.strip().splitlines() or ["no output"])[-1]
@@ -361,6 +493,98 @@ def run_child(name: str, threads: int, args) -> dict:
     record = json.loads(done.stdout.strip().splitlines()[-1])
     record.update(case=name, blas_threads=threads)
     return record
+
+
+def run_units(method: str, args) -> list[dict]:
+    """The ``units`` case for one method, one BLAS thread: one row per mesh."""
+    record = run_child("units", 1, args, [f"--method={method}"])
+    if "error" in record:
+        return [dict(method=method, mesh=mesh, error=record["error"]) for mesh in UNITS_MESHES]
+    return record["rows"]
+
+
+UNITS_COLUMNS_OUT = [
+    "method", "mesh", "surfaces", "steps", "approach_sigma", "precision", "tol", "repeats",
+    "gemm_unit_s", "wall_s", "wall_max_s", "units", "units_over_refined", "matvecs_total",
+    "products_per_step", "iterations_per_step",
+    *(f"{name}_at_{level:.0%}".replace("%", "pct") for level in CONTACT_LEVELS
+      for name in ("contact", "iterations", "products")),
+    "contact_first", "contact_last", "final_pressure_MPa", "converged", "stiffness_converged",
+    "max_residual", "error",
+]
+#: Issue 17's targets: GEMM units per mesh, and paper over refined.
+UNITS_TARGET, RATIO_TARGET = 500.0, 1.2
+
+
+def units_findings(table) -> list[str]:
+    """Findings of the ``units`` case against issue 17's targets."""
+    lines = []
+    for method, rows in table.groupby("method", sort=False):
+        by_mesh = {row.mesh: row for row in rows.itertuples() if np.isfinite(row.units)}
+        if set(by_mesh) != set(UNITS_MESHES):
+            lines.append(f"- {method}: failed ({rows.error.dropna().iloc[0]})"
+                         if rows.error.notna().any() else f"- {method}: incomplete")
+            continue
+        paper, refined = by_mesh["paper"], by_mesh["refined"]
+        ratio = paper.units / refined.units
+        verdict = "meets" if max(paper.units, refined.units) <= UNITS_TARGET else "misses"
+        lines.append(
+            f"- {method}: paper {paper.units:.0f} units ({paper.wall_s:.2f} s), refined "
+            f"{refined.units:.0f} units ({refined.wall_s:.2f} s), GEMM unit "
+            f"{1e3 * paper.gemm_unit_s:.1f} ms: {verdict} the {UNITS_TARGET:.0f}-unit target; "
+            f"paper / refined {ratio:.2f} "
+            f"({'meets' if ratio <= RATIO_TARGET else 'misses'} the {RATIO_TARGET:g} target)")
+        for row in (paper, refined):
+            reach = []
+            for level in CONTACT_LEVELS:
+                found = getattr(row, f"contact_at_{level:.0%}".replace("%", "pct"))
+                missed = " (not reached)" if found < 0.5 * level else ""
+                reach.append(f"{found:.2%} for {level:.0%}{missed}")
+            reach = ", ".join(reach)
+            flags = "all steps converged" if row.converged else "NOT all steps converged"
+            lines.append(
+                f"  - {row.mesh}: mean real area {row.contact_first:.2%} to "
+                f"{row.contact_last:.2%} over the sweep (nearest steps: {reach}), final "
+                f"{row.final_pressure_MPa:.3g} MPa; {flags}, worst residual "
+                f"{row.max_residual:.4g}")
+    return lines
+
+
+def write_units(rows: list[dict], args, out: Path) -> None:
+    """``contact_units.csv`` and ``contact_units.md`` from the ``units`` rows."""
+    import pandas as pd
+
+    out.mkdir(parents=True, exist_ok=True)
+    table = pd.DataFrame(rows).reindex(columns=UNITS_COLUMNS_OUT)
+    table.to_csv(out / "contact_units.csv.tmp", index=False)
+    os.replace(out / "contact_units.csv.tmp", out / "contact_units.csv")
+    start, end = args.approach_range
+    header = (
+        "# Contact sweep in GEMM units (issue 17)\n\n"
+        f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"1 BLAS thread; numpy {np.__version__}. Units are only comparable when measured on "
+        f"an idle machine.\n"
+        f"Workload: {args.surfaces} Gaussian surfaces (sigma {UNITS_SIGMA * 1e6:g} um, b 1 mm, "
+        f"60 x 60 over 9 mm) x {args.steps} approaches from {start:g} to {end:g} sigma after "
+        f"first touch, tol {args.tol:g}, precision {args.precision}, tangent stiffness at "
+        f"every step, on the paper's block (10 mm, nu 0, clamped) with the paper and the "
+        f"refined mesh. GEMM unit: best of 5 products C @ P (3600 x 3600 by 3600 x "
+        f"{UNITS_COLUMNS}, float64) before each round, the smallest kept; wall: the smallest "
+        f"of {args.repeats} sweeps per mesh, meshes alternating. products: matvecs of the "
+        f"contact solves, charged per surface (the stiffness CG's are not counted); "
+        f"*_per_step: mean per surface and step; *_at_Npct: at the step whose mean real area "
+        f"is nearest N % (contact_at_Npct is that step's fraction).\n\n"
+    )
+    findings = "\n".join(["## Findings", "", *units_findings(table)]) + "\n\n"
+    summary_columns = ["method", "mesh", "units", "units_over_refined", "wall_s", "gemm_unit_s",
+                       "products_per_step", "iterations_per_step",
+                       *(f"{name}_at_{level:.0%}".replace("%", "pct") for level in CONTACT_LEVELS
+                         for name in ("contact", "iterations"))]
+    text = (header + findings + "## Summary\n\n"
+            + table.reindex(columns=summary_columns).to_markdown(index=False, floatfmt=".4g")
+            + "\n\n## All columns\n\n" + table.to_markdown(index=False, floatfmt=".4g") + "\n")
+    (out / "contact_units.md.tmp").write_text(text)
+    os.replace(out / "contact_units.md.tmp", out / "contact_units.md")
 
 
 def summary(table, args) -> list[str]:
@@ -451,11 +675,23 @@ def main(argv=None) -> None:
     parser.add_argument("--baseline-grid", type=int, default=256)
     parser.add_argument("--sweep-two-threads", action="store_true",
                         help="also run the full paper sweep with 2 BLAS threads")
+    parser.add_argument("--only", nargs="+", choices=sorted(CASES), metavar="CASE",
+                        help=f"run only these cases (of: {', '.join(sorted(CASES))})")
+    parser.add_argument("--methods", nargs="+", default=["cg"],
+                        help="units: contact methods to measure, one child each (default cg)")
+    parser.add_argument("--repeats", type=int, default=3,
+                        help="units: sweeps per mesh, alternating meshes; the minimum is kept")
+    parser.add_argument("--approach-range", type=float, nargs=2, default=UNITS_APPROACH,
+                        metavar=("START", "END"),
+                        help="units: first and last approach after first touch [sigma]")
+    parser.add_argument("--precision", default="mixed",
+                        help="units: sweep precision (the study's: mixed)")
     parser.add_argument("--quick", action="store_true", help="small sizes, for a smoke test")
     parser.add_argument("--out", type=Path, default=ROOT / "results" / "benchmarks")
     parser.add_argument("--report", action="store_true",
-                        help="only rewrite contact.md from an existing contact.csv")
+                        help="only rewrite contact.md (and contact_units.md) from the csv files")
     parser.add_argument("--child", choices=sorted(CASES), help=argparse.SUPPRESS)
+    parser.add_argument("--method", default="cg", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.quick:
         args.surfaces, args.steps, args.subset, args.subset_steps = 4, 30, 2, 2
@@ -466,15 +702,22 @@ def main(argv=None) -> None:
     if args.report:
         import pandas as pd
 
-        write_report(pd.read_csv(args.out / "contact.csv"), args, args.out)
+        if (args.out / "contact.csv").exists():
+            write_report(pd.read_csv(args.out / "contact.csv"), args, args.out)
+        if (args.out / "contact_units.csv").exists():
+            write_units(pd.read_csv(args.out / "contact_units.csv").to_dict("records"),
+                        args, args.out)
         return
     args.forward = [f"--surfaces={args.surfaces}", f"--steps={args.steps}",
                     f"--subset={args.subset}", f"--subset-steps={args.subset_steps}",
                     f"--tol={args.tol}", f"--periodic-grid={args.periodic_grid}",
-                    f"--baseline-grid={args.baseline_grid}"]
+                    f"--baseline-grid={args.baseline_grid}", f"--repeats={args.repeats}",
+                    "--approach-range", *map(str, args.approach_range),
+                    f"--precision={args.precision}"]
+    selected = set(args.only or CASES)
     records = []
     for name, threads in plan(args):
-        if args.quick and name == "paper-sweep":
+        if name not in selected or (args.quick and name == "paper-sweep" and not args.only):
             continue
         record = run_child(name, threads, args)
         print(f"{name:28s} threads={threads} wall={record.get('wall_s', float('nan')):8.2f} s "
@@ -482,7 +725,21 @@ def main(argv=None) -> None:
               f"converged={record.get('converged')}", flush=True)
         records.append(record)
         write_tables(records, args, args.out)
-    print(f"wrote {args.out / 'contact.csv'} and {args.out / 'contact.md'}")
+    if records:
+        print(f"wrote {args.out / 'contact.csv'} and {args.out / 'contact.md'}")
+    if "units" in selected:
+        rows = []
+        for method in args.methods:
+            rows += run_units(method, args)
+            for row in rows[-len(UNITS_MESHES):]:
+                print(f"units {row['method']:9s} {row['mesh']:8s} "
+                      f"wall={row.get('wall_s', float('nan')):8.2f} s "
+                      f"units={row.get('units', float('nan')):7.0f} "
+                      f"products/step={row.get('products_per_step', float('nan')):6.1f} "
+                      f"contact={row.get('contact_last', float('nan')):.2%} "
+                      f"converged={row.get('converged')}", flush=True)
+            write_units(rows, args, args.out)
+        print(f"wrote {args.out / 'contact_units.csv'} and {args.out / 'contact_units.md'}")
 
 
 if __name__ == "__main__":
