@@ -153,9 +153,13 @@ def get_surface_params(wildcards):
 
 
 def get_surface_inputs(wildcards):
-    """The measured file of a measured surface cell (none for generated cells)."""
+    """The measured file of a measured surface cell, the spectrum's file (a PSD
+    table or a measurement) of a generated cell with one; else none."""
     cell = SURFACE_CELLS[wildcards.cell]
-    return [cell["measured"]["file"]] if cell["method"] == "measured" else []
+    if cell["method"] == "measured":
+        return [cell["measured"]["file"]]
+    spectrum_file = study.spectrum_file(cell.get("spectrum"))
+    return [spectrum_file] if spectrum_file else []
 
 
 def get_surface_path(params):
