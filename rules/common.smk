@@ -268,6 +268,13 @@ def get_convergence_mem_mb(wildcards):
     return resources.convergence_mem_mb(get_body_geometry(wildcards), presets)
 
 
+def get_speed_vs_error_spectrum_files(wildcards):
+    """The file of the grid study's spectrum (a PSD table or a measurement), if any."""
+    spectrum = _report_settings("speed_vs_error").get("spectrum")
+    path = study.spectrum_file(study.spectrum_params(spectrum))
+    return [path] if path else []
+
+
 def get_speed_vs_error_runtime(wildcards, attempt):
     geometry, section = get_body_geometry(wildcards), _report_settings("speed_vs_error")
     return resources.speed_vs_error_runtime(geometry, section, attempt)

@@ -161,6 +161,16 @@ def test_a_measured_spectrum_is_keyed_by_the_file_and_its_options():
     assert cells.spec_from_params(params).acf == "psd"
 
 
+def test_the_speed_report_takes_a_spectrum_from_its_section():
+    cfg = validated({"reports": {"speed_vs_error": {"spectrum": {
+        "kind": "self-affine", "hurst": 0.8, "rolloff_mm": 3.0, "cutoff_mm": 0.6}}}})
+    section = cfg["reports"]["speed_vs_error"]
+    fields = cells.spectrum_fields(cells.spectrum_params(section["spectrum"]))
+    assert fields == pytest.approx({"acf": "self-affine", "hurst": 0.8,
+                                    "rolloff_wavelength": 3e-3, "cutoff_wavelength": 0.6e-3})
+    assert "spectrum" not in validated({})["reports"]["speed_vs_error"]
+
+
 def test_a_measured_study_gives_its_spectrum_to_the_twin_only(tmp_path):
     path = write_table(tmp_path / "psd.csv")
     surface = {"file": str(MEASURED), "format": "xyz", "height_unit": "um", "fill_holes": 0.01}
