@@ -153,9 +153,13 @@ def get_surface_params(wildcards):
 
 
 def get_surface_inputs(wildcards):
-    """The measured file of a measured surface cell (none for generated cells)."""
+    """The measured file of a measured surface cell, the spectrum's file (a PSD
+    table or a measurement) of a generated cell with one; else none."""
     cell = SURFACE_CELLS[wildcards.cell]
-    return [cell["measured"]["file"]] if cell["method"] == "measured" else []
+    if cell["method"] == "measured":
+        return [cell["measured"]["file"]]
+    spectrum_file = study.spectrum_file(cell.get("spectrum"))
+    return [spectrum_file] if spectrum_file else []
 
 
 def get_surface_path(params):
@@ -262,6 +266,13 @@ def get_convergence_runtime(wildcards, attempt):
 def get_convergence_mem_mb(wildcards):
     presets = study.convergence_presets(config)
     return resources.convergence_mem_mb(get_body_geometry(wildcards), presets)
+
+
+def get_speed_vs_error_spectrum_files(wildcards):
+    """The file of the grid study's spectrum (a PSD table or a measurement), if any."""
+    spectrum = _report_settings("speed_vs_error").get("spectrum")
+    path = study.spectrum_file(study.spectrum_params(spectrum))
+    return [path] if path else []
 
 
 def get_speed_vs_error_runtime(wildcards, attempt):

@@ -31,6 +31,7 @@ rule influence_convergence:
 rule speed_vs_error:
     input:
         mesh_table="results/reports/influence_convergence.csv",
+        spectrum=get_speed_vs_error_spectrum_files,
     output:
         md=report(
             "results/reports/speed_vs_error.md",

@@ -3,7 +3,7 @@
 import logging
 
 from roughcontact.reports.speed import speed_vs_error_report
-from roughcontact.study.cells import block_geometry
+from roughcontact.study.cells import block_geometry, spectrum_fields, spectrum_params
 from roughcontact.study.config import SpeedReportSettings
 from roughcontact.study.logs import route_logging
 from roughcontact.units import MPA
@@ -11,6 +11,7 @@ from roughcontact.units import MPA
 route_logging(snakemake.log[0])
 settings = SpeedReportSettings.from_section(snakemake.params.settings)
 body = block_geometry(snakemake.params.geometry, E=snakemake.params.E_MPa * MPA)
+spectrum = spectrum_params(snakemake.params.settings.get("spectrum"))
 speed_vs_error_report(
     snakemake.output.md,
     snakemake.output.csv,
@@ -23,6 +24,7 @@ speed_vs_error_report(
     nu=body.nu,
     mesh_table_path=snakemake.input.mesh_table,
     seed=snakemake.params.study_seed,
+    spectrum=None if spectrum is None else spectrum_fields(spectrum),
     progress=logging.getLogger("roughcontact.report").info,
     **settings.as_kwargs(),
 )

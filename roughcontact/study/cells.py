@@ -1,8 +1,8 @@
 """The study grid: which surface cells, geometries and contact cells a configuration asks for.
 
 A *surface cell* is one set of surface statistics and sampling (skewness,
-kurtosis, correlation lengths, grid, size, ACF, periodicity, generator) with a
-number of seeded realisations. Its key names every parameter, so a changed
+kurtosis, correlation lengths, grid, size, ACF or spectrum, periodicity,
+generator) with a number of seeded realisations. Its key names every parameter, so a changed
 parameter is a new file and the workflow reruns exactly what depends on it.
 Sigma is not part of a cell: surfaces are stored in units of sigma and scaled
 at use (Eq 28-32 of Kumar et al. 2006). The jobs that build them are in
@@ -25,12 +25,15 @@ import numpy as np
 from roughcontact.contact.cell import nondim_pressure
 from roughcontact.elasticity.influence import BlockGeometry, estimate_cost
 from roughcontact.elasticity.operators import HYBRID_MESHES, choose_operator, default_coarse_grid
+from roughcontact.errors import MeasurementError
+from roughcontact.hashes import file_sha256
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.provenance import canonical_json
 from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.synthetic import (
     SurfaceSpec,
     calibrate_filter,
+    filter_kernel,
     input_moments,
     kurt_min,
 )
@@ -53,10 +56,15 @@ def cell_params(defaults: dict, **overrides) -> dict:
     """Complete, canonical parameters of one surface cell.
 
     ``defaults`` is the config's ``surfaces`` section; ``overrides`` may set
-    ``skew``, ``kurt``, ``b_mm``, ``count`` and any default.
+    ``skew``, ``kurt``, ``b_mm``, ``count``, ``spectrum`` and any default.
+    A ``spectrum`` other than ``{kind: acf}`` (:func:`spectrum_params`) is
+    stored under ``"spectrum"`` and replaces the ACF: ``acf`` is then
+    ``"self-affine"`` or ``"psd"`` (the :class:`SurfaceSpec` kind) and
+    ``b_mm`` only labels the cell. Without one the parameters are those of
+    a cell before spectra existed (same keys, same surfaces).
     """
     merged = {**defaults, **overrides}
-    return {
+    params = {
         "skew": float(merged["skew"]),
         "kurt": float(merged["kurt"]),
         "b_mm": [float(v) for v in _pair(merged["b_mm"])],
@@ -67,24 +75,33 @@ def cell_params(defaults: dict, **overrides) -> dict:
         "method": str(merged["method"]),
         "count": int(merged["count"]),
     }
+    spectrum = spectrum_params(merged.get("spectrum"))
+    if spectrum is not None:
+        params["acf"] = "self-affine" if spectrum["kind"] == "self-affine" else "psd"
+        params["spectrum"] = spectrum
+    return params
 
 
 def statistics_key(params: dict) -> str:
     """Key of a cell's statistics and sampling, without the surface count.
 
     Seeds derive from this key, so the first k surfaces of a cell are the same
-    whatever the count. A measured cell's key is :func:`measured_key`.
+    whatever the count. A measured cell's key is :func:`measured_key`. A cell
+    with a spectrum ends in :func:`spectrum_tag`.
     """
     if params["method"] == "measured":
         return measured_key(params)
     bx, by = params["b_mm"]
     lx, ly = params["size_mm"]
     nx, ny = params["grid"]
-    return (
+    key = (
         f"sk{params['skew']:g}_ku{params['kurt']:g}_b{bx:g}x{by:g}mm_L{lx:g}x{ly:g}mm"
         f"_g{nx}x{ny}_{params['acf'][:3]}_{'per' if params['periodic'] else 'pad'}"
         f"_{params['method']}"
     )
+    if "spectrum" in params:
+        key += f"_{spectrum_tag(params['spectrum'])}"
+    return key
 
 
 def cell_key(params: dict) -> str:
@@ -93,17 +110,155 @@ def cell_key(params: dict) -> str:
 
 
 def spec_from_params(params: dict, sigma: float = 1.0) -> SurfaceSpec:
-    """The :class:`SurfaceSpec` of a cell (lengths converted from mm to m)."""
+    """The :class:`SurfaceSpec` of a cell (lengths converted from mm to m).
+
+    A cell with a spectrum gets its fields from :func:`spectrum_fields` (a
+    table is read from its file, which must be the planned one) and the
+    spectrum's own correlation length (``b_mm`` is not used).
+    """
+    if "spectrum" in params:
+        shape = {"corr_length": None, **spectrum_fields(params["spectrum"])}
+    else:
+        shape = {"corr_length": tuple(v * MM for v in params["b_mm"]), "acf": params["acf"]}
     return SurfaceSpec(
         grid=tuple(params["grid"]),
         size=tuple(v * MM for v in params["size_mm"]),
-        corr_length=tuple(v * MM for v in params["b_mm"]),
         sigma=sigma,
         skew=params["skew"],
         kurt=params["kurt"],
-        acf=params["acf"],
         periodic=params["periodic"],
+        **shape,
     )
+
+
+# ---------------------------------------------------------------------------
+# Spectra: ``surfaces.spectrum`` (or a study's ``spectrum``) in place of the ACF
+
+#: Short names of the spectrum kinds in cell keys (:func:`spectrum_tag`).
+SPECTRUM_TAGS = {"self-affine": "sa", "table": "tab", "measured": "mpsd"}
+#: Import options of a measured spectrum beyond the schema's (its own grid is kept).
+_MEASURED_SPECTRUM_FIXED = {"decimate": None, "resample_grid": None}
+
+
+def spectrum_params(entry: dict | None) -> dict | None:
+    """Canonical parameters of a validated ``spectrum:`` entry; None for ``kind: acf``
+    (or no entry): the ACF of the ``surfaces`` section.
+
+    - ``self-affine``: ``hurst``, ``rolloff_mm``, ``cutoff_mm``.
+    - ``table``: ``file`` (a CSV table, :func:`roughcontact.surfaces.measured.read_psd_table`)
+      and its ``file_sha256``.
+    - ``measured``: the import options of :func:`measured_options` (no
+      decimation or resampling) and the file's ``file_sha256``.
+
+    Files are read here (relative paths from the working directory), so a
+    changed file is a new cell (:func:`spectrum_tag`).
+    """
+    if entry is None or entry["kind"] == "acf":
+        return None
+    kind = entry["kind"]
+    if kind == "self-affine":
+        return {"kind": kind, "hurst": float(entry["hurst"]),
+                "rolloff_mm": float(entry["rolloff_mm"]), "cutoff_mm": float(entry["cutoff_mm"])}
+    if kind == "table":
+        path = str(entry["file"])
+        return {"kind": kind, "file": path, "file_sha256": _psd_file(path, _stamp(path))[0]}
+    options = measured_options({**{k: v for k, v in entry.items() if k != "kind"},
+                                **_MEASURED_SPECTRUM_FIXED})
+    return {"kind": kind, **options, "file_sha256": load_measured(options).sha256}
+
+
+def spectrum_tag(spectrum: dict) -> str:
+    """Short name and hash of a spectrum, appended to its cells' keys.
+
+    ``sa-<8 hex>`` (self-affine: the hash of its parameters), ``tab-<12 hex>``
+    (a table: the first 12 hex digits of the file's SHA-256, as ``sha256sum``
+    prints it) or ``mpsd-<12 hex>-<8 hex>`` (a measured PSD: the file's
+    SHA-256 and the hash of the import options). The file's name and folder do
+    not enter; its content does, so a changed table regenerates the surfaces.
+    """
+    kind, tag = spectrum["kind"], SPECTRUM_TAGS[spectrum["kind"]]
+    if kind == "self-affine":
+        return f"{tag}-{hashlib.sha256(canonical_json(spectrum).encode()).hexdigest()[:8]}"
+    if kind == "table":
+        return f"{tag}-{spectrum['file_sha256'][:12]}"
+    options = {k: v for k, v in spectrum.items() if k not in ("file", "file_sha256")}
+    digest = hashlib.sha256(canonical_json(options).encode()).hexdigest()[:8]
+    return f"{tag}-{spectrum['file_sha256'][:12]}-{digest}"
+
+
+def spectrum_fields(spectrum: dict) -> dict:
+    """:class:`SurfaceSpec` fields of a spectrum (:func:`spectrum_params`), in SI units.
+
+    ``acf="self-affine"`` with its wavelengths in metres, or ``acf="psd"``
+    with the table (q [1/m], C) of the file. Raises
+    :class:`~roughcontact.errors.MeasurementError` if the file's content is
+    no longer the one planned (``file_sha256``).
+    """
+    if spectrum["kind"] == "self-affine":
+        return {"acf": "self-affine", "hurst": spectrum["hurst"],
+                "rolloff_wavelength": spectrum["rolloff_mm"] * MM,
+                "cutoff_wavelength": spectrum["cutoff_mm"] * MM}
+    path = spectrum["file"]
+    if spectrum["kind"] == "table":
+        sha, table = _psd_file(path, _stamp(path))
+    else:
+        options = {k: v for k, v in spectrum.items() if k not in ("kind", "file_sha256")}
+        sha, table = _measured_psd(canonical_json(options), _stamp(path))
+    if sha != spectrum["file_sha256"]:
+        raise MeasurementError(
+            f"{path}: the spectrum's file changed after the workflow was planned (sha256 "
+            f"{sha[:12]}, planned {spectrum['file_sha256'][:12]}); run again", path)
+    return {"acf": "psd", "psd": table}
+
+
+@functools.lru_cache(maxsize=16)
+def _psd_file(path: str, stamp) -> tuple[str, tuple]:
+    """SHA-256 and table of a PSD table file, kept per content stamp."""
+    table = measured.read_psd_table(path)
+    return file_sha256(path), table
+
+
+@functools.lru_cache(maxsize=16)
+def _measured_psd(options_json: str, stamp) -> tuple[str, tuple]:
+    """SHA-256 and isotropic PSD table of a measured file, kept per options and stamp."""
+    measurement = _load_measured(options_json, stamp)
+    return measurement.sha256, measured.psd_table_from_measurement(measurement)
+
+
+def spectrum_file(spectrum: dict | None) -> str | None:
+    """The file a spectrum is read from (an input of the jobs that use it), or None."""
+    return None if spectrum is None else spectrum.get("file")
+
+
+def _spectrum_entries(config: dict, names) -> list[tuple[str, dict]]:
+    """``(where, entry)`` of the config's spectrum and of each named study's own."""
+    entries = [("surfaces.spectrum", config["surfaces"].get("spectrum"))]
+    for name in names:
+        try:
+            entry = resolve_source(config, name)
+        except (KeyError, ValueError):
+            continue  # check_studies names it
+        if "spectrum" in entry:
+            entries.append((f"{source_name(config, name)}.spectrum", entry["spectrum"]))
+    return entries
+
+
+def check_spectra(config: dict, names) -> list[str]:
+    """Messages for spectra that cannot be used: a spectrum with padded surfaces
+    (``periodic: false``), a file that is missing or not a valid PSD table."""
+    problems = []
+    for where, entry in dict(_spectrum_entries(config, names)).items():
+        if entry is None or entry["kind"] == "acf":
+            continue
+        if not config["surfaces"]["periodic"]:
+            problems.append(f"{where}: kind {entry['kind']} generates periodic surfaces only; "
+                            "set surfaces.periodic: true or remove the spectrum")
+            continue
+        try:
+            spectrum_fields(spectrum_params(entry))
+        except (OSError, ValueError) as err:
+            problems.append(f"{where}: {err}")
+    return problems
 
 
 def figure_cells(config: dict, figure: str) -> list[dict]:
@@ -170,6 +325,8 @@ def check_feasible(cells: dict[str, dict]) -> list[str]:
         if params["method"] == "measured":
             continue
         try:
+            if "spectrum" in params:  # the table and the grid agree (power on the grid)
+                filter_kernel(spec_from_params(params))
             if params["method"] == "paper":
                 johnson.fit(*input_moments(spec_from_params(params)))
             elif params["method"] == "filter":
@@ -299,29 +456,37 @@ def measured_key(params: dict) -> str:
     return f"measured-{stem or 'surface'}_{info['file_sha256'][:12]}_{digest}"
 
 
-def synthetic_twin(defaults: dict, measured_cell: dict, count: int) -> dict:
+def synthetic_twin(defaults: dict, measured_cell: dict, count: int, **overrides) -> dict:
     """A generated cell with a measurement's Sk, Ku and correlation lengths.
 
-    Same grid and plan size as the measurement; ACF shape, periodicity and
-    generator are the config's ``surfaces`` defaults. Sigma is not part of a
-    cell: both are scaled by the same sigma in the study.
+    Same grid and plan size as the measurement; ACF shape (or spectrum),
+    periodicity and generator are the config's ``surfaces`` defaults, or
+    ``overrides`` (a study's ``spectrum``). Sigma is not part of a cell: both
+    are scaled by the same sigma in the study.
     """
     return cell_params(defaults, skew=measured_cell["skew"], kurt=measured_cell["kurt"],
                        b_mm=measured_cell["b_mm"], grid=measured_cell["grid"],
-                       size_mm=measured_cell["size_mm"], count=count)
+                       size_mm=measured_cell["size_mm"], count=count, **overrides)
+
+
+def _study_overrides(entry: dict) -> dict:
+    """Surface settings a study may set for its generated cells: its ``spectrum``."""
+    return {"spectrum": entry["spectrum"]} if "spectrum" in entry else {}
 
 
 def study_surfaces(config: dict, entry: dict) -> list[dict]:
     """Surface cells of a study that names a measured surface.
 
     The measurement, then, with ``compare_synthetic: true``, its
-    :func:`synthetic_twin` with the study's (or the config's) surface count.
+    :func:`synthetic_twin` with the study's (or the config's) surface count
+    and spectrum.
     """
     measured_cell = measured_cell_params(entry["surface"])
     cells = [measured_cell]
     if entry.get("compare_synthetic", False):
         count = entry.get("count", config["surfaces"]["count"])
-        cells.append(synthetic_twin(config["surfaces"], measured_cell, count))
+        cells.append(synthetic_twin(config["surfaces"], measured_cell, count,
+                                    **_study_overrides(entry)))
     return cells
 
 
@@ -331,6 +496,9 @@ def check_measured(config: dict, name: str, entry: dict) -> list[str]:
         if entry.get("compare_synthetic"):
             return [f"{name}: compare_synthetic needs a measured surface ('surface:')"]
         return []
+    if "spectrum" in entry and not entry.get("compare_synthetic"):
+        return [f"{name}: 'spectrum' applies to the generated twin of a measured surface; "
+                "add compare_synthetic: true or remove spectrum"]
     clashing = [k for k in ("moments", "b_mm", "size_mm") if k in entry]
     if clashing:
         return [f"{name}: 'surface' (a measured surface) fixes the statistics, grid and "
@@ -556,6 +724,7 @@ def contact_cells(config: dict, name: str) -> list[dict]:
                                     surfaces, skew=skew, kurt=kurt, b_mm=b,
                                     size_mm=size, grid=grid,
                                     count=fig.get("count", surfaces["count"]),
+                                    **_study_overrides(fig),
                                 )
                                 geom = geometry_params(body, surfaces, nu=nu, mesh=mesh,
                                                        size_mm=size, grid=grid)
@@ -712,6 +881,9 @@ def study_plan(config: dict) -> StudyPlan:
     """
     figures = [n for n in (*SURFACE_ONLY_FIGURES, *CONTACT_FIGURES) if n in config["figures"]]
     studies = [n for n in figures if n in CONTACT_FIGURES] + list(config["sweeps"])
+    spectra = check_spectra(config, studies)
+    if spectra:
+        raise ConfigProblems("Spectra that cannot be used", spectra)
     bad = check_studies(config, studies)
     if bad:
         raise ConfigProblems("Invalid contact studies in the config", bad)

@@ -93,7 +93,10 @@ def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict
     Heights are stored in units of sigma (dimensionless, zero mean per
     surface); realised moments (Eq 2-5) and 10 % ACF lags [m] per surface;
     the filter's transfer factors and the fitted Johnson curve of the white
-    noise as attributes, with provenance. Returns the root attributes.
+    noise as attributes, with provenance. A cell with a spectrum also has
+    ``spectrum`` (its parameters, JSON), ``spectrum_kind`` and, for a table or
+    measured PSD, ``spectrum_file`` and ``spectrum_file_sha256`` (the SHA-256
+    of the file the surfaces were generated from). Returns the root attributes.
     A measured cell (``method: measured``) is imported by
     :func:`build_measured_cell` instead.
     """
@@ -103,6 +106,12 @@ def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict
     spec = spec_from_params(params)
     seeds = derive_seeds(study_seed, statistics_key(params), params["count"])
     attrs = {"cell": cell_key(params), "study_seed": int(study_seed), "method": params["method"]}
+    if "spectrum" in params:
+        spectrum = params["spectrum"]
+        attrs |= {"spectrum": canonical_json(spectrum), "spectrum_kind": spectrum["kind"]}
+        if "file_sha256" in spectrum:
+            attrs |= {"spectrum_file": spectrum["file"],
+                      "spectrum_file_sha256": spectrum["file_sha256"]}
     extra = {}
     if params["method"] in ("filter", "paper"):
         kern = filter_kernel(spec)

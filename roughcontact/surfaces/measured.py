@@ -64,6 +64,10 @@ Johnson law with the same moments (:func:`roughcontact.surfaces.johnson.fit`);
 with ``spectral=True`` also the rms slope, the rms curvature and the isotropic
 power spectral density, computed by SurfaceTopography.
 Arrays are ``(ny, nx)``, row-major over y then x, as everywhere in the package.
+
+An isotropic PSD can also stand in for the autocorrelation of generated
+surfaces (``SurfaceSpec(acf="psd")``): :func:`psd_table_from_measurement`
+takes it from a measurement, :func:`read_psd_table` from a CSV table.
 """
 
 from __future__ import annotations
@@ -83,7 +87,8 @@ from scipy.sparse import linalg as sparse_linalg
 from roughcontact.errors import MeasurementError
 from roughcontact.hashes import file_sha256
 from roughcontact.surfaces import johnson
-from roughcontact.surfaces.synthetic import correlation_length, height_stats
+from roughcontact.surfaces.synthetic import check_psd_table, correlation_length, height_stats
+from roughcontact.units import MM
 
 log = logging.getLogger(__name__)
 
@@ -934,8 +939,80 @@ def spectral_statistics(measurement: Measurement) -> dict:
     }
 
 
+#: Columns of a PSD table file (:func:`read_psd_table`).
+PSD_COLUMNS = ("q_per_mm", "C")
+
+
+def psd_table_from_measurement(measurement: Measurement) -> tuple[tuple[float, float], ...]:
+    """The isotropic PSD of a measurement as a ``SurfaceSpec(acf="psd")`` table.
+
+    ``psd_q`` [1/m] and ``psd_C`` [m^4] of :func:`spectral_statistics`
+    (SurfaceTopography's ``power_spectrum_from_area`` on the prepared,
+    non-periodic heights), without the bins whose q or C is not finite or not
+    positive, sorted by q (a repeated q keeps its first bin). Returns
+    ``((q, C), ...)`` checked by
+    :func:`roughcontact.surfaces.synthetic.check_psd_table`.
+    """
+    spectral = spectral_statistics(measurement)
+    q = np.asarray(spectral["psd_q"], dtype=float)
+    c = np.asarray(spectral["psd_C"], dtype=float)
+    keep = np.isfinite(q) & np.isfinite(c) & (q > 0) & (c > 0)
+    q, c = q[keep], c[keep]
+    q, first = np.unique(q, return_index=True)
+    return check_psd_table(np.column_stack([q, c[first]]),
+                           f"{measurement.source}: the measured PSD")
+
+
+def read_psd_table(path: str | os.PathLike) -> tuple[tuple[float, float], ...]:
+    """An isotropic PSD table from a CSV file with columns ``q_per_mm,C``.
+
+    ``q_per_mm`` is the wavenumber magnitude ``q = 2 pi / wavelength`` [1/mm]
+    (so a 1 mm wavelength is 6.283), positive and strictly increasing; ``C``
+    the isotropic 2-D PSD ``C(q) >= 0`` in any unit (only its shape matters).
+    Read with pandas (a header line, comma separators; other columns are
+    refused). Returns ``((q [1/m], C), ...)`` for ``SurfaceSpec(acf="psd")``.
+
+    Raises
+    ------
+    MeasurementError
+        When the file is missing, cannot be parsed, has other columns or
+        non-numeric values, or its table is not a valid PSD
+        (:func:`roughcontact.surfaces.synthetic.check_psd_table`).
+    """
+    import pandas as pd
+
+    path = Path(path)
+    if not path.is_file():
+        raise MeasurementError(f"{path}: no such file (a PSD table with columns "
+                               f"{','.join(PSD_COLUMNS)})", path)
+    try:
+        frame = pd.read_csv(path, comment="#", skipinitialspace=True)
+    except (ValueError, pd.errors.ParserError, UnicodeDecodeError) as err:
+        raise MeasurementError(f"{path}: not a CSV table ({err}); write a header line "
+                               f"{','.join(PSD_COLUMNS)} and one row per wavenumber", path
+                               ) from None
+    columns = [str(c).strip() for c in frame.columns]
+    if columns != list(PSD_COLUMNS):
+        raise MeasurementError(
+            f"{path}: columns {columns}; expected exactly {list(PSD_COLUMNS)}: q = 2 pi / "
+            "wavelength in 1/mm, and the isotropic PSD C(q) in any unit", path)
+    values = frame.apply(pd.to_numeric, errors="coerce")
+    bad = values.isna().any(axis=1).to_numpy().nonzero()[0]
+    if bad.size:
+        row = int(bad[0])
+        raise MeasurementError(f"{path}: row {row + 1} of the table, "
+                               f"{frame.iloc[row].tolist()}, is not two numbers (q_per_mm, C)",
+                               path)
+    table = values.to_numpy(dtype=float) * np.array([1.0 / MM, 1.0])
+    try:
+        return check_psd_table(table, f"{path} (q in 1/m)")
+    except ValueError as err:
+        raise MeasurementError(str(err), path) from None
+
+
 __all__ = [
     "FORMATS",
+    "PSD_COLUMNS",
     "InstrumentData",
     "HEIGHT_UNITS",
     "LATERAL_UNITS",
@@ -945,6 +1022,8 @@ __all__ = [
     "fill_missing",
     "file_sha256",
     "load_measurement",
+    "psd_table_from_measurement",
+    "read_psd_table",
     "read_instrument",
     "read_npy",
     "read_text_grid",

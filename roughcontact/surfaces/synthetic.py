@@ -29,6 +29,10 @@ an isotropic self-affine power spectrum with roll-off and short-wavelength
 cut-off (:func:`self_affine_psd`), usable with both methods and any Johnson
 height law: with the cut-off resolved, the surface has no roughness at the
 grid scale and contact results converge as the grid is refined.
+``SurfaceSpec(acf="psd", psd=((q1, C1), (q2, C2), ...))`` takes any isotropic
+PSD as a table (a measured one, for instance: see
+:func:`roughcontact.surfaces.measured.psd_table_from_measurement`),
+interpolated in log-log between its rows (:func:`tabulated_psd`).
 """
 
 from __future__ import annotations
@@ -51,10 +55,15 @@ log = logging.getLogger(__name__)
 ACF_DECAY = 2.3
 """Decay constant of Eq 1: the ACF falls to exp(-2.3) ~ 10 % at lag b."""
 
-ACF_KINDS = ("exponential", "gaussian", "self-affine")
-"""Spectrum kinds of :class:`SurfaceSpec`: two ACFs (Eq 1) and a self-affine PSD."""
+ACF_KINDS = ("exponential", "gaussian", "self-affine", "psd")
+"""Spectrum kinds of :class:`SurfaceSpec`: two ACFs (Eq 1), a self-affine PSD and a
+tabulated isotropic PSD."""
 
 _SELF_AFFINE_FIELDS = ("hurst", "rolloff_wavelength", "cutoff_wavelength")
+#: The fields of each spectrum kind defined by its PSD (None for every other kind).
+_SPECTRUM_FIELDS = {"self-affine": _SELF_AFFINE_FIELDS, "psd": ("psd",)}
+#: Relative tolerance of "above the largest wavenumber" (cut-offs, table ends).
+_Q_RTOL = 1e-12
 
 
 def _pair(value, name: str) -> tuple:
@@ -84,16 +93,18 @@ class SurfaceSpec:
     skew, kurt : float
         Target skewness Sk and Pearson kurtosis Ku (normal: 0 and 3) of the
         heights (Eq 4-5).
-    acf : {"exponential", "gaussian", "self-affine"}
+    acf : {"exponential", "gaussian", "self-affine", "psd"}
         ``exp(-2.3 r)`` (Eq 1) or ``exp(-2.3 r^2)``, with
         ``r = sqrt((x/bx)^2 + (y/by)^2)``; or ``"self-affine"``: the isotropic
         power spectral density of :func:`self_affine_psd` (constant below the
         roll-off wavenumber, ``q^(-2(1+H))`` up to the cut-off, zero above),
-        set by ``hurst``, ``rolloff_wavelength`` and ``cutoff_wavelength``.
+        set by ``hurst``, ``rolloff_wavelength`` and ``cutoff_wavelength``;
+        or ``"psd"``: the isotropic PSD tabulated in ``psd``
+        (:func:`tabulated_psd`).
     periodic : bool
         True: circular convolution, the surface tiles the plane. False: the
         paper's moving average over padded noise, no wrap-around
-        (``"self-affine"`` is periodic only).
+        (``"self-affine"`` and ``"psd"`` are periodic only).
     hurst : float, optional
         Hurst exponent H in (0, 1) of the self-affine band (``"self-affine"``
         only).
@@ -106,10 +117,19 @@ class SurfaceSpec:
         shorter wavelengths, so the surface is smooth below it and contact
         results converge with the grid once it is resolved. At least two grid
         spacings along each axis (``"self-affine"`` only).
+    psd : sequence of (q, C) pairs, optional
+        The isotropic (2-D) power spectral density as a table (``"psd"``
+        only): wavenumber magnitude ``q = 2 pi / lambda`` [1/m], positive and
+        strictly increasing, and ``C(q) >= 0`` in any unit (only its shape
+        matters: ``sigma`` sets the amplitude), at least two rows, some C
+        positive. Stored as a tuple of float pairs, so the spec stays
+        hashable (:func:`check_psd_table`).
 
-    For ``"self-affine"``, ``corr_length`` may be left out (None): it is then
-    set to the roll-off wavelength along both axes, the scale beyond which
-    heights decorrelate; it enters only the domain checks and messages.
+    For ``"self-affine"`` and ``"psd"``, ``corr_length`` may be left out
+    (None): it is then set along both axes to the longest wavelength of the
+    spectrum's band, beyond which the PSD is flat and heights decorrelate: the
+    roll-off wavelength, or ``2 pi / q_1`` of the table's first row. It enters
+    only the domain checks and messages.
     """
 
     grid: tuple[int, int]
@@ -123,25 +143,30 @@ class SurfaceSpec:
     hurst: float | None = None
     rolloff_wavelength: float | None = None
     cutoff_wavelength: float | None = None
+    psd: tuple[tuple[float, float], ...] | None = None
 
     def __post_init__(self):
         grid = _pair(self.grid, "grid")
         size = _pair(self.size, "size")
         if self.acf not in ACF_KINDS:
             raise ValueError(f"SurfaceSpec.acf must be one of {ACF_KINDS}; got {self.acf!r}")
+        for kind, names in _SPECTRUM_FIELDS.items():
+            for name in names:
+                if self.acf != kind and getattr(self, name) is not None:
+                    raise ValueError(
+                        f"SurfaceSpec.{name} applies to acf={kind!r} only; got "
+                        f"{name}={_short(getattr(self, name))} with acf={self.acf!r}"
+                    )
         if self.acf == "self-affine":
             self._check_self_affine(grid, size)
             if self.corr_length is None:
                 object.__setattr__(self, "corr_length", float(self.rolloff_wavelength))
-        else:
-            for name in _SELF_AFFINE_FIELDS:
-                if getattr(self, name) is not None:
-                    raise ValueError(
-                        f"SurfaceSpec.{name} applies to acf='self-affine' only; got "
-                        f"{name}={getattr(self, name)!r} with acf={self.acf!r}"
-                    )
+        elif self.acf == "psd":
+            self._check_psd(size)
             if self.corr_length is None:
-                raise ValueError(f"SurfaceSpec.corr_length [m] is required for acf={self.acf!r}")
+                object.__setattr__(self, "corr_length", 2.0 * math.pi / self.psd[0][0])
+        elif self.corr_length is None:
+            raise ValueError(f"SurfaceSpec.corr_length [m] is required for acf={self.acf!r}")
         corr = _pair(self.corr_length, "corr_length")
         for name, pair in (("size", size), ("corr_length", corr)):
             for v in pair:
@@ -200,6 +225,22 @@ class SurfaceSpec:
         object.__setattr__(self, "rolloff_wavelength", float(rolloff))
         object.__setattr__(self, "cutoff_wavelength", float(cutoff))
 
+    def _check_psd(self, size) -> None:
+        table = check_psd_table(self.psd, "SurfaceSpec.psd")
+        if not self.periodic:
+            raise ValueError("acf='psd' generates periodic surfaces only; set periodic=True")
+        q_top = max(q for q, c in table if c > 0)
+        q_lowest = 2.0 * math.pi / max(float(v) for v in size)
+        if q_top < q_lowest * (1.0 - _Q_RTOL):
+            raise ValueError(
+                f"SurfaceSpec.psd has power only up to q = {q_top:.4g} 1/m (wavelength "
+                f"{2 * math.pi / q_top:.4g} m), below the smallest non-zero wavenumber of the "
+                f"surface, 2 pi / L = {q_lowest:.4g} 1/m: the surface would be flat. Enlarge "
+                "the surface to more than the longest wavelength with power, or check the "
+                "unit of q (1/m, q = 2 pi / wavelength)."
+            )
+        object.__setattr__(self, "psd", table)
+
     @property
     def shape(self) -> tuple[int, int]:
         """Array shape ``(ny, nx)`` of one surface."""
@@ -222,7 +263,90 @@ class SurfaceSpec:
             "acf": self.acf,
             "periodic": self.periodic,
         } | {name: getattr(self, name) for name in _SELF_AFFINE_FIELDS
-             if getattr(self, name) is not None}
+             if getattr(self, name) is not None
+             } | ({"psd": [list(row) for row in self.psd]} if self.psd is not None else {})
+
+
+def _short(value, limit: int = 80) -> str:
+    """``repr(value)`` cut to ``limit`` characters (a PSD table can be long)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 5] + " ...)"
+
+
+def check_psd_table(table, name: str = "psd") -> tuple[tuple[float, float], ...]:
+    """A tabulated isotropic PSD as a tuple of ``(q, C)`` float pairs, checked.
+
+    ``table`` holds rows ``(q, C)``: the wavenumber magnitude ``q`` [1/m],
+    positive and strictly increasing, and ``C >= 0`` (any unit), at least two
+    rows with some C positive; every value finite. ``name`` says where the
+    table came from in the messages (a field, a file); rows are counted from 1.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, the offending row, what was expected and what to do.
+    """
+    try:
+        rows = np.asarray(table, dtype=float)
+    except (TypeError, ValueError):
+        rows = None
+    if table is None or rows is None or rows.ndim != 2 or rows.shape[1] != 2:
+        raise ValueError(
+            f"{name} must be a table of (q, C) rows: wavenumber q [1/m] and PSD C; got "
+            f"{_short(table)}. Give a sequence of pairs, e.g. ((1e3, 1.0), (1e4, 1e-4))."
+        )
+    if len(rows) < 2:
+        raise ValueError(f"{name} needs at least 2 rows (q, C) to interpolate between; got "
+                         f"{len(rows)}")
+    bad = np.nonzero(~np.isfinite(rows).all(axis=1))[0]
+    if bad.size:
+        raise ValueError(f"{name}: row {bad[0] + 1} (q, C) = {tuple(rows[bad[0]])} is not "
+                         "finite; drop the row or give its value")
+    q, c = rows[:, 0], rows[:, 1]
+    if not q[0] > 0:
+        raise ValueError(f"{name}: row 1 has q = {q[0]:g} 1/m; wavenumbers must be positive "
+                         "(drop the q = 0 row: the mean height is not part of the spectrum)")
+    step = np.nonzero(np.diff(q) <= 0)[0]
+    if step.size:
+        i = int(step[0]) + 1
+        raise ValueError(f"{name}: q must increase strictly from row to row; row {i + 1} has "
+                         f"q = {q[i]:g} 1/m after q = {q[i - 1]:g}. Sort the table by q and "
+                         "merge repeated q")
+    negative = np.nonzero(c < 0)[0]
+    if negative.size:
+        raise ValueError(f"{name}: row {negative[0] + 1} has C = {c[negative[0]]:g}; a power "
+                         "spectral density is >= 0")
+    if not np.any(c > 0):
+        raise ValueError(f"{name}: every C is zero (no power); give the PSD's values")
+    return tuple((float(a), float(b)) for a, b in rows)
+
+
+def tabulated_psd(q, table):
+    """Isotropic PSD interpolated from a table of ``(q, C)`` rows, at wavenumbers ``q`` [1/m].
+
+    Between two rows, ``log C`` is linear in ``log q`` (power laws are exact);
+    where either row's C is zero, C itself is linear in ``q`` (the log is not
+    defined there). Below the first row C is the first row's (a plateau, like
+    the roll-off of :func:`self_affine_psd`); above the last row it is zero (a
+    cut-off). ``table`` as :func:`check_psd_table` returns it (not checked
+    here); the result has C's unit.
+    """
+    q = np.asarray(q, dtype=float)
+    rows = np.asarray(table, dtype=float)
+    qt, ct = rows[:, 0], rows[:, 1]
+    out = np.zeros(q.shape)
+    out[q < qt[0]] = ct[0]
+    inside = (q >= qt[0]) & (q <= qt[-1] * (1.0 + _Q_RTOL))
+    x = np.minimum(q[inside], qt[-1])
+    i = np.clip(np.searchsorted(qt, x, side="right") - 1, 0, len(qt) - 2)
+    q0, q1, c0, c1 = qt[i], qt[i + 1], ct[i], ct[i + 1]
+    positive = (c0 > 0) & (c1 > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_log = np.log(x / q0) / np.log(q1 / q0)
+        log_value = np.exp(np.log(c0) + t_log * (np.log(c1) - np.log(c0)))
+    linear = c0 + (x - q0) / (q1 - q0) * (c1 - c0)
+    out[inside] = np.where(positive, log_value, linear)
+    return out
 
 
 # --------------------------------------------------------------------------- filter
@@ -259,13 +383,13 @@ def _grid_wavenumber(spec: SurfaceSpec) -> np.ndarray:
 def autocorrelation(spec: SurfaceSpec, lag_x, lag_y):
     """Target ACF R(x, y) of Eq 1 [m^2] at lags ``lag_x``, ``lag_y`` [m].
 
-    Exponential and Gaussian kinds only; a self-affine spec is defined by its
-    PSD (:func:`self_affine_psd`), whose ACF on the grid is the inverse FFT of
-    :func:`filter_kernel`'s power.
+    Exponential and Gaussian kinds only; a self-affine or tabulated spec is
+    defined by its PSD (:func:`self_affine_psd`, :func:`tabulated_psd`), whose
+    ACF on the grid is the inverse FFT of :func:`filter_kernel`'s power.
     """
-    if spec.acf == "self-affine":
-        raise ValueError("autocorrelation: acf='self-affine' is defined by its PSD, "
-                         "see self_affine_psd")
+    if spec.acf in _SPECTRUM_FIELDS:
+        raise ValueError(f"autocorrelation: acf={spec.acf!r} is defined by its PSD, "
+                         "see self_affine_psd and tabulated_psd")
     bx, by = spec.corr_length
     r2 = (np.asarray(lag_x) / bx) ** 2 + (np.asarray(lag_y) / by) ** 2
     shape = np.sqrt(r2) if spec.acf == "exponential" else r2
@@ -330,11 +454,26 @@ def filter_kernel(spec: SurfaceSpec) -> FilterKernel:
     kernel is normalised to unit variance, sigma scales the output).
 
     For ``acf="self-affine"`` S_z is :func:`self_affine_psd` at each bin's
-    wavenumber ``|q|`` on the (periodic) surface grid, with no clipping needed.
+    wavenumber ``|q|`` on the (periodic) surface grid, with no clipping needed;
+    for ``acf="psd"`` it is :func:`tabulated_psd` of ``spec.psd`` there
+    (divided by the table's largest C), and a table that leaves every bin but
+    the mean (q = 0) without power is refused with a ValueError.
     """
     if spec.acf == "self-affine":
         spectrum = self_affine_psd(_grid_wavenumber(spec), spec.hurst, spec.rolloff_wavelength,
                                    spec.cutoff_wavelength)
+    elif spec.acf == "psd":
+        spectrum = tabulated_psd(_grid_wavenumber(spec), spec.psd)
+        spectrum /= max(c for _, c in spec.psd)
+        if not np.any(spectrum.ravel()[1:] > 0):
+            raise ValueError(
+                f"SurfaceSpec.psd puts no power on any wavenumber of the {spec.grid[0]} x "
+                f"{spec.grid[1]} grid over {_mm(spec.size)} mm but the mean: its rows with "
+                "C > 0 fall between the grid's wavenumbers. Refine the grid, enlarge the "
+                "surface, or tabulate the PSD over the grid's wavenumbers "
+                "(2 pi / L up to pi / spacing)."
+            )
+    if spec.acf in _SPECTRUM_FIELDS:
         transfer = np.sqrt(spectrum)
         weights = np.fft.ifft2(transfer).real
         norm = math.sqrt(float(np.sum(weights**2)))
@@ -371,6 +510,15 @@ def filter_kernel(spec: SurfaceSpec) -> FilterKernel:
 
 
 def _check_domain(spec: SurfaceSpec) -> None:
+    if spec.acf == "psd":
+        nyquist = math.pi / max(spec.spacing)
+        q_top = max(q for q, c in spec.psd if c > 0)
+        if q_top > nyquist * (1.0 + _Q_RTOL):
+            log.warning(
+                "the tabulated PSD has power up to q = %.4g 1/m, beyond the grid's Nyquist "
+                "wavenumber pi / spacing = %.4g 1/m: shorter wavelengths are left out, or "
+                "kept only along the diagonals (anisotropically). Refine the grid or end the "
+                "table at q = %.4g 1/m.", q_top, nyquist, nyquist)
     for axis, (b, L, d) in enumerate(zip(spec.corr_length, spec.size, spec.spacing, strict=True)):
         name = "xy"[axis]
         if b > L / 2:

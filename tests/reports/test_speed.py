@@ -251,6 +251,12 @@ def test_recommend_shares_tighten_a_component():
     assert choice.loc["solver", "choice"].startswith("cg tol 1e-08")
 
 
+#: The grid study's spectrum in the scaled-down report (the workflow test runs the
+#: report with the exponential ACF): the cut-off two spacings of the finest grid.
+REPORT_SPECTRUM = {"acf": "self-affine", "hurst": 0.8, "rolloff_wavelength": 0.9e-3,
+                   "cutoff_wavelength": 2 * H}
+
+
 @pytest.fixture(scope="module")
 def quick_report(tmp_path_factory):
     """The Snakemake entry point, scaled down (seconds): output folder and tables."""
@@ -258,7 +264,8 @@ def quick_report(tmp_path_factory):
     tables = speed.speed_vs_error_report(
         out / "s.md", out / "s.csv", out / "s.png", grid=12, surfaces=2, cells=((0.0, 3.0),),
         tolerances={"cg": (1e-4, 1e-8), "steepest": (1e-4,)}, steps=6, grids=(6, 12),
-        count_surfaces=8, counts=(4, 8), size=12 * H, thickness=2e-3, b=0.3e-3, seed=1)
+        count_surfaces=8, counts=(4, 8), size=12 * H, thickness=2e-3, b=0.3e-3, seed=1,
+        spectrum=REPORT_SPECTRUM)
     return out, tables
 
 
@@ -271,6 +278,9 @@ def test_speed_vs_error_report_end_to_end(quick_report):
     assert sorted(tables["surfaces"]["count"].unique()) == [4, 8]
     text = (out / "s.md").read_text()
     assert "## Recommendation" in text and "Total wall time" in text
+    # the grid study ran on the spectrum given, and the notes say so
+    assert tables["grid"].attrs["spectrum"] == REPORT_SPECTRUM
+    assert "spectrum: self-affine (hurst 0.8, rolloff_wavelength 0.0009" in text
     assert imread(out / "s.png").shape[0] > 100
 
 

@@ -146,6 +146,18 @@ def _presets_table(presets: Mapping) -> pd.DataFrame:
     return pd.DataFrame([{"preset": name, **dict(values)} for name, values in presets.items()])
 
 
+#: Longest attribute value written in full in the notes (a tabulated PSD is cut).
+ATTR_TEXT_LIMIT = 200
+
+
+def _attr_text(value) -> str:
+    """A table attribute for the notes, cut to :data:`ATTR_TEXT_LIMIT` characters."""
+    text = str(value)
+    if len(text) <= ATTR_TEXT_LIMIT:
+        return text
+    return f"{text[:ATTR_TEXT_LIMIT]} ... ({len(text)} characters)"
+
+
 def write_report(solver_table: pd.DataFrame | None, mesh_table: pd.DataFrame | None,
                  grid_table: pd.DataFrame | None, count_table: pd.DataFrame | None,
                  recommendation: pd.DataFrame, md_path, csv_path, png_paths=(), *,
@@ -187,7 +199,8 @@ def write_report(solver_table: pd.DataFrame | None, mesh_table: pd.DataFrame | N
         if frame is not None and frame.attrs:
             attrs = {k: v for k, v in frame.attrs.items() if k != "text"}
             if attrs:
-                out.append(f"- {name}: " + "; ".join(f"{k} = {v}" for k, v in attrs.items()))
+                out.append(f"- {name}: " + "; ".join(f"{k} = {_attr_text(v)}"
+                                                     for k, v in attrs.items()))
     out.append("")
     out += ["## Solver", ""]
     if solver_table is not None and len(solver_table):

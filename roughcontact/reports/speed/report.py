@@ -75,6 +75,18 @@ def write_presets(path: str | os.PathLike, presets: Mapping) -> None:
         Path(tmp).write_text(header + yaml.safe_dump(presets, sort_keys=False, width=100))
 
 
+def _spectrum_note(spectrum: Mapping | None) -> str:
+    """How the grid study's surfaces differ from the exponential ACF, for the notes."""
+    if not spectrum:
+        return ""
+    if spectrum.get("acf") == "psd":
+        rows = spectrum["psd"]
+        return (f", spectrum: a tabulated isotropic PSD ({len(rows)} rows, q "
+                f"{rows[0][0] * MM:.4g}-{rows[-1][0] * MM:.4g} 1/mm) in place of the ACF")
+    fields = ", ".join(f"{k} {v:g}" for k, v in spectrum.items() if isinstance(v, float))
+    return f", spectrum: {spectrum.get('acf')} ({fields}) in place of the ACF"
+
+
 def speed_vs_error_report(
     out_md,
     out_csv,
@@ -91,6 +103,7 @@ def speed_vs_error_report(
     steps: int = 30,
     grids: Sequence[int] = (30, 60, 120),
     grid_surfaces: int | None = None,
+    spectrum: Mapping | None = None,
     count_surfaces: int = 120,
     counts: Sequence[int] = DEFAULT_COUNTS,
     count_mesh: str = "hybrid:refined",
@@ -118,7 +131,10 @@ def speed_vs_error_report(
     2. :func:`mesh_errors` from ``mesh_table_path`` (the influence-convergence
        CSV) and ``hybrid_table_path``, or :data:`FALLBACK_MESH_ERRORS`.
     3. :func:`grid_study` over ``grids`` (hybrid refined influence, nested
-       surfaces, the first cell, ``grid_surfaces`` or ``surfaces`` surfaces).
+       surfaces, the first cell, ``grid_surfaces`` or ``surfaces`` surfaces),
+       with ``spectrum`` (:class:`~roughcontact.surfaces.synthetic.SurfaceSpec`
+       fields such as ``acf="self-affine"``; None: the exponential ACF) in
+       place of the exponential ACF where given.
     4. :func:`surfaces_per_cell`: ``count_surfaces`` surfaces of the first cell
        on ``count_mesh`` at ``grid``, subsampled to ``counts``.
     5. :func:`~roughcontact.reports.speed.recommend.recommend` for ``tol_kP``,
@@ -162,7 +178,7 @@ def speed_vs_error_report(
     grid_table = grid_study(cells[:1], grids=grids, size=size, thickness=thickness, E=E, nu=nu,
                             surfaces=grid_surfaces or surfaces, sigma=sigma, b=b,
                             pressures=pressures, precision=precision, steps=steps, seed=seed,
-                            progress=say)
+                            spectrum=spectrum, progress=say)
     unit, geom = build(count_mesh)
     count_table = surfaces_per_cell(unit, geom, cells[0], surfaces=count_surfaces,
                                     counts=counts, sigma=sigma, b=b, pressures=pressures,
@@ -189,7 +205,8 @@ def speed_vs_error_report(
         f"{grid_table.attrs.get('influence_model')}, chosen because the refined "
         "finite-element model at 120 x 120 needs about 4 times the dofs of 60 x 60 and the "
         "hybrid is within 1.2 % of the converged preset at 60 x 60; surfaces "
-        f"{grid_table.attrs.get('pairing')} (the finest grid point-sampled).",
+        f"{grid_table.attrs.get('pairing')} (the finest grid point-sampled)"
+        f"{_spectrum_note(spectrum)}.",
         f"Surfaces per cell: {count_surfaces} surfaces of cell {cells[0]} on {count_mesh} "
         f"at {grid} x {grid}, solved once; random subsets per count.",
         f"Total wall time {time.perf_counter() - started:.0f} s; machine before: {before}; "
