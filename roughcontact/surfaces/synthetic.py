@@ -519,6 +519,7 @@ def _check_domain(spec: SurfaceSpec) -> None:
                 "wavenumber pi / spacing = %.4g 1/m: shorter wavelengths are left out, or "
                 "kept only along the diagonals (anisotropically). Refine the grid or end the "
                 "table at q = %.4g 1/m.", q_top, nyquist, nyquist)
+        return  # its corr_length (2 pi / q_1) only labels the spec: no length checks
     for axis, (b, L, d) in enumerate(zip(spec.corr_length, spec.size, spec.spacing, strict=True)):
         name = "xy"[axis]
         if b > L / 2:
