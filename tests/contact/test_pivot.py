@@ -7,20 +7,12 @@ active-set CG of ``tangent_stiffness``.
 
 import numpy as np
 import pytest
-import scipy.linalg
-import scipy.optimize
+from test_solver import nnls_reference  # scipy NNLS on the Cholesky factor of C
 
 from roughcontact.contact.solver import resolve_method, sweep, tangent_stiffness
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
 
 E, NU = 2.1e11, 0.3
-
-
-def nnls_reference(C, gap0, approach):
-    factor = np.linalg.cholesky(C)
-    target = scipy.linalg.solve_triangular(factor, approach - gap0, lower=True)
-    pressure, _ = scipy.optimize.nnls(factor.T, target, maxiter=50 * C.shape[0])
-    return pressure
 
 
 @pytest.fixture(scope="module")
