@@ -10,6 +10,7 @@ from snakemake.logging import logger
 
 from roughcontact.study import cells as study
 from roughcontact.study import resources
+from roughcontact.study.config import report_section
 from roughcontact.study.provenance import config_hash
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -254,7 +255,7 @@ def get_audit_verify_mem_mb(wildcards):
 
 
 def _report_settings(name):
-    return config["reports"].get(name, {})  # {}: a report not configured
+    return report_section(config, name)  # the schema's defaults if not configured
 
 
 def get_convergence_runtime(wildcards, attempt):

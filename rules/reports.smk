@@ -22,7 +22,7 @@ rule influence_convergence:
     params:
         geometry=get_body_geometry,
         stored=get_convergence_stored,
-        settings=canonical(config["reports"].get("influence_convergence", {})),
+        settings=canonical(report_section(config, "influence_convergence")),
         E_MPa=config["body"]["E_MPa"],
     script:
         "../scripts/influence_convergence.py"

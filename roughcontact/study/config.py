@@ -69,6 +69,16 @@ def validated(config: dict) -> dict:
     return apply_schema(copy.deepcopy(config))
 
 
+def report_section(config: dict, name: str) -> dict:
+    """The validated ``reports: <name>`` section, or its schema defaults when it
+    is not configured (another report may need it: the speed report reads the
+    mesh-convergence table)."""
+    section = config.get("reports", {}).get(name)
+    if section is not None:
+        return section
+    return apply_schema({"reports": {name: {}}})["reports"][name]
+
+
 def load_config(path: str | os.PathLike) -> dict:
     """Read a YAML configuration and return it :func:`validated`."""
     return validated(yaml.safe_load(Path(path).read_text()))

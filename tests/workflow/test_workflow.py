@@ -385,3 +385,17 @@ def test_speed_vs_error_report_is_built_on_demand(quick_run):
     assert {"solver", "mesh", "grid", "surfaces", "recommendation"} <= set(table["table"])
     solver = table[table["table"] == "solver"]
     assert {"cg", "steepest", "exact"} <= set(solver["method"])
+
+
+def test_speed_report_plans_without_a_convergence_section(tmp_path):
+    """The speed report reads the mesh-convergence table; without a configured
+    `reports: influence_convergence` that report runs with the schema's defaults
+    (it used to fail with KeyError: 'surfaces' while planning)."""
+    config = yaml.safe_load((REPO / "config" / "quick.yaml").read_text())
+    config.get("reports", {}).pop("influence_convergence", None)
+    path = tmp_path / "no_convergence.yaml"
+    path.write_text(yaml.safe_dump(config))
+    proc = run_snakemake(tmp_path, "--dry-run", "results/reports/speed_vs_error.md", config=path)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out
+    assert "influence_convergence" in out and "KeyError" not in out
