@@ -16,20 +16,51 @@ whose optimality (KKT) conditions are Eq 19-22: with the gap
 All quantities are SI: ``p`` in Pa, ``u``, ``f``, ``d``, ``g`` in m, ``C`` in
 m/Pa, loads in N.
 
+Hardness cap (elastic-perfectly-plastic elements)
+-------------------------------------------------
+With ``hardness = H`` [Pa] every public solver caps the pressure: it
+minimizes the same ``V(p)`` over the box ``0 <= p <= H``, whose KKT
+conditions are
+
+    g = 0 where 0 < p < H (elastic contact),   g >= 0 where p = 0,
+    g <= 0 where p = H (saturated, the plastic area).
+
+The saturated elements carry ``H`` whatever the approach, so at fixed
+free and saturated sets only the free set ``F`` moves with ``d``
+(``C_FF p_F = d 1 - f_F - C_FU H``) and the tangent stiffness is
+``dF/dd = dA 1^T (C_FF)^-1 1``. ``hardness=None`` (the default) is the
+uncapped problem, computed exactly as without the keyword. With a cap the
+pressure no longer scales with ``sigma E`` alone: the elastic
+``phat = p L / (E sigma)`` of :mod:`roughcontact.contact.nondim` depends
+only on the surface shape and ``d / sigma``, but the cap becomes
+``phat <= H L / (E sigma)``, so a capped solution depends on that group
+too, and one dimensionless solve no longer serves every (sigma, E): it
+serves every (sigma, E, H) with the same ``H L / (E sigma)``.
+``plastic_area_fraction`` in the results is the fraction of elements at
+``p = H`` (included in ``real_area_fraction``).
+
 Methods
 -------
 ``"steepest"``
     Projected steepest descent, the paper's method (Fig 6): the gradient
     ``g`` on the free set (``p > 0`` or ``g < 0``), exact line search, then
-    projection onto ``p >= 0``; kept as a slow baseline.
+    projection onto ``p >= 0``; kept as a slow baseline. With a cap the
+    elements at ``H`` with ``g < 0`` are held and the projection is onto
+    ``[0, H]``.
 ``"cg"``
     Constrained conjugate gradients of Polonsky & Keer (1999), in the
     displacement-controlled form (no load constraint, so no mean-gap shift).
+    With a cap the free set is ``0 < p < H``, iterates are projected onto
+    ``[0, H]``, and elements at ``H`` with a positive gap are released like
+    elements out of contact with a negative gap join (conjugacy restarts).
 ``"exact"``
     Block principal pivoting (Kim & Park 2011, after Judice & Pires 1994) for
     the linear complementarity problem, with a Cholesky factorization of
     ``C`` on the contact set at every pivot; finite, for up to a few thousand
-    unknowns; the reference. One surface at a time.
+    unknowns; the reference. One surface at a time. With a cap, its
+    box-constrained extension: free, zero and saturated sets,
+    ``C_FF p_F = d - f_F - C_FU H`` on the free set, and ``p > H`` or
+    ``g > 0`` at the cap counted as infeasible.
 ``"pivot"``
     The same pivoting, for dense matrices, with every surface in flight at
     once (:func:`sweep`): each round factors each surface's ``C_AA`` on its
@@ -62,6 +93,14 @@ diagonal scaling ``C_ii``, measured in units of the largest rigid
 interference. It is zero exactly when ``p >= 0``, ``g >= 0`` and
 ``p_i g_i = 0``; a negative pressure, a penetration (negative gap) and a gap
 left open under positive pressure all raise it. ``converged`` is ``r <= tol``.
+With a cap ``H`` it is the natural residual of the box-constrained problem,
+
+    r = max_i | C_ii p_i - clip(C_ii p_i - g_i, 0, C_ii H) | / max_i |d - f_i|,
+
+i.e. ``C_ii (p_i - clip(p_i - g_i / C_ii, 0, H))``, the distance moved by a
+diagonally scaled projected gradient step. It is zero exactly at the KKT
+point above (a pressure above ``H`` and a positive gap at the cap raise it
+too), and it is the uncapped residual for ``H = inf``.
 
 Operators
 ---------
@@ -922,11 +961,13 @@ def _pivoting(matrix, rhs, start, tol, max_iter, diagonal, scale, hardness=None,
     ``C`` (Kim & Park 2011, Algorithm 2).
 
     With a cap ``hardness = H`` it solves the box-constrained problem
-    ``0 <= x <= H`` (Judice & Pires 1994) with three sets: free ``F``
+    ``0 <= x <= H`` with three sets: free ``F``
     (``C_FF x_F = b_F - C_FU H``), ``x = 0`` and ``x = H`` (``upper``, the
     starting guess of the last); ``x > H`` on ``F`` and ``w > 0`` on the
     upper set are infeasible too, and an exchange moves a free variable to
-    the bound it violates.
+    the bound it violates. The same block/single exchange safeguard is
+    used; ``max_iter`` bounds the work in any case and an unfinished solve
+    is reported by its residual.
     """
     n = rhs.size
     passive = start.copy()
