@@ -800,6 +800,8 @@ def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast,
     direction = np.zeros((m, n))
     previous_norm = np.zeros(m)
     conjugate = np.zeros(m, dtype=bool)
+    # with a cap: elements that joined or left a bound at the last projection
+    moved = np.zeros((m, n), dtype=bool) if hardness is not None else None
     iteration = 0
     while surfaces.size:
         res = _residual(p, gap, diagonal, scale, hardness)
@@ -828,11 +830,20 @@ def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast,
             if not surfaces.size:
                 break
             p, gap, rigid, direction = (a[keep] for a in (p, gap, rigid, direction))
+            if moved is not None:
+                moved = moved[keep]
             scale, previous_norm, conjugate, cost, stale, verify_at = (
                 a[keep] for a in (scale, previous_norm, conjugate, cost, stale, verify_at)
             )
         if method == "cg":
             active = _free(p, hardness)
+            if moved is not None:
+                # Polonsky & Keer: a joining element is in the contact set. One
+                # that joined at the cap (or left it for 0) would otherwise stay
+                # out of the search direction; when all join at once (no step
+                # yet) their Jacobi values can all exceed H and then all be
+                # released again, without end.
+                active |= moved
         else:
             active = (p > 0.0) | (gap < 0.0)
             if hardness is not None:
@@ -887,6 +898,8 @@ def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast,
                 # released elements start from H, joining ones from 0
                 new[joins] += np.where(g_join > 0.0, hardness, 0.0)
                 new[joins] = np.clip(new[joins], 0.0, hardness)
+                moved[:] = False
+                moved[rows[joins], cols[joins]] = True
         p[rows, cols] = new
         gap -= step[:, None] * product
         iteration += 1
