@@ -95,6 +95,20 @@ def test_bounded_sweep_matches_bvls(method, problem):
     assert result.plastic_area_fraction[:, -1].min() > 0
 
 
+def test_mixed_precision_and_a_start_above_the_cap(problem):
+    C, gaps, approaches, hardness = problem
+    result = sweep(C, gaps, approaches, precision="mixed", tol=1e-10, element_area=AREA,
+                   hardness=hardness)
+    assert result.converged.all() and result.residual.max() <= 1e-10
+    reference = bounded_reference(C, gaps[1], approaches[2], hardness)
+    start = np.full(N * N, 10.0 * hardness)  # clipped to H before the solve
+    for method in ("cg", "exact"):
+        warm = solve(C, gaps[1], approaches[2], method=method, tol=1e-11, element_area=AREA,
+                     hardness=hardness, p0=start)
+        assert warm.converged
+        assert np.abs(warm.pressure - reference).max() <= 1e-7 * hardness
+
+
 def test_tangent_with_saturation_is_the_load_derivative(problem):
     # dF/dd at fixed free and saturated sets, against a central difference of
     # exact capped solves (small enough a step that no element changes set)
