@@ -16,20 +16,51 @@ whose optimality (KKT) conditions are Eq 19-22: with the gap
 All quantities are SI: ``p`` in Pa, ``u``, ``f``, ``d``, ``g`` in m, ``C`` in
 m/Pa, loads in N.
 
+Hardness cap (elastic-perfectly-plastic elements)
+-------------------------------------------------
+With ``hardness = H`` [Pa] every public solver caps the pressure: it
+minimizes the same ``V(p)`` over the box ``0 <= p <= H``, whose KKT
+conditions are
+
+    g = 0 where 0 < p < H (elastic contact),   g >= 0 where p = 0,
+    g <= 0 where p = H (saturated, the plastic area).
+
+The saturated elements carry ``H`` whatever the approach, so at fixed
+free and saturated sets only the free set ``F`` moves with ``d``
+(``C_FF p_F = d 1 - f_F - C_FU H``) and the tangent stiffness is
+``dF/dd = dA 1^T (C_FF)^-1 1``. ``hardness=None`` (the default) is the
+uncapped problem, computed exactly as without the keyword. With a cap the
+pressure no longer scales with ``sigma E`` alone: the elastic
+``phat = p L / (E sigma)`` of :mod:`roughcontact.contact.nondim` depends
+only on the surface shape and ``d / sigma``, but the cap becomes
+``phat <= H L / (E sigma)``, so a capped solution depends on that group
+too, and one dimensionless solve no longer serves every (sigma, E): it
+serves every (sigma, E, H) with the same ``H L / (E sigma)``.
+``plastic_area_fraction`` in the results is the fraction of elements at
+``p = H`` (included in ``real_area_fraction``).
+
 Methods
 -------
 ``"steepest"``
     Projected steepest descent, the paper's method (Fig 6): the gradient
     ``g`` on the free set (``p > 0`` or ``g < 0``), exact line search, then
-    projection onto ``p >= 0``; kept as a slow baseline.
+    projection onto ``p >= 0``; kept as a slow baseline. With a cap the
+    elements at ``H`` with ``g < 0`` are held and the projection is onto
+    ``[0, H]``.
 ``"cg"``
     Constrained conjugate gradients of Polonsky & Keer (1999), in the
     displacement-controlled form (no load constraint, so no mean-gap shift).
+    With a cap the free set is ``0 < p < H``, iterates are projected onto
+    ``[0, H]``, and elements at ``H`` with a positive gap are released like
+    elements out of contact with a negative gap join (conjugacy restarts).
 ``"exact"``
     Block principal pivoting (Kim & Park 2011, after Judice & Pires 1994) for
     the linear complementarity problem, with a Cholesky factorization of
     ``C`` on the contact set at every pivot; finite, for up to a few thousand
-    unknowns; the reference. One surface at a time.
+    unknowns; the reference. One surface at a time. With a cap, its
+    box-constrained extension: free, zero and saturated sets,
+    ``C_FF p_F = d - f_F - C_FU H`` on the free set, and ``p > H`` or
+    ``g > 0`` at the cap counted as infeasible.
 ``"pivot"``
     The same pivoting, for dense matrices, with every surface in flight at
     once (:func:`sweep`): each round factors each surface's ``C_AA`` on its
@@ -62,6 +93,14 @@ diagonal scaling ``C_ii``, measured in units of the largest rigid
 interference. It is zero exactly when ``p >= 0``, ``g >= 0`` and
 ``p_i g_i = 0``; a negative pressure, a penetration (negative gap) and a gap
 left open under positive pressure all raise it. ``converged`` is ``r <= tol``.
+With a cap ``H`` it is the natural residual of the box-constrained problem,
+
+    r = max_i | C_ii p_i - clip(C_ii p_i - g_i, 0, C_ii H) | / max_i |d - f_i|,
+
+i.e. ``C_ii (p_i - clip(p_i - g_i / C_ii, 0, H))``, the distance moved by a
+diagonally scaled projected gradient step. It is zero exactly at the KKT
+point above (a pressure above ``H`` and a positive gap at the cap raise it
+too), and it is the uncapped residual for ``H = inf``.
 
 Operators
 ---------
@@ -157,7 +196,7 @@ class ContactResult:
     nominal_pressure : float
         ``P = F / A_n`` [Pa], ``A_n = n dA`` the nominal area.
     real_area_fraction : float
-        Fraction of elements with ``p > 0`` [-].
+        Fraction of elements with ``p > 0`` [-] (saturated ones included).
     max_pressure : float
         Largest element pressure [Pa].
     mean_plane_deflection : float
@@ -175,6 +214,10 @@ class ContactResult:
         Method used.
     tol : float
         Requested tolerance on ``residual``.
+    plastic_area_fraction : float
+        Fraction of elements at the cap, ``p = H`` [-]; 0 without a cap.
+    hardness : float or None
+        Pressure cap ``H`` [Pa] of the solve; None without a cap.
     """
 
     pressure: np.ndarray
@@ -192,6 +235,8 @@ class ContactResult:
     converged: bool
     method: str
     tol: float
+    plastic_area_fraction: float = 0.0
+    hardness: float | None = None
 
 
 @dataclass(frozen=True)
@@ -213,12 +258,13 @@ class SweepResult:
     mean_plane_deflection : ndarray
         Mean of ``u`` [m] (Eq 35).
     real_area_fraction : ndarray
-        Fraction of elements in contact [-].
+        Fraction of elements in contact, ``p > 0`` [-] (saturated ones included).
     max_pressure : ndarray
         Largest element pressure [Pa].
     tangent_stiffness : ndarray
-        ``dF/dd`` [N/m] at fixed contact set, see :func:`tangent_stiffness`;
-        NaN where it was not computed. The normalized stiffness of Eq 33 is
+        ``dF/dd`` [N/m] at fixed contact set (and, with a cap, fixed
+        saturated set), see :func:`tangent_stiffness`; NaN where it was not
+        computed. The normalized stiffness of Eq 33 is
         ``k_P = (L / A_n) dF/dd``.
     iterations, matvecs : ndarray of int
         Work of the contact solve at each step.
@@ -234,6 +280,11 @@ class SweepResult:
         Contact method.
     tol : float
         Contact tolerance.
+    plastic_area_fraction : ndarray
+        Fraction of elements at the cap, ``p = H`` [-]; zeros without a cap
+        (also when not given to the constructor).
+    hardness : float or None
+        Pressure cap ``H`` [Pa] of the sweep; None without a cap.
     """
 
     approach: np.ndarray
@@ -251,6 +302,13 @@ class SweepResult:
     pressure: np.ndarray | None
     method: str
     tol: float
+    plastic_area_fraction: np.ndarray | None = None
+    hardness: float | None = None
+
+    def __post_init__(self):
+        if self.plastic_area_fraction is None:
+            object.__setattr__(self, "plastic_area_fraction",
+                               np.zeros(np.shape(self.approach)))
 
 
 # ---------------------------------------------------------------------------
@@ -476,7 +534,9 @@ def _default_max_iter(method: str, n: int) -> int:
     return 10 * n + 100
 
 
-def _check_initial_pressure(p0, m: int, n: int, name: str = "p0") -> np.ndarray:
+def _check_initial_pressure(p0, m: int, n: int, name: str = "p0",
+                            hardness: float | None = None) -> np.ndarray:
+    """Starting pressures as (m, n) [Pa]; clipped to ``hardness`` when there is a cap."""
     if p0 is None:
         return np.zeros((m, n))
     p = np.asarray(p0, dtype=float)
@@ -486,7 +546,48 @@ def _check_initial_pressure(p0, m: int, n: int, name: str = "p0") -> np.ndarray:
         )
     if not np.isfinite(p).all() or (p < 0.0).any():
         raise ValueError(f"{name} must be finite and non-negative (Pa)")
-    return p.reshape(m, n).copy()
+    p = p.reshape(m, n).copy()
+    if hardness is not None:
+        np.minimum(p, hardness, out=p)
+    return p
+
+
+def _check_hardness(hardness) -> float | None:
+    """The pressure cap ``H`` [Pa] as a float, or None for no cap (None or +inf).
+
+    Raises
+    ------
+    ValueError
+        Naming ``hardness`` unless it is None or a positive real number (not
+        NaN, not a bool, string or array).
+    """
+    if hardness is None:
+        return None
+    value = float("nan")
+    if not isinstance(hardness, (bool, np.bool_, str, bytes)) and np.ndim(hardness) == 0:
+        try:
+            value = float(hardness)
+        except (TypeError, ValueError):
+            pass
+    if not value > 0.0:  # also NaN
+        raise ValueError(
+            f"hardness must be None or a positive pressure cap in Pa, got {hardness!r}"
+        )
+    return None if math.isinf(value) else value
+
+
+def _free(pressure: np.ndarray, hardness: float | None) -> np.ndarray:
+    """Elements free to move with ``d``: ``p > 0``, and ``p < H`` with a cap."""
+    if hardness is None:
+        return pressure > 0.0
+    return (pressure > 0.0) & (pressure < hardness)
+
+
+def _plastic_fraction(pressure: np.ndarray, hardness: float | None) -> np.ndarray:
+    """Fraction of elements at the cap ``p = H`` [-] per row (0 without a cap)."""
+    if hardness is None:
+        return np.zeros(pressure.shape[:-1])
+    return np.count_nonzero(pressure >= hardness, axis=-1) / pressure.shape[-1]
 
 
 # ---------------------------------------------------------------------------
@@ -499,18 +600,30 @@ def _gap_scale(rigid: np.ndarray) -> np.ndarray:
     return np.where(scale > 0.0, scale, 1.0)
 
 
-def _residual(pressure, gap, diagonal, scale) -> np.ndarray:
-    """Per-surface KKT residual ``max_i |min(C_ii p_i, g_i)| / scale``, rows = surfaces."""
+def _residual(pressure, gap, diagonal, scale, hardness=None) -> np.ndarray:
+    """Per-surface KKT residual, rows = surfaces (module docstring).
+
+    ``max_i |min(C_ii p_i, g_i)| / scale`` without a cap; with ``hardness``
+    ``H``, ``max_i |C_ii p_i - clip(C_ii p_i - g_i, 0, C_ii H)| / scale``,
+    which is the same expression when ``H`` is infinite.
+    """
     natural = pressure * diagonal
-    np.minimum(natural, gap, out=natural)
+    if hardness is None:
+        np.minimum(natural, gap, out=natural)
+    else:
+        natural -= np.clip(natural - gap, 0.0, hardness * diagonal)
     return np.maximum(natural.max(axis=1), -natural.min(axis=1)) / scale + 0.0
 
 
-def kkt_residual(operator, gap0, approach, pressure, *, element_area=None) -> float:
+def kkt_residual(operator, gap0, approach, pressure, *, element_area=None,
+                 hardness=None) -> float:
     """Dimensionless KKT residual of a pressure field for Eq 27.
 
     ``r = max_i |min(C_ii p_i, g_i)| / max_i |d - f_i|`` with
-    ``g = C p + f - d``; zero exactly at the solution.
+    ``g = C p + f - d``; zero exactly at the solution. With a cap
+    ``0 <= p <= H`` the residual of the bounded problem,
+    ``r = max_i |C_ii p_i - clip(C_ii p_i - g_i, 0, C_ii H)| / max_i |d - f_i|``
+    (module docstring), zero exactly at its KKT point.
 
     Parameters
     ----------
@@ -525,12 +638,16 @@ def kkt_residual(operator, gap0, approach, pressure, *, element_area=None) -> fl
     element_area : float, optional
         Element area [m^2]; not used by the residual, accepted for symmetry
         with :func:`solve`.
+    hardness : float, optional
+        Pressure cap ``H`` [Pa] of the problem the pressure is scored
+        against; default None (no cap).
 
     Returns
     -------
     float
         The residual [-].
     """
+    hardness = _check_hardness(hardness)
     op = _as_operator(operator, 1.0 if element_area is None else element_area)
     gaps, _ = _check_surfaces(gap0, op, "gap0", batched=False)
     d = _check_approach(approach, 1)
@@ -540,7 +657,7 @@ def kkt_residual(operator, gap0, approach, pressure, *, element_area=None) -> fl
     p = p.reshape(1, op.n)
     rigid = gaps - d[:, None]
     gap = op.apply(p) + rigid
-    return float(_residual(p, gap, op.diagonal, _gap_scale(rigid))[0])
+    return float(_residual(p, gap, op.diagonal, _gap_scale(rigid), hardness)[0])
 
 
 # ---------------------------------------------------------------------------
@@ -643,7 +760,8 @@ def _check_curvature(op: _Operator, direction, curvature, surfaces, method, iter
     )
 
 
-def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast) -> _Batch:
+def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast,
+             hardness=None) -> _Batch:
     """Projected steepest descent or constrained CG on the rows of ``gaps``.
 
     Each surface (row) is an independent problem (Eq 27) with its own active
@@ -657,6 +775,12 @@ def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast) -> _
     rounding this leaves in ``g`` is removed by the exact recomputations
     (the first when the residual estimate reaches ``_MIXED_FLOOR``), so the
     returned solution meets ``tol`` in double precision all the same.
+
+    With a cap ``hardness = H`` the iterates are projected onto
+    ``0 <= p <= H``: for CG the free set is ``0 < p < H``, and the elements
+    at the cap whose gap is positive (they would unload) leave it with
+    ``p = H - step * g``, mirroring the elements out of contact that
+    penetrate; elements at the cap with a negative gap stay saturated.
     """
     m, n = gaps.shape
     out = _new_batch(m, n)
@@ -676,9 +800,11 @@ def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast) -> _
     direction = np.zeros((m, n))
     previous_norm = np.zeros(m)
     conjugate = np.zeros(m, dtype=bool)
+    # with a cap: elements that joined or left a bound at the last projection
+    moved = np.zeros((m, n), dtype=bool) if hardness is not None else None
     iteration = 0
     while surfaces.size:
-        res = _residual(p, gap, diagonal, scale)
+        res = _residual(p, gap, diagonal, scale, hardness)
         last = iteration >= max_iter
         check = stale & ((res <= verify_at) | last)
         if check.any():
@@ -686,7 +812,7 @@ def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast) -> _
             idx = np.flatnonzero(check)
             gap[idx] = op.apply(p[idx]) + rigid[idx]
             cost[idx] += 1.0
-            res[idx] = _residual(p[idx], gap[idx], diagonal, scale[idx])
+            res[idx] = _residual(p[idx], gap[idx], diagonal, scale[idx], hardness)
             stale[idx] = False
             verify_at[idx] = tol
         finished = ~stale & ((res <= tol) | last)
@@ -704,13 +830,24 @@ def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast) -> _
             if not surfaces.size:
                 break
             p, gap, rigid, direction = (a[keep] for a in (p, gap, rigid, direction))
+            if moved is not None:
+                moved = moved[keep]
             scale, previous_norm, conjugate, cost, stale, verify_at = (
                 a[keep] for a in (scale, previous_norm, conjugate, cost, stale, verify_at)
             )
         if method == "cg":
-            active = p > 0.0
+            active = _free(p, hardness)
+            if moved is not None:
+                # Polonsky & Keer: a joining element is in the contact set. One
+                # that joined at the cap (or left it for 0) would otherwise stay
+                # out of the search direction; when all join at once (no step
+                # yet) their Jacobi values can all exceed H and then all be
+                # released again, without end.
+                active |= moved
         else:
             active = (p > 0.0) | (gap < 0.0)
+            if hardness is not None:
+                active &= ~((p >= hardness) & (gap < 0.0))
         gap_active = gap * active
         if method == "cg":
             norm = np.einsum("ij,ij->i", gap_active, gap_active)
@@ -735,21 +872,34 @@ def _iterate(op: _Operator, gaps, d, pressure, tol, max_iter, method, fast) -> _
         # Projection onto p >= 0 and, for CG, the elements of Polonsky & Keer
         # that are out of contact but penetrate: they join the contact set
         # with p = -step * g (a Jacobi step -g / C_ii if there is no step), and
-        # the conjugacy restarts.
+        # the conjugacy restarts. With a cap, the same onto p <= H: elements
+        # at the cap with a positive gap leave it with p = H - step * g.
         changed = p < 0.0
+        if hardness is not None:
+            changed |= p > hardness
         if method == "cg":
             overlap = (p <= 0.0) & (gap < 0.0)
             changed |= overlap
+            if hardness is not None:
+                release = (p >= hardness) & (gap > 0.0)
+                changed |= release
+                overlap |= release
             conjugate = ~overlap.any(axis=1)
         rows, cols = np.nonzero(changed)
         trial = p[rows, cols]
-        new = np.zeros_like(trial)
+        new = np.zeros_like(trial) if hardness is None else np.clip(trial, 0.0, hardness)
         if method == "cg":
             joins = overlap[rows, cols]
             g_join = gap[rows[joins], cols[joins]]
             s_join = step[rows[joins]]
             new[joins] = np.where(s_join > 0.0, -s_join * g_join,
                                   -g_join / diagonal[cols[joins]])
+            if hardness is not None:
+                # released elements start from H, joining ones from 0
+                new[joins] += np.where(g_join > 0.0, hardness, 0.0)
+                new[joins] = np.clip(new[joins], 0.0, hardness)
+                moved[:] = False
+                moved[rows[joins], cols[joins]] = True
         p[rows, cols] = new
         gap -= step[:, None] * product
         iteration += 1
@@ -780,7 +930,41 @@ def _dense_matrix(op: _Operator) -> np.ndarray:
     return 0.5 * (matrix + matrix.T)
 
 
-def _pivoting(matrix, rhs, start, tol, max_iter, diagonal, scale):
+def _swap(passive: np.ndarray, upper: np.ndarray | None, flip: np.ndarray,
+          over: np.ndarray | None) -> None:
+    """Exchange the elements ``flip`` between the free set and their bound, in place.
+
+    A free element leaves for the cap ``U`` if it is ``over`` it, else for
+    ``p = 0``; an element at either bound becomes free.
+    """
+    passive ^= flip
+    if upper is not None:
+        upper[flip] = over[flip]
+
+
+def _infeasible(passive, upper, x, w, diagonal, slack, hardness):
+    """Infeasible variables of a pivoting guess, and the free ones above the cap.
+
+    ``x < 0`` or ``x > H`` on the free set, ``w < 0`` at ``p = 0``, ``w > 0``
+    at ``p = H`` (beyond the rounding ``slack`` [m]). Returns
+    ``(infeasible, over)``; ``over`` is None without a cap.
+    """
+    if hardness is None:
+        return (passive & (x * diagonal < -slack)) | (~passive & (w < -slack)), None
+    over = passive & ((x - hardness) * diagonal > slack)
+    infeasible = ((passive & (x * diagonal < -slack)) | over
+                  | (~passive & ~upper & (w < -slack)) | (upper & (w > slack)))
+    return infeasible, over
+
+
+def _capped_rhs(matrix, rhs, idx, top, hardness):
+    """``b_F - C_FU H``: the right-hand side on the free set ``idx`` with ``top`` at the cap."""
+    if hardness is None or not top.size or not idx.size:
+        return rhs
+    return rhs - hardness * matrix[np.ix_(idx, top)].sum(axis=1)
+
+
+def _pivoting(matrix, rhs, start, tol, max_iter, diagonal, scale, hardness=None, upper=None):
     """Block principal pivoting for ``w = C x - b, x >= 0, w >= 0, x.w = 0``.
 
     Returns ``(x, w, iterations)``. Infeasible variables (negative ``x`` on
@@ -788,15 +972,30 @@ def _pivoting(matrix, rhs, start, tol, max_iter, diagonal, scale):
     blocks stop reducing their number, single exchanges of the largest index
     (Murty's rule) guarantee finite termination for a P-matrix such as an SPD
     ``C`` (Kim & Park 2011, Algorithm 2).
+
+    With a cap ``hardness = H`` it solves the box-constrained problem
+    ``0 <= x <= H`` with three sets: free ``F``
+    (``C_FF x_F = b_F - C_FU H``), ``x = 0`` and ``x = H`` (``upper``, the
+    starting guess of the last); ``x > H`` on ``F`` and ``w > 0`` on the
+    upper set are infeasible too, and an exchange moves a free variable to
+    the bound it violates. The same block/single exchange safeguard is
+    used; ``max_iter`` bounds the work in any case and an unfinished solve
+    is reported by its residual.
     """
     n = rhs.size
     passive = start.copy()
+    if hardness is not None:
+        upper = np.zeros(n, dtype=bool) if upper is None else upper & ~passive
     best = n + 1
     budget = 3
     slack = 1e-3 * tol * scale  # infeasible only beyond rounding
     for iteration in range(max_iter + 1):
         x = np.zeros(n)
         idx = np.flatnonzero(passive)
+        top = None
+        if hardness is not None:
+            top = np.flatnonzero(upper)
+            x[top] = hardness
         if idx.size:
             try:
                 factor = scipy.linalg.cho_factor(matrix[np.ix_(idx, idx)], lower=True,
@@ -806,42 +1005,45 @@ def _pivoting(matrix, rhs, start, tol, max_iter, diagonal, scale):
                     "operator must be positive definite: Cholesky factorization of C on "
                     "the contact set failed"
                 ) from None
-            x[idx] = scipy.linalg.cho_solve(factor, rhs[idx], check_finite=False)
+            x[idx] = scipy.linalg.cho_solve(
+                factor, _capped_rhs(matrix, rhs[idx], idx, top, hardness), check_finite=False)
         w = matrix @ x - rhs
-        infeasible = (passive & (x * diagonal < -slack)) | (~passive & (w < -slack))
+        infeasible, over = _infeasible(passive, upper, x, w, diagonal, slack, hardness)
         count = int(infeasible.sum())
         if count == 0 or iteration == max_iter:
             break
         if count < best:
             best, budget = count, 3
-            passive ^= infeasible
         elif budget > 0:
             budget -= 1
-            passive ^= infeasible
         else:
-            k = np.flatnonzero(infeasible)[-1]
-            passive[k] = not passive[k]
-    x = np.maximum(x, 0.0)
+            single = np.zeros(n, dtype=bool)
+            single[np.flatnonzero(infeasible)[-1]] = True
+            infeasible = single
+        _swap(passive, upper, infeasible, over)
+    x = np.maximum(x, 0.0) if hardness is None else np.clip(x, 0.0, hardness)
     return x, iteration
 
 
-def _exact(op: _Operator, gaps, d, pressure, tol, max_iter) -> _Batch:
+def _exact(op: _Operator, gaps, d, pressure, tol, max_iter, hardness=None) -> _Batch:
     m, n = gaps.shape
     matrix = _dense_matrix(op)
     out = _new_batch(m, n)
     rigid = gaps - d[:, None]
     scale = _gap_scale(rigid)
     for j in range(m):
-        start = pressure[j] > 0.0 if pressure[j].any() else rigid[j] < 0.0
+        loaded = pressure[j].any()
+        start = _free(pressure[j], hardness) if loaded else rigid[j] < 0.0
+        upper = pressure[j] >= hardness if loaded and hardness is not None else None
         x, iterations = _pivoting(matrix, -rigid[j], start, tol, max_iter, op.diagonal,
-                                  scale[j])
+                                  scale[j], hardness, upper)
         u = matrix @ x
         out.pressure[j] = x
         out.displacement[j] = u
         out.iterations[j] = iterations
         out.matvecs[j] = iterations + 2
         out.residual[j] = _residual(x[None], (u + rigid[j])[None], op.diagonal,
-                                    scale[j : j + 1])[0]
+                                    scale[j : j + 1], hardness)[0]
         out.converged[j] = out.residual[j] <= tol
     out.matvecs = out.matvecs.astype(int)
     return out
@@ -854,13 +1056,13 @@ def _fast_matrix(op: _Operator, precision: str, method: str):
     return None
 
 
-def _run(op, gaps, d, pressure, method, tol, max_iter, fast=None) -> _Batch:
+def _run(op, gaps, d, pressure, method, tol, max_iter, fast=None, hardness=None) -> _Batch:
     if max_iter is None:
         max_iter = _default_max_iter(method, op.n)
     if method in ("exact", "pivot"):
-        batch = _exact(op, gaps, d, pressure, tol, int(max_iter))
+        batch = _exact(op, gaps, d, pressure, tol, int(max_iter), hardness)
     else:
-        batch = _iterate(op, gaps, d, pressure, tol, int(max_iter), method, fast)
+        batch = _iterate(op, gaps, d, pressure, tol, int(max_iter), method, fast, hardness)
     failed = np.flatnonzero(~batch.converged)
     if failed.size:
         logger.warning(
@@ -873,7 +1075,7 @@ def _run(op, gaps, d, pressure, method, tol, max_iter, fast=None) -> _Batch:
 
 
 def _result(batch: _Batch, j: int, rigid_j, op: _Operator, shape, method, tol,
-            approach) -> ContactResult:
+            approach, hardness=None) -> ContactResult:
     p = batch.pressure[j]
     u = batch.displacement[j]
     load = float(p.sum() * op.element_area)
@@ -893,6 +1095,8 @@ def _result(batch: _Batch, j: int, rigid_j, op: _Operator, shape, method, tol,
         converged=bool(batch.converged[j]),
         method=method,
         tol=tol,
+        plastic_area_fraction=float(_plastic_fraction(p, hardness)),
+        hardness=hardness,
     )
 
 
@@ -901,7 +1105,7 @@ def _result(batch: _Batch, j: int, rigid_j, op: _Operator, shape, method, tol,
 
 
 def solve(operator, gap0, approach, *, method="cg", tol=1e-10, max_iter=None, p0=None,
-          element_area=None, precision="double") -> ContactResult:
+          element_area=None, precision="double", hardness=None) -> ContactResult:
     """Contact pressure under a rigid flat at prescribed approach (Eq 27).
 
     Minimizes ``V = 1/2 p.C p - p.(d - f)`` over ``p >= 0`` (Eq 17, 18, 27 of
@@ -940,6 +1144,11 @@ def solve(operator, gap0, approach, *, method="cg", tol=1e-10, max_iter=None, p0
         twice as fast); convergence is still decided on double-precision
         residuals, so the result meets ``tol`` either way. Ignored for
         matrix-free operators and ``"exact"``.
+    hardness : float, optional
+        Pressure cap ``H`` [Pa] (elastic-perfectly-plastic elements): solves
+        Eq 27 over ``0 <= p <= H`` instead of ``p >= 0``; default None (no
+        cap; ``+inf`` is the same). See the module docstring. ``p0`` is
+        clipped to ``H``.
 
     Returns
     -------
@@ -954,19 +1163,21 @@ def solve(operator, gap0, approach, *, method="cg", tol=1e-10, max_iter=None, p0
         On invalid input; the message names the argument.
     """
     tol = _check_options(method, tol, max_iter, precision)
+    hardness = _check_hardness(hardness)
     op = _as_operator(operator, element_area)
     method = resolve_method(method, op)
     gaps, shape = _check_surfaces(gap0, op, "gap0", batched=False)
     d = _check_approach(approach, 1)
     _check_bounded(op, gaps, d, "approach")
-    pressure = _check_initial_pressure(p0, 1, op.n)
+    pressure = _check_initial_pressure(p0, 1, op.n, hardness=hardness)
     fast = _fast_matrix(op, precision, method)
-    batch = _run(op, gaps, d, pressure, method, tol, max_iter, fast)
-    return _result(batch, 0, gaps[0] - d[0], op, shape, method, tol, d[0])
+    batch = _run(op, gaps, d, pressure, method, tol, max_iter, fast, hardness)
+    return _result(batch, 0, gaps[0] - d[0], op, shape, method, tol, d[0], hardness)
 
 
 def solve_many(operator, gaps0, approach, *, method="cg", tol=1e-10, max_iter=None, p0=None,
-               element_area=None, precision="double") -> tuple[ContactResult, ...]:
+               element_area=None, precision="double",
+               hardness=None) -> tuple[ContactResult, ...]:
     """Solve m contact problems with one operator in one batched call (Eq 27).
 
     Same problem as :func:`solve` for each surface; the iterative methods
@@ -983,7 +1194,7 @@ def solve_many(operator, gaps0, approach, *, method="cg", tol=1e-10, max_iter=No
         Initial separations ``f`` [m] (Eq 21), one per surface.
     approach : float or ndarray (m,)
         Rigid-body approach ``d >= 0`` [m], shared or per surface.
-    method, tol, max_iter, element_area, precision
+    method, tol, max_iter, element_area, precision, hardness
         As in :func:`solve`.
     p0 : ndarray, optional
         Starting pressures [Pa], shape of ``gaps0``.
@@ -994,17 +1205,19 @@ def solve_many(operator, gaps0, approach, *, method="cg", tol=1e-10, max_iter=No
         One result per surface, fields shaped like one surface of ``gaps0``.
     """
     tol = _check_options(method, tol, max_iter, precision)
+    hardness = _check_hardness(hardness)
     op = _as_operator(operator, element_area)
     method = resolve_method(method, op)
     gaps, shape = _check_surfaces(gaps0, op, "gaps0", batched=True)
     m = gaps.shape[0]
     d = _check_approach(approach, m)
     _check_bounded(op, gaps, d, "approach")
-    pressure = _check_initial_pressure(p0, m, op.n)
+    pressure = _check_initial_pressure(p0, m, op.n, hardness=hardness)
     fast = _fast_matrix(op, precision, method)
-    batch = _run(op, gaps, d, pressure, method, tol, max_iter, fast)
+    batch = _run(op, gaps, d, pressure, method, tol, max_iter, fast, hardness)
     return tuple(
-        _result(batch, j, gaps[j] - d[j], op, shape, method, tol, d[j]) for j in range(m)
+        _result(batch, j, gaps[j] - d[j], op, shape, method, tol, d[j], hardness)
+        for j in range(m)
     )
 
 
@@ -1073,7 +1286,7 @@ def _active_set_cg(op: _Operator, active, start, tol, max_iter, fast=None):
 
 
 def tangent_stiffness(operator, pressure, *, element_area=None, tol=1e-10, max_iter=None,
-                      x0=None) -> float:
+                      x0=None, hardness=None) -> float:
     """Tangent contact stiffness ``dF/dd`` [N/m] at a solved contact state.
 
     On a fixed contact set ``A`` (elements with ``p > 0``) the solution of
@@ -1081,6 +1294,12 @@ def tangent_stiffness(operator, pressure, *, element_area=None, tol=1e-10, max_i
     ``C_AA x = 1`` and
 
         dF/dd = dA * 1^T x = dA * 1^T (C_AA)^-1 1.
+
+    With a cap ``H`` the saturated elements (``p = H``) do not move with
+    ``d``: ``A`` is then the free set ``0 < p < H`` only
+    (``C_AA p_A = d 1 - f_A - C_AU H``, whose right-hand side changes with
+    ``d`` only through ``d 1``), and the saturated load ``H dA |U|`` adds
+    nothing to ``dF/dd``.
 
     This is the derivative of the load-approach curve between changes of the
     contact set (its one-sided derivative where the set changes), without the
@@ -1102,6 +1321,9 @@ def tangent_stiffness(operator, pressure, *, element_area=None, tol=1e-10, max_i
         CG iteration limit, default ``max(1000, 2n)``.
     x0 : ndarray, optional
         Starting guess for ``x = (C_AA)^-1 1`` [Pa/m] (warm start).
+    hardness : float, optional
+        Pressure cap ``H`` [Pa] of the solve that gave ``pressure``;
+        elements with ``p >= H`` are left out of ``A``. Default None.
 
     Returns
     -------
@@ -1109,6 +1331,7 @@ def tangent_stiffness(operator, pressure, *, element_area=None, tol=1e-10, max_i
         ``dF/dd`` [N/m]; 0 without contact. A warning is logged if CG does
         not reach ``tol``.
     """
+    hardness = _check_hardness(hardness)
     op = _as_operator(operator, element_area)
     p = np.asarray(pressure, dtype=float)
     if p.size != op.n or not np.isfinite(p).all():
@@ -1118,7 +1341,8 @@ def tangent_stiffness(operator, pressure, *, element_area=None, tol=1e-10, max_i
     if x0 is not None:
         start = np.asarray(x0, dtype=float).reshape(1, op.n)
     limit = _default_max_iter("cg", op.n) if max_iter is None else int(max_iter)
-    x, converged, _ = _active_set_cg(op, p.reshape(1, op.n) > 0.0, start, tol, limit)
+    x, converged, _ = _active_set_cg(op, _free(p.reshape(1, op.n), hardness), start, tol,
+                                     limit)
     if not converged[0]:
         logger.warning("tangent stiffness: CG on the contact set did not reach tol %.3g", tol)
     return float(op.element_area * x.sum())
@@ -1137,27 +1361,32 @@ def _warn_unconverged(flags, table, method, tol) -> None:
             float(table["residual"][failed].max()), tol)
 
 
-def _predict(pressure, approach, last_approach, rate) -> np.ndarray:
+def _predict(pressure, approach, last_approach, rate, hardness=None) -> np.ndarray:
     """First-order predictor ``max(p + (d - d_last) dp/dd, 0)`` [Pa] for the next step.
 
     On a fixed contact set the solution of Eq 27 is linear in ``d``
     (``C_AA p_A = d 1 - f_A``), so with the exact ``dp/dd`` the prediction is
     the solution whenever no element enters or leaves contact; rows of
-    ``rate`` that are not finite (no rate yet) keep ``p``.
+    ``rate`` that are not finite (no rate yet) keep ``p``. With a cap the
+    prediction is clipped to ``[0, H]``.
     """
     delta = (approach - last_approach)[:, None]
     predicted = pressure + delta * np.nan_to_num(rate, nan=0.0, posinf=0.0, neginf=0.0)
+    if hardness is not None:
+        return np.clip(predicted, 0.0, hardness, out=predicted)
     return np.maximum(predicted, 0.0, out=predicted)
 
 
 class _PivotState:
     """Block principal pivoting of one surface through its approach steps (:func:`_pivot_sweep`)."""
 
-    __slots__ = ("step", "passive", "best", "budget", "rounds", "factor", "index", "members")
+    __slots__ = ("step", "passive", "upper", "best", "budget", "rounds", "factor", "index",
+                 "members")
 
-    def __init__(self, passive: np.ndarray):
+    def __init__(self, passive: np.ndarray, upper: np.ndarray | None = None):
         self.step = 0
-        self.passive = passive
+        # the free set, and with a cap the saturated set (p = H; None without)
+        self.passive, self.upper = passive, upper
         self.best, self.budget, self.rounds = passive.size + 1, 3, 0
         # lower Cholesky factor of C on the elements ``index`` (in that order),
         # and the same set as a mask
@@ -1206,28 +1435,29 @@ class _PivotState:
         """``(C_AA)^-1 rhs_A`` in the factor's element order."""
         return scipy.linalg.cho_solve((self.factor, True), rhs, check_finite=False)
 
-    def exchange(self, infeasible: np.ndarray) -> None:
+    def exchange(self, infeasible: np.ndarray, over: np.ndarray | None = None) -> None:
         """Kim & Park (2011), Algorithm 2: block exchanges while they reduce the
         number of infeasible variables (3 tries otherwise), then Murty's single
-        exchange of the largest index, which terminates for a P-matrix."""
+        exchange of the largest index, which terminates for a P-matrix. With
+        a cap, free elements ``over`` it move to the saturated set."""
         count = int(infeasible.sum())
         if count < self.best:
             self.best, self.budget = count, 3
-            self.passive ^= infeasible
         elif self.budget > 0:
             self.budget -= 1
-            self.passive ^= infeasible
         else:
-            k = np.flatnonzero(infeasible)[-1]
-            self.passive[k] = not self.passive[k]
+            single = np.zeros_like(infeasible)
+            single[np.flatnonzero(infeasible)[-1]] = True
+            infeasible = single
+        _swap(self.passive, self.upper, infeasible, over)
 
-    def restart(self, passive: np.ndarray) -> None:
-        self.passive = passive
+    def restart(self, passive: np.ndarray, upper: np.ndarray | None = None) -> None:
+        self.passive, self.upper = passive, upper
         self.best, self.budget, self.rounds = passive.size + 1, 3, 0
 
 
 def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, counts, flags,
-                 fields) -> None:
+                 fields, hardness=None) -> None:
     """Every surface's sweep by block principal pivoting, all in flight at once.
 
     Each surface advances through its own steps; every round factors each
@@ -1238,12 +1468,19 @@ def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, co
     (``p_A >= 0``, ``g >= 0`` off ``A``, to rounding) has solved its step:
     its tangent ``(C_AA)^-1 1`` comes from the same factor, and its next step
     starts at once from the predicted set ``{p + (d' - d) dp/dd > 0}``.
+    With a cap ``hardness = H`` each surface also keeps a saturated set
+    ``U`` (``p = H``): the free set solves ``C_FF p_F = d - f_F - C_FU H``,
+    ``p > H`` on it and ``g > 0`` on ``U`` are infeasible too, the tangent
+    is ``(C_FF)^-1 1`` (saturated elements fixed) and the predicted ``U``
+    is ``{p + (d' - d) dp/dd >= H}``.
     Fills the (m, k) arrays of ``table``, ``counts``, ``flags`` in place.
     """
     m, n = gaps.shape
     k = steps.shape[1]
     matrix, diagonal = _dense_matrix(op), op.diagonal
-    states = [_PivotState(gaps[j] - steps[j, 0] < 0.0) for j in range(m)]
+    empty = None if hardness is None else np.zeros(n, dtype=bool)
+    states = [_PivotState(gaps[j] - steps[j, 0] < 0.0, None if empty is None else empty.copy())
+              for j in range(m)]
     ones = np.ones(n)
     while True:
         flight = [j for j in range(m) if states[j].step < k]
@@ -1254,9 +1491,14 @@ def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, co
         for r, j in enumerate(flight):
             state = states[j]
             state.refactor(matrix)
+            top = None
+            if hardness is not None:
+                top = np.flatnonzero(state.upper)
+                x[r, top] = hardness
             if state.index.size:
                 idx = state.index
-                x[r, idx] = state.solve(steps[j, state.step] - gaps[j, idx])
+                x[r, idx] = state.solve(_capped_rhs(
+                    matrix, steps[j, state.step] - gaps[j, idx], idx, top, hardness))
         gap = x @ matrix  # C is symmetric: the rows are C p
         for r, j in enumerate(flight):
             state = states[j]
@@ -1266,19 +1508,24 @@ def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, co
             state.rounds += 1
             scale = _gap_scale((gaps[j] - d)[None])[0]
             slack = 1e-3 * tol * scale
-            infeasible = ((state.passive & (x[r] * diagonal < -slack))
-                          | (~state.passive & (gap[r] < -slack)))
+            infeasible, over = _infeasible(state.passive, state.upper, x[r], gap[r], diagonal,
+                                           slack, hardness)
             if infeasible.any() and state.rounds <= max_iter:
-                state.exchange(infeasible)
+                state.exchange(infeasible, over)
                 continue
-            p = np.maximum(x[r], 0.0)
-            residual = _residual(p[None], gap[r][None], diagonal, np.array([scale]))[0]
+            if hardness is None:
+                p = np.maximum(x[r], 0.0)
+            else:
+                p = np.clip(x[r], 0.0, hardness)
+            residual = _residual(p[None], gap[r][None], diagonal, np.array([scale]),
+                                 hardness)[0]
             load = p.sum() * op.element_area
             table["load"][j, step] = load
             table["nominal_pressure"][j, step] = load / (n * op.element_area)
             table["mean_plane_deflection"][j, step] = (gap[r] - gaps[j] + d).mean()
             table["real_area_fraction"][j, step] = np.count_nonzero(p > 0.0) / n
             table["max_pressure"][j, step] = p.max()
+            table["plastic_area_fraction"][j, step] = _plastic_fraction(p, hardness)
             table["residual"][j, step] = residual
             counts["iterations"][j, step] = state.rounds
             counts["matvecs"][j, step] = state.rounds
@@ -1294,15 +1541,21 @@ def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, co
             state.step += 1
             if state.step < k:
                 predicted = p + (steps[j, state.step] - d) * rate
-                start = predicted > 0.0
-                if not start.any():
+                start, upper = predicted > 0.0, None
+                if hardness is not None:
+                    upper = predicted >= hardness
+                    start &= ~upper
+                    if not upper.any() and not start.any():
+                        upper = empty.copy()
+                        start = gaps[j] - steps[j, state.step] < 0.0
+                elif not start.any():
                     start = gaps[j] - steps[j, state.step] < 0.0
-                state.restart(start)
+                state.restart(start, upper)
 
 
 def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
           element_area=None, return_fields=False, stiffness=True, stiffness_tol=1e-6,
-          precision="double", extrapolate=True) -> SweepResult:
+          precision="double", extrapolate=True, hardness=None) -> SweepResult:
     """Force-deflection curves of m surfaces over k approaches (Eq 27, 33, 35).
 
     Solves Eq 27 for every surface at every approach, all surfaces at once
@@ -1327,8 +1580,10 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
     approaches : ndarray, (k,) or (m, k)
         Rigid-body approaches ``d >= 0`` [m] at each step, shared or per
         surface; warm starts help most when they increase.
-    method, tol, max_iter, element_area, precision
+    method, tol, max_iter, element_area, precision, hardness
         As in :func:`solve`; ``precision`` also applies to the stiffness CG.
+        With ``hardness`` the tangent and the extrapolation hold the
+        saturated elements (``p = H``) fixed.
     return_fields : bool
         Keep the pressure fields (m, k, *surface shape) [Pa].
     stiffness : bool
@@ -1352,6 +1607,7 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
         raise ValueError(
             f"stiffness_tol must be a finite positive number, got {stiffness_tol!r}"
         ) from None
+    hardness = _check_hardness(hardness)
     op = _as_operator(operator, element_area)
     method = resolve_method(method, op)
     gaps, shape = _check_surfaces(gaps0, op, "gaps0", batched=True)
@@ -1360,7 +1616,7 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
     _check_bounded(op, gaps, steps.max(axis=1), "approaches")
     k = steps.shape[1]
     names = ("load", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
-             "max_pressure", "residual")
+             "max_pressure", "residual", "plastic_area_fraction")
     table = {name: np.zeros((m, k)) for name in names}
     table["tangent_stiffness"] = np.full((m, k), np.nan)
     counts = {name: np.zeros((m, k), dtype=int) for name in ("iterations", "matvecs")}
@@ -1368,10 +1624,11 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
     fields = np.zeros((m, k, *shape)) if return_fields else None
     if method == "pivot":
         limit = _default_max_iter("exact", n) if max_iter is None else int(max_iter)
-        _pivot_sweep(op, gaps, steps, tol, limit, stiffness, table, counts, flags, fields)
+        _pivot_sweep(op, gaps, steps, tol, limit, stiffness, table, counts, flags, fields,
+                     hardness)
         _warn_unconverged(flags, table, method, tol)
         return SweepResult(approach=np.array(steps), pressure=fields, method=method, tol=tol,
-                           **table, **counts, **flags)
+                           hardness=hardness, **table, **counts, **flags)
     pressure = np.zeros((m, n))
     tangent = np.zeros((m, n))
     cg_limit = _default_max_iter("cg", n)
@@ -1380,8 +1637,9 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
     for step in range(k):
         start = pressure
         if extrapolate and step > 0:
-            start = _predict(pressure, steps[:, step], steps[:, step - 1], rate)
-        batch = _run(op, gaps, steps[:, step].copy(), start, method, tol, max_iter, fast)
+            start = _predict(pressure, steps[:, step], steps[:, step - 1], rate, hardness)
+        batch = _run(op, gaps, steps[:, step].copy(), start, method, tol, max_iter, fast,
+                     hardness)
         if extrapolate and not stiffness:
             # Secant dp/dd of this step, for the next prediction.
             delta = steps[:, step] - (steps[:, step - 1] if step > 0 else np.nan)
@@ -1394,13 +1652,14 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
         table["mean_plane_deflection"][:, step] = batch.displacement.mean(axis=1)
         table["real_area_fraction"][:, step] = (pressure > 0.0).sum(axis=1) / n
         table["max_pressure"][:, step] = pressure.max(axis=1)
+        table["plastic_area_fraction"][:, step] = _plastic_fraction(pressure, hardness)
         table["residual"][:, step] = batch.residual
         counts["iterations"][:, step] = batch.iterations
         counts["matvecs"][:, step] = batch.matvecs
         flags["converged"][:, step] = batch.converged
         if stiffness:
-            tangent, ok, _ = _active_set_cg(op, pressure > 0.0, tangent, stiffness_tol,
-                                            cg_limit, fast)
+            tangent, ok, _ = _active_set_cg(op, _free(pressure, hardness), tangent,
+                                            stiffness_tol, cg_limit, fast)
             table["tangent_stiffness"][:, step] = op.element_area * tangent.sum(axis=1)
             rate = tangent
             flags["stiffness_converged"][:, step] = ok
@@ -1416,6 +1675,7 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
         pressure=fields,
         method=method,
         tol=tol,
+        hardness=hardness,
         **table,
         **counts,
         **flags,
