@@ -590,6 +590,20 @@ def _plastic_fraction(pressure: np.ndarray, hardness: float | None) -> np.ndarra
     return np.count_nonzero(pressure >= hardness, axis=-1) / pressure.shape[-1]
 
 
+def _record_step(table, rows, step, pressure, displacement, residual, op, hardness) -> None:
+    """A sweep step's summary columns of ``table`` for ``rows`` (a surface or a slice),
+    from the solved pressure [Pa] and displacement [m] (last axis: elements)."""
+    n = pressure.shape[-1]
+    load = pressure.sum(axis=-1) * op.element_area
+    table["load"][rows, step] = load
+    table["nominal_pressure"][rows, step] = load / (n * op.element_area)
+    table["mean_plane_deflection"][rows, step] = displacement.mean(axis=-1)
+    table["real_area_fraction"][rows, step] = np.count_nonzero(pressure > 0.0, axis=-1) / n
+    table["max_pressure"][rows, step] = pressure.max(axis=-1)
+    table["plastic_area_fraction"][rows, step] = _plastic_fraction(pressure, hardness)
+    table["residual"][rows, step] = residual
+
+
 # ---------------------------------------------------------------------------
 # Residual
 
@@ -1519,14 +1533,7 @@ def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, co
                 p = np.clip(x[r], 0.0, hardness)
             residual = _residual(p[None], gap[r][None], diagonal, np.array([scale]),
                                  hardness)[0]
-            load = p.sum() * op.element_area
-            table["load"][j, step] = load
-            table["nominal_pressure"][j, step] = load / (n * op.element_area)
-            table["mean_plane_deflection"][j, step] = (gap[r] - gaps[j] + d).mean()
-            table["real_area_fraction"][j, step] = np.count_nonzero(p > 0.0) / n
-            table["max_pressure"][j, step] = p.max()
-            table["plastic_area_fraction"][j, step] = _plastic_fraction(p, hardness)
-            table["residual"][j, step] = residual
+            _record_step(table, j, step, p, gap[r] - gaps[j] + d, residual, op, hardness)
             counts["iterations"][j, step] = state.rounds
             counts["matvecs"][j, step] = state.rounds
             flags["converged"][j, step] = residual <= tol
@@ -1646,14 +1653,8 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
             with np.errstate(invalid="ignore", divide="ignore"):
                 rate = (batch.pressure - pressure) / delta[:, None]
         pressure = batch.pressure
-        load = pressure.sum(axis=1) * op.element_area
-        table["load"][:, step] = load
-        table["nominal_pressure"][:, step] = load / (n * op.element_area)
-        table["mean_plane_deflection"][:, step] = batch.displacement.mean(axis=1)
-        table["real_area_fraction"][:, step] = (pressure > 0.0).sum(axis=1) / n
-        table["max_pressure"][:, step] = pressure.max(axis=1)
-        table["plastic_area_fraction"][:, step] = _plastic_fraction(pressure, hardness)
-        table["residual"][:, step] = batch.residual
+        _record_step(table, slice(None), step, pressure, batch.displacement, batch.residual, op,
+                     hardness)
         counts["iterations"][:, step] = batch.iterations
         counts["matvecs"][:, step] = batch.matvecs
         flags["converged"][:, step] = batch.converged

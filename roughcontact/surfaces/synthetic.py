@@ -1020,6 +1020,12 @@ def expected_sample_moments(spec: SurfaceSpec, count: int = 2000, *,
     return _SampleMoments(spec, seed).estimate(spec.skew, spec.kurt, int(count))
 
 
+def _on_bound(spec: SurfaceSpec, skew: float) -> float:
+    """The filter's smallest reachable kurtosis at process skewness ``skew`` (Eq 15),
+    nudged inside so the white noise's Johnson law can still be fitted."""
+    return float(kurt_min(spec, skew)) * (1.0 + 1e-9) + 1e-12
+
+
 def sample_bound(spec: SurfaceSpec, skew, count: int = 1000, *,
                  seed: int = CALIBRATION_SEED) -> tuple[np.ndarray, np.ndarray]:
     """The reachable region's edge for a window's expected sample moments (Fig 2, same rule).
@@ -1035,8 +1041,7 @@ def sample_bound(spec: SurfaceSpec, skew, count: int = 1000, *,
     """
     skew = np.atleast_1d(np.asarray(skew, dtype=float))
     sampler = _SampleMoments(spec, seed)
-    out = np.array([sampler.estimate(s, float(kurt_min(spec, s)) * (1.0 + 1e-9) + 1e-12,
-                                     int(count))[0] for s in skew])
+    out = np.array([sampler.estimate(s, _on_bound(spec, s), int(count))[0] for s in skew])
     return out[:, 0], out[:, 1]
 
 
@@ -1104,10 +1109,7 @@ def _calibrate(spec: SurfaceSpec, rse: float, max_points: float, seed: int) -> F
             g[0], se[0] = 0.0, 0.0
         return g, se
 
-    def bound(skew):
-        return float(kurt_min(spec, skew)) * (1.0 + 1e-9) + 1e-12
-
-    theta = np.array([spec.skew, max(spec.kurt, bound(spec.skew))])
+    theta = np.array([spec.skew, max(spec.kurt, _on_bound(spec, spec.skew))])
     # 1. grow the sample at the targets until the standard errors are small enough
     most = max(sampler.batch, int(max_points // math.prod(spec.shape)) // sampler.batch
                * sampler.batch)
@@ -1149,11 +1151,11 @@ def _calibrate(spec: SurfaceSpec, rse: float, max_points: float, seed: int) -> F
             break
         if on_edge:
             skew = theta[0] + residual[0] / slope
-            proposal = np.array([skew, bound(skew)])
+            proposal = np.array([skew, _on_bound(spec, skew)])
         else:
             proposal = theta + np.linalg.solve(jac, residual)
-            if proposal[1] < bound(proposal[0]):
-                proposal[1] = bound(proposal[0])
+            if proposal[1] < _on_bound(spec, proposal[0]):
+                proposal[1] = _on_bound(spec, proposal[0])
                 on_edge = True
         new_g, se = estimate(proposal, count)
         evaluations += 1
