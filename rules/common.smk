@@ -56,7 +56,7 @@ def get_final_outputs():
     aggregates = expand(
         "results/aggregates/{study}.{ext}",
         study=AGGREGATES,
-        ext=("csv", "moduli.csv", "json"),
+        ext=("csv", "moduli.csv", "json", "validity.csv"),
     )
     audit = ["results/audit/audit.csv", "results/audit/audit.md"] if STUDIES else []
     if STUDIES and config["audit"]["strict"]:
@@ -179,6 +179,7 @@ def get_figure_aggregates(wildcards):
         f"results/aggregates/{name}.csv",
         f"results/aggregates/{name}.moduli.csv",
         f"results/aggregates/{name}.json",
+        f"results/aggregates/{name}.validity.csv",
     ]
 
 

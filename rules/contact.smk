@@ -19,6 +19,8 @@ rule contact:
     params:
         job=get_contact_params,
         solver=canonical(study.contact_settings(config)),
+        # version of the stored layout (2: plastic area and the solutions' pressure profiles)
+        layout=2,
     script:
         "../scripts/solve_contact.py"
 
@@ -30,6 +32,7 @@ rule aggregate:
         table="results/aggregates/{study}.csv",
         moduli="results/aggregates/{study}.moduli.csv",
         meta="results/aggregates/{study}.json",
+        validity="results/aggregates/{study}.validity.csv",
     log:
         "results/logs/aggregates/{study}.log",
     group:
@@ -41,7 +44,8 @@ rule aggregate:
     params:
         cells=get_aggregate_cells,
         levels=config["contact"]["pressure_levels"],
-        # version of the stored layout (2: the sidecar holds the tables' SHA-256)
-        layout=2,
+        # version of the stored layout (2: the sidecar holds the tables' SHA-256; 3: the
+        # validity table against the hardness)
+        layout=3,
     script:
         "../scripts/aggregate.py"

@@ -18,4 +18,5 @@ aggregate_study(
     snakemake.output.moduli,
     snakemake.output.meta,
     config=snakemake.config,
+    validity_path=snakemake.output.validity,
 )

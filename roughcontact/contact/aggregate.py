@@ -36,9 +36,11 @@ __all__ = [
     "aggregate_cell",
     "coverage",
     "covered_range",
+    "interpolate",
     "mean_plane_modulus",
     "modulus_summary",
     "pressure_axis",
+    "statistics",
     "surface_curves",
 ]
 
@@ -50,6 +52,7 @@ QUANTITIES = {
     "asperity_deflection": ("m", "d_a = d - d_b (Eq 45)"),
     "real_area_fraction": ("1", "real contact area / nominal area"),
     "max_pressure": ("Pa", "largest element pressure"),
+    "plastic_area_fraction": ("1", "elements at the hardness cap / all elements (0 if elastic)"),
 }
 
 INTERPOLATION = ("piecewise linear in log(P) and log(q) (linear in q where q <= 0) over "
@@ -130,11 +133,33 @@ def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> n
     levels = np.asarray(pressures, dtype=float)
     if levels.ndim != 1 or not np.isfinite(levels).all() or (levels <= 0.0).any():
         raise ValueError("pressures must be a 1-d array of finite positive levels [Pa]")
-    values = np.asarray(getattr(sweep, quantity), dtype=float)
-    usable = _usable(sweep, quantity)
+    return _interpolate(sweep.nominal_pressure, np.asarray(getattr(sweep, quantity), dtype=float),
+                        _usable(sweep, quantity), levels)
+
+
+def interpolate(sweep_physical: PhysicalSweep, values, pressures) -> np.ndarray:
+    """Per-step ``values`` (m, k) of a sweep interpolated onto ``pressures`` [Pa], (m, levels).
+
+    As :func:`surface_curves` for a quantity the sweep does not hold (e.g. a
+    share above a hardness, :func:`roughcontact.contact.cell.validity_table`):
+    over the converged steps with finite values, no extrapolation.
+    """
+    sweep = _check_sweep(sweep_physical)
+    values = np.asarray(values, dtype=float)
+    if values.shape != sweep.nominal_pressure.shape:
+        raise ValueError(f"values must have the sweep's shape {sweep.nominal_pressure.shape}, "
+                         f"got {values.shape}")
+    levels = np.asarray(pressures, dtype=float)
+    if levels.ndim != 1 or not np.isfinite(levels).all() or (levels <= 0.0).any():
+        raise ValueError("pressures must be a 1-d array of finite positive levels [Pa]")
+    usable = _usable(sweep, "approach") & np.isfinite(values)
+    return _interpolate(sweep.nominal_pressure, values, usable, levels)
+
+
+def _interpolate(nominal_pressure, values, usable, levels) -> np.ndarray:
     out = np.full((values.shape[0], levels.size), np.nan)
     for j in range(values.shape[0]):
-        P = sweep.nominal_pressure[j, usable[j]]
+        P = nominal_pressure[j, usable[j]]
         y = values[j, usable[j]]
         if P.size == 0:
             continue
@@ -149,7 +174,7 @@ def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> n
     return out
 
 
-def _statistics(samples: np.ndarray, confidence: float):
+def statistics(samples: np.ndarray, confidence: float = 0.95):
     """Mean, Student-t half-width and count per column, ignoring NaN."""
     finite = np.isfinite(samples)
     count = finite.sum(axis=0)
@@ -216,7 +241,7 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
     units = {"nominal_pressure": "Pa"}
     for quantity, (unit, _) in QUANTITIES.items():
         samples = surface_curves(sweep, levels, quantity)
-        mean, half_width, count = _statistics(samples, confidence)
+        mean, half_width, count = statistics(samples, confidence)
         columns[f"{quantity}_mean"] = mean
         columns[f"{quantity}_half_width"] = half_width
         columns[f"{quantity}_count"] = count

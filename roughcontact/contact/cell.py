@@ -23,16 +23,19 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
-from roughcontact.contact import aggregate, nondim
+from roughcontact.contact import aggregate, nondim, validity
 
 __all__ = [
     "APPROACH_RANGE",
     "BULK_FACTOR",
+    "VALIDITY_QUANTITIES",
     "aggregate_sweep",
     "approach_grid",
+    "hardness_threshold",
     "nondim_pressure",
     "sweep_and_aggregate",
     "sweep_cell",
+    "validity_table",
 ]
 
 #: Ratio of the sweep's last to its first approach (the grid is geometric).
@@ -84,7 +87,8 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
                stiffness_tol: float = 1e-6, max_iter: int | None = None,
                batch_size: int | None = None,
                progress: Callable[[nondim.SweepProgress], None] | None = None,
-               rows: slice | None = None) -> nondim.NondimSweep:
+               rows: slice | None = None, hardness: float | None = None,
+               profile: bool = True) -> nondim.NondimSweep:
     """Sweep every surface of a cell to ``pressure_end`` on :func:`approach_grid`.
 
     Parameters
@@ -103,6 +107,11 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
     rows : slice, optional
         Solve only these surfaces, on the approach grid of the whole cell (the
         audit re-solves one stored batch this way).
+    hardness : float, optional
+        Dimensionless cap ``H L / (E sigma)`` of a capped sweep (None: elastic).
+    profile : bool
+        Record the pressure and load profiles of every solution (default),
+        from which :func:`validity_table` reads the share above any hardness.
     """
     approaches = approach_grid(heights, pressure_end, steps)
     if rows is not None:
@@ -111,18 +120,75 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
                              element_area=geometry.element_area, approaches=approaches,
                              method=method, tol=tol, max_iter=max_iter,
                              stiffness_tol=stiffness_tol, precision=precision,
-                             batch_size=batch_size, progress=progress)
+                             batch_size=batch_size, progress=progress, hardness=hardness,
+                             profile=profile)
 
 
-def aggregate_sweep(sweep: nondim.NondimSweep, sigma: float, E: float,
-                    pressures) -> tuple[nondim.PhysicalSweep, pd.DataFrame]:
+def aggregate_sweep(sweep: nondim.NondimSweep, sigma: float, E: float, pressures,
+                    hardness: float | None = None,
+                    ) -> tuple[nondim.PhysicalSweep, pd.DataFrame]:
     """The sweep in SI units for ``sigma`` [m] and ``E`` [Pa], averaged at ``pressures`` [Pa].
 
-    Returns the :class:`~roughcontact.contact.nondim.PhysicalSweep` and the
-    table of :func:`roughcontact.contact.aggregate.aggregate_cell`.
+    ``hardness`` [Pa] is the cap of a capped sweep (checked by
+    :func:`~roughcontact.contact.nondim.to_physical`). Returns the
+    :class:`~roughcontact.contact.nondim.PhysicalSweep` and the table of
+    :func:`roughcontact.contact.aggregate.aggregate_cell`.
     """
-    physical = nondim.to_physical(sweep, sigma, E)
+    physical = nondim.to_physical(sweep, sigma, E, hardness=hardness)
     return physical, aggregate.aggregate_cell(physical, pressures)
+
+
+def hardness_threshold(sweep: nondim.NondimSweep, sigma: float, E: float,
+                       hardness: float) -> float:
+    """The dimensionless threshold ``H L / (E sigma)`` of a hardness ``H`` [Pa] for ``sweep``."""
+    return nondim_pressure(hardness, thickness=sweep.thickness, E=E, sigma=sigma)
+
+
+def validity_table(sweep: nondim.NondimSweep, sigma: float, E: float, hardness: float,
+                   pressures, *, confidence: float = 0.95) -> pd.DataFrame:
+    """How much of an elastic cell lies above a hardness, per nominal-pressure level.
+
+    For every surface and step, the share of the real contact area, of the
+    load, and the excess load ``sum (p - H)_+ / sum p`` above ``H`` [Pa] are
+    read from the stored profiles (:func:`roughcontact.contact.validity.fractions_above`,
+    no extra solve), interpolated onto ``pressures`` [Pa] like every other
+    quantity (:func:`roughcontact.contact.aggregate.interpolate`) and averaged
+    over the surfaces with the Student-t band.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per level: ``nominal_pressure`` [Pa], ``hardness`` [Pa], and
+        for ``area_above``, ``load_above`` and ``excess_load`` the
+        ``_mean``, ``_half_width`` and ``_count`` columns.
+
+    Raises
+    ------
+    ValueError
+        If the sweep has no profiles (solved without ``profile``) or is capped.
+    """
+    if sweep.pressure_profile is None or sweep.profile_ranks is None:
+        raise ValueError("the sweep has no pressure profiles (solved with profile=False, or "
+                         "stored by an older version): solve it again with profile=True")
+    if sweep.hardness is not None:
+        raise ValueError("the sweep is capped: its saturated share is plastic_area_fraction")
+    physical = nondim.to_physical(sweep, sigma, E)
+    shares = validity.fractions_above(sweep.profile_ranks, sweep.pressure_profile,
+                                      sweep.load_profile, sweep.real_area_fraction,
+                                      sweep.nominal_pressure,
+                                      hardness_threshold(sweep, sigma, E, hardness))
+    levels = np.asarray(pressures, dtype=float)
+    columns = {"nominal_pressure": levels, "hardness": np.full(levels.size, float(hardness))}
+    for name in VALIDITY_QUANTITIES:
+        samples = aggregate.interpolate(physical, shares[name], levels)
+        mean, half_width, count = aggregate.statistics(samples, confidence)
+        columns.update({f"{name}_mean": mean, f"{name}_half_width": half_width,
+                        f"{name}_count": count})
+    return pd.DataFrame(columns)
+
+
+#: Shares above a hardness in :func:`validity_table` (all [-]).
+VALIDITY_QUANTITIES = ("area_above", "load_above", "excess_load")
 
 
 def sweep_and_aggregate(unit_influence, heights: np.ndarray, geometry, *, sigma: float,

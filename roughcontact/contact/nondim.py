@@ -54,7 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from roughcontact.contact import solver
+from roughcontact.contact import solver, validity
 
 __all__ = [
     "NondimSweep",
@@ -74,6 +74,8 @@ logger = logging.getLogger("roughcontact.nondim")
 HEIGHT_STD_RANGE = (0.1, 10.0)
 #: Relative tolerance when checking that to_physical gets the geometry of the solve.
 GEOMETRY_RTOL = 1e-9
+#: Relative tolerance of the dimensionless cap H L / (E sigma) in :func:`to_physical`.
+HARDNESS_RTOL = 1e-5
 
 
 # ---------------------------------------------------------------------------
@@ -150,6 +152,15 @@ class NondimSweep:
     method, tol, stiffness_tol, precision, max_iter
         Settings of the contact and stiffness solves (``max_iter`` None: the
         solver's default).
+    hardness : float or None
+        Dimensionless pressure cap ``H L / (E sigma)`` of a capped sweep
+        (0 <= phat <= H L / (E sigma)); None for the elastic problem.
+    plastic_area_fraction : ndarray or None
+        Fraction of elements at the cap [-] (zeros for an elastic sweep).
+    profile_ranks, pressure_profile, load_profile : ndarray or None
+        The solutions' pressure profiles (dimensionless, like ``max_pressure``)
+        and load profiles at the ranks ``profile_ranks``
+        (:mod:`roughcontact.contact.validity`); None when not recorded.
     """
 
     approach: np.ndarray
@@ -171,6 +182,16 @@ class NondimSweep:
     stiffness_tol: float
     precision: str
     max_iter: int | None
+    hardness: float | None = None
+    plastic_area_fraction: np.ndarray | None = None
+    profile_ranks: np.ndarray | None = None
+    pressure_profile: np.ndarray | None = None
+    load_profile: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.plastic_area_fraction is None:
+            object.__setattr__(self, "plastic_area_fraction",
+                               np.zeros(np.shape(self.approach)))
 
     @property
     def nominal_area(self) -> float:
@@ -212,6 +233,10 @@ class PhysicalSweep:
         Block thickness ``L`` [m] used in ``k_P``.
     nominal_area : float
         ``A_n`` [m^2].
+    plastic_area_fraction : ndarray
+        Fraction of elements at the cap [-] (zeros without one).
+    hardness : float or None
+        Pressure cap ``H`` [Pa] of a capped sweep; None for the elastic problem.
     """
 
     approach: np.ndarray
@@ -231,6 +256,13 @@ class PhysicalSweep:
     E: float
     thickness: float
     nominal_area: float
+    plastic_area_fraction: np.ndarray | None = None
+    hardness: float | None = None
+
+    def __post_init__(self):
+        if self.plastic_area_fraction is None:
+            object.__setattr__(self, "plastic_area_fraction",
+                               np.zeros(np.shape(self.approach)))
 
     @property
     def asperity_deflection(self) -> np.ndarray:
@@ -272,6 +304,8 @@ class PhysicalSweep:
             E=float(E),
             thickness=thickness,
             nominal_area=nominal_area,
+            plastic_area_fraction=np.asarray(result.plastic_area_fraction, dtype=float),
+            hardness=result.hardness,
         )
 
     def to_frame(self) -> pd.DataFrame:
@@ -282,7 +316,8 @@ class PhysicalSweep:
         ``asperity_deflection`` [m], ``real_area_fraction`` [-],
         ``max_pressure`` [Pa], ``contact_stiffness`` [N/m],
         ``normalized_stiffness`` [Pa], ``iterations``, ``matvecs``,
-        ``residual`` [-], ``converged``, ``stiffness_converged``. The units
+        ``residual`` [-], ``converged``, ``stiffness_converged``,
+        ``plastic_area_fraction`` [-]. The units
         are also in ``frame.attrs["units"]``, the scales in ``frame.attrs``.
         """
         m, k = self.approach.shape
@@ -313,6 +348,7 @@ _PHYSICAL_UNITS = {
     "residual": "1",
     "converged": "bool",
     "stiffness_converged": "bool",
+    "plastic_area_fraction": "1",
 }
 
 
@@ -439,7 +475,8 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
                method: str = "cg", tol: float = 1e-8, max_iter: int | None = None,
                stiffness_tol: float = 1e-6, precision: str = "double",
                batch_size: int | None = None,
-               progress: Callable[[SweepProgress], None] | None = None) -> NondimSweep:
+               progress: Callable[[SweepProgress], None] | None = None,
+               hardness: float | None = None, profile: bool = False) -> NondimSweep:
     """Dimensionless force-deflection sweep of all surfaces of one cell (Eq 27, 33, 35).
 
     Solves ``min 1/2 phat.K phat - phat.(dhat - fhat)`` over ``phat >= 0``
@@ -477,6 +514,14 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         Called with a :class:`SweepProgress` for every step of every batch.
         ``contact.sweep`` offers no per-step hook, so the reports of a batch
         are made, in step order, when that batch is finished.
+    hardness : float, optional
+        Dimensionless pressure cap ``H L / (E sigma)`` (``0 <= phat <= H L /
+        (E sigma)``): the result then holds only for the (sigma, E, H) with that
+        value (:func:`to_physical` checks it). None: the elastic problem.
+    profile : bool
+        Record every solution's pressure and load profiles
+        (:mod:`roughcontact.contact.validity`), from which the share of area
+        and load above any hardness is read without another solve.
 
     Returns
     -------
@@ -499,17 +544,24 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
     batch_size = int(batch_size)
     operator = dimensionless_operator(unit_influence, thickness)
     method = solver.resolve_method(method, operator)  # recorded as solved
+    if hardness is not None:
+        hardness = _positive(hardness, "hardness (H L / (E sigma))")
     names = ("approach", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
-             "max_pressure", "stiffness", "residual")
+             "max_pressure", "stiffness", "residual", "plastic_area_fraction")
     table = {name: np.empty((m, k)) for name in names}
     counts = {name: np.zeros((m, k), dtype=int) for name in ("iterations", "matvecs")}
     flags = {name: np.zeros((m, k), dtype=bool) for name in ("converged", "stiffness_converged")}
+    ranks = validity.rank_grid(n) if profile else None
+    profiles = ({name: np.zeros((m, k, ranks.size)) for name in ("pressure_profile",
+                                                                  "load_profile")}
+                if profile else {})
     start = time.perf_counter()
     for first in range(0, m, batch_size):
         rows = slice(first, min(m, first + batch_size))
         result = solver.sweep(operator, gaps[rows], steps[rows], method=method, tol=tol,
                                max_iter=max_iter, element_area=1.0 / n, stiffness=True,
-                               stiffness_tol=stiffness_tol, precision=precision)
+                               stiffness_tol=stiffness_tol, precision=precision,
+                               hardness=hardness, profile=profile)
         table["approach"][rows] = steps[rows]
         table["nominal_pressure"][rows] = result.load
         table["mean_plane_deflection"][rows] = result.mean_plane_deflection
@@ -517,6 +569,9 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         table["max_pressure"][rows] = result.max_pressure
         table["stiffness"][rows] = result.tangent_stiffness
         table["residual"][rows] = result.residual
+        table["plastic_area_fraction"][rows] = result.plastic_area_fraction
+        for name, values in profiles.items():
+            values[rows] = getattr(result, name)
         counts["iterations"][rows] = result.iterations
         counts["matvecs"][rows] = result.matvecs
         finite = np.logical_and.reduce(
@@ -546,7 +601,8 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
     return NondimSweep(**table, **counts, **flags, thickness=thickness,
                        element_area=element_area, n_elements=n, method=method, tol=float(tol),
                        stiffness_tol=float(stiffness_tol), precision=precision,
-                       max_iter=None if max_iter is None else int(max_iter))
+                       max_iter=None if max_iter is None else int(max_iter), hardness=hardness,
+                       profile_ranks=ranks, **profiles)
 
 
 # ---------------------------------------------------------------------------
@@ -702,7 +758,7 @@ def _bisect_ends(reached: Callable[[np.ndarray], np.ndarray], guess: np.ndarray,
 
 
 def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None = None,
-                area: float | None = None) -> PhysicalSweep:
+                area: float | None = None, hardness: float | None = None) -> PhysicalSweep:
     """SI force-deflection curves of a dimensionless sweep for one (sigma, E).
 
     ``d = sigma dhat``, ``d_b = sigma dhat_b``, ``P = E sigma Phat / L``,
@@ -723,6 +779,11 @@ def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None
         ``K = Chat / L`` fixed it (default: that one).
     area : float, optional
         Nominal area ``A_n`` [m^2]; must equal ``nd.nominal_area`` (default).
+    hardness : float, optional
+        Pressure cap ``H`` [Pa] of a capped sweep (required for one, refused
+        for an elastic one). A capped sweep holds only where ``H L / (E
+        sigma)`` equals the value it was solved for: another (sigma, E, H)
+        that changes it is refused, and must be solved anew.
 
     Returns
     -------
@@ -740,6 +801,7 @@ def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None
             )
     length = nd.thickness
     pressure_scale = E * sigma / length
+    cap = _check_cap(nd, hardness, pressure_scale)
     nominal_pressure = pressure_scale * nd.nominal_pressure
     normalized_stiffness = E * nd.stiffness
     return PhysicalSweep(
@@ -760,4 +822,29 @@ def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None
         E=E,
         thickness=length,
         nominal_area=nd.nominal_area,
+        plastic_area_fraction=np.asarray(nd.plastic_area_fraction, dtype=float).copy(),
+        hardness=cap,
     )
+
+
+def _check_cap(nd: NondimSweep, hardness, pressure_scale: float) -> float | None:
+    """``hardness`` [Pa] checked against the dimensionless cap of ``nd`` (:func:`to_physical`)."""
+    if nd.hardness is None:
+        if hardness is not None:
+            raise ValueError(
+                f"hardness = {hardness!r} Pa given, but the sweep is elastic (solved without a "
+                f"cap): solve it with hardness H L / (E sigma), or check the elastic result "
+                f"against H with roughcontact.contact.validity")
+        return None
+    if hardness is None:
+        raise ValueError(
+            f"the sweep was solved with the cap H L / (E sigma) = {nd.hardness:.6g}; give the "
+            f"hardness H [Pa] so that the scaling can be checked")
+    H = _positive(hardness, "hardness")
+    wanted = H / pressure_scale
+    if abs(wanted - nd.hardness) > HARDNESS_RTOL * nd.hardness:
+        raise ValueError(
+            f"H L / (E sigma) = {wanted:.6g} for this (sigma, E, H), but the sweep was solved "
+            f"for {nd.hardness:.6g}: with a cap, pressure no longer scales with sigma E alone, "
+            f"so this rescaling would change the problem; solve it anew with that cap")
+    return H

@@ -143,6 +143,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from roughcontact.contact import validity
+
 __all__ = [
     "METHODS",
     "resolve_method",
@@ -285,6 +287,13 @@ class SweepResult:
         (also when not given to the constructor).
     hardness : float or None
         Pressure cap ``H`` [Pa] of the sweep; None without a cap.
+    profile_ranks : ndarray of int or None
+        Ranks of the profiles, (R,), when ``profile=True``.
+    pressure_profile : ndarray or None
+        (m, k, R): the ``r``-th largest element pressure [Pa] of each solution
+        at the ranks ``r`` of ``profile_ranks``.
+    load_profile : ndarray or None
+        (m, k, R): share of the load on the ``r`` most loaded elements [-].
     """
 
     approach: np.ndarray
@@ -304,6 +313,9 @@ class SweepResult:
     tol: float
     plastic_area_fraction: np.ndarray | None = None
     hardness: float | None = None
+    profile_ranks: np.ndarray | None = None
+    pressure_profile: np.ndarray | None = None
+    load_profile: np.ndarray | None = None
 
     def __post_init__(self):
         if self.plastic_area_fraction is None:
@@ -590,9 +602,11 @@ def _plastic_fraction(pressure: np.ndarray, hardness: float | None) -> np.ndarra
     return np.count_nonzero(pressure >= hardness, axis=-1) / pressure.shape[-1]
 
 
-def _record_step(table, rows, step, pressure, displacement, residual, op, hardness) -> None:
+def _record_step(table, rows, step, pressure, displacement, residual, op, hardness,
+                 ranks=None) -> None:
     """A sweep step's summary columns of ``table`` for ``rows`` (a surface or a slice),
-    from the solved pressure [Pa] and displacement [m] (last axis: elements)."""
+    from the solved pressure [Pa] and displacement [m] (last axis: elements); with
+    ``ranks``, also its pressure and load profiles (:mod:`roughcontact.contact.validity`)."""
     n = pressure.shape[-1]
     load = pressure.sum(axis=-1) * op.element_area
     table["load"][rows, step] = load
@@ -602,6 +616,10 @@ def _record_step(table, rows, step, pressure, displacement, residual, op, hardne
     table["max_pressure"][rows, step] = pressure.max(axis=-1)
     table["plastic_area_fraction"][rows, step] = _plastic_fraction(pressure, hardness)
     table["residual"][rows, step] = residual
+    if ranks is not None:
+        values, shares = validity.pressure_profile(pressure, ranks)
+        table["pressure_profile"][rows, step] = values
+        table["load_profile"][rows, step] = shares
 
 
 # ---------------------------------------------------------------------------
@@ -1471,7 +1489,7 @@ class _PivotState:
 
 
 def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, counts, flags,
-                 fields, hardness=None) -> None:
+                 fields, hardness=None, ranks=None) -> None:
     """Every surface's sweep by block principal pivoting, all in flight at once.
 
     Each surface advances through its own steps; every round factors each
@@ -1533,7 +1551,8 @@ def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, co
                 p = np.clip(x[r], 0.0, hardness)
             residual = _residual(p[None], gap[r][None], diagonal, np.array([scale]),
                                  hardness)[0]
-            _record_step(table, j, step, p, gap[r] - gaps[j] + d, residual, op, hardness)
+            _record_step(table, j, step, p, gap[r] - gaps[j] + d, residual, op, hardness,
+                         ranks)
             counts["iterations"][j, step] = state.rounds
             counts["matvecs"][j, step] = state.rounds
             flags["converged"][j, step] = residual <= tol
@@ -1562,7 +1581,7 @@ def _pivot_sweep(op: _Operator, gaps, steps, tol, max_iter, stiffness, table, co
 
 def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
           element_area=None, return_fields=False, stiffness=True, stiffness_tol=1e-6,
-          precision="double", extrapolate=True, hardness=None) -> SweepResult:
+          precision="double", extrapolate=True, hardness=None, profile=False) -> SweepResult:
     """Force-deflection curves of m surfaces over k approaches (Eq 27, 33, 35).
 
     Solves Eq 27 for every surface at every approach, all surfaces at once
@@ -1602,6 +1621,12 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
         Start each step from the extrapolated pressure (above) instead of the
         previous solution. Only the starting point changes: every solution
         still meets ``tol``.
+    profile : bool
+        Keep every solution's pressure and load profiles
+        (:func:`roughcontact.contact.validity.pressure_profile` at the ranks
+        of :func:`~roughcontact.contact.validity.rank_grid`): enough to tell,
+        for any hardness chosen later, how much of the contact area and load
+        lies above it (:func:`~roughcontact.contact.validity.fractions_above`).
 
     Returns
     -------
@@ -1629,13 +1654,17 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
     counts = {name: np.zeros((m, k), dtype=int) for name in ("iterations", "matvecs")}
     flags = {name: np.zeros((m, k), dtype=bool) for name in ("converged", "stiffness_converged")}
     fields = np.zeros((m, k, *shape)) if return_fields else None
+    ranks = validity.rank_grid(n) if profile else None
+    if profile:
+        table["pressure_profile"] = np.zeros((m, k, ranks.size))
+        table["load_profile"] = np.zeros((m, k, ranks.size))
     if method == "pivot":
         limit = _default_max_iter("exact", n) if max_iter is None else int(max_iter)
         _pivot_sweep(op, gaps, steps, tol, limit, stiffness, table, counts, flags, fields,
-                     hardness)
+                     hardness, ranks)
         _warn_unconverged(flags, table, method, tol)
         return SweepResult(approach=np.array(steps), pressure=fields, method=method, tol=tol,
-                           hardness=hardness, **table, **counts, **flags)
+                           hardness=hardness, profile_ranks=ranks, **table, **counts, **flags)
     pressure = np.zeros((m, n))
     tangent = np.zeros((m, n))
     cg_limit = _default_max_iter("cg", n)
@@ -1654,7 +1683,7 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
                 rate = (batch.pressure - pressure) / delta[:, None]
         pressure = batch.pressure
         _record_step(table, slice(None), step, pressure, batch.displacement, batch.residual, op,
-                     hardness)
+                     hardness, ranks)
         counts["iterations"][:, step] = batch.iterations
         counts["matvecs"][:, step] = batch.matvecs
         flags["converged"][:, step] = batch.converged
@@ -1677,6 +1706,7 @@ def sweep(operator, gaps0, approaches, *, method="cg", tol=1e-10, max_iter=None,
         method=method,
         tol=tol,
         hardness=hardness,
+        profile_ranks=ranks,
         **table,
         **counts,
         **flags,

@@ -202,7 +202,7 @@ def load_aggregates(paths) -> tuple:
 
     import pandas as pd
 
-    table_path, moduli_path, meta_path = paths
+    table_path, moduli_path, meta_path = paths[:3]
     meta = json.loads(Path(meta_path).read_text())
     for path, key in ((table_path, "table_sha256"), (moduli_path, "moduli_sha256")):
         if meta.get(key) != file_sha256(path):
@@ -211,6 +211,59 @@ def load_aggregates(paths) -> tuple:
                 f"the aggregation, or written by an older version); delete it and run the "
                 "workflow again to rebuild it", path)
     return pd.read_csv(table_path), pd.read_csv(moduli_path), meta
+
+
+def load_validity(paths):
+    """The validity table of a study (``aggregate_files``; 4th path), checked against
+    the SHA-256 its sidecar records; an empty table if the study has none."""
+    import json
+
+    import pandas as pd
+
+    if len(paths) < 4:
+        return pd.DataFrame()
+    meta_path, path = paths[2], paths[3]
+    meta = json.loads(Path(meta_path).read_text())
+    if meta.get("validity_sha256") != file_sha256(path):
+        raise StoredFileError(
+            f"{path}: does not match the SHA-256 in {meta_path} (changed or damaged after "
+            f"the aggregation, or written by an older version); delete it and run the "
+            "workflow again to rebuild it", path)
+    return pd.read_csv(path)
+
+
+def curve_style(row) -> dict:
+    """Legend label (Sk, Ku; "capped at H" for a capped cell) and line style of a cell's
+    curve (dashed when capped), from a row of an aggregate table."""
+    import math
+
+    label = f"Sk = {row['skew']:g}, Ku = {row['kurt']:g}"
+    cap = row.get("cap_MPa", float("nan"))
+    if cap is not None and not math.isnan(cap):
+        return {"label": f"{label}, capped at {cap:g} MPa", "linestyle": "--"}
+    return {"label": label, "linestyle": "-"}
+
+
+def mark_hardness(ax, validity, cells) -> float | None:
+    """Shade where any of ``cells`` is flagged in ``validity`` (:func:`load_validity`).
+
+    From the lowest flagged nominal pressure [MPa] of those cells to the right
+    edge, with a note naming the hardness and threshold; nothing without a
+    flagged level. Returns that pressure [MPa] or None.
+    """
+    if validity is None or len(validity) == 0:
+        return None
+    part = validity[validity["cell"].isin(list(cells)) & validity["flagged"].astype(bool)]
+    if part.empty:
+        return None
+    first = part.loc[part["nominal_pressure"].idxmin()]
+    x = float(first["nominal_pressure"]) / 1e6
+    ax.axvspan(x, ax.get_xlim()[1], color="tab:red", alpha=0.08, linewidth=0)
+    ax.axvline(x, color="tab:red", linestyle=":", linewidth=1)
+    ax.text(x, 0.02, f" > {100 * first['threshold']:g} % of area or load\n above "
+            f"H = {first['hardness_MPa']:g} MPa", transform=ax.get_xaxis_transform(),
+            color="tab:red", fontsize=7, va="bottom")
+    return x
 
 
 def plot_band(ax, frame, quantity: str, *, y_scale: float = 1.0, label=None, color=None,

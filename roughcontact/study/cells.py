@@ -633,7 +633,7 @@ def influence_cost(params: dict, solver: str, max_memory_gb: float):
 #: Figures drawn from contact results, and the source of their cells ("measured": a
 #: measured surface against its synthetic twin, usually ``from:`` a sweep).
 CONTACT_FIGURES = ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu",
-                   "measured")
+                   "hardness", "measured")
 
 
 def _as_list(value) -> list:
@@ -679,8 +679,12 @@ def accuracy_attrs(config: dict) -> dict:
 
 
 def contact_settings(config: dict) -> dict:
-    """The solver settings of the contact jobs: the config's, or the accuracy preset's."""
-    settings = dict(config["contact"])
+    """The solver settings of the contact jobs: the config's, or the accuracy preset's.
+
+    ``cap`` is left out: it decides which cells are capped, and a capped job
+    carries its own cap (:func:`contact_jobs`).
+    """
+    settings = {k: v for k, v in config["contact"].items() if k != "cap"}
     preset = accuracy_preset(config)
     if preset is not None:
         settings.update(method=preset["method"], tol=preset["tol"],
@@ -706,7 +710,7 @@ def contact_cells(config: dict, name: str) -> list[dict]:
         body = {**body, "mesh": preset["mesh"]}
         fig = {"count": preset["surfaces"], **fig}
     if "surface" in fig:
-        return measured_study_cells(config, fig, body)
+        return with_hardness(config, fig, measured_study_cells(config, fig, body))
     spacing = [s / g for s, g in zip(_pair(surfaces["size_mm"]), _pair(surfaces["grid"]),
                                      strict=True)]
     cells = []
@@ -729,7 +733,45 @@ def contact_cells(config: dict, name: str) -> list[dict]:
                                 geom = geometry_params(body, surfaces, nu=nu, mesh=mesh,
                                                        size_mm=size, grid=grid)
                                 cells.append(_study_cell(config, fig, surf, geom, sigma, E))
-    return cells
+    return with_hardness(config, fig, cells)
+
+
+def hardness_settings(config: dict, fig: dict) -> tuple[list[float], object, float]:
+    """A study's hardness values [MPa], cap setting (False, True, "both") and threshold.
+
+    The study's own ``hardness_MPa`` and ``cap`` replace ``body.hardness_MPa``
+    and ``contact.cap``.
+    """
+    value = fig.get("hardness_MPa", config["body"].get("hardness_MPa"))
+    values = [] if value is None else [float(v) for v in _as_list(value)]
+    cap = fig.get("cap", config["contact"].get("cap", False))
+    return values, cap, float(config["body"].get("hardness_threshold", 0.05))
+
+
+def with_hardness(config: dict, fig: dict, cells: list[dict]) -> list[dict]:
+    """The cells of a study with its hardness (:func:`hardness_settings`).
+
+    Without a hardness the cells are unchanged. With one, every elastic cell
+    carries ``hardness_MPa`` (the values its elastic results are checked
+    against: no extra solve) and ``hardness_threshold``; ``cap: true``
+    replaces each cell by one capped cell per hardness (``cap_MPa``: solved
+    with 0 <= p <= H), ``cap: both`` adds those beside the elastic cells.
+    """
+    values, cap, threshold = hardness_settings(config, fig)
+    if not values:
+        return cells
+    elastic = [{**cell, "hardness_MPa": values, "hardness_threshold": threshold}
+               for cell in cells]
+    capped = [{**cell, "cap_MPa": H} for cell in cells for H in values] if cap else []
+    return capped if cap is True else elastic + capped
+
+
+def cap_value(cell: dict) -> float | None:
+    """The dimensionless cap ``H L / (E sigma)`` of a capped cell (None: elastic)."""
+    if cell.get("cap_MPa") is None:
+        return None
+    return nondim_pressure(cell["cap_MPa"] * MPA, thickness=cell["geometry"]["thickness_mm"] * MM,
+                           E=cell["E_MPa"] * MPA, sigma=cell["sigma_um"] * UM)
 
 
 def _study_cell(config: dict, fig: dict, surf: dict, geom: dict, sigma, E) -> dict:
@@ -783,6 +825,14 @@ def check_studies(config: dict, names) -> list[str]:
                             f"with P_min < P_max (MPa)")
         problems += check_measured(config, name, entry)
         problems += _check_operator(config, name, entry)
+        values, cap, _ = hardness_settings(config, entry)
+        if name == "hardness" and (not values or cap != "both"):
+            problems.append(f"{name}: the hardness figure compares elastic and capped cells; "
+                            f"give it hardness_MPa (a hardness [MPa]) and cap: both")
+        elif cap and not values:
+            problems.append(f"{name}: contact.cap = {cap!r} but no hardness is given; set "
+                            f"body.hardness_MPa (or the study's hardness_MPa) to the hardness "
+                            f"[MPa] to cap the pressure at, or cap: false")
     return problems
 
 
@@ -808,10 +858,16 @@ def contact_key(cell: dict) -> str:
     The end (:func:`sweep_end`, a power of 2 of P L / (E sigma)) is part of the
     key: a file's content depends on its key alone, so a study that needs a
     longer sweep gets its own file, and no result is ever re-solved or
-    rewritten because another study was added, changed or removed.
+    rewritten because another study was added, changed or removed. A capped
+    cell's key ends with its cap ``H L / (E sigma)`` (:func:`cap_value`): with a
+    cap, sigma and E no longer only rescale the solution, so cells that differ
+    in it are solved apart.
     """
     end = cell["pressure_end"] if "pressure_end" in cell else sweep_end(cell)
-    return f"{cell['surface_key']}__{cell['geometry_key']}__end{end:g}"
+    key = f"{cell['surface_key']}__{cell['geometry_key']}__end{end:g}"
+    cap = cell["hardness"] if "hardness" in cell else cap_value(cell)
+    # 7 digits: cells whose caps agree to 1e-6 share a job (to_physical allows 1e-5)
+    return key if cap is None else f"{key}__cap{cap:.7g}"
 
 
 def sweep_end(cell: dict) -> float:
@@ -835,13 +891,16 @@ def contact_jobs(config: dict, names) -> dict[str, dict]:
     jobs = {}
     for name in names:
         for cell in contact_cells(config, name):
-            jobs.setdefault(contact_key(cell), {
+            job = {
                 "surface": cell["surface"], "geometry": cell["geometry"],
                 "surface_key": cell["surface_key"], "geometry_key": cell["geometry_key"],
                 "pressure_end": sweep_end(cell),
                 "accuracy": cell.get("accuracy", "as configured"),
                 "expected_error": cell.get("expected_error", {}),
-            })
+            }
+            if cell.get("cap_MPa") is not None:
+                job["hardness"] = cap_value(cell)
+            jobs.setdefault(contact_key(cell), job)
     return jobs
 
 

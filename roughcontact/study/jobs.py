@@ -415,10 +415,13 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
         )
     body = block_geometry(geometry)
     solver = ContactSettings.from_section(settings)
+    hardness = job.get("hardness")
     log.info("contact %s__%s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
-             "method %s, tol %.1e, precision %s, influence %s", job["surface_key"],
+             "method %s, tol %.1e, precision %s, influence %s, %s", job["surface_key"],
              job["geometry_key"], m, solver.steps, job["pressure_end"], solver.method,
-             solver.tol, solver.precision, geometry_attrs.get("operator", "dense"))
+             solver.tol, solver.precision, geometry_attrs.get("operator", "dense"),
+             "elastic" if hardness is None else f"pressure capped at H L / (E sigma) = "
+             f"{hardness:.6g}")
 
     last = [time.perf_counter()]
 
@@ -439,7 +442,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
     result = cell_module.sweep_cell(unit, heights, body, job["pressure_end"], solver.steps,
                                     method=solver.method, tol=solver.tol,
                                     precision=solver.precision, batch_size=min(m, BATCH_SIZE),
-                                    progress=progress)
+                                    progress=progress, hardness=hardness)
     log.info("approach d/sigma %.3g .. %.3g", result.approach[0, 0], result.approach[0, -1])
     reached = result.nominal_pressure[:, -1].min()
     if reached < job["pressure_end"]:
@@ -455,6 +458,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
         "total_iterations": int(result.iterations.sum()),
         "max_iterations": int(result.iterations.max()),
         "total_matvecs": int(result.matvecs.sum()),
+        "max_plastic_area_fraction": float(result.plastic_area_fraction.max()),
         "wall_seconds": seconds,
     }
     (log.warning if unconverged else log.info)(
@@ -476,29 +480,75 @@ def cell_label(cell: dict) -> str:
     s, g = cell["surface"], cell["geometry"]
     source = (f"measured {Path(s['measured']['file']).name}: " if s.get("method") == "measured"
               else "")
+    cap = f", capped at {cell['cap_MPa']:g} MPa" if cell.get("cap_MPa") is not None else ""
     return (f"{source}Sk {s['skew']:g}, Ku {s['kurt']:g}, b {s['b_mm'][0]:g} mm, "
             f"{g['size_mm'][0]:g} mm, nu {g['nu']:g}, {g['mesh']} mesh, "
-            f"sigma {cell['sigma_um']:g} um")
+            f"sigma {cell['sigma_um']:g} um{cap}")
+
+
+def validity_rows(cell: dict, nd, levels) -> list[pd.DataFrame]:
+    """The validity tables of an elastic cell (one per hardness it names), with ``flagged``.
+
+    ``levels`` [Pa]; each table is :func:`roughcontact.contact.cell.validity_table`
+    with ``hardness_MPa`` and ``flagged`` (the mean share of the real area or
+    of the load above H exceeds the cell's ``hardness_threshold``).
+    """
+    if cell.get("cap_MPa") is not None or not cell.get("hardness_MPa"):
+        return []
+    sigma, E = cell["sigma_um"] * UM, cell["E_MPa"] * MPA
+    threshold = float(cell["hardness_threshold"])
+    out = []
+    for H in cell["hardness_MPa"]:
+        frame = cell_module.validity_table(nd, sigma, E, H * MPA, levels)
+        flagged = ((frame["area_above_mean"] > threshold)
+                   | (frame["load_above_mean"] > threshold))
+        out.append(frame.drop(columns="hardness").assign(
+            hardness_MPa=float(H), threshold=threshold, flagged=flagged))
+    return out
+
+
+def validity_summary(frame: pd.DataFrame) -> dict:
+    """Per cell and hardness: the lowest flagged pressure level [MPa] and the largest shares."""
+    flagged = frame[frame["flagged"]]
+    return {
+        "first_flagged_MPa": (float(flagged["nominal_pressure"].min() / MPA)
+                              if len(flagged) else None),
+        "max_area_above": float(frame["area_above_mean"].max()),
+        "max_load_above": float(frame["load_above_mean"].max()),
+        "max_excess_load": float(frame["excess_load_mean"].max()),
+    }
+
+
+#: Columns of a study's validity table when no cell names a hardness.
+VALIDITY_COLUMNS = ("cell", "label", "contact_key", "hardness_MPa", "threshold",
+                    "nominal_pressure", *(f"{q}_{s}" for q in cell_module.VALIDITY_QUANTITIES
+                                          for s in ("mean", "half_width", "count")), "flagged")
 
 
 def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_path,
-                    moduli_path, meta_path, config=None) -> pd.DataFrame:
+                    moduli_path, meta_path, config=None, validity_path=None) -> pd.DataFrame:
     """Aggregate a figure's or sweep's cells into CSV tables with a JSON sidecar.
 
     ``contact_paths`` maps a contact key to its file. The table has one row per
     cell and pressure level (:func:`roughcontact.contact.aggregate.aggregate_cell`
     columns plus the cell's parameters); the moduli table one row per cell and
     surface (E_u, Eq 36) with the cell summary in the sidecar. Unconverged
-    solves are excluded by the aggregation and counted in both.
+    solves are excluded by the aggregation and counted in both. With
+    ``validity_path``, the validity table (:func:`validity_rows`: the share of
+    each elastic cell's real area and load above each hardness it names, no
+    extra solve; header only without a hardness) is written there, its
+    flagged cells summarised in the sidecar.
     """
-    rows, moduli, summaries = [], [], []
+    rows, moduli, summaries, checks, validity = [], [], [], [], []
     for index, cell in enumerate(cells):
         key = contact_key(cell)
         nd, attrs = read_contact(contact_paths[key])
         sigma, E = cell["sigma_um"] * UM, cell["E_MPa"] * MPA
         p_min, p_max = (p * MPA for p in cell["pressure_MPa"])
+        axis = aggregate.pressure_axis(p_min, p_max, levels)
+        cap = cell.get("cap_MPa")
         physical, frame = cell_module.aggregate_sweep(
-            nd, sigma, E, aggregate.pressure_axis(p_min, p_max, levels))
+            nd, sigma, E, axis, hardness=None if cap is None else cap * MPA)
         s, g = cell["surface"], cell["geometry"]
         labels = {
             "cell": index, "label": cell_label(cell), "contact_key": key,
@@ -507,6 +557,21 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
             "thickness_mm": g["thickness_mm"], "sigma_um": cell["sigma_um"],
             "E_MPa": cell["E_MPa"],
         }
+        if cap is not None or cell.get("hardness_MPa"):
+            labels["cap_MPa"] = float("nan") if cap is None else float(cap)
+        for part in validity_rows(cell, nd, axis):
+            validity.append(part.assign(cell=index, label=labels["label"], contact_key=key))
+            summary = validity_summary(part)
+            checks.append({"cell": index, "label": labels["label"],
+                           "hardness_MPa": float(part["hardness_MPa"].iloc[0]),
+                           "threshold": float(part["threshold"].iloc[0]), **summary})
+            if summary["first_flagged_MPa"] is not None:
+                log.warning("cell %s: above the hardness %g MPa from P = %.3g MPa (share of "
+                            "real area up to %.3g, of load up to %.3g; threshold %g): the "
+                            "elastic model overstates pressures there", labels["label"],
+                            checks[-1]["hardness_MPa"], summary["first_flagged_MPa"],
+                            summary["max_area_above"], summary["max_load_above"],
+                            checks[-1]["threshold"])
         rows.append(frame.assign(**labels))
         per_surface = aggregate.mean_plane_modulus(physical)
         moduli.append(per_surface.assign(seed=attrs["seeds"], **labels))
@@ -529,6 +594,11 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
         table.to_csv(tmp, index=False)
     with atomic_path(moduli_path) as tmp:
         pd.concat(moduli, ignore_index=True).to_csv(tmp, index=False)
+    if validity_path is not None:
+        frame = (pd.concat(validity, ignore_index=True) if validity
+                 else pd.DataFrame(columns=list(VALIDITY_COLUMNS)))
+        with atomic_path(validity_path) as tmp:
+            frame[list(VALIDITY_COLUMNS)].to_csv(tmp, index=False)
     meta = {
         "description": "aggregates of the contact study; one row per cell and nominal "
                        "pressure level; mean, 95 % Student-t half width and surface count "
@@ -543,6 +613,16 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
         "table_sha256": file_sha256(table_path),
         "moduli_sha256": file_sha256(moduli_path),
     }
+    if validity_path is not None:
+        meta["validity"] = {
+            "description": "share of each elastic cell's real contact area and load above "
+                           "the hardness (from the stored solutions, no extra solve); flagged "
+                           "where a mean share exceeds the threshold",
+            "checks": checks,
+            "flagged_cells": sorted({c["cell"] for c in checks
+                                     if c["first_flagged_MPa"] is not None}),
+        }
+        meta["validity_sha256"] = file_sha256(validity_path)
     with atomic_path(meta_path) as tmp:
         Path(tmp).write_text(json.dumps(meta, indent=1, default=float))
     return table
@@ -550,10 +630,13 @@ def aggregate_study(cells: list[dict], contact_paths: dict, levels: int, table_p
 
 __all__ = [
     "BATCH_SIZE",
+    "VALIDITY_COLUMNS",
     "aggregate_study",
     "build_influence",
     "build_measured_cell",
     "build_surface_cell",
     "cell_label",
     "solve_contact_job",
+    "validity_rows",
+    "validity_summary",
 ]

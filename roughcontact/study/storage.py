@@ -25,7 +25,11 @@ Layout of an influence file (``results/influence/<geometry>.h5``)::
 Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
 
     /<field>   (m, k)  every array of NondimSweep in CONTACT_ARRAYS (dimensionless)
-    attributes: job (JSON), the NondimSweep settings (``sweep_*``), solver
+    /profile_ranks (R,) int64, /pressure_profile and /load_profile (m, k, R)
+               float32: each solution's pressure and load profiles
+               (:mod:`roughcontact.contact.validity`), when recorded
+    attributes: job (JSON), the NondimSweep settings (``sweep_*``; ``sweep_hardness``
+                the dimensionless cap H L / (E sigma), -1 for an elastic sweep), solver
                 statistics, the content hashes of the contact arrays and of
                 the surface and influence inputs, provenance
 
@@ -51,7 +55,10 @@ from roughcontact.study.provenance import atomic_path
 #: Arrays of a contact file (the fields of NondimSweep that are stored).
 CONTACT_ARRAYS = ("approach", "nominal_pressure", "mean_plane_deflection",
                   "real_area_fraction", "max_pressure", "stiffness", "iterations", "matvecs",
-                  "residual", "converged", "stiffness_converged")
+                  "residual", "converged", "stiffness_converged", "plastic_area_fraction")
+#: Optional arrays of a contact file: the solutions' profiles, stored in single
+#: precision (7 digits; the shares read from them are interpolated to about 1 %).
+PROFILE_ARRAYS = ("profile_ranks", "pressure_profile", "load_profile")
 #: Scalar settings of NondimSweep, stored as ``sweep_<name>`` attributes.
 SWEEP_SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffness_tol",
                   "precision")
@@ -252,9 +259,19 @@ def read_influence(path: str | os.PathLike):
 # Contact files
 
 
+def contact_datasets(sweep: NondimSweep) -> dict:
+    """The arrays a contact file stores for ``sweep`` (profiles in single precision)."""
+    datasets = {name: np.asarray(getattr(sweep, name)) for name in CONTACT_ARRAYS}
+    if sweep.pressure_profile is not None:
+        datasets["profile_ranks"] = np.asarray(sweep.profile_ranks, dtype=np.int64)
+        for name in PROFILE_ARRAYS[1:]:
+            datasets[name] = np.asarray(getattr(sweep, name), dtype=np.float32)
+    return datasets
+
+
 def contact_sha256(sweep: NondimSweep) -> str:
-    """Content hash of a contact sweep's stored arrays (:data:`CONTACT_ARRAYS`)."""
-    return arrays_sha256({name: np.asarray(getattr(sweep, name)) for name in CONTACT_ARRAYS})
+    """Content hash of a contact sweep's stored arrays (:func:`contact_datasets`)."""
+    return arrays_sha256(contact_datasets(sweep))
 
 
 def write_contact(path: str | os.PathLike, sweep: NondimSweep, attrs: dict) -> dict:
@@ -263,12 +280,13 @@ def write_contact(path: str | os.PathLike, sweep: NondimSweep, attrs: dict) -> d
     The attributes gain ``content_sha256`` (:func:`contact_sha256`) and the
     sweep's settings as ``sweep_<name>``.
     """
-    datasets = {name: np.asarray(getattr(sweep, name)) for name in CONTACT_ARRAYS}
+    datasets = contact_datasets(sweep)
     attrs = {
         "content_sha256": arrays_sha256(datasets),
         **attrs,
         **{f"sweep_{k}": getattr(sweep, k) for k in SWEEP_SETTINGS},
         "sweep_max_iter": -1 if sweep.max_iter is None else sweep.max_iter,
+        "sweep_hardness": -1.0 if sweep.hardness is None else float(sweep.hardness),
     }
     write_h5(path, datasets, attrs)
     return attrs
@@ -277,7 +295,11 @@ def write_contact(path: str | os.PathLike, sweep: NondimSweep, attrs: dict) -> d
 def read_contact(path: str | os.PathLike) -> tuple[NondimSweep, dict]:
     """The :class:`~roughcontact.contact.nondim.NondimSweep` and attributes of a contact file."""
     with open_h5(path) as f:
-        arrays = {name: f[name][...] for name in CONTACT_ARRAYS}
+        missing = [name for name in CONTACT_ARRAYS if name not in f]
+        if missing:
+            raise StoredFileError(f"{path}: no {', '.join(missing)} (written by an older "
+                                  f"version of roughcontact); {REBUILD}", path)
+        arrays = {name: f[name][...] for name in CONTACT_ARRAYS + PROFILE_ARRAYS if name in f}
         attrs = _decoded(f.attrs)
     verify(path, attrs, arrays_sha256(arrays))
     settings = {k: attrs[f"sweep_{k}"] for k in SWEEP_SETTINGS}
@@ -287,5 +309,6 @@ def read_contact(path: str | os.PathLike) -> tuple[NondimSweep, dict]:
     if isinstance(attrs.get("seeds"), str):  # stored as JSON text
         attrs["seeds"] = json.loads(attrs["seeds"])
     max_iter = int(attrs["sweep_max_iter"])
-    return NondimSweep(**arrays, **settings,
-                       max_iter=None if max_iter < 0 else max_iter), attrs
+    hardness = float(attrs.get("sweep_hardness", -1.0))
+    return NondimSweep(**arrays, **settings, max_iter=None if max_iter < 0 else max_iter,
+                       hardness=None if hardness < 0 else hardness), attrs
