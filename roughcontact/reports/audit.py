@@ -19,9 +19,11 @@ import numpy as np
 import pandas as pd
 
 from roughcontact import __version__
+from roughcontact.contact.aggregate import pressure_axis
 from roughcontact.contact.cell import sweep_cell
 from roughcontact.errors import StoredFileError
 from roughcontact.study.cells import block_geometry, contact_key
+from roughcontact.study.jobs import validity_rows, validity_summary
 from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.study.storage import (
     CONTACT_ARRAYS,
@@ -29,6 +31,7 @@ from roughcontact.study.storage import (
     read_influence,
     read_surfaces,
 )
+from roughcontact.units import MPA
 
 log = logging.getLogger(__name__)
 
@@ -49,6 +52,9 @@ EXACT_MOMENT_TOL = 1e-6
 
 #: Realised moments further than this many standard errors from the target are flagged.
 MOMENT_SIGMAS = 3.0
+#: Nominal-pressure levels over a cell's range at which its shares above the hardness
+#: are checked (as many as the default aggregates').
+HARDNESS_LEVELS = 30
 
 
 def _moment_check(stats: dict, target: dict) -> dict:
@@ -103,15 +109,16 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
         row["flags"] = "missing: " + ", ".join(missing)
         return row
     try:
-        return _checked_cell(row, s, g, surf_path, infl_path, cont_path)
+        return _checked_cell(row, cell, surf_path, infl_path, cont_path)
     except StoredFileError as err:  # unreadable, or changed since it was written
         log.warning("%s", err)
         row["flags"] = f"unusable file: {err}"
         return row
 
 
-def _checked_cell(row: dict, s: dict, g: dict, surf_path, infl_path, cont_path) -> dict:
+def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path) -> dict:
     flags = []
+    s, g = cell["surface"], cell["geometry"]
     surfaces = read_surfaces(surf_path)
     row["study_seed"] = int(surfaces["attrs"]["study_seed"])
     row["seeds"] = " ".join(str(int(v)) for v in surfaces["seeds"])
@@ -150,8 +157,33 @@ def _checked_cell(row: dict, s: dict, g: dict, surf_path, infl_path, cont_path) 
         flags.append("solved on another influence matrix")
     if attrs.get("surfaces_content_sha256") != surfaces["content_sha256"]:
         flags.append("solved on other surfaces")
+    flags += _hardness_check(row, cell, stored)
     row["flags"] = "; ".join(flags)
     return row
+
+
+def _hardness_check(row: dict, cell: dict, stored) -> list[str]:
+    """Shares of an elastic cell above its hardness values (no solve); a flag per value
+    where the mean share of the real area or load exceeds the cell's threshold."""
+    if cell.get("cap_MPa") is not None:
+        row["cap_MPa"] = float(cell["cap_MPa"])
+        row["max_plastic_area_fraction"] = float(stored.plastic_area_fraction.max())
+        return []
+    flags = []
+    levels = pressure_axis(*(p * MPA for p in cell["pressure_MPa"]), HARDNESS_LEVELS)
+    for part in validity_rows(cell, stored, levels):
+        H = float(part["hardness_MPa"].iloc[0])
+        summary = validity_summary(part)
+        row[f"area_above_{H:g}MPa"] = summary["max_area_above"]
+        row[f"load_above_{H:g}MPa"] = summary["max_load_above"]
+        if summary["first_flagged_MPa"] is not None:
+            flags.append(
+                f"elastic beyond the hardness {H:g} MPa from P = "
+                f"{summary['first_flagged_MPa']:.3g} MPa (up to "
+                f"{100 * summary['max_area_above']:.1f} % of the real area and "
+                f"{100 * summary['max_load_above']:.1f} % of the load above it; threshold "
+                f"{100 * float(part['threshold'].iloc[0]):g} %)")
+    return flags
 
 
 def audit_table(studies: dict[str, list[dict]], root: str | Path = ".") -> pd.DataFrame:
@@ -237,6 +269,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
             unit, heights, block_geometry(job["geometry"]), job["pressure_end"],
             stored.approach.shape[1], method=stored.method, tol=stored.tol,
             precision=stored.precision, max_iter=stored.max_iter, rows=slice(first, last),
+            hardness=stored.hardness,
         )
         seconds = time.perf_counter() - start
         commit = git_commit()

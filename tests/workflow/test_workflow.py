@@ -250,9 +250,38 @@ def test_two_nominal_areas_agree_within_their_bands_for_nu0(quick_run):
     assert np.all(gap <= band)
 
 
+def test_hardness_study_caps_its_capped_cells_and_checks_its_elastic_ones(quick_run):
+    workdir, _ = quick_run
+    table, _, meta = aggregates(workdir, "hardness")
+    validity = pd.read_csv(workdir / "results" / "aggregates" / "hardness.validity.csv")
+    H = quick_config()["figures"]["hardness"]["hardness_MPa"]
+    capped = table[table["cap_MPa"].notna()]
+    elastic = table[table["cap_MPa"].isna()]
+    assert len(capped) == len(elastic) > 0
+    assert (capped["max_pressure_mean"] <= H * 1e6 * (1 + 1e-9)).all()
+    assert (elastic["max_pressure_mean"] > H * 1e6).any()  # the cap does matter here
+    assert (capped["plastic_area_fraction_mean"] > 0).any()
+    assert (elastic["plastic_area_fraction_mean"] == 0).all()
+    # the elastic cells' shares above H, one row per elastic cell and level
+    assert set(validity["cell"]) == set(elastic["cell"])
+    assert len(validity) == len(elastic)
+    assert validity["flagged"].any()
+    assert validity[["area_above_mean", "load_above_mean"]].le(1.0).all().all()
+    # load is concentrated on the high-pressure elements: its share is the larger
+    assert (validity["load_above_mean"] >= validity["area_above_mean"] - 1e-9).all()
+    flagged = meta["validity"]["flagged_cells"]
+    assert flagged and set(flagged) <= set(elastic["cell"])
+    audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv")
+    assert audit["flags"].fillna("").str.contains("elastic beyond the hardness").any()
+    # the other studies name no hardness: header-only validity tables, nothing flagged
+    plain = pd.read_csv(workdir / "results" / "aggregates" / "fig07.validity.csv")
+    assert plain.empty and "area_above_mean" in plain.columns
+
+
 def test_study_figures_are_written(quick_run):
     workdir, start = quick_run
-    for fig in ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu"):
+    for fig in ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu",
+                "hardness"):
         path = workdir / "results" / "figures" / f"{fig}.png"
         assert path.stat().st_size > 1000 and path.stat().st_mtime >= start - 1, fig
 

@@ -1,0 +1,88 @@
+"""A hardness in the config: checked cells, capped cells and their contact keys."""
+
+import copy
+
+import pytest
+
+from roughcontact.study import cells as study
+from roughcontact.study.config import load_config, validated
+
+STUDY = {"sigma_um": [10.0, 20.0], "b_mm": 0.5, "pressure_MPa": [0.1, 2.0]}
+BASE = {"study_seed": 0,
+        "surfaces": {"grid": [8, 8], "size_mm": [1.2, 1.2], "count": 2},
+        "body": {"thickness_mm": 2.0, "E_MPa": 500.0},
+        "figures": {"fig07": STUDY}}
+
+
+def config(**changes):
+    raw = copy.deepcopy(BASE)
+    for section, values in changes.items():
+        raw.setdefault(section, {}).update(values)
+    return validated(raw)
+
+
+def test_without_a_hardness_cells_keys_and_settings_are_unchanged():
+    default = load_config("config/config.yaml")
+    assert default["body"]["hardness_MPa"] is None and default["contact"]["cap"] is False
+    for name in ("fig07", "fig11", "fig14", "table_Eu"):
+        for cell in study.contact_cells(default, name):
+            assert "hardness_MPa" not in cell and "cap_MPa" not in cell
+            assert "__cap" not in study.contact_key(cell)
+    assert "cap" not in study.contact_settings(default)  # not a solver setting: no rerun
+
+
+def test_a_hardness_checks_every_elastic_cell_and_solves_nothing_more():
+    plain = study.contact_cells(config(), "fig07")
+    checked = study.contact_cells(config(body={"hardness_MPa": [50.0, 200.0]}), "fig07")
+    assert [study.contact_key(c) for c in checked] == [study.contact_key(c) for c in plain]
+    assert all(c["hardness_MPa"] == [50.0, 200.0] and c["hardness_threshold"] == 0.05
+               for c in checked)
+    assert study.contact_jobs(config(body={"hardness_MPa": 50.0}), ["fig07"]).keys() == \
+        study.contact_jobs(config(), ["fig07"]).keys()
+
+
+def test_cap_both_adds_one_capped_cell_per_hardness_keyed_by_its_cap():
+    cfg = config(body={"hardness_MPa": [50.0, 200.0]}, contact={"cap": "both"})
+    cells = study.contact_cells(cfg, "fig07")
+    elastic = [c for c in cells if "cap_MPa" not in c]
+    capped = [c for c in cells if "cap_MPa" in c]
+    assert len(elastic) == 2 and len(capped) == 4
+    jobs = study.contact_jobs(cfg, ["fig07"])
+    assert len(jobs) == 6
+    for cell in capped:
+        key = study.contact_key(cell)
+        # H L / (E sigma), computed here from the cell's values
+        cap = cell["cap_MPa"] * 2.0e-3 / (500.0 * cell["sigma_um"] * 1e-6)
+        assert key.endswith(f"__cap{cap:.7g}")
+        assert jobs[key]["hardness"] == pytest.approx(cap, rel=1e-12)
+    only_capped = study.contact_cells(config(body={"hardness_MPa": 50.0},
+                                             contact={"cap": True}), "fig07")
+    assert [c["cap_MPa"] for c in only_capped] == [50.0, 50.0]
+
+
+def test_capped_cells_share_a_job_only_when_their_cap_is_the_same():
+    """sigma and E rescale a capped solution only where H L / (E sigma) is unchanged."""
+    study_cells = {"sigma_um": [10.0], "E_MPa": [500.0], "b_mm": 0.5,
+                   "pressure_MPa": [0.1, 2.0], "hardness_MPa": 50.0, "cap": True}
+    twin = {**study_cells, "sigma_um": [20.0], "E_MPa": [250.0]}   # same E sigma
+    other = {**study_cells, "sigma_um": [20.0]}                     # E sigma doubled
+    cfg = validated({**BASE, "figures": {}, "sweeps": {"a": study_cells, "b": twin,
+                                                       "c": other}})
+    key = {name: study.contact_key(study.contact_cells(cfg, name)[0]) for name in "abc"}
+    assert key["a"] == key["b"] != key["c"]
+
+
+def test_a_cap_without_a_hardness_and_a_hardness_figure_without_both_are_refused():
+    with pytest.raises(study.ConfigProblems, match="body.hardness_MPa"):
+        study.study_plan(config(contact={"cap": True}))
+    raw = copy.deepcopy(BASE)
+    raw["figures"]["hardness"] = {**STUDY, "hardness_MPa": 100.0}
+    with pytest.raises(study.ConfigProblems, match="cap: both"):
+        study.study_plan(validated(raw))
+
+
+def test_bad_hardness_values_are_named_by_the_schema():
+    with pytest.raises(ValueError, match="hardness_MPa"):
+        config(body={"hardness_MPa": -5.0})
+    with pytest.raises(ValueError, match="cap"):
+        config(contact={"cap": "yes"})
