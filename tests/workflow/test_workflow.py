@@ -369,7 +369,8 @@ def test_audit_lists_every_cell_and_flags_a_corrupted_result(quick_run, tmp_path
     audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv", dtype={"flags": str})
     config = quick_config()
     studies = [n for n in config["figures"] if n in ("fig07", "fig09", "fig10", "fig11",
-                                                       "fig12", "fig13", "fig14", "table_Eu")]
+                                                       "fig12", "fig13", "fig14", "table_Eu",
+                                                       "hardness")]
     sources = sorted({source_name(config, n) for n in studies})  # fig12 is fig07's cells
     assert len(audit) == sum(len(contact_cells(config, n)) for n in sources)
     # a study "from:" another is not listed again (its cells are the same)
