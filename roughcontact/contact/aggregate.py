@@ -53,6 +53,7 @@ QUANTITIES = {
     "real_area_fraction": ("1", "real contact area / nominal area"),
     "max_pressure": ("Pa", "largest element pressure"),
     "plastic_area_fraction": ("1", "elements at the hardness cap / all elements (0 if elastic)"),
+    "plastic_load_fraction": ("1", "load on elements at the cap / load (0 if elastic)"),
 }
 
 INTERPOLATION = ("piecewise linear in log(P) and log(q) (linear in q where q <= 0) over "
@@ -216,7 +217,9 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
         quantity ``q`` of ``QUANTITIES`` (``normalized_stiffness`` k_P [Pa],
         ``approach`` d [m], ``mean_plane_deflection`` d_b [m],
         ``asperity_deflection`` d_a [m], ``real_area_fraction`` [-],
-        ``max_pressure`` [Pa]): ``q_mean``, ``q_half_width`` (same unit) and
+        ``max_pressure`` [Pa], ``plastic_area_fraction`` and
+        ``plastic_load_fraction`` [-], zero without a cap): ``q_mean``,
+        ``q_half_width`` (same unit) and
         ``q_count`` (surfaces used; fewer than ``surfaces`` where the level
         lies outside some surfaces' swept range, 0 with NaN values where it
         lies outside all); ``coverage`` (:func:`coverage`: why a count is

@@ -269,6 +269,16 @@ class PhysicalSweep:
         """``d_a = d - d_b`` [m] (Eq 45)."""
         return self.approach - self.mean_plane_deflection
 
+    @property
+    def plastic_load_fraction(self) -> np.ndarray:
+        """Share of the load carried by elements at the cap, ``H A_p / (P A_n)`` [-]
+        (zeros for an elastic sweep)."""
+        if self.hardness is None:
+            return np.zeros(np.shape(self.approach))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = self.plastic_area_fraction * self.hardness / self.nominal_pressure
+        return np.where(self.plastic_area_fraction > 0.0, share, 0.0)
+
     @classmethod
     def from_contact_sweep(cls, result: solver.SweepResult, *, thickness: float,
                            nominal_area: float, sigma: float = float("nan"),
@@ -317,7 +327,7 @@ class PhysicalSweep:
         ``max_pressure`` [Pa], ``contact_stiffness`` [N/m],
         ``normalized_stiffness`` [Pa], ``iterations``, ``matvecs``,
         ``residual`` [-], ``converged``, ``stiffness_converged``,
-        ``plastic_area_fraction`` [-]. The units
+        ``plastic_area_fraction``, ``plastic_load_fraction`` [-]. The units
         are also in ``frame.attrs["units"]``, the scales in ``frame.attrs``.
         """
         m, k = self.approach.shape
@@ -349,6 +359,7 @@ _PHYSICAL_UNITS = {
     "converged": "bool",
     "stiffness_converged": "bool",
     "plastic_area_fraction": "1",
+    "plastic_load_fraction": "1",
 }
 
 

@@ -189,3 +189,23 @@ def test_a_capped_sweep_refuses_a_rescaling_that_changes_its_cap(heights, unit_i
                                 element_area=AREA, approaches=[0.2, 0.5])
     with pytest.raises(ValueError, match="the sweep is elastic"):
         nondim.to_physical(elastic, sigma, E, hardness=H)
+
+
+def test_plastic_load_is_the_saturated_elements_times_H_over_the_load(heights, unit_influence):
+    sigma, E, H = 20e-6, 200e6, 30e6
+    cap = cell_module.nondim_pressure(H, thickness=LENGTH, E=E, sigma=sigma)
+    gaps = nondim.initial_separation(heights)
+    nd = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
+                           approaches=[0.3, 1.0], hardness=cap, method="pivot")
+    physical = nondim.to_physical(nd, sigma, E, hardness=H)
+    # counted on the fields of the same capped problem, solved in SI units
+    result = sweep(unit_influence / E, gaps * sigma, np.array([0.3, 1.0]) * sigma,
+                   method="pivot", element_area=AREA, hardness=H, return_fields=True, tol=1e-10)
+    p = result.pressure.reshape(*result.pressure.shape[:2], -1)
+    saturated = np.where(p >= H * (1 - 1e-12), p, 0.0).sum(axis=-1) / p.sum(axis=-1)
+    np.testing.assert_allclose(physical.plastic_load_fraction, saturated, rtol=1e-9, atol=1e-12)
+    assert (physical.plastic_load_fraction > 0).any()
+    elastic = nondim.to_physical(nondim.solve_cell(unit_influence, heights, thickness=LENGTH,
+                                                   element_area=AREA, approaches=[0.3]),
+                                 sigma, E)
+    assert (elastic.plastic_load_fraction == 0).all()
