@@ -39,7 +39,7 @@ test: lint
 # profiles/slurm against a real Slurm: a throw-away one-node cluster (root; installs
 # slurm-wlm and munge with apt-get if missing) runs Fig 14 of config/quick.yaml.
 test-cluster: $(STAMP)
-	$(BIN)/pytest -q -m slurm --durations=0 tests/workflow/test_slurm_cluster.py
+	$(BIN)/pytest -q -m slurm -rP --durations=0 tests/workflow/test_slurm_cluster.py
 
 # Benchmarks (minutes; results in results/benchmarks/). QUICK=1 for a short run.
 bench: $(STAMP)

@@ -61,9 +61,11 @@ def install_slurm():
     if shutil.which("apt-get") is None:
         pytest.fail(f"{', '.join(missing)} not found, and no apt-get to install them")
     env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    start = time.monotonic()
     for cmd in (["apt-get", "update", "-qq"], ["apt-get", "install", "-y", "-qq", *PACKAGES]):
         proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=900)
         assert proc.returncode == 0, (proc.stdout + proc.stderr)[-3000:]
+    print(f"Slurm: {' and '.join(PACKAGES)} installed in {time.monotonic() - start:.1f} s")
 
 
 def free_ports(count):
@@ -149,6 +151,7 @@ def slurm(tmp_path_factory, request):
     if os.geteuid() != 0:
         pytest.fail("the Slurm test starts slurmd, which needs root (sudo make test-cluster)")
     install_slurm()
+    started = time.monotonic()
     root = tmp_path_factory.mktemp("slurm")
     # munged wants its socket in a directory that every user can enter
     socket_dir = Path(tempfile.mkdtemp(prefix="roughcontact-munge-"))
@@ -210,6 +213,7 @@ def slurm(tmp_path_factory, request):
         return proc.stdout.strip() == "idle"
 
     wait_for(node_idle, 90, f"node {node} idle", logs)
+    print(f"Slurm: one-node cluster ready in {time.monotonic() - started:.1f} s")
     return Cluster(root=root, node=node)
 
 
