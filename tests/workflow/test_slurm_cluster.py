@@ -8,12 +8,12 @@ foreground with their key, configuration, state and logs in a temporary
 directory and on free ports; the fixture stops them by the processes it started,
 after cancelling any job left, also when a test fails.
 
-The plugin's job step removes every ``SLURM_*`` variable, ``SLURM_CONF``
-included, before it calls ``srun`` inside the job (snakemake-executor-plugin-
-slurm-jobstep 0.6.1). On a cluster srun finds the configuration at its default
-path (/etc/slurm/slurm.conf) or through slurmd (configless); here a two-line
-``srun`` first on PATH sets SLURM_CONF again, so that nothing is written outside
-the test's directories.
+The plugin's job step removes ``SLURM_CONF``, with the ``SLURM_*`` variables
+other than the job's identity, before it calls ``srun`` inside the job
+(snakemake-executor-plugin-slurm-jobstep 0.6.1). On a cluster srun finds the
+configuration at its default path (/etc/slurm/slurm.conf) or through slurmd
+(configless); here a two-line ``srun`` first on PATH sets SLURM_CONF again, so
+that nothing is written outside the test's directories.
 """
 
 import os
