@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 export MKL_NUM_THREADS ?= 1
 
-.PHONY: run test lint bench clean-results
+.PHONY: run test test-cluster lint bench clean-results
 
 $(BIN)/python:
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || \
@@ -35,6 +35,11 @@ lint: $(STAMP)
 
 test: lint
 	$(BIN)/pytest -q
+
+# profiles/slurm against a real Slurm: a throw-away one-node cluster (root; installs
+# slurm-wlm and munge with apt-get if missing) runs Fig 14 of config/quick.yaml.
+test-cluster: $(STAMP)
+	$(BIN)/pytest -q -m slurm -rP --durations=0 tests/workflow/test_slurm_cluster.py
 
 # Benchmarks (minutes; results in results/benchmarks/). QUICK=1 for a short run.
 bench: $(STAMP)
