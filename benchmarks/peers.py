@@ -167,6 +167,25 @@ def periodic_runners(grid: int, tol: float, peers) -> tuple[dict, dict]:
 
 
 
+def alternate(runners: dict, repeats: int) -> tuple[dict, dict]:
+    """Run every runner ``repeats`` times, alternating, the order rotated each round.
+
+    Round r starts with the r-th runner (mod their number), so that none
+    always follows the same other. Returns ``(walls, outputs)``: each
+    runner's wall times [s], and what its last run returned after the wall
+    time.
+    """
+    names = list(runners)
+    walls = {name: [] for name in names}
+    outputs = {}
+    for round_ in range(repeats):
+        shift = round_ % len(names)
+        for name in names[shift:] + names[:shift]:
+            wall, *outputs[name] = runners[name]()
+            walls[name].append(wall)
+    return walls, outputs
+
+
 def periodic_case(grid: int, repeats: int, peers, tol: float = 1e-10) -> list[dict]:
     """Minimum wall time of ``repeats`` alternating cold solves per library.
 
@@ -176,13 +195,7 @@ def periodic_case(grid: int, repeats: int, peers, tol: float = 1e-10) -> list[di
     """
     runners, context = periodic_runners(grid, tol, peers)
     names = list(runners)
-    walls = {name: [] for name in names}
-    outputs = {}
-    for round_ in range(repeats):
-        shift = round_ % len(names)
-        for name in names[shift:] + names[:shift]:
-            wall, *outputs[name] = runners[name]()
-            walls[name].append(wall)
+    walls, outputs = alternate(runners, repeats)
     p_ours = context["pressure"]
     best_ours = min(walls["roughcontact (spectral)"])
     rows = []
