@@ -38,8 +38,9 @@ capped solution's mean pressure (from one untimed solve of ours):
   gradient with the pressure cap, Almqvist et al. 2007), load controlled
   (``solve(mean pressure)``), on the ``basic_2d`` model, whose kernel is the
   shared one. Its iteration works in absolute units: in SI (E* ~ 5e8 Pa,
-  heights ~ 1e-5 m) it stalls at its first error, hangs, or stops at a
-  uniform pressure (seen on 64^2 and 128^2 grids). It is therefore run on
+  heights ~ 1e-5 m) its error stays at its first value (about 3) and it
+  returns a pressure spread over the whole grid, or does not return within
+  minutes (seen on 32^2 to 128^2 grids). It is therefore run on
   the same discrete problem in dimensionless units: E* = 1, period 1,
   heights / L, pressures / E* (the kernel ``2 / (E* |q|)`` is invariant
   under that scaling), and its pressures are scaled back.
@@ -53,10 +54,11 @@ Compared with ours: the load (mean pressure), the contact and saturated area
 fractions and the points where they differ, ``max |p - p_ours| / H``, and our
 capped KKT residual of each pressure. Measured (tol 1e-10, 32^2 to 512^2):
 both peers and BVLS agree with ours to within 6e-10 H pointwise, with the
-same contact and saturated points and loads equal to 1e-11; Tamaas' Kato
-iteration is slow (about 30 s on 256^2 and 4 min on 512^2, against 0.1 s and
-2 s for ours), so the default grids are 32 and 256 (``--capped-grids`` for
-others).
+same contact and saturated points, and loads equal to 1e-13 (BVLS, by
+displacement control: 4e-12). Tamaas' Kato iteration is slow (about 30 s on
+256^2 and 4.5 min on 512^2, against 0.15 s and 1.2 s for ours and 0.55 s and
+6 s for ContactMechanics), so the default grids are 32 and 256
+(``--capped-grids`` for others).
 
 Peers are optional (the ``bench`` extra, ``pip install -e '.[bench]'``): a
 library that does not import is skipped and named in the report, and the
@@ -78,11 +80,11 @@ isolates the effect of the base condition (made without ContactMechanics too).
 
 Usage::
 
-    .venv/bin/python benchmarks/peers.py                      # ~13 min
+    .venv/bin/python benchmarks/peers.py                      # ~12 min
     .venv/bin/python benchmarks/peers.py --quick              # 128^2 (capped: 32^2, 128^2),
                                                               #   "refined" only
     .venv/bin/python benchmarks/peers.py --parts periodic --repeats 5
-    .venv/bin/python benchmarks/peers.py --parts capped --capped-grids 512  # ~15 min
+    .venv/bin/python benchmarks/peers.py --parts capped --capped-grids 512  # ~16 min
 
 Writes ``results/benchmarks/peers.csv`` and ``peers.md``. FE matrices are
 cached in /tmp (``roughcontact_peers_*.npy``). BLAS and OpenMP run one thread.
