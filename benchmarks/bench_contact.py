@@ -294,12 +294,19 @@ def case_periodic(args, method: str, grid: int, tol: float, spectral: bool) -> d
     return record
 
 
-def score(operator, gap0, pressure) -> float:
-    """Our KKT residual of a load-controlled pressure, ``d`` fitted on the contact."""
+def score(operator, gap0, pressure, hardness=None) -> float:
+    """Our KKT residual of a load-controlled pressure, ``d`` fitted on the contact.
+
+    With a cap ``hardness`` [Pa] the approach is fitted on the elastic
+    contact ``0 < p < H`` only (the saturated elements have ``g <= 0``, not
+    ``g = 0``) and the residual is the capped one.
+    """
     gap = operator.matvec(pressure.ravel()).reshape(gap0.shape) + gap0
     contact = pressure > 0
+    if hardness is not None:
+        contact &= pressure < hardness
     approach = float(np.median(gap[contact])) if contact.any() else 0.0
-    return kkt_residual(operator, gap0, approach, pressure)
+    return kkt_residual(operator, gap0, approach, pressure, hardness=hardness)
 
 
 def case_external(args, library: str, tol: float) -> dict:

@@ -20,10 +20,51 @@ minimum, the ratio of minima to ours (``time_ratio``) and the spread
 from 2.6 to 6.7 on a loaded machine. The pressures of the last round are
 compared with ours (contact set, peak and mean pressure, our KKT residual).
 
+Part 1b, periodic half-space with a hardness cap (elastic-perfectly-plastic
+elements, 0 <= p <= H): the surface, kernel and approach of part 1, with H the
+0.95 quantile of our elastic contact pressures at that approach, so that
+about 5 % of the capped contact (1 % of the area) saturates. Ours: cg with
+``hardness=H`` by displacement control; the peers by load control at our
+capped solution's mean pressure (from one untimed solve of ours):
+
+- ContactMechanics: ``constrained_conjugate_gradients(hardness=...)``
+  (Polonsky & Keer 1999 with the plastic extension of Almqvist et al. 2007 /
+  Weber et al. 2018); it works in forces per grid point, so the cap is
+  ``H dA``, the conversion ``PlasticNonSmoothContactSystem`` makes for a
+  ``PlasticTopography`` (which then also accumulates the plastic
+  displacement, not needed here). Load or displacement controlled; used
+  with ``external_force``.
+- Tamaas: ``KatoSaturated(model, heights, tol, pmax)`` (Kato's projected
+  gradient with the pressure cap, Almqvist et al. 2007), load controlled
+  (``solve(mean pressure)``), on the ``basic_2d`` model, whose kernel is the
+  shared one. Its iteration works in absolute units: in SI (E* ~ 5e8 Pa,
+  heights ~ 1e-5 m) its error stays at its first value (about 3) and it
+  returns a pressure spread over the whole grid, or does not return within
+  minutes (seen on 32^2 to 128^2 grids). It is therefore run on
+  the same discrete problem in dimensionless units: E* = 1, period 1,
+  heights / L, pressures / E* (the kernel ``2 / (E* |q|)`` is invariant
+  under that scaling), and its pressures are scaled back.
+- On grids up to 32 x 32 a dense referee: scipy's bounded least squares
+  (``lsq_linear``, BVLS) on the Cholesky factor of the matrix of the same
+  kernel, as in tests/contact/test_hardness.py. The zero-mean kernel has a
+  zero eigenvalue; ``C + c 1 1^T / n`` at the approach ``d + c mean(p)`` has
+  the same solution and is positive definite.
+
+Compared with ours: the load (mean pressure), the contact and saturated area
+fractions and the points where they differ, ``max |p - p_ours| / H``, and our
+capped KKT residual of each pressure. Measured (tol 1e-10, 32^2 to 512^2):
+both peers and BVLS agree with ours to within 6e-10 H pointwise, with the
+same contact and saturated points, and loads equal to 1e-13 (BVLS, by
+displacement control: 4e-12). Tamaas' Kato iteration is slow (about 30 s on
+256^2 and 4.5 min on 512^2, against 0.15 s and 1.2 s for ours and 0.55 s and
+6 s for ContactMechanics), so the default grids are 32 and 256
+(``--capped-grids`` for others).
+
 Peers are optional (the ``bench`` extra, ``pip install -e '.[bench]'``): a
 library that does not import is skipped and named in the report, and the
-script then times ours alone. SlipPY is not compared: its latest release
-(0.5.2) installs on Python < 3.11 only.
+script then times ours alone; a peer without its capped solver (older
+versions) is skipped in part 1b, with the reason in the report. SlipPY is
+not compared: its latest release (0.5.2) installs on Python < 3.11 only.
 
 Part 2, finite thickness: the influence matrix of roughcontact's finite-element
 block (``unit_modulus_influence``; free lateral sides, bottom bonded to a rigid
@@ -39,9 +80,11 @@ isolates the effect of the base condition (made without ContactMechanics too).
 
 Usage::
 
-    .venv/bin/python benchmarks/peers.py                      # ~10 min
-    .venv/bin/python benchmarks/peers.py --quick              # 128^2 only, "refined" only
+    .venv/bin/python benchmarks/peers.py                      # ~12 min
+    .venv/bin/python benchmarks/peers.py --quick              # 128^2 (capped: 32^2, 128^2),
+                                                              #   "refined" only
     .venv/bin/python benchmarks/peers.py --parts periodic --repeats 5
+    .venv/bin/python benchmarks/peers.py --parts capped --capped-grids 512  # ~16 min
 
 Writes ``results/benchmarks/peers.csv`` and ``peers.md``. FE matrices are
 cached in /tmp (``roughcontact_peers_*.npy``). BLAS and OpenMP run one thread.
@@ -56,12 +99,15 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import importlib  # noqa: E402
+import inspect  # noqa: E402
 import platform  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+import scipy.linalg  # noqa: E402
+import scipy.optimize  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -167,6 +213,25 @@ def periodic_runners(grid: int, tol: float, peers) -> tuple[dict, dict]:
 
 
 
+def alternate(runners: dict, repeats: int) -> tuple[dict, dict]:
+    """Run every runner ``repeats`` times, alternating, the order rotated each round.
+
+    Round r starts with the r-th runner (mod their number), so that none
+    always follows the same other. Returns ``(walls, outputs)``: each
+    runner's wall times [s], and what its last run returned after the wall
+    time.
+    """
+    names = list(runners)
+    walls = {name: [] for name in names}
+    outputs = {}
+    for round_ in range(repeats):
+        shift = round_ % len(names)
+        for name in names[shift:] + names[:shift]:
+            wall, *outputs[name] = runners[name]()
+            walls[name].append(wall)
+    return walls, outputs
+
+
 def periodic_case(grid: int, repeats: int, peers, tol: float = 1e-10) -> list[dict]:
     """Minimum wall time of ``repeats`` alternating cold solves per library.
 
@@ -176,13 +241,7 @@ def periodic_case(grid: int, repeats: int, peers, tol: float = 1e-10) -> list[di
     """
     runners, context = periodic_runners(grid, tol, peers)
     names = list(runners)
-    walls = {name: [] for name in names}
-    outputs = {}
-    for round_ in range(repeats):
-        shift = round_ % len(names)
-        for name in names[shift:] + names[:shift]:
-            wall, *outputs[name] = runners[name]()
-            walls[name].append(wall)
+    walls, outputs = alternate(runners, repeats)
     p_ours = context["pressure"]
     best_ours = min(walls["roughcontact (spectral)"])
     rows = []
@@ -206,6 +265,175 @@ def periodic_case(grid: int, repeats: int, peers, tol: float = 1e-10) -> list[di
         else:
             row.update(kkt_residual=kkt_residual(*context["love"], pressure))
         rows.append(row)
+    return rows
+
+
+# ----------------------------------------------------------------- part 1b
+
+#: Quantile of the elastic contact pressures taken as the hardness: about 5 %
+#: of the contact saturates once the cap is on (about 1 % of the area).
+HARDNESS_QUANTILE = 0.95
+#: A pressure within this fraction of H counts as saturated (the peers return
+#: H up to rounding: ContactMechanics in force units, Tamaas scaled).
+SATURATED_RTOL = 1e-9
+#: Largest grid on which the dense bounded least-squares referee runs.
+BVLS_MAX_GRID = 32
+BVLS = "BVLS (scipy lsq_linear, dense)"
+
+
+def capped_support(peers) -> tuple[list[str], dict]:
+    """The importable peers that have a capped solver, and why the others are left out."""
+    supported, missing = [], {}
+    for module in peers:
+        if module == "tamaas":
+            import tamaas as tm
+
+            if hasattr(tm, "KatoSaturated"):
+                supported.append(module)
+            else:
+                missing["Tamaas (capped)"] = f"tamaas {tm.__version__} has no KatoSaturated"
+        elif module == "ContactMechanics":
+            import ContactMechanics
+            from ContactMechanics.Optimization import constrained_conjugate_gradients
+
+            parameters = inspect.signature(constrained_conjugate_gradients).parameters
+            if "hardness" in parameters:
+                supported.append(module)
+            else:
+                missing["ContactMechanics (capped)"] = (
+                    f"ContactMechanics {ContactMechanics.__version__}: "
+                    "constrained_conjugate_gradients takes no hardness")
+    return supported, missing
+
+
+def capped_runners(grid: int, tol: float, peers) -> tuple[dict, dict]:
+    """Cold-solve runners of the capped periodic problem (0 <= p <= H) on one grid.
+
+    The surface, kernel and approach of :func:`periodic_runners`; the cap
+    ``H`` is the ``HARDNESS_QUANTILE`` of our elastic contact pressures at
+    that approach. Ours solves by displacement control with ``hardness=H``;
+    the peers by load control at our capped solution's mean pressure. Runners
+    return ``(wall [s], pressure (grid, grid) [Pa], iterations, note)``;
+    ``context`` holds the problem, ``H`` and our untimed reference.
+    """
+    operator, gap0, approach, size = periodic_problem(grid, spectral=True)
+    elastic = np.asarray(solve(operator, gap0, approach, tol=tol).pressure).ravel()
+    hardness = float(np.quantile(elastic[elastic > 0], HARDNESS_QUANTILE))
+    reference = solve(operator, gap0, approach, tol=tol, hardness=hardness)  # untimed
+    mean_pressure = reference.nominal_pressure
+    heights = np.ascontiguousarray(-gap0)
+    modulus = E / (1 - NU**2)
+
+    def ours():
+        start = time.perf_counter()
+        result = solve(operator, gap0, approach, tol=tol, hardness=hardness)
+        wall = time.perf_counter() - start
+        return (wall, np.asarray(result.pressure).reshape(grid, grid), result.iterations,
+                "" if result.converged else "not converged")
+
+    def tamaas():
+        # KatoSaturated steps in absolute units: in SI (E* ~ 5e8 Pa, heights
+        # ~ 1e-5 m) it stalls or stops at a uniform pressure. Scaled by E*
+        # (pressures) and the period (lengths) the discrete problem is the
+        # same (u' = 2 p' / |q'| with u' = u / L, q' = q L, p' = p / E*).
+        import tamaas as tm
+
+        model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [1.0, 1.0], [grid, grid])
+        model.E, model.nu = 1.0, 0.0
+        solver = tm.KatoSaturated(model, heights / size, tol, hardness / modulus)
+        solver.max_iter = 100000
+        solver.dump_freq = 100000
+        start = time.perf_counter()
+        solver.solve(mean_pressure / modulus)
+        wall = time.perf_counter() - start
+        return (wall, np.array(model.traction).reshape(grid, grid) * modulus, float("nan"),
+                "dimensionless units (E* = 1, L = 1)")
+
+    def contactmechanics():
+        from ContactMechanics import PeriodicFFTElasticHalfSpace
+        from ContactMechanics.Optimization import constrained_conjugate_gradients
+
+        substrate = PeriodicFFTElasticHalfSpace((grid, grid), modulus,
+                                                physical_sizes=(size, size))
+        scale = float(np.abs(approach - gap0).max())
+        force = mean_pressure * size * size
+        start = time.perf_counter()
+        # the solver works in forces per grid point, so the cap is H dA (as
+        # PlasticNonSmoothContactSystem converts it)
+        solution = constrained_conjugate_gradients(
+            substrate, heights, hardness=hardness * operator.element_area,
+            external_force=force, pentol=tol * scale, forcetol=tol * force / grid**2,
+            maxiter=100000)
+        wall = time.perf_counter() - start
+        return (wall, np.asarray(solution.jac) / operator.element_area, float(solution.nit),
+                "" if solution.success else str(solution.message))
+
+    def bvls():
+        # C has a zero eigenvalue (zero-mean kernel); C + c 11^T / n at the
+        # approach d + c mean(p_ours) has the same solution and is positive
+        # definite. min |L^T p - L^-1 b| over 0 <= p <= H, C = L L^T, b = d - f.
+        n = grid * grid
+        matrix = operator.matvec(np.eye(n))
+        compliance = float(matrix[0, 0])
+        start = time.perf_counter()
+        factor = np.linalg.cholesky(0.5 * (matrix + matrix.T) + compliance / n)
+        target = scipy.linalg.solve_triangular(
+            factor, approach + compliance * mean_pressure - gap0.ravel(), lower=True)
+        solution = scipy.optimize.lsq_linear(factor.T, target, bounds=(0.0, hardness),
+                                             method="bvls", tol=1e-15, max_iter=50 * n)
+        wall = time.perf_counter() - start
+        return (wall, solution.x.reshape(grid, grid), float(solution.nit),
+                "dense referee, displacement control" if solution.status > 0
+                else f"BVLS: {solution.message}")
+
+    runners = {"roughcontact (spectral)": ours}
+    if "tamaas" in peers:
+        runners["tamaas"] = tamaas
+    if "ContactMechanics" in peers:
+        runners["contactmechanics"] = contactmechanics
+    if grid <= BVLS_MAX_GRID:
+        runners[BVLS] = bvls
+    context = dict(operator=operator, gap0=gap0, hardness=hardness,
+                   pressure=np.asarray(reference.pressure).reshape(grid, grid))
+    return runners, context
+
+
+def capped_case(grid: int, repeats: int, peers, tol: float = 1e-10) -> list[dict]:
+    """Capped periodic solves: minimum wall times and agreement with ours.
+
+    Rounds as in :func:`periodic_case`. Every pressure is compared with our
+    untimed reference: mean pressure (the load), contact and saturated
+    (``p >= H (1 - SATURATED_RTOL)``) area fractions and the points where
+    they differ, ``max |p - p_ours| / H``, and our capped KKT residual of it
+    (approach fitted on its elastic contact).
+    """
+    runners, context = capped_runners(grid, tol, peers)
+    hardness, p_ours = context["hardness"], context["pressure"]
+    walls, outputs = alternate(runners, repeats)
+    best_ours = min(walls["roughcontact (spectral)"])
+
+    def plastic(pressure):
+        return pressure >= hardness * (1 - SATURATED_RTOL)
+
+    rows = []
+    for name in runners:
+        raw, iterations, note = outputs[name]
+        pressure = np.clip(raw, 0.0, hardness)
+        contact = pressure > 0
+        rows.append(dict(
+            part="capped", grid=grid, library=name, runs=len(walls[name]),
+            wall_min_s=min(walls[name]), spread=max(walls[name]) / min(walls[name]),
+            time_ratio=min(walls[name]) / best_ours, iterations=iterations,
+            hardness_MPa=hardness / 1e6, max_p_over_H=float(raw.max() / hardness),
+            mean_pressure_MPa=float(pressure.mean() / 1e6),
+            rel_d_mean_pressure=float(pressure.mean() / p_ours.mean() - 1),
+            contact=float(contact.mean()), plastic=float(plastic(pressure).mean()),
+            plastic_share=float(plastic(pressure).sum() / max(contact.sum(), 1)),
+            d_contact=float(np.mean(contact != (p_ours > 0))),
+            d_plastic=float(np.mean(plastic(pressure) != plastic(p_ours))),
+            max_abs_dp_over_H=float(np.abs(pressure - p_ours).max() / hardness),
+            kkt_residual=score(context["operator"], context["gap0"], pressure, hardness),
+            note=note))
     return rows
 
 
@@ -335,19 +563,26 @@ def main(argv=None) -> None:
     parser.add_argument("--repeats", type=int, default=3,
                         help="rounds of alternating cold solves; the minimum is kept (>= 3 "
                              "for numbers to quote)")
-    parser.add_argument("--parts", nargs="+", choices=("periodic", "layer"),
-                        default=["periodic", "layer"])
+    parser.add_argument("--parts", nargs="+", choices=("periodic", "capped", "layer"),
+                        default=["periodic", "capped", "layer"])
+    parser.add_argument("--capped-grids", nargs="+", type=int, default=None,
+                        help="grids of the capped part (default 32 256; --quick: 32 128); "
+                             f"a BVLS referee runs on grids <= {BVLS_MAX_GRID}")
     parser.add_argument("--out", type=Path, default=ROOT / "results" / "benchmarks")
     args = parser.parse_args(argv)
     if args.repeats < 1:
         parser.error("--repeats must be at least 1")
     grids = (128,) if args.quick else (256, 512)
+    capped_grids = args.capped_grids or ((32, 128) if args.quick else (32, 256))
     meshes = ("refined",) if args.quick else ("refined", "converged")
     subs = (1, 9) if args.quick else (1, 5, 15)
     peers = [module for module in PEERS if importable(module)]
     skipped = {PEERS[module]: "not importable (install the bench extra)"
                for module in PEERS if module not in peers}
     skipped.update(NOT_COMPARED)
+    capped_peers, missing = capped_support(peers)
+    if "capped" in args.parts:
+        skipped.update(missing)
     for name, why in skipped.items():
         print(f"skipped {name}: {why}", flush=True)
 
@@ -356,45 +591,74 @@ def main(argv=None) -> None:
         start = time.perf_counter()
         rows += periodic_case(grid, args.repeats, peers)
         print(f"periodic {grid}: {time.perf_counter() - start:.1f} s", flush=True)
+    for grid in capped_grids if "capped" in args.parts else ():
+        start = time.perf_counter()
+        rows += capped_case(grid, args.repeats, capped_peers)
+        print(f"capped {grid}: {time.perf_counter() - start:.1f} s", flush=True)
     if "layer" in args.parts:
         rows += layer_case(meshes, subs, contactmechanics="ContactMechanics" in peers)
 
     args.out.mkdir(parents=True, exist_ok=True)
     table = pd.DataFrame(rows)
     table.to_csv(args.out / "peers.csv", index=False)
-    periodic = table[table.part == "periodic"]
-    layer = table[table.part == "layer"]
+    periodic, capped, layer = (table[table.part == part] if rows else table
+                               for part in ("periodic", "capped", "layer"))
     not_compared = "".join(f"- {name}: {why}\n" for name, why in skipped.items())
+    sections = {
+        "periodic": (
+            "## 1. Periodic half-space (identical spectral problem, tol 1e-10)\n\n"
+            f"Cold solves in {args.repeats} rounds, the libraries alternating (order rotated "
+            "each round); wall_min_s: the fastest of a library's runs; time_ratio: that "
+            "minimum over ours; spread: slowest over fastest run. "
+            "d_contact: fraction of grid points whose contact state differs from ours; "
+            "rel_d_*: relative difference to ours; max_abs_dp_rel: max |p - p_ours| / "
+            "max p_ours; kkt_residual: our KKT residual of that library's pressure (the Love "
+            "row: of its own problem).\n\n"
+            + fmt(periodic, ["grid", "library", "runs", "wall_min_s", "time_ratio", "spread",
+                             "iterations", "contact",
+                             "max_pressure_MPa", "mean_pressure_MPa", "d_contact",
+                             "rel_d_max_pressure", "rel_d_mean_pressure", "max_abs_dp_rel",
+                             "kkt_residual", "note"])),
+        "capped": (
+            "## 1b. Periodic half-space with a hardness cap, 0 <= p <= H (identical "
+            "spectral problem, tol 1e-10)\n\n"
+            f"The surface, kernel and approach of part 1; H: the {HARDNESS_QUANTILE:g} "
+            "quantile of our elastic contact pressures there. Ours: cg, displacement "
+            "control, hardness=H; ContactMechanics: constrained_conjugate_gradients("
+            "hardness=H dA); Tamaas: KatoSaturated(pmax=H) in dimensionless units (E* = 1, "
+            "period 1); both peers at our mean pressure. "
+            f"{BVLS}: an independent referee on the small grid (its time includes the "
+            "Cholesky factorisation of the dense matrix). Rounds as in part 1. "
+            "plastic: fraction of grid points at p >= H (1 - "
+            f"{SATURATED_RTOL:g}); plastic_share: of the contact; d_contact, d_plastic: "
+            "fraction of points whose state differs from ours; max_abs_dp_over_H: "
+            "max |p - p_ours| / H; kkt_residual: our capped KKT residual of that pressure "
+            "(approach fitted on its elastic contact 0 < p < H).\n\n"
+            + fmt(capped, ["grid", "library", "runs", "wall_min_s", "time_ratio", "spread",
+                           "iterations", "hardness_MPa", "mean_pressure_MPa",
+                           "rel_d_mean_pressure", "contact", "plastic", "plastic_share",
+                           "d_contact", "d_plastic", "max_p_over_H", "max_abs_dp_over_H",
+                           "kkt_residual", "note"])),
+        "layer": (
+            "## 2. Finite layer, 9 x 9 mm, L = 1 mm, 60 x 60 (h = 0.15 mm), E = 1\n\n"
+            "Reference: roughcontact FE block (free sides, clamped base) unless stated. "
+            "E u / h at the loaded point; rel_centre = peer / FE - 1 there; near/mid/far: "
+            "max |u_peer - u_FE| / u_FE(centre) over distances (0, 0.5), [0.5, 2), >= 3 mm; "
+            "fe_ring_r: mean u_FE on the ring at r / u_FE(centre); d_ring_r: mean "
+            "(u_peer - u_FE) there / u_FE(centre); *_far_over_centre: "
+            "max |u| beyond 3 mm / u(centre); sum_ratio: total displacement ratio - 1.\n\n"
+            + fmt(layer, ["nu", "load", "fe_mesh", "fe_base", "peer", "fe_centre_Eu_over_h",
+                          "peer_centre_Eu_over_h", "rel_centre", "near_0_0p5mm",
+                          "mid_0p5_2mm", "far_gt3mm", "fe_ring_1mm", "d_ring_1mm",
+                          "fe_ring_2mm", "d_ring_2mm", "fe_far_over_centre",
+                          "other_far_over_centre", "sum_ratio"])),
+    }
     text = (
         "# roughcontact vs Tamaas and ContactMechanics\n\n"
         f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
         "1 thread (BLAS, OpenMP); wall times vary with load.\n\n"
         + (f"Not compared:\n\n{not_compared}\n" if not_compared else "")
-        + "## 1. Periodic half-space (identical spectral problem, tol 1e-10)\n\n"
-        f"Cold solves in {args.repeats} rounds, the libraries alternating (order rotated "
-        "each round); wall_min_s: the fastest of a library's runs; time_ratio: that minimum "
-        "over ours; spread: slowest over fastest run. "
-        "d_contact: fraction of grid points whose contact state differs from ours; rel_d_*: "
-        "relative difference to ours; max_abs_dp_rel: max |p - p_ours| / max p_ours; "
-        "kkt_residual: our KKT residual of that library's pressure (the Love row: of its "
-        "own problem).\n\n"
-        + fmt(periodic, ["grid", "library", "runs", "wall_min_s", "time_ratio", "spread",
-                         "iterations", "contact",
-                         "max_pressure_MPa", "mean_pressure_MPa", "d_contact",
-                         "rel_d_max_pressure", "rel_d_mean_pressure", "max_abs_dp_rel",
-                         "kkt_residual", "note"])
-        + "\n\n## 2. Finite layer, 9 x 9 mm, L = 1 mm, 60 x 60 (h = 0.15 mm), E = 1\n\n"
-        "Reference: roughcontact FE block (free sides, clamped base) unless stated. "
-        "E u / h at the loaded point; rel_centre = peer / FE - 1 there; near/mid/far: "
-        "max |u_peer - u_FE| / u_FE(centre) over distances (0, 0.5), [0.5, 2), >= 3 mm; "
-        "fe_ring_r: mean u_FE on the ring at r / u_FE(centre); d_ring_r: mean (u_peer - u_FE) "
-        "there / u_FE(centre); *_far_over_centre: "
-        "max |u| beyond 3 mm / u(centre); sum_ratio: total displacement ratio - 1.\n\n"
-        + fmt(layer, ["nu", "load", "fe_mesh", "fe_base", "peer", "fe_centre_Eu_over_h",
-                      "peer_centre_Eu_over_h", "rel_centre", "near_0_0p5mm", "mid_0p5_2mm",
-                      "far_gt3mm", "fe_ring_1mm", "d_ring_1mm", "fe_ring_2mm", "d_ring_2mm",
-                      "fe_far_over_centre",
-                      "other_far_over_centre", "sum_ratio"])
+        + "\n\n".join(body for part, body in sections.items() if part in args.parts)
         + "\n"
     )
     (args.out / "peers.md").write_text(text)
