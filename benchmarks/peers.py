@@ -140,6 +140,31 @@ def importable(module: str) -> bool:
     return True
 
 
+def contactmechanics_run(grid, size, modulus, heights, interference, mean_pressure, tol,
+                         element_area, hardness=None):
+    """One cold ContactMechanics solve (load control at ``mean_pressure`` [Pa]), as a runner.
+
+    ``interference`` is ``d - f`` [m] (its largest value scales the penetration
+    tolerance); with ``hardness`` [Pa] the pressure is capped: the solver works
+    in forces per grid point, so the cap is ``H dA`` (as its
+    ``PlasticNonSmoothContactSystem`` converts it).
+    """
+    from ContactMechanics import PeriodicFFTElasticHalfSpace
+    from ContactMechanics.Optimization import constrained_conjugate_gradients
+
+    substrate = PeriodicFFTElasticHalfSpace((grid, grid), modulus, physical_sizes=(size, size))
+    scale = float(np.abs(interference).max())
+    force = mean_pressure * size * size
+    cap = {} if hardness is None else {"hardness": hardness * element_area}
+    start = time.perf_counter()
+    solution = constrained_conjugate_gradients(
+        substrate, heights, external_force=force, pentol=tol * scale,
+        forcetol=tol * force / grid**2, maxiter=100000, **cap)
+    wall = time.perf_counter() - start
+    return (wall, np.asarray(solution.jac) / element_area, float(solution.nit),
+            "" if solution.success else str(solution.message))
+
+
 def periodic_runners(grid: int, tol: float, peers) -> tuple[dict, dict]:
     """Cold-solve runners of the periodic problem on a ``grid`` x ``grid`` grid.
 
@@ -175,20 +200,8 @@ def periodic_runners(grid: int, tol: float, peers) -> tuple[dict, dict]:
         return wall, np.array(model.traction).reshape(grid, grid), float("nan"), ""
 
     def contactmechanics():
-        from ContactMechanics import PeriodicFFTElasticHalfSpace
-        from ContactMechanics.Optimization import constrained_conjugate_gradients
-
-        substrate = PeriodicFFTElasticHalfSpace((grid, grid), modulus,
-                                                physical_sizes=(size, size))
-        scale = float(np.abs(approach - gap0).max())
-        force = mean_pressure * size * size
-        start = time.perf_counter()
-        solution = constrained_conjugate_gradients(
-            substrate, heights, external_force=force, pentol=tol * scale,
-            forcetol=tol * force / grid**2, maxiter=100000)
-        wall = time.perf_counter() - start
-        return (wall, np.asarray(solution.jac) / operator.element_area, float(solution.nit),
-                "" if solution.success else str(solution.message))
+        return contactmechanics_run(grid, size, modulus, heights, approach - gap0,
+                                    mean_pressure, tol, operator.element_area)
 
     # our own discretisation (Love element kernel): a different discrete problem
     operator_love, gap_love, approach_love, _ = periodic_problem(grid, spectral=False)
@@ -350,23 +363,8 @@ def capped_runners(grid: int, tol: float, peers) -> tuple[dict, dict]:
                 "dimensionless units (E* = 1, L = 1)")
 
     def contactmechanics():
-        from ContactMechanics import PeriodicFFTElasticHalfSpace
-        from ContactMechanics.Optimization import constrained_conjugate_gradients
-
-        substrate = PeriodicFFTElasticHalfSpace((grid, grid), modulus,
-                                                physical_sizes=(size, size))
-        scale = float(np.abs(approach - gap0).max())
-        force = mean_pressure * size * size
-        start = time.perf_counter()
-        # the solver works in forces per grid point, so the cap is H dA (as
-        # PlasticNonSmoothContactSystem converts it)
-        solution = constrained_conjugate_gradients(
-            substrate, heights, hardness=hardness * operator.element_area,
-            external_force=force, pentol=tol * scale, forcetol=tol * force / grid**2,
-            maxiter=100000)
-        wall = time.perf_counter() - start
-        return (wall, np.asarray(solution.jac) / operator.element_area, float(solution.nit),
-                "" if solution.success else str(solution.message))
+        return contactmechanics_run(grid, size, modulus, heights, approach - gap0,
+                                    mean_pressure, tol, operator.element_area, hardness)
 
     def bvls():
         # C has a zero eigenvalue (zero-mean kernel); C + c 11^T / n at the

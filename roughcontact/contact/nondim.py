@@ -189,9 +189,7 @@ class NondimSweep:
     load_profile: np.ndarray | None = None
 
     def __post_init__(self):
-        if self.plastic_area_fraction is None:
-            object.__setattr__(self, "plastic_area_fraction",
-                               np.zeros(np.shape(self.approach)))
+        solver.zero_plastic_area(self)
 
     @property
     def nominal_area(self) -> float:
@@ -260,9 +258,7 @@ class PhysicalSweep:
     hardness: float | None = None
 
     def __post_init__(self):
-        if self.plastic_area_fraction is None:
-            object.__setattr__(self, "plastic_area_fraction",
-                               np.zeros(np.shape(self.approach)))
+        solver.zero_plastic_area(self)
 
     @property
     def asperity_deflection(self) -> np.ndarray:

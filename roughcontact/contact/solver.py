@@ -318,9 +318,14 @@ class SweepResult:
     load_profile: np.ndarray | None = None
 
     def __post_init__(self):
-        if self.plastic_area_fraction is None:
-            object.__setattr__(self, "plastic_area_fraction",
-                               np.zeros(np.shape(self.approach)))
+        zero_plastic_area(self)
+
+
+def zero_plastic_area(result) -> None:
+    """Give a frozen result built without ``plastic_area_fraction`` zeros (no cap) of
+    its ``approach``'s shape (the ``__post_init__`` of the sweep results)."""
+    if result.plastic_area_fraction is None:
+        object.__setattr__(result, "plastic_area_fraction", np.zeros(np.shape(result.approach)))
 
 
 # ---------------------------------------------------------------------------
