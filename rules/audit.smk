@@ -19,6 +19,8 @@ rule audit:
         runtime=get_audit_runtime,
     params:
         studies=get_audit_studies,
+        # the hardness check's pressure levels: the aggregates'
+        levels=config["contact"]["pressure_levels"],
         # size, mtime and ctime of every file read: any change reruns the audit, also an
         # edit that restores the mtime (touch -r)
         stamp=get_audit_stamp,

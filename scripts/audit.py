@@ -5,7 +5,7 @@ from roughcontact.study.logs import route_logging
 from roughcontact.study.provenance import config_hash
 
 route_logging(snakemake.log[0])
-table = audit_table(snakemake.params.studies)
+table = audit_table(snakemake.params.studies, levels=snakemake.params.levels)
 write_audit(table, snakemake.output.csv, snakemake.output.md,
             config_hash=config_hash(snakemake.config))
 flagged = table[table["flagged"]]

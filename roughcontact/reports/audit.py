@@ -53,7 +53,8 @@ EXACT_MOMENT_TOL = 1e-6
 #: Realised moments further than this many standard errors from the target are flagged.
 MOMENT_SIGMAS = 3.0
 #: Nominal-pressure levels over a cell's range at which its shares above the hardness
-#: are checked (as many as the default aggregates').
+#: are checked, unless told (the workflow passes contact.pressure_levels, the
+#: aggregates' levels, so the audit's shares are the validity table's).
 HARDNESS_LEVELS = 30
 
 
@@ -83,8 +84,12 @@ def _moment_check(stats: dict, target: dict) -> dict:
     return out, flags
 
 
-def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> dict:
-    """One row of the audit: parameters, provenance, checks and flags of a study cell."""
+def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
+               levels: int = HARDNESS_LEVELS) -> dict:
+    """One row of the audit: parameters, provenance, checks and flags of a study cell.
+
+    ``levels``: nominal-pressure levels of the hardness check (:func:`_hardness_check`).
+    """
     root = Path(root)
     key = contact_key(cell)
     surf_path = root / "results" / "surfaces" / f"{cell['surface_key']}.h5"
@@ -109,14 +114,14 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".") -> di
         row["flags"] = "missing: " + ", ".join(missing)
         return row
     try:
-        return _checked_cell(row, cell, surf_path, infl_path, cont_path)
+        return _checked_cell(row, cell, surf_path, infl_path, cont_path, levels)
     except StoredFileError as err:  # unreadable, or changed since it was written
         log.warning("%s", err)
         row["flags"] = f"unusable file: {err}"
         return row
 
 
-def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path) -> dict:
+def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels) -> dict:
     flags = []
     s, g = cell["surface"], cell["geometry"]
     surfaces = read_surfaces(surf_path)
@@ -157,12 +162,12 @@ def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path) -> dic
         flags.append("solved on another influence matrix")
     if attrs.get("surfaces_content_sha256") != surfaces["content_sha256"]:
         flags.append("solved on other surfaces")
-    flags += _hardness_check(row, cell, stored)
+    flags += _hardness_check(row, cell, stored, levels)
     row["flags"] = "; ".join(flags)
     return row
 
 
-def _hardness_check(row: dict, cell: dict, stored) -> list[str]:
+def _hardness_check(row: dict, cell: dict, stored, levels: int) -> list[str]:
     """Shares of an elastic cell above its hardness values (no solve); a flag per value
     where the mean share of the real area or load exceeds the cell's threshold."""
     if cell.get("cap_MPa") is not None:
@@ -170,8 +175,8 @@ def _hardness_check(row: dict, cell: dict, stored) -> list[str]:
         row["max_plastic_area_fraction"] = float(stored.plastic_area_fraction.max())
         return []
     flags = []
-    levels = pressure_axis(*(p * MPA for p in cell["pressure_MPa"]), HARDNESS_LEVELS)
-    for part in validity_rows(cell, stored, levels):
+    axis = pressure_axis(*(p * MPA for p in cell["pressure_MPa"]), levels)
+    for part in validity_rows(cell, stored, axis):
         H = float(part["hardness_MPa"].iloc[0])
         summary = validity_summary(part)
         row[f"area_above_{H:g}MPa"] = summary["max_area_above"]
@@ -186,9 +191,11 @@ def _hardness_check(row: dict, cell: dict, stored) -> list[str]:
     return flags
 
 
-def audit_table(studies: dict[str, list[dict]], root: str | Path = ".") -> pd.DataFrame:
-    """The audit rows of every cell of every study (``{name: contact_cells}``)."""
-    rows = [audit_cell(name, i, cell, root)
+def audit_table(studies: dict[str, list[dict]], root: str | Path = ".",
+                levels: int = HARDNESS_LEVELS) -> pd.DataFrame:
+    """The audit rows of every cell of every study (``{name: contact_cells}``);
+    ``levels`` as in :func:`audit_cell`."""
+    rows = [audit_cell(name, i, cell, root, levels)
             for name, cells in studies.items() for i, cell in enumerate(cells)]
     table = pd.DataFrame(rows)
     table["flagged"] = table["flags"].fillna("") != ""

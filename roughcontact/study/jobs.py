@@ -519,7 +519,8 @@ def validity_summary(frame: pd.DataFrame) -> dict:
     }
 
 
-#: Columns of a study's validity table when no cell names a hardness.
+#: Columns of a study's validity table, in order (also its header when no cell names a
+#: hardness).
 VALIDITY_COLUMNS = ("cell", "label", "contact_key", "hardness_MPa", "threshold",
                     "nominal_pressure", *(f"{q}_{s}" for q in cell_module.VALIDITY_QUANTITIES
                                           for s in ("mean", "half_width", "count")), "flagged")
