@@ -31,7 +31,6 @@ __all__ = [
     "VALIDITY_QUANTITIES",
     "aggregate_sweep",
     "approach_grid",
-    "hardness_threshold",
     "nondim_pressure",
     "sweep_and_aggregate",
     "sweep_cell",
@@ -138,12 +137,6 @@ def aggregate_sweep(sweep: nondim.NondimSweep, sigma: float, E: float, pressures
     return physical, aggregate.aggregate_cell(physical, pressures)
 
 
-def hardness_threshold(sweep: nondim.NondimSweep, sigma: float, E: float,
-                       hardness: float) -> float:
-    """The dimensionless threshold ``H L / (E sigma)`` of a hardness ``H`` [Pa] for ``sweep``."""
-    return nondim_pressure(hardness, thickness=sweep.thickness, E=E, sigma=sigma)
-
-
 def validity_table(sweep: nondim.NondimSweep, sigma: float, E: float, hardness: float,
                    pressures, *, confidence: float = 0.95) -> pd.DataFrame:
     """How much of an elastic cell lies above a hardness, per nominal-pressure level.
@@ -176,7 +169,9 @@ def validity_table(sweep: nondim.NondimSweep, sigma: float, E: float, hardness: 
     shares = validity.fractions_above(sweep.profile_ranks, sweep.pressure_profile,
                                       sweep.load_profile, sweep.real_area_fraction,
                                       sweep.nominal_pressure,
-                                      hardness_threshold(sweep, sigma, E, hardness))
+                                      # H L / (E sigma): the threshold in the sweep's units
+                                      nondim_pressure(hardness, thickness=sweep.thickness,
+                                                      E=E, sigma=sigma))
     levels = np.asarray(pressures, dtype=float)
     columns = {"nominal_pressure": levels, "hardness": np.full(levels.size, float(hardness))}
     for name in VALIDITY_QUANTITIES:

@@ -742,10 +742,10 @@ def hardness_settings(config: dict, fig: dict) -> tuple[list[float], object, flo
     The study's own ``hardness_MPa`` and ``cap`` replace ``body.hardness_MPa``
     and ``contact.cap``.
     """
-    value = fig.get("hardness_MPa", config["body"].get("hardness_MPa"))
+    value = fig.get("hardness_MPa", config["body"]["hardness_MPa"])
     values = [] if value is None else [float(v) for v in _as_list(value)]
-    cap = fig.get("cap", config["contact"].get("cap", False))
-    return values, cap, float(config["body"].get("hardness_threshold", 0.05))
+    cap = fig.get("cap", config["contact"]["cap"])
+    return values, cap, float(config["body"]["hardness_threshold"])
 
 
 def with_hardness(config: dict, fig: dict, cells: list[dict]) -> list[dict]:
