@@ -49,7 +49,6 @@ __all__ = [
 ]
 
 
-
 class Quantity(NamedTuple):
     """How an aggregated quantity is read from a :class:`PhysicalSweep`.
 

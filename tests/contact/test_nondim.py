@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from approach_targets import target_grid
 
+from roughcontact.contact import cell as cell_module
 from roughcontact.contact import nondim
 from roughcontact.contact import solver as contact
 from roughcontact.contact.curves import PhysicalSweep
@@ -109,6 +110,21 @@ def test_block_matrix_stiffness_tends_to_E():
     physical = nondim.to_physical(nd, sigma=30e-6, E=5.11e8)
     assert physical.normalized_stiffness[:, -1] == pytest.approx(5.11e8, rel=1e-5)
     assert physical.nominal_area == pytest.approx(1.8e-3**2)
+
+
+def test_cell_grid_reaches_its_pressure_on_every_surface_without_a_trial_solve():
+    """cell.approach_grid ends at bulk_factor P_end + max(h), enough for P_end (nu = 0 block)."""
+    geom = BlockGeometry(size=(1.8e-3, 1.8e-3), thickness=2e-3, grid=(12, 12), nu=0.0)
+    h = np.random.default_rng(4).standard_normal((3, 12, 12))
+    grid = cell_module.approach_grid(h, 2.0, 8)
+    assert grid[-1] == pytest.approx(cell_module.BULK_FACTOR * 2.0 + h.max(), rel=1e-12)
+    ratio = cell_module.APPROACH_RANGE ** (1 / 7)
+    assert grid[1:] / grid[:-1] == pytest.approx(np.full(7, ratio))
+    nd = nondim.solve_cell(unit_modulus_influence(geom), h, thickness=2e-3,
+                           element_area=1.5e-4**2, approaches=grid)
+    assert nd.converged.all()
+    assert (nd.nominal_pressure[:, -1] >= 2.0).all()
+    assert (nd.nominal_pressure[:, 0] < 2.0).all()
 
 
 def test_unconverged_steps_are_flagged_not_hidden(heights, unit_influence, caplog):
