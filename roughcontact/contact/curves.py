@@ -42,8 +42,9 @@ DIAGNOSTICS = ("iterations", "matvecs", "residual", "converged", "stiffness_conv
 PROFILES = ("pressure_profile", "load_profile")
 #: Record field -> SweepResult field, for the arrays both records read from the
 #: solver's :func:`roughcontact.contact.sweep` under the same name.
-SOLVER_FIELDS = {name: name for name in ("approach", "mean_plane_deflection", "real_area_fraction",
-                                      "max_pressure", "plastic_area_fraction", *DIAGNOSTICS)}
+SOLVER_FIELDS = {name: name for name in ("approach", "mean_plane_deflection",
+                                         "real_area_fraction", "max_pressure",
+                                         "plastic_area_fraction", *DIAGNOSTICS)}
 #: dtype of the per-step arrays that are not floats.
 _DTYPES = {"iterations": int, "matvecs": int, "converged": bool, "stiffness_converged": bool}
 
