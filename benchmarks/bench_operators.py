@@ -277,7 +277,7 @@ def case_solve(model: str, grid: int, coarse: int | None) -> dict:
         "stiffness_converged": bool(result.stiffness_converged.all()),
         "final_pressure": float(result.nominal_pressure[:, -1].mean()),
         "final_real_area": float(result.real_area_fraction[:, -1].mean()),
-        "last_k_P": result.stiffness[:, -1].tolist(),
+        "last_k_P": result.normalized_stiffness[:, -1].tolist(),
         "last_real_area": result.real_area_fraction[:, -1].tolist(),
         "last_max_pressure": result.max_pressure[:, -1].tolist(),
         "peak_gb": peak_gb(),

@@ -24,15 +24,19 @@ holds at every level too. A pressure level outside a surface's solved range
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import pandas as pd
 import scipy.stats
 
-from roughcontact.contact.nondim import PhysicalSweep
+from roughcontact.contact.curves import PhysicalSweep
 
 __all__ = [
     "COVERAGE",
     "QUANTITIES",
+    "SPACINGS",
+    "Quantity",
     "aggregate_cell",
     "coverage",
     "covered_range",
@@ -44,17 +48,39 @@ __all__ = [
     "surface_curves",
 ]
 
-#: Aggregated quantities: name -> (unit, symbol and equation of Kumar et al. 2006).
+
+class Quantity(NamedTuple):
+    """How an aggregated quantity is read from a :class:`PhysicalSweep`.
+
+    ``unit`` and ``meaning`` (symbol and equation of Kumar et al. 2006);
+    ``flags``: the convergence flags a step needs to be used; ``difference``:
+    for a quantity averaged as the difference of two averaged curves (so that
+    the relation holds at every level), their names.
+    """
+
+    unit: str
+    meaning: str
+    flags: tuple[str, ...] = ("converged",)
+    difference: tuple[str, str] | None = None
+
+
+#: Aggregated quantities, by name.
 QUANTITIES = {
-    "normalized_stiffness": ("Pa", "k_P = (L / A_n) dF/dd, tangent at fixed contact set (Eq 33)"),
-    "approach": ("m", "d, total deflection (rigid approach)"),
-    "mean_plane_deflection": ("m", "d_b, mean of u (Eq 35)"),
-    "asperity_deflection": ("m", "d_a = d - d_b (Eq 45)"),
-    "real_area_fraction": ("1", "real contact area / nominal area"),
-    "max_pressure": ("Pa", "largest element pressure"),
-    "plastic_area_fraction": ("1", "elements at the hardness cap / all elements (0 if elastic)"),
-    "plastic_load_fraction": ("1", "load on elements at the cap / load (0 if elastic)"),
+    "normalized_stiffness": Quantity(
+        "Pa", "k_P = (L / A_n) dF/dd, tangent at fixed contact set (Eq 33)",
+        flags=("converged", "stiffness_converged")),
+    "approach": Quantity("m", "d, total deflection (rigid approach)"),
+    "mean_plane_deflection": Quantity("m", "d_b, mean of u (Eq 35)"),
+    "asperity_deflection": Quantity("m", "d_a = d - d_b (Eq 45)",
+                                    difference=("approach", "mean_plane_deflection")),
+    "real_area_fraction": Quantity("1", "real contact area / nominal area"),
+    "max_pressure": Quantity("Pa", "largest element pressure"),
+    "plastic_area_fraction": Quantity(
+        "1", "elements at the hardness cap / all elements (0 if elastic)"),
+    "plastic_load_fraction": Quantity("1", "load on elements at the cap / load (0 if elastic)"),
 }
+#: Spacings of :func:`pressure_axis`: name -> ``f(first, last, n)``.
+SPACINGS = {"log": np.geomspace, "linear": np.linspace}
 
 INTERPOLATION = ("piecewise linear in log(P) and log(q) (linear in q where q <= 0) over "
                  "converged steps, no extrapolation; d_a = d - d_b of the interpolated curves")
@@ -82,18 +108,16 @@ def pressure_axis(P_min: float, P_max: float, n: int, spacing: str = "log") -> n
         raise ValueError(f"need 0 < P_min < P_max (finite, Pa), got {P_min!r}, {P_max!r}")
     if isinstance(n, bool) or int(n) != n or n < 2:
         raise ValueError(f"n must be an integer >= 2, got {n!r}")
-    if spacing == "log":
-        return np.geomspace(low, high, int(n))
-    if spacing == "linear":
-        return np.linspace(low, high, int(n))
-    raise ValueError(f"spacing must be 'log' or 'linear', got {spacing!r}")
+    if spacing not in SPACINGS:
+        raise ValueError(f"spacing must be one of {tuple(SPACINGS)}, got {spacing!r}")
+    return SPACINGS[spacing](low, high, int(n))
 
 
 def _check_sweep(sweep) -> PhysicalSweep:
     if not isinstance(sweep, PhysicalSweep):
         raise TypeError(
-            "sweep_physical must be a roughcontact.nondim.PhysicalSweep (from to_physical or "
-            f"PhysicalSweep.from_contact_sweep), got {type(sweep).__name__}"
+            "sweep_physical must be a roughcontact.contact.curves.PhysicalSweep (from "
+            f"to_physical or PhysicalSweep.from_contact_sweep), got {type(sweep).__name__}"
         )
     return sweep
 
@@ -101,9 +125,9 @@ def _check_sweep(sweep) -> PhysicalSweep:
 def _usable(sweep: PhysicalSweep, quantity: str) -> np.ndarray:
     """(m, k) mask of steps a quantity may be interpolated from."""
     P = sweep.nominal_pressure
-    mask = sweep.converged & np.isfinite(P) & (P > 0.0)
-    if quantity == "normalized_stiffness":
-        mask &= sweep.stiffness_converged
+    mask = np.isfinite(P) & (P > 0.0)
+    for flag in QUANTITIES[quantity].flags:
+        mask &= getattr(sweep, flag)
     return mask & np.isfinite(getattr(sweep, quantity))
 
 
@@ -128,9 +152,11 @@ def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> n
     sweep = _check_sweep(sweep_physical)
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {tuple(QUANTITIES)}, got {quantity!r}")
-    if quantity == "asperity_deflection":  # Eq 45 at every level
-        return (surface_curves(sweep, pressures, "approach")
-                - surface_curves(sweep, pressures, "mean_plane_deflection"))
+    difference = QUANTITIES[quantity].difference
+    if difference is not None:  # e.g. d_a = d - d_b (Eq 45) at every level
+        first, second = difference
+        return (surface_curves(sweep, pressures, first)
+                - surface_curves(sweep, pressures, second))
     levels = np.asarray(pressures, dtype=float)
     if levels.ndim != 1 or not np.isfinite(levels).all() or (levels <= 0.0).any():
         raise ValueError("pressures must be a 1-d array of finite positive levels [Pa]")
@@ -242,13 +268,13 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
     m = sweep.nominal_pressure.shape[0]
     columns = {"nominal_pressure": levels}
     units = {"nominal_pressure": "Pa"}
-    for quantity, (unit, _) in QUANTITIES.items():
+    for quantity, spec in QUANTITIES.items():
         samples = surface_curves(sweep, levels, quantity)
         mean, half_width, count = statistics(samples, confidence)
         columns[f"{quantity}_mean"] = mean
         columns[f"{quantity}_half_width"] = half_width
         columns[f"{quantity}_count"] = count
-        units.update({f"{quantity}_mean": unit, f"{quantity}_half_width": unit,
+        units.update({f"{quantity}_mean": spec.unit, f"{quantity}_half_width": spec.unit,
                       f"{quantity}_count": "1"})
     columns["coverage"] = coverage(sweep, levels)
     columns["surfaces"] = np.full(levels.size, m)

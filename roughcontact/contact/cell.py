@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 
 from roughcontact.contact import aggregate, nondim, validity
+from roughcontact.contact.curves import NondimSweep, PhysicalSweep
 
 __all__ = [
     "APPROACH_RANGE",
@@ -61,12 +62,14 @@ def approach_grid(heights: np.ndarray, pressure_end: float, steps: int,
     ``d_b = P L / E_u`` with ``E_u >= E / bulk_factor`` (``E_u = E`` for nu = 0,
     rows of ``E C`` summing to L; a few percent above E for nu > 0), so
     ``d = bulk_factor * P_end + max(h)`` is enough. The grid is geometric from
-    ``end / APPROACH_RANGE``, fine where the load grows fastest.
+    ``end / APPROACH_RANGE``, fine where the load grows fastest; first touch
+    itself (``d = 0``, no load) is left out.
 
     Parameters
     ----------
     heights : ndarray, (m, ny, nx) or (m, n)
-        Heights in units of sigma.
+        Heights in units of sigma (checked as by
+        :func:`~roughcontact.contact.nondim.initial_separation`).
     pressure_end : float
         ``P L / (E sigma)`` every surface must reach.
     steps : int
@@ -77,8 +80,13 @@ def approach_grid(heights: np.ndarray, pressure_end: float, steps: int,
     ndarray, (steps,)
         Strictly increasing approaches [-] (units of sigma).
     """
+    nondim.initial_separation(heights)  # a batch of heights in units of sigma
+    if isinstance(steps, bool) or int(steps) != steps or steps < 1:
+        raise ValueError(f"steps must be a positive integer, got {steps!r}")
     end = bulk_factor * pressure_end + float(np.max(heights))
-    return nondim.approach_grid(heights, end=end, steps=steps, start=1.0 / APPROACH_RANGE)
+    if not (np.isfinite(end) and end > 0.0):
+        raise ValueError(f"end must be a finite positive number, got {end!r}")
+    return np.geomspace(end / APPROACH_RANGE, end, int(steps))
 
 
 def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: float, steps: int,
@@ -86,8 +94,8 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
                stiffness_tol: float = 1e-6, max_iter: int | None = None,
                batch_size: int | None = None,
                progress: Callable[[nondim.SweepProgress], None] | None = None,
-               rows: slice | None = None, hardness: float | None = None,
-               profile: bool = True) -> nondim.NondimSweep:
+               rows: slice | None = None, nondim_hardness: float | None = None,
+               profile: bool = True) -> NondimSweep:
     """Sweep every surface of a cell to ``pressure_end`` on :func:`approach_grid`.
 
     Parameters
@@ -106,7 +114,7 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
     rows : slice, optional
         Solve only these surfaces, on the approach grid of the whole cell (the
         audit re-solves one stored batch this way).
-    hardness : float, optional
+    nondim_hardness : float, optional
         Dimensionless cap ``H L / (E sigma)`` of a capped sweep (None: elastic).
     profile : bool
         Record the pressure and load profiles of every solution (default),
@@ -119,25 +127,25 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
                              element_area=geometry.element_area, approaches=approaches,
                              method=method, tol=tol, max_iter=max_iter,
                              stiffness_tol=stiffness_tol, precision=precision,
-                             batch_size=batch_size, progress=progress, hardness=hardness,
-                             profile=profile)
+                             batch_size=batch_size, progress=progress,
+                             nondim_hardness=nondim_hardness, profile=profile)
 
 
-def aggregate_sweep(sweep: nondim.NondimSweep, sigma: float, E: float, pressures,
+def aggregate_sweep(sweep: NondimSweep, sigma: float, E: float, pressures,
                     hardness: float | None = None,
-                    ) -> tuple[nondim.PhysicalSweep, pd.DataFrame]:
+                    ) -> tuple[PhysicalSweep, pd.DataFrame]:
     """The sweep in SI units for ``sigma`` [m] and ``E`` [Pa], averaged at ``pressures`` [Pa].
 
     ``hardness`` [Pa] is the cap of a capped sweep (checked by
     :func:`~roughcontact.contact.nondim.to_physical`). Returns the
-    :class:`~roughcontact.contact.nondim.PhysicalSweep` and the table of
+    :class:`~roughcontact.contact.curves.PhysicalSweep` and the table of
     :func:`roughcontact.contact.aggregate.aggregate_cell`.
     """
     physical = nondim.to_physical(sweep, sigma, E, hardness=hardness)
     return physical, aggregate.aggregate_cell(physical, pressures)
 
 
-def validity_table(sweep: nondim.NondimSweep, sigma: float, E: float, hardness: float,
+def validity_table(sweep: NondimSweep, sigma: float, E: float, hardness: float,
                    pressures, *, confidence: float = 0.95) -> pd.DataFrame:
     """How much of an elastic cell lies above a hardness, per nominal-pressure level.
 
@@ -163,7 +171,7 @@ def validity_table(sweep: nondim.NondimSweep, sigma: float, E: float, hardness: 
     if sweep.pressure_profile is None or sweep.profile_ranks is None:
         raise ValueError("the sweep has no pressure profiles (solved with profile=False, or "
                          "stored by an older version): solve it again with profile=True")
-    if sweep.hardness is not None:
+    if sweep.nondim_hardness is not None:
         raise ValueError("the sweep is capped: its saturated share is plastic_area_fraction")
     physical = nondim.to_physical(sweep, sigma, E)
     shares = validity.fractions_above(sweep.profile_ranks, sweep.pressure_profile,
@@ -188,7 +196,7 @@ VALIDITY_QUANTITIES = ("area_above", "load_above", "excess_load")
 
 def sweep_and_aggregate(unit_influence, heights: np.ndarray, geometry, *, sigma: float,
                         pressures, steps: int, reach: float = 1.0, **options,
-                        ) -> tuple[nondim.NondimSweep, nondim.PhysicalSweep, pd.DataFrame]:
+                        ) -> tuple[NondimSweep, PhysicalSweep, pd.DataFrame]:
     """Sweep a cell and average it at ``pressures`` [Pa]: :func:`sweep_cell` then
     :func:`aggregate_sweep`.
 

@@ -22,7 +22,7 @@ __all__ = ["CALIBRATION", "CRITERION_QUANTITIES", "halfspace_errors", "halfspace
 CALIBRATION = {"surfaces": 2, "b_fraction": 1.0 / 9.0, "pressures": (0.1, 1.0, 4.0),
                "seed": 2006, "steps": 16}
 #: Quantities the criterion measures: NondimSweep attribute of each.
-CRITERION_QUANTITIES = {"k_P": "stiffness", "real_area": "real_area_fraction",
+CRITERION_QUANTITIES = {"k_P": "normalized_stiffness", "real_area": "real_area_fraction",
                         "max_pressure": "max_pressure"}
 
 

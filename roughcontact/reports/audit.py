@@ -26,7 +26,7 @@ from roughcontact.study.cells import block_geometry, contact_key
 from roughcontact.study.jobs import validity_rows, validity_summary
 from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.study.storage import (
-    CONTACT_ARRAYS,
+    contact_datasets,
     read_contact,
     read_influence,
     read_surfaces,
@@ -140,7 +140,7 @@ def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels
         else OPERATOR_DIAGONAL_ERROR.get(row["operator"], float("nan")))
 
     stored, attrs = read_contact(cont_path)
-    arrays = {name: getattr(stored, name) for name in CONTACT_ARRAYS}
+    arrays = contact_datasets(stored)
     row.update({
         "method": attrs["sweep_method"], "tol": float(attrs["sweep_tol"]),
         "precision": attrs["sweep_precision"],
@@ -276,7 +276,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
             unit, heights, block_geometry(job["geometry"]), job["pressure_end"],
             stored.approach.shape[1], method=stored.method, tol=stored.tol,
             precision=stored.precision, max_iter=stored.max_iter, rows=slice(first, last),
-            hardness=stored.hardness,
+            nondim_hardness=stored.nondim_hardness,
         )
         seconds = time.perf_counter() - start
         commit = git_commit()
@@ -285,7 +285,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
                          and attrs["git_commit"] == commit and not commit.endswith("-dirty"))
         worst, identical = 0.0, True
         for name in ("approach", "nominal_pressure", "mean_plane_deflection",
-                     "real_area_fraction", "max_pressure", "stiffness"):
+                     "real_area_fraction", "max_pressure", "normalized_stiffness"):
             a = getattr(stored, name)[first:last]
             b = getattr(again, name)
             identical &= bool(np.array_equal(a, b))

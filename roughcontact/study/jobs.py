@@ -442,7 +442,7 @@ def solve_contact_job(job: dict, surfaces_path, influence_path, out_path, settin
     result = cell_module.sweep_cell(unit, heights, body, job["pressure_end"], solver.steps,
                                     method=solver.method, tol=solver.tol,
                                     precision=solver.precision, batch_size=min(m, BATCH_SIZE),
-                                    progress=progress, hardness=hardness)
+                                    progress=progress, nondim_hardness=hardness)
     log.info("approach d/sigma %.3g .. %.3g", result.approach[0, 0], result.approach[0, -1])
     reached = result.nominal_pressure[:, -1].min()
     if reached < job["pressure_end"]:

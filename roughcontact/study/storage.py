@@ -24,12 +24,14 @@ Layout of an influence file (``results/influence/<geometry>.h5``)::
 
 Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
 
-    /<field>   (m, k)  every array of NondimSweep in CONTACT_ARRAYS (dimensionless)
+    /<field>   (m, k)  every array of NondimSweep in CONTACT_ARRAYS (dimensionless;
+               the dataset ``stiffness`` is the field ``normalized_stiffness``, k_P / E)
     /profile_ranks (R,) int64, /pressure_profile and /load_profile (m, k, R)
                float32: each solution's pressure and load profiles
                (:mod:`roughcontact.contact.validity`), when recorded
     attributes: job (JSON), the NondimSweep settings (``sweep_*``; ``sweep_hardness``
-                the dimensionless cap H L / (E sigma), -1 for an elastic sweep), solver
+                the dimensionless cap ``nondim_hardness`` H L / (E sigma), -1 for an
+                elastic sweep), solver
                 statistics, the content hashes of the contact arrays and of
                 the surface and influence inputs, provenance
 
@@ -46,16 +48,18 @@ import os
 import h5py
 import numpy as np
 
-from roughcontact.contact.nondim import NondimSweep
+from roughcontact.contact.curves import NondimSweep
 from roughcontact.elasticity.operators import BlockOperator
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import array_sha256, arrays_sha256
 from roughcontact.study.provenance import atomic_path
 
-#: Arrays of a contact file (the fields of NondimSweep that are stored).
+#: Arrays of a contact file (the fields of NondimSweep that are stored), by dataset name.
 CONTACT_ARRAYS = ("approach", "nominal_pressure", "mean_plane_deflection",
                   "real_area_fraction", "max_pressure", "stiffness", "iterations", "matvecs",
                   "residual", "converged", "stiffness_converged", "plastic_area_fraction")
+#: NondimSweep field of a dataset named otherwise: ``stiffness`` is ``k_P / E``.
+CONTACT_FIELDS = {"stiffness": "normalized_stiffness"}
 #: Optional arrays of a contact file: the solutions' profiles, stored in single
 #: precision (7 digits; the shares read from them are interpolated to about 1 %).
 PROFILE_ARRAYS = ("profile_ranks", "pressure_profile", "load_profile")
@@ -261,7 +265,8 @@ def read_influence(path: str | os.PathLike):
 
 def contact_datasets(sweep: NondimSweep) -> dict:
     """The arrays a contact file stores for ``sweep`` (profiles in single precision)."""
-    datasets = {name: np.asarray(getattr(sweep, name)) for name in CONTACT_ARRAYS}
+    datasets = {name: np.asarray(getattr(sweep, CONTACT_FIELDS.get(name, name)))
+                for name in CONTACT_ARRAYS}
     if sweep.pressure_profile is not None:
         datasets["profile_ranks"] = np.asarray(sweep.profile_ranks, dtype=np.int64)
         for name in PROFILE_ARRAYS[1:]:
@@ -286,14 +291,14 @@ def write_contact(path: str | os.PathLike, sweep: NondimSweep, attrs: dict) -> d
         **attrs,
         **{f"sweep_{k}": getattr(sweep, k) for k in SWEEP_SETTINGS},
         "sweep_max_iter": -1 if sweep.max_iter is None else sweep.max_iter,
-        "sweep_hardness": -1.0 if sweep.hardness is None else float(sweep.hardness),
+        "sweep_hardness": -1.0 if sweep.nondim_hardness is None else float(sweep.nondim_hardness),
     }
     write_h5(path, datasets, attrs)
     return attrs
 
 
 def read_contact(path: str | os.PathLike) -> tuple[NondimSweep, dict]:
-    """The :class:`~roughcontact.contact.nondim.NondimSweep` and attributes of a contact file."""
+    """The :class:`~roughcontact.contact.curves.NondimSweep` and attributes of a contact file."""
     with open_h5(path) as f:
         missing = [name for name in CONTACT_ARRAYS if name not in f]
         if missing:
@@ -310,5 +315,6 @@ def read_contact(path: str | os.PathLike) -> tuple[NondimSweep, dict]:
         attrs["seeds"] = json.loads(attrs["seeds"])
     max_iter = int(attrs["sweep_max_iter"])
     hardness = float(attrs.get("sweep_hardness", -1.0))
-    return NondimSweep(**arrays, **settings, max_iter=None if max_iter < 0 else max_iter,
-                       hardness=None if hardness < 0 else hardness), attrs
+    fields = {CONTACT_FIELDS.get(name, name): values for name, values in arrays.items()}
+    return NondimSweep(**fields, **settings, max_iter=None if max_iter < 0 else max_iter,
+                       nondim_hardness=None if hardness < 0 else hardness), attrs

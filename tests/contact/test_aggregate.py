@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import scipy.stats
+from approach_targets import target_grid
 
 from roughcontact.contact import aggregate, nondim
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
@@ -50,8 +51,8 @@ def block_nu0():
 
 @pytest.fixture(scope="module")
 def approaches(heights, block_nu0):
-    return nondim.approach_grid(heights, block_nu0, thickness=LENGTH, target_area=0.95,
-                                steps=24, method="exact", start=1e-5)
+    return target_grid(heights, block_nu0, thickness=LENGTH, target_area=0.95, steps=24,
+                       method="exact", start=1e-5)
 
 
 @pytest.fixture(scope="module")

@@ -11,8 +11,9 @@ import logging
 
 import numpy as np
 import pytest
+from approach_targets import target_grid
 
-from roughcontact.contact import nondim
+from roughcontact.contact import cell, nondim
 from roughcontact.contact import solver as contact
 from roughcontact.elasticity.influence import BlockGeometry, influence_matrix
 
@@ -155,7 +156,7 @@ def test_nominal_pressure_a_tenth_of_E(block, sigma_over_length):
     heights = np.random.default_rng(5).standard_normal((2, GRID, GRID))
     sigma = sigma_over_length * LENGTH
     target = 0.1 * LENGTH / sigma  # Phat = P L / (E sigma)
-    grid = nondim.approach_grid(heights, unit, thickness=LENGTH, target_pressure=target, steps=6)
+    grid = target_grid(heights, unit, thickness=LENGTH, target_pressure=target, steps=6)
     nd = nondim.solve_cell(unit, heights, thickness=LENGTH, element_area=area,
                            approaches=grid, tol=1e-10)
     assert nd.converged.all() and nd.stiffness_converged.all()
@@ -191,7 +192,7 @@ def test_sigma_and_E_over_twelve_decades_give_identical_nondimensional_results(m
     unit = influence_matrix(geom) * geom.E
     area = geom.spacing[0] * geom.spacing[1]
     heights = np.random.default_rng(5).standard_normal((2, GRID, GRID))
-    grid = nondim.approach_grid(heights, unit, thickness=LENGTH, target_area=0.5, steps=8)
+    grid = target_grid(heights, unit, thickness=LENGTH, target_area=0.5, steps=8)
     options = {"method": method, "tol": 1e-12, "stiffness_tol": 1e-12}
     nd = nondim.solve_cell(unit, heights, thickness=LENGTH, element_area=area,
                            approaches=grid, **options)
@@ -223,7 +224,7 @@ def test_flat_surface_is_rejected_by_the_dimensionless_path(block):
         nondim.solve_cell(C * geom.E, flat, thickness=LENGTH, element_area=area,
                           approaches=[0.1, 0.2])
     with pytest.raises(ValueError, match=message):
-        nondim.approach_grid(flat, end=1.0)
+        cell.approach_grid(flat, 1.0, 4)
     # sigma = 0 on the way back to SI units is refused too
     rough = np.random.default_rng(0).standard_normal((1, N))
     nd = nondim.solve_cell(C * geom.E, rough, thickness=LENGTH, element_area=area,

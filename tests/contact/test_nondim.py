@@ -10,9 +10,12 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from approach_targets import target_grid
 
+from roughcontact.contact import cell as cell_module
 from roughcontact.contact import nondim
 from roughcontact.contact import solver as contact
+from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many
@@ -43,8 +46,8 @@ def unit_influence():
 
 @pytest.fixture(scope="module")
 def cell(heights, unit_influence):
-    approaches = nondim.approach_grid(heights, unit_influence, thickness=LENGTH,
-                                      target_area=0.6, steps=10)
+    approaches = target_grid(heights, unit_influence, thickness=LENGTH, target_area=0.6,
+                             steps=10)
     nd = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
                            approaches=approaches, tol=1e-12, stiffness_tol=1e-12)
     return approaches, nd
@@ -63,7 +66,7 @@ def test_rescaled_sweep_equals_direct_si_sweep(cell, heights, sigma, E):
     direct = contact.sweep(C, gaps, sigma * approaches, element_area=AREA, tol=1e-12,
                            stiffness_tol=1e-12)
     assert direct.converged.all()
-    reference = nondim.PhysicalSweep.from_contact_sweep(
+    reference = PhysicalSweep.from_contact_sweep(
         direct, thickness=LENGTH, nominal_area=GRID**2 * AREA, sigma=sigma, E=E)
     scaled = nondim.to_physical(nd, sigma, E, LENGTH, GRID**2 * AREA)
     for name in QUANTITIES:
@@ -90,8 +93,8 @@ def test_stiffness_matches_finite_difference(cell):
     approaches, nd = cell
     slope = np.diff(nd.nominal_pressure, axis=1) / np.diff(approaches)
     # secant between steps lies between the tangents at its ends (load convex in d)
-    assert (slope >= nd.stiffness[:, :-1] * (1 - 1e-9)).all()
-    assert (slope <= nd.stiffness[:, 1:] * (1 + 1e-9)).all()
+    assert (slope >= nd.normalized_stiffness[:, :-1] * (1 - 1e-9)).all()
+    assert (slope <= nd.normalized_stiffness[:, 1:] * (1 + 1e-9)).all()
 
 
 def test_block_matrix_stiffness_tends_to_E():
@@ -109,29 +112,19 @@ def test_block_matrix_stiffness_tends_to_E():
     assert physical.nominal_area == pytest.approx(1.8e-3**2)
 
 
-def test_approach_grid_reaches_target(heights, unit_influence):
-    for per_surface in (False, True):
-        grid = nondim.approach_grid(heights, unit_influence, thickness=LENGTH,
-                                    target_area=0.3, steps=6, per_surface=per_surface)
-        nd = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                               approaches=grid)
-        assert (nd.real_area_fraction[:, -1] >= 0.3).all()
-        assert (np.diff(np.atleast_2d(grid), axis=1) > 0).all()
-    ends = nondim.approach_grid(heights, unit_influence, thickness=LENGTH, target_area=0.3,
-                                steps=1, per_surface=True, rtol=1e-4)[:, 0]
-    below = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                              approaches=(ends * (1 - 1e-3))[:, None])
-    assert (below.real_area_fraction[:, 0] < 0.3).all()  # the smallest such approach
-    target = 0.05
-    grid = nondim.approach_grid(heights, unit_influence, thickness=LENGTH,
-                                target_pressure=target, steps=5, spacing="linear", rtol=1e-3)
-    assert np.allclose(np.diff(grid), grid[0])
-    nd = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                           approaches=grid)
-    assert (nd.nominal_pressure[:, -1] >= target).all()
-    assert nd.nominal_pressure[:, -1].min() < target * 1.01
-    fixed = nondim.approach_grid(heights, end=3.0, steps=4, start=1e-2)
-    assert fixed == pytest.approx(3.0 * np.logspace(-2, 0, 4))
+def test_cell_grid_reaches_its_pressure_on_every_surface_without_a_trial_solve():
+    """cell.approach_grid ends at bulk_factor P_end + max(h), enough for P_end (nu = 0 block)."""
+    geom = BlockGeometry(size=(1.8e-3, 1.8e-3), thickness=2e-3, grid=(12, 12), nu=0.0)
+    h = np.random.default_rng(4).standard_normal((3, 12, 12))
+    grid = cell_module.approach_grid(h, 2.0, 8)
+    assert grid[-1] == pytest.approx(cell_module.BULK_FACTOR * 2.0 + h.max(), rel=1e-12)
+    ratio = cell_module.APPROACH_RANGE ** (1 / 7)
+    assert grid[1:] / grid[:-1] == pytest.approx(np.full(7, ratio))
+    nd = nondim.solve_cell(unit_modulus_influence(geom), h, thickness=2e-3,
+                           element_area=1.5e-4**2, approaches=grid)
+    assert nd.converged.all()
+    assert (nd.nominal_pressure[:, -1] >= 2.0).all()
+    assert (nd.nominal_pressure[:, 0] < 2.0).all()
 
 
 def test_unconverged_steps_are_flagged_not_hidden(heights, unit_influence, caplog):
@@ -172,7 +165,7 @@ def test_batches_and_matrix_free_operator_agree(cell, heights, unit_influence):
     other = nondim.solve_cell(MatrixFree(), heights, thickness=LENGTH, element_area=AREA,
                               approaches=approaches, tol=1e-12, stiffness_tol=1e-12,
                               batch_size=3)
-    for name in ("nominal_pressure", "real_area_fraction", "stiffness",
+    for name in ("nominal_pressure", "real_area_fraction", "normalized_stiffness",
                  "mean_plane_deflection", "max_pressure"):
         assert relative_error(getattr(other, name), getattr(nd, name)) < 1e-9, name
 

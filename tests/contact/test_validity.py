@@ -124,10 +124,12 @@ def test_where_nothing_exceeds_H_the_capped_solve_is_the_elastic_one(heights, un
                                       elastic.nominal_pressure, H)
     assert (shares["area_above"] == 0.0).all()
     capped = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                               approaches=approaches, method="pivot", tol=1e-10, hardness=H)
+                               approaches=approaches, method="pivot", tol=1e-10,
+                               nondim_hardness=H)
     assert (capped.plastic_area_fraction == 0.0).all()
     np.testing.assert_allclose(capped.nominal_pressure, elastic.nominal_pressure, rtol=1e-9)
-    np.testing.assert_allclose(capped.stiffness, elastic.stiffness, rtol=1e-9)
+    np.testing.assert_allclose(capped.normalized_stiffness, elastic.normalized_stiffness,
+                               rtol=1e-9)
 
 
 def test_the_capped_plastic_area_follows_the_elastic_share_above_H(heights, unit_influence):
@@ -138,7 +140,8 @@ def test_the_capped_plastic_area_follows_the_elastic_share_above_H(heights, unit
                                 profile=True)
     H = 0.5 * elastic.max_pressure[:, -1].min()
     capped = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                               approaches=approaches, method="pivot", tol=1e-10, hardness=H)
+                               approaches=approaches, method="pivot", tol=1e-10,
+                               nondim_hardness=H)
     shares = validity.fractions_above(elastic.profile_ranks, elastic.pressure_profile,
                                       elastic.load_profile, elastic.real_area_fraction,
                                       elastic.nominal_pressure, H)
@@ -175,7 +178,7 @@ def test_a_capped_sweep_refuses_a_rescaling_that_changes_its_cap(heights, unit_i
     sigma, E, H = 20e-6, 200e6, 30e6
     cap = cell_module.nondim_pressure(H, thickness=LENGTH, E=E, sigma=sigma)
     nd = nondim.solve_cell(unit_influence, heights[:1], thickness=LENGTH, element_area=AREA,
-                           approaches=[0.2, 0.5], hardness=cap, method="pivot")
+                           approaches=[0.2, 0.5], nondim_hardness=cap, method="pivot")
     physical = nondim.to_physical(nd, sigma, E, hardness=H)
     assert physical.hardness == H and physical.max_pressure.max() <= H * (1 + 1e-9)
     # doubling sigma and E quadruples E sigma: the same H is a quarter of the cap, refused
@@ -196,7 +199,7 @@ def test_plastic_load_is_the_saturated_elements_times_H_over_the_load(heights, u
     cap = cell_module.nondim_pressure(H, thickness=LENGTH, E=E, sigma=sigma)
     gaps = nondim.initial_separation(heights)
     nd = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                           approaches=[0.3, 1.0], hardness=cap, method="pivot")
+                           approaches=[0.3, 1.0], nondim_hardness=cap, method="pivot")
     physical = nondim.to_physical(nd, sigma, E, hardness=H)
     # counted on the fields of the same capped problem, solved in SI units
     result = sweep(unit_influence / E, gaps * sigma, np.array([0.3, 1.0]) * sigma,

@@ -6,7 +6,7 @@ import pytest
 import yaml
 from matplotlib.image import imread
 
-from roughcontact.contact.nondim import PhysicalSweep
+from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.reports import speed
 from roughcontact.study.presets import ACCURACY_PRESETS, PRESETS_FILE

@@ -6,11 +6,11 @@ import h5py
 import numpy as np
 import pytest
 
-from roughcontact.contact.nondim import NondimSweep
+from roughcontact.contact.curves import NondimSweep
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import arrays_sha256
 from roughcontact.study import storage
-from roughcontact.study.storage import CONTACT_ARRAYS
+from roughcontact.study.storage import CONTACT_ARRAYS, CONTACT_FIELDS
 
 
 def surfaces_file(path):
@@ -24,7 +24,8 @@ def surfaces_file(path):
 
 def sweep():
     shape = (2, 4)
-    arrays = {name: np.linspace(0.1, 1.0, 8).reshape(shape) for name in CONTACT_ARRAYS}
+    arrays = {CONTACT_FIELDS.get(name, name): np.linspace(0.1, 1.0, 8).reshape(shape)
+              for name in CONTACT_ARRAYS}
     arrays["iterations"] = np.ones(shape, dtype=np.int64)
     arrays["matvecs"] = np.ones(shape, dtype=np.int64)
     arrays["converged"] = np.ones(shape, dtype=bool)

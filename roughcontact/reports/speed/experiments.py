@@ -45,6 +45,7 @@ import scipy.stats
 
 from roughcontact.contact import aggregate, nondim
 from roughcontact.contact.cell import aggregate_sweep, nondim_pressure, sweep_cell
+from roughcontact.contact.curves import NondimSweep, PhysicalSweep
 from roughcontact.elasticity import operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
@@ -76,7 +77,8 @@ SOLVER_QUANTITIES = MappingProxyType({
     "load": ("nominal_pressure", "load F = P A_n at the prescribed approach"),
     "real_area": ("real_area_fraction", "real contact area fraction"),
     "max_pressure": ("max_pressure", "largest element pressure"),
-    "k_P": ("stiffness", "normalized stiffness k_P (Eq 33), tangent at the contact set"),
+    "k_P": ("normalized_stiffness",
+            "normalized stiffness k_P (Eq 33), tangent at the contact set"),
 })
 
 #: Default statistics cells of the solver study: Gaussian and negatively skewed.
@@ -122,7 +124,7 @@ def _cell_heights(grid, size, b: float, skew: float, kurt: float, count: int, se
 
 
 def _timed_sweep(unit_influence, heights, geometry: BlockGeometry, pressure_end: float,
-                 steps: int, **options) -> tuple[nondim.NondimSweep, float]:
+                 steps: int, **options) -> tuple[NondimSweep, float]:
     """One :func:`~roughcontact.contact.cell.sweep_cell` and its wall time [s].
 
     ``options`` go to ``sweep_cell``; callers pass ``precision`` explicitly
@@ -558,7 +560,7 @@ def grid_study(
 
 
 def band_vs_count(
-    physical: nondim.PhysicalSweep,
+    physical: PhysicalSweep,
     pressures: Sequence[float],
     counts: Sequence[int] = DEFAULT_COUNTS,
     *,

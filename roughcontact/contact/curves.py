@@ -1,0 +1,296 @@
+"""Force-deflection curves of a contact cell: one record in dimensionless form, one in SI units.
+
+A cell (``m`` surfaces on one body) is swept once in dimensionless form
+(:func:`roughcontact.contact.nondim.solve_cell`, a :class:`NondimSweep`) and
+read in SI units for any sigma and E (:func:`roughcontact.contact.nondim.to_physical`,
+a :class:`PhysicalSweep`). Both records hold the same per-step arrays, declared
+once in :class:`CellSweep`, each under the name of its quantity: in SI units in
+a PhysicalSweep, made dimensionless in a NondimSweep (by the scale of
+:data:`roughcontact.contact.nondim.SI_SCALES`: lengths by sigma, pressures by
+``E sigma / L``, ``k_P`` by E). Scalars that are passed on to other code keep
+one name per unit: the cap of a capped sweep is ``hardness`` H [Pa] in a
+PhysicalSweep and ``nondim_hardness`` ``H L / (E sigma)`` [-] in a NondimSweep.
+
+Every array has shape (m, k): surface by approach step; the pressure and load
+profiles of a NondimSweep have shape (m, k, R).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from roughcontact.contact import solver
+
+__all__ = [
+    "DIAGNOSTICS",
+    "PROFILES",
+    "SOLVER_FIELDS",
+    "CellSweep",
+    "NondimSweep",
+    "PhysicalSweep",
+    "positive",
+    "solver_arrays",
+]
+
+#: Diagnostics of the solves: the same numbers in both records.
+DIAGNOSTICS = ("iterations", "matvecs", "residual", "converged", "stiffness_converged")
+#: Per-step solution profiles a NondimSweep may hold, (m, k, R).
+PROFILES = ("pressure_profile", "load_profile")
+#: Record field -> SweepResult field, for the arrays both records read from the
+#: solver's :func:`roughcontact.contact.sweep` under the same name.
+SOLVER_FIELDS = {name: name for name in ("approach", "mean_plane_deflection",
+                                         "real_area_fraction", "max_pressure",
+                                         "plastic_area_fraction", *DIAGNOSTICS)}
+#: dtype of the per-step arrays that are not floats.
+_DTYPES = {"iterations": int, "matvecs": int, "converged": bool, "stiffness_converged": bool}
+
+
+@dataclass(frozen=True, kw_only=True)
+class CellSweep:
+    """The per-step arrays of a swept cell, shared by :class:`NondimSweep` and
+    :class:`PhysicalSweep` (units: SI, and in brackets the dimensionless form).
+
+    Attributes
+    ----------
+    approach : ndarray
+        Rigid approach ``d`` [m] (``d / sigma``).
+    nominal_pressure : ndarray
+        ``P = F / A_n`` [Pa] (``P L / (E sigma)``).
+    mean_plane_deflection : ndarray
+        ``d_b``, the mean of ``u`` [m] (Eq 35) (``d_b / sigma``).
+    real_area_fraction : ndarray
+        Fraction of elements in contact, ``p > 0`` [-] (saturated ones included).
+    max_pressure : ndarray
+        Largest element pressure [Pa] (``p_max L / (E sigma)``).
+    normalized_stiffness : ndarray
+        ``k_P = (L / A_n) dF/dd`` at fixed contact set [Pa] (Eq 33)
+        (``k_P / E = dPhat / ddhat``).
+    plastic_area_fraction : ndarray
+        Fraction of elements at the hardness cap [-]; zeros for an elastic
+        sweep (also when not given to the constructor).
+    iterations, matvecs : ndarray of int
+        Work of the contact solve at each step.
+    residual : ndarray
+        KKT residual of each solve [-] (:mod:`roughcontact.contact`; the same
+        in both forms).
+    converged : ndarray of bool
+        The contact solve reached its ``tol`` and every value it reported is finite.
+    stiffness_converged : ndarray of bool
+        The active-set CG of the stiffness reached its ``stiffness_tol`` and
+        the stiffness is finite.
+    thickness : float
+        Block thickness ``L`` [m] (for a half-space, the reference length of
+        the scaling).
+    """
+
+    approach: np.ndarray
+    nominal_pressure: np.ndarray
+    mean_plane_deflection: np.ndarray
+    real_area_fraction: np.ndarray
+    max_pressure: np.ndarray
+    normalized_stiffness: np.ndarray
+    iterations: np.ndarray
+    matvecs: np.ndarray
+    residual: np.ndarray
+    converged: np.ndarray
+    stiffness_converged: np.ndarray
+    thickness: float
+    plastic_area_fraction: np.ndarray | None = None
+
+    def __post_init__(self):
+        solver.zero_plastic_area(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class NondimSweep(CellSweep):
+    """Dimensionless force-deflection sweep of one cell
+    (:mod:`roughcontact.contact.nondim`): the arrays of :class:`CellSweep` in
+    their dimensionless form, and the settings of the solve.
+
+    Attributes
+    ----------
+    element_area : float
+        Contact element area ``dA`` [m^2] of the influence matrix.
+    n_elements : int
+        Contact elements per surface ``n``.
+    method, tol, stiffness_tol, precision, max_iter
+        Settings of the contact and stiffness solves (``max_iter`` None: the
+        solver's default).
+    nondim_hardness : float or None
+        Dimensionless pressure cap ``H L / (E sigma)`` of a capped sweep
+        (``0 <= p L / (E sigma) <= H L / (E sigma)``); None for the elastic problem.
+    profile_ranks, pressure_profile, load_profile : ndarray or None
+        The solutions' pressure profiles (dimensionless, like ``max_pressure``)
+        and load profiles at the ranks ``profile_ranks``
+        (:mod:`roughcontact.contact.validity`); None when not recorded.
+    """
+
+    element_area: float
+    n_elements: int
+    method: str
+    tol: float
+    stiffness_tol: float
+    precision: str
+    max_iter: int | None
+    nondim_hardness: float | None = None
+    profile_ranks: np.ndarray | None = None
+    pressure_profile: np.ndarray | None = None
+    load_profile: np.ndarray | None = None
+
+    @property
+    def nominal_area(self) -> float:
+        """Nominal contact area ``A_n = n dA`` [m^2]."""
+        return self.n_elements * self.element_area
+
+
+@dataclass(frozen=True, kw_only=True)
+class PhysicalSweep(CellSweep):
+    """Force-deflection sweep of one cell in SI units, for one (sigma, E): the
+    arrays of :class:`CellSweep` and those that need the nominal area.
+
+    Attributes
+    ----------
+    load : ndarray
+        Total force ``F = P A_n`` [N].
+    contact_stiffness : ndarray
+        ``dF/dd`` at fixed contact set [N/m].
+    sigma : float
+        Height scale [m] (NaN if the sweep was solved directly in SI units).
+    E : float
+        Young's modulus [Pa] (NaN if solved directly in SI units).
+    nominal_area : float
+        ``A_n`` [m^2].
+    hardness : float or None
+        Pressure cap ``H`` [Pa] of a capped sweep; None for the elastic problem.
+    """
+
+    load: np.ndarray
+    contact_stiffness: np.ndarray
+    sigma: float
+    E: float
+    nominal_area: float
+    hardness: float | None = None
+
+    @property
+    def asperity_deflection(self) -> np.ndarray:
+        """``d_a = d - d_b`` [m] (Eq 45)."""
+        return self.approach - self.mean_plane_deflection
+
+    @property
+    def plastic_load_fraction(self) -> np.ndarray:
+        """Share of the load carried by elements at the cap, ``H A_p / (P A_n)`` [-]
+        (zeros for an elastic sweep)."""
+        if self.hardness is None:
+            return np.zeros(np.shape(self.approach))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = self.plastic_area_fraction * self.hardness / self.nominal_pressure
+        return np.where(self.plastic_area_fraction > 0.0, share, 0.0)
+
+    @classmethod
+    def from_contact_sweep(cls, result: solver.SweepResult, *, thickness: float,
+                           nominal_area: float, sigma: float = float("nan"),
+                           E: float = float("nan")) -> PhysicalSweep:
+        """Wrap a :func:`roughcontact.contact.sweep` solved directly in SI units.
+
+        ``thickness`` [m] gives ``k_P = (L / A_n) dF/dd``; ``nominal_area``
+        [m^2] is ``n dA`` of that sweep. Unconverged flags are kept and steps
+        with non-finite values are flagged unconverged.
+        """
+        thickness = positive(thickness, "thickness")
+        nominal_area = positive(nominal_area, "nominal_area")
+        arrays = solver_arrays(result, {**SOLVER_FIELDS, "load": "load",
+                                        "nominal_pressure": "nominal_pressure",
+                                        "contact_stiffness": "tangent_stiffness"},
+                               stiffness="contact_stiffness")
+        return cls(**arrays,
+                   normalized_stiffness=thickness / nominal_area * arrays["contact_stiffness"],
+                   sigma=float(sigma), E=float(E), thickness=thickness,
+                   nominal_area=nominal_area, hardness=result.hardness)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per (surface, step), long format.
+
+        Columns: ``surface``, ``step`` (0-based), ``approach`` [m], ``load``
+        [N], ``nominal_pressure`` [Pa], ``mean_plane_deflection`` [m],
+        ``asperity_deflection`` [m], ``real_area_fraction`` [-],
+        ``max_pressure`` [Pa], ``contact_stiffness`` [N/m],
+        ``normalized_stiffness`` [Pa], ``iterations``, ``matvecs``,
+        ``residual`` [-], ``converged``, ``stiffness_converged``,
+        ``plastic_area_fraction``, ``plastic_load_fraction`` [-]. The units
+        are also in ``frame.attrs["units"]``, the scales in ``frame.attrs``.
+        """
+        m, k = self.approach.shape
+        columns = {
+            "surface": np.repeat(np.arange(m), k),
+            "step": np.tile(np.arange(k), m),
+        }
+        for name in _PHYSICAL_UNITS:
+            columns[name] = np.asarray(getattr(self, name)).ravel()
+        frame = pd.DataFrame(columns)
+        frame.attrs.update(units=dict(_PHYSICAL_UNITS), sigma=self.sigma, E=self.E,
+                           thickness=self.thickness, nominal_area=self.nominal_area)
+        return frame
+
+
+_PHYSICAL_UNITS = {
+    "approach": "m",
+    "load": "N",
+    "nominal_pressure": "Pa",
+    "mean_plane_deflection": "m",
+    "asperity_deflection": "m",
+    "real_area_fraction": "1",
+    "max_pressure": "Pa",
+    "contact_stiffness": "N/m",
+    "normalized_stiffness": "Pa",
+    "iterations": "1",
+    "matvecs": "1",
+    "residual": "1",
+    "converged": "bool",
+    "stiffness_converged": "bool",
+    "plastic_area_fraction": "1",
+    "plastic_load_fraction": "1",
+}
+
+
+def solver_arrays(result, names: Mapping[str, str], stiffness: str) -> dict:
+    """The per-step arrays of a solver sweep under the names of a record.
+
+    Parameters
+    ----------
+    result : SweepResult
+        Result of :func:`roughcontact.contact.sweep`.
+    names : mapping
+        Record field -> the ``result`` field it is read from.
+    stiffness : str
+        The record field of the stiffness, vouched for by ``stiffness_converged``.
+
+    Returns
+    -------
+    dict
+        Record field -> (m, k) array (int for the counts, bool for the flags,
+        float otherwise). A step with a non-finite stiffness is flagged
+        ``stiffness_converged=False``, one with any other non-finite value
+        ``converged=False``.
+    """
+    arrays = {name: np.asarray(getattr(result, source), dtype=_DTYPES.get(name, float))
+              for name, source in names.items()}
+    finite = np.logical_and.reduce([np.isfinite(values) for name, values in arrays.items()
+                                    if name not in _DTYPES and name != stiffness])
+    arrays["converged"] = arrays["converged"] & finite
+    arrays["stiffness_converged"] = arrays["stiffness_converged"] & np.isfinite(arrays[stiffness])
+    return arrays
+
+
+def positive(value, name: str) -> float:
+    """``value`` as a finite positive float; else ``ValueError`` naming it ``name``."""
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a finite positive number, got {value!r}") from None
+    if not np.isfinite(out) or out <= 0.0:
+        raise ValueError(f"{name} must be a finite positive number, got {value!r}")
+    return out
