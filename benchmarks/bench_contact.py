@@ -86,7 +86,7 @@ import scipy.fft
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact.contact.solver import kkt_residual, solve, solve_many, sweep  # noqa: E402
+from roughcontact.contact import kkt_residual, solve, solve_many, sweep  # noqa: E402
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence  # noqa: E402
 
 SIGMA = 24.5e-6  # surface standard deviation [m]

@@ -54,7 +54,11 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from roughcontact.contact import solver, validity
+from roughcontact.contact import validity
+from roughcontact.contact.checks import approach_steps
+from roughcontact.contact.methods import resolve_method, solve_many
+from roughcontact.contact.result import SweepResult, zero_plastic_area
+from roughcontact.contact.sweeps import sweep
 
 __all__ = [
     "NondimSweep",
@@ -189,7 +193,7 @@ class NondimSweep:
     load_profile: np.ndarray | None = None
 
     def __post_init__(self):
-        solver.zero_plastic_area(self)
+        zero_plastic_area(self)
 
     @property
     def nominal_area(self) -> float:
@@ -258,7 +262,7 @@ class PhysicalSweep:
     hardness: float | None = None
 
     def __post_init__(self):
-        solver.zero_plastic_area(self)
+        zero_plastic_area(self)
 
     @property
     def asperity_deflection(self) -> np.ndarray:
@@ -276,7 +280,7 @@ class PhysicalSweep:
         return np.where(self.plastic_area_fraction > 0.0, share, 0.0)
 
     @classmethod
-    def from_contact_sweep(cls, result: solver.SweepResult, *, thickness: float,
+    def from_contact_sweep(cls, result: SweepResult, *, thickness: float,
                            nominal_area: float, sigma: float = float("nan"),
                            E: float = float("nan")) -> PhysicalSweep:
         """Wrap a :func:`roughcontact.contact.sweep` solved directly in SI units.
@@ -468,7 +472,7 @@ def dimensionless_operator(unit_influence, thickness: float):
 
 
 def _check_steps(approaches, m: int) -> np.ndarray:
-    steps = solver._approach_steps(approaches, m, "units of sigma")
+    steps = approach_steps(approaches, m, "units of sigma")
     if (np.diff(steps, axis=1) <= 0.0).any():
         raise ValueError("approaches must increase strictly along the steps (units of sigma)")
     return np.ascontiguousarray(steps)
@@ -550,7 +554,7 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         raise ValueError(f"batch_size must be a positive integer or None, got {batch_size!r}")
     batch_size = int(batch_size)
     operator = dimensionless_operator(unit_influence, thickness)
-    method = solver.resolve_method(method, operator)  # recorded as solved
+    method = resolve_method(method, operator)  # recorded as solved
     if hardness is not None:
         hardness = _positive(hardness, "hardness (H L / (E sigma))")
     names = ("approach", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
@@ -565,10 +569,10 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
     start = time.perf_counter()
     for first in range(0, m, batch_size):
         rows = slice(first, min(m, first + batch_size))
-        result = solver.sweep(operator, gaps[rows], steps[rows], method=method, tol=tol,
-                               max_iter=max_iter, element_area=1.0 / n, stiffness=True,
-                               stiffness_tol=stiffness_tol, precision=precision,
-                               hardness=hardness, profile=profile)
+        result = sweep(operator, gaps[rows], steps[rows], method=method, tol=tol,
+                       max_iter=max_iter, element_area=1.0 / n, stiffness=True,
+                       stiffness_tol=stiffness_tol, precision=precision,
+                       hardness=hardness, profile=profile)
         table["approach"][rows] = steps[rows]
         table["nominal_pressure"][rows] = result.load
         table["mean_plane_deflection"][rows] = result.mean_plane_deflection
@@ -709,9 +713,9 @@ def approach_grid(heights, unit_influence=None, *, thickness: float | None = Non
 
         def reached(d):
             # warm start from the previous evaluation (any p >= 0 is a valid start)
-            results = solver.solve_many(operator, gaps, d, method=method, tol=tol,
-                                         element_area=1.0 / n, precision=precision,
-                                         p0=last["pressure"])
+            results = solve_many(operator, gaps, d, method=method, tol=tol,
+                                 element_area=1.0 / n, precision=precision,
+                                 p0=last["pressure"])
             last["pressure"] = np.stack([r.pressure for r in results])
             unconverged = sum(not r.converged for r in results)
             if unconverged:

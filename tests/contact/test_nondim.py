@@ -11,8 +11,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from roughcontact import contact
 from roughcontact.contact import nondim
-from roughcontact.contact import solver as contact
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from test_solver import nnls_reference  # scipy NNLS on the Cholesky factor of C
 
-from roughcontact.contact.solver import resolve_method, sweep, tangent_stiffness
+from roughcontact.contact import resolve_method, solve, solve_many, sweep, tangent_stiffness
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
+from roughcontact.elasticity.protocol import DenseInfluence
 
 E, NU = 2.1e11, 0.3
 
@@ -85,11 +86,37 @@ def test_ill_conditioned_matrix_is_solved_to_rounding():
 
 
 def test_auto_picks_pivot_for_dense_and_cg_for_matrix_free(problem):
-    C = problem[0]
+    C, gaps, approaches, area = problem
     assert resolve_method("auto", C) == "pivot"
+    assert resolve_method("auto", DenseInfluence(C, area)) == "pivot"
     periodic = PeriodicHalfSpace((16, 16), (1e-3, 1e-3), E, NU)
     assert resolve_method("auto", periodic) == "cg"
     assert resolve_method("steepest", C) == "steepest"
+    # "auto" is the default of the entry points: the study's solver
+    assert solve(C, gaps[0], approaches[0, 2], element_area=area).method == "pivot"
+    assert sweep(C, gaps[:1], approaches[:1, :2], element_area=area).method == "pivot"
+    ramp = np.linspace(0.0, 1e-6, 256).reshape(16, 16)
+    assert solve(periodic, ramp, 1e-7).method == "cg"
+
+
+def test_single_solves_and_the_sweep_share_the_pivoting(problem):
+    """solve_many("pivot"/"exact") runs the rounds of the sweep for one step: the same
+    solutions to rounding, a dense matrix passed plain or wrapped alike."""
+    C, gaps, approaches, area = problem
+    swept = sweep(C, gaps, approaches, method="pivot", tol=1e-10, element_area=area,
+                  return_fields=True)
+    for k in (0, 3, 5):
+        for method, operator, given in (("pivot", C, area), ("exact", DenseInfluence(C, area),
+                                                            None)):
+            results = solve_many(operator, gaps, approaches[:, k], method=method, tol=1e-10,
+                                 element_area=given)
+            for j, result in enumerate(results):
+                assert result.method == method and result.converged
+                assert result.matvecs == result.iterations + 2  # rounds, then C p
+                expected = swept.pressure[j, k]
+                assert np.array_equal(result.contact_set, expected > 0)
+                np.testing.assert_allclose(result.pressure, expected, rtol=0,
+                                           atol=1e-12 * expected.max())
 
 
 def test_not_positive_definite_is_refused(problem):
