@@ -177,7 +177,7 @@ def case_paper_sweep(args, surfaces: int, steps: int, extrapolate: bool) -> dict
     matrix, area, gaps = paper_problem(surfaces)
     approaches = np.linspace(0.0, APPROACH_END * SIGMA, args.steps + 1)[1 : steps + 1]
     start = time.perf_counter()
-    result = sweep(matrix, gaps, approaches, element_area=area, tol=args.tol,
+    result = sweep(matrix, gaps, approaches, method="cg", element_area=area, tol=args.tol,
                    precision="mixed", stiffness=True, extrapolate=extrapolate)
     wall = time.perf_counter() - start
     return dict(

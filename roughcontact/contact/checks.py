@@ -34,10 +34,10 @@ __all__ = [
     "check_hardness",
     "check_initial_pressure",
     "check_max_iter",
+    "check_positive",
     "check_precision",
     "check_pressure",
     "check_surfaces",
-    "check_tol",
     "given_matrix",
 ]
 
@@ -324,15 +324,15 @@ def check_hardness(hardness) -> float | None:
 # Options
 
 
-def check_tol(tol, name: str = "tol") -> float:
-    """A tolerance as a finite positive float."""
+def check_positive(value, name: str = "tol") -> float:
+    """``value`` (a tolerance, by default named ``tol``) as a finite positive float."""
     try:
-        value = float(tol)
+        number = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a finite positive number, got {tol!r}") from None
-    if not np.isfinite(value) or value <= 0.0:
-        raise ValueError(f"{name} must be a finite positive number, got {tol!r}")
-    return value
+        raise ValueError(f"{name} must be a finite positive number, got {value!r}") from None
+    if not np.isfinite(number) or number <= 0.0:
+        raise ValueError(f"{name} must be a finite positive number, got {value!r}")
+    return number
 
 
 def check_max_iter(max_iter) -> None:

@@ -68,24 +68,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughcontact.contact import cg, pivot, steepest
-from roughcontact.contact.checks import (
-    as_operator,
-    check_approach,
-    check_bounded,
-    check_hardness,
-    check_initial_pressure,
-    check_max_iter,
-    check_precision,
-    check_surfaces,
-    check_tol,
-    given_matrix,
-)
+from roughcontact.contact import cg, checks, pivot, steepest
 from roughcontact.contact.products import PRECISIONS, Products
 from roughcontact.contact.result import Batch, ContactResult
+from roughcontact.elasticity.protocol import InfluenceOperator
 
-__all__ = ["METHODS", "PRECISIONS", "REGISTRY", "Method", "check_method", "method_for",
-           "resolve_method", "run", "solve", "solve_many"]
+__all__ = ["METHODS", "PRECISIONS", "REGISTRY", "Method", "Problem", "check_method",
+           "check_problem", "method_for", "resolve_method", "run", "solve", "solve_many"]
 
 logger = logging.getLogger("roughcontact.contact")
 
@@ -105,8 +94,8 @@ class Method:
     single_precision : bool
         Takes single-precision search products (``precision="mixed"``).
     sweep : callable or None
-        ``sweep(operator, gaps, steps, options, table)``, its own approach
-        loop; None: the shared loop of :mod:`roughcontact.contact.sweeps`.
+        ``sweep(method, products, gaps, steps, options, table)``, its own
+        approach loop; None: the shared loop of :mod:`roughcontact.contact.sweeps`.
     """
 
     name: str
@@ -136,7 +125,7 @@ REGISTRY = {
 def _auto(operator) -> str:
     """Block principal pivoting needs the dense ``C`` (it factors its blocks
     ``C_AA``); a matrix-free operator (hybrid, half-space) is solved by CG."""
-    return "cg" if given_matrix(operator) is None else "pivot"
+    return "cg" if checks.given_matrix(operator) is None else "pivot"
 
 
 #: Names that stand for a method chosen from the operator.
@@ -182,26 +171,54 @@ def run(method: Method, products: Products, gaps, d, pressure, tol: float, max_i
     return batch
 
 
-def _solve_rows(operator, gaps0, approach, method, tol, max_iter, p0, element_area, precision,
-             hardness, batched: bool):
-    """:func:`solve` / :func:`solve_many`: check the arguments (in the order of their
-    messages), solve every surface, and return one :class:`ContactResult` each."""
+@dataclass(frozen=True)
+class Problem:
+    """The checked arguments every entry point shares.
+
+    ``operator`` and the :class:`Method` chosen for it, the initial
+    separations ``gaps`` (m, n) [m] and the ``shape`` of one surface as
+    given, ``tol``, ``max_iter`` (the method's default filled in), the
+    ``products`` of the solve and the cap ``hardness`` [Pa] or None.
+    """
+
+    operator: InfluenceOperator
+    method: Method
+    gaps: np.ndarray
+    shape: tuple
+    tol: float
+    max_iter: int
+    products: Products
+    hardness: float | None
+
+
+def check_problem(operator, gaps0, name: str, *, method, tol, max_iter, precision,
+                  element_area, hardness, batched: bool) -> Problem:
+    """Check the arguments shared by the entry points, in the order of their messages;
+    the gaps are named ``name``."""
     check_method(method)
-    tol = check_tol(tol)
-    check_max_iter(max_iter)
-    check_precision(precision)
-    hardness = check_hardness(hardness)
-    op = as_operator(operator, element_area)
+    tol = checks.check_positive(tol)
+    checks.check_max_iter(max_iter)
+    checks.check_precision(precision)
+    hardness = checks.check_hardness(hardness)
+    op = checks.as_operator(operator, element_area)
     chosen = method_for(method, op)
-    gaps, shape = check_surfaces(gaps0, op, "gaps0" if batched else "gap0", batched=batched)
+    gaps, shape = checks.check_surfaces(gaps0, op, name, batched=batched)
+    return Problem(op, chosen, gaps, shape, tol, chosen.max_iter(max_iter, gaps.shape[1]),
+                   chosen.products(op, precision), hardness)
+
+
+def _solve_rows(problem: Problem, approach, p0) -> list[ContactResult]:
+    """Solve every surface of ``problem`` at ``approach``; one :class:`ContactResult` each."""
+    gaps, hardness = problem.gaps, problem.hardness
     m, n = gaps.shape
-    d = check_approach(approach, m)
-    check_bounded(op, gaps, d, "approach")
-    pressure = check_initial_pressure(p0, m, n, hardness=hardness)
-    batch = run(chosen, chosen.products(op, precision), gaps, d, pressure, tol,
-                chosen.max_iter(max_iter, n), hardness)
-    return [batch.contact_result(j, gaps[j] - d[j], op.element_area, shape, chosen.name, tol,
-                                 d[j], hardness) for j in range(m)]
+    d = checks.check_approach(approach, m)
+    checks.check_bounded(problem.operator, gaps, d, "approach")
+    pressure = checks.check_initial_pressure(p0, m, n, hardness=hardness)
+    batch = run(problem.method, problem.products, gaps, d, pressure, problem.tol,
+                problem.max_iter, hardness)
+    return [batch.contact_result(j, gaps[j] - d[j], problem.operator.element_area,
+                                 problem.shape, problem.method.name, problem.tol, d[j], hardness)
+            for j in range(m)]
 
 
 def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, p0=None,
@@ -262,8 +279,10 @@ def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, 
     ValueError
         On invalid input; the message names the argument.
     """
-    return _solve_rows(operator, gap0, approach, method, tol, max_iter, p0, element_area,
-                    precision, hardness, batched=False)[0]
+    problem = check_problem(operator, gap0, "gap0", method=method, tol=tol, max_iter=max_iter,
+                            precision=precision, element_area=element_area, hardness=hardness,
+                            batched=False)
+    return _solve_rows(problem, approach, p0)[0]
 
 
 def solve_many(operator, gaps0, approach, *, method="auto", tol=1e-10, max_iter=None, p0=None,
@@ -295,5 +314,7 @@ def solve_many(operator, gaps0, approach, *, method="auto", tol=1e-10, max_iter=
     tuple of ContactResult
         One result per surface, fields shaped like one surface of ``gaps0``.
     """
-    return tuple(_solve_rows(operator, gaps0, approach, method, tol, max_iter, p0, element_area,
-                          precision, hardness, batched=True))
+    problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
+                            precision=precision, element_area=element_area, hardness=hardness,
+                            batched=True)
+    return tuple(_solve_rows(problem, approach, p0))

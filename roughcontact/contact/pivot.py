@@ -320,7 +320,7 @@ def _step_solved(state: PivotState, j: int, x, gap, gaps, steps, operator, diago
         state.restart(*_next_sets(p, rate, steps[j, state.step] - d, rigid_next, hardness))
 
 
-def sweep(operator: InfluenceOperator, gaps, steps, options: SweepOptions,
+def sweep(method, products: Products, gaps, steps, options: SweepOptions,
           table: SweepTable) -> None:
     """Every surface's sweep by block principal pivoting, all in flight at once.
 
@@ -333,10 +333,11 @@ def sweep(operator: InfluenceOperator, gaps, steps, options: SweepOptions,
     its tangent ``(C_FF)^-1 1`` comes from the same factor (saturated
     elements fixed), and its next step starts at once from the predicted
     sets ``{p + (d' - d) dp/dd > 0}`` (and ``>= H`` for the saturated set).
-    Fills ``table`` in place.
+    Fills ``table`` in place; ``method`` (the registry entry) names the sweep in the
+    warning about unconverged steps.
     """
-    dense = dense_influence(operator)
-    diagonal = operator.diagonal()
+    dense = dense_influence(products.operator)
+    diagonal = products.operator.diagonal()
     m = gaps.shape[0]
     k = steps.shape[1]
     states = [PivotState(*_cold_sets(gaps[j] - steps[j, 0], options.hardness))
@@ -358,6 +359,6 @@ def sweep(operator: InfluenceOperator, gaps, steps, options: SweepOptions,
     failed = ~table.columns["converged"]
     if failed.any():
         logger.warning(
-            "contact sweep (pivot): %d of %d steps did not converge; largest KKT residual "
-            "%.3g > tol %.3g", int(failed.sum()), failed.size,
+            "contact sweep (%s): %d of %d steps did not converge; largest KKT residual "
+            "%.3g > tol %.3g", method.name, int(failed.sum()), failed.size,
             float(table.columns["residual"][failed].max()), options.tol)

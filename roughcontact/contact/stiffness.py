@@ -25,8 +25,8 @@ from roughcontact.contact.checks import (
     as_operator,
     check_hardness,
     check_max_iter,
+    check_positive,
     check_pressure,
-    check_tol,
 )
 from roughcontact.contact.kkt import free_set
 from roughcontact.contact.products import Products
@@ -151,7 +151,7 @@ def tangent_stiffness(operator, pressure, *, element_area=None, tol=1e-10, max_i
     op = as_operator(operator, element_area)
     n = op.shape[0]
     p = check_pressure(pressure, n)
-    tol = check_tol(tol)
+    tol = check_positive(tol)
     check_max_iter(max_iter)
     start = np.zeros((1, n))
     if x0 is not None:

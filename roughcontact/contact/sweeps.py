@@ -17,20 +17,10 @@ import logging
 
 import numpy as np
 
-from roughcontact.contact import cg
-from roughcontact.contact.checks import (
-    SweepOptions,
-    approach_steps,
-    as_operator,
-    check_bounded,
-    check_hardness,
-    check_max_iter,
-    check_precision,
-    check_surfaces,
-    check_tol,
-)
+from roughcontact.contact import cg, checks
+from roughcontact.contact.checks import SweepOptions
 from roughcontact.contact.kkt import free_set
-from roughcontact.contact.methods import Method, check_method, method_for, run
+from roughcontact.contact.methods import Method, check_problem, run
 from roughcontact.contact.products import Products
 from roughcontact.contact.result import SweepResult, SweepTable
 from roughcontact.contact.stiffness import free_set_cg
@@ -67,7 +57,7 @@ def _tangent(products: Products, pressure, tangent, options: SweepOptions, step:
                            products.operator.element_area * tangent.sum(axis=1), ok)
     if not ok.all():
         logger.warning(
-            "tangent stiffness: active-set CG did not reach tol %.3g for %d surfaces "
+            "tangent stiffness: free-set CG did not reach tol %.3g for %d surfaces "
             "at step %d", options.stiffness_tol, int((~ok).sum()), step,
         )
     return tangent
@@ -164,23 +154,16 @@ def sweep(operator, gaps0, approaches, *, method="auto", tol=1e-10, max_iter=Non
     -------
     SweepResult
     """
-    check_method(method)
-    tol = check_tol(tol)
-    check_max_iter(max_iter)
-    check_precision(precision)
-    stiffness_tol = check_tol(stiffness_tol, "stiffness_tol")
-    hardness = check_hardness(hardness)
-    op = as_operator(operator, element_area)
-    chosen = method_for(method, op)
-    gaps, shape = check_surfaces(gaps0, op, "gaps0", batched=True)
-    m, n = gaps.shape
-    steps = approach_steps(approaches, m, "m")
-    check_bounded(op, gaps, steps.max(axis=1), "approaches")
-    options = SweepOptions(tol, chosen.max_iter(max_iter, n), hardness, bool(stiffness),
+    problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
+                            precision=precision, element_area=element_area, hardness=hardness,
+                            batched=True)
+    stiffness_tol = checks.check_positive(stiffness_tol, "stiffness_tol")
+    gaps = problem.gaps
+    steps = checks.approach_steps(approaches, gaps.shape[0], "m")
+    checks.check_bounded(problem.operator, gaps, steps.max(axis=1), "approaches")
+    options = SweepOptions(problem.tol, problem.max_iter, problem.hardness, bool(stiffness),
                            stiffness_tol, bool(extrapolate))
-    table = SweepTable(m, steps.shape[1], shape, return_fields, profile)
-    if chosen.sweep is None:
-        approach_loop(chosen, chosen.products(op, precision), gaps, steps, options, table)
-    else:
-        chosen.sweep(op, gaps, steps, options, table)
-    return table.result(steps, chosen.name, tol, hardness)
+    table = SweepTable(gaps.shape[0], steps.shape[1], problem.shape, return_fields, profile)
+    loop = problem.method.sweep or approach_loop
+    loop(problem.method, problem.products, gaps, steps, options, table)
+    return table.result(steps, problem.method.name, problem.tol, problem.hardness)

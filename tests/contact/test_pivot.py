@@ -2,7 +2,7 @@
 
 Checked against things it does not use: scipy's NNLS on the Cholesky factor of
 C (the same problem solved independently), the constrained CG sweep, and the
-active-set CG of ``tangent_stiffness``.
+free-set CG of ``tangent_stiffness``.
 """
 
 import numpy as np
@@ -54,7 +54,7 @@ def test_agrees_with_the_cg_sweep_and_costs_fewer_products(problem):
     assert pivot.matvecs.sum() < cg.matvecs.sum()
 
 
-def test_tangent_from_the_factor_equals_the_active_set_cg(problem):
+def test_tangent_from_the_factor_equals_the_free_set_cg(problem):
     C, gaps, approaches, area = problem
     result = sweep(C, gaps[:1], approaches[:1], method="pivot", tol=1e-10, element_area=area,
                    return_fields=True)
