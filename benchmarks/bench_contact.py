@@ -86,7 +86,7 @@ import scipy.fft
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact.contact.solver import kkt_residual, solve, solve_many, sweep  # noqa: E402
+from roughcontact.contact import kkt_residual, solve, solve_many, sweep  # noqa: E402
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence  # noqa: E402
 
 SIGMA = 24.5e-6  # surface standard deviation [m]
@@ -177,7 +177,7 @@ def case_paper_sweep(args, surfaces: int, steps: int, extrapolate: bool) -> dict
     matrix, area, gaps = paper_problem(surfaces)
     approaches = np.linspace(0.0, APPROACH_END * SIGMA, args.steps + 1)[1 : steps + 1]
     start = time.perf_counter()
-    result = sweep(matrix, gaps, approaches, element_area=area, tol=args.tol,
+    result = sweep(matrix, gaps, approaches, method="cg", element_area=area, tol=args.tol,
                    precision="mixed", stiffness=True, extrapolate=extrapolate)
     wall = time.perf_counter() - start
     return dict(

@@ -80,7 +80,7 @@ import pandas as pd  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact.contact import solver  # noqa: E402
+from roughcontact import contact  # noqa: E402
 from roughcontact.elasticity import operators  # noqa: E402
 from roughcontact.reports.speed.experiments import grid_study  # noqa: E402
 from roughcontact.surfaces import synthetic  # noqa: E402
@@ -128,7 +128,7 @@ def interior_peaks(spectrum: dict | None, label: str, args) -> pd.DataFrame:
                 f_fine = z_fine.max() - z_fine
                 approach = float(np.quantile(f_fine, level))
                 z = z_fine[:: finest // g, :: finest // g]
-                result = solver.solve(op, z_fine.max() - z, approach, tol=1e-8)
+                result = contact.solve(op, z_fine.max() - z, approach, tol=1e-8)
                 p = result.pressure
                 area.append(result.real_area_fraction)
                 peak.append(p.max())

@@ -115,7 +115,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_contact import NU, E, periodic_problem, score  # noqa: E402
 
-from roughcontact.contact.solver import kkt_residual, solve  # noqa: E402
+from roughcontact.contact import kkt_residual, solve  # noqa: E402
 
 # ----------------------------------------------------------------- part 1
 

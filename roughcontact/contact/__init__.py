@@ -1,28 +1,30 @@
 """Stage 3, contact: a rigid flat pressed onto rough surfaces on an elastic body.
 
-``solver`` minimizes the complementary energy with p >= 0 (Eq 27 of Kumar
-et al. 2006) for one or many surfaces and through approach sweeps; ``nondim``
-solves a cell once in dimensionless form and rescales it to any sigma and E
-(Eq 28-32); ``aggregate`` averages a cell's surfaces at equal nominal
-pressure; ``cell`` is the one sweep-then-aggregate recipe the workflow, the
-reports and the audit share; ``halfspace_criterion`` measures, by solving,
-whether the half-space model is enough for a geometry.
+The solver minimizes the complementary energy with p >= 0 (Eq 27 of Kumar
+et al. 2006) for one or many surfaces and through approach sweeps, one
+module per part: ``methods`` (the methods by name, ``solve``,
+``solve_many``), ``cg``, ``steepest`` and ``pivot`` (one algorithm each,
+``iteration`` the projected iteration the first two share), ``sweeps`` (the
+approach loop and its warm starts), ``stiffness`` (the tangent dF/dd),
+``kkt`` (the residual every method stops on), ``result`` (the results all
+methods return), ``checks`` (input checks) and ``products`` (the products
+C p, double or mixed precision). ``validity`` reads from a solution how much
+of it lies above a hardness; ``nondim`` solves a cell once in dimensionless
+form and rescales it to any sigma and E (Eq 28-32); ``aggregate`` averages
+a cell's surfaces at equal nominal pressure; ``cell`` is the one
+sweep-then-aggregate recipe the workflow, the reports and the audit share;
+``halfspace_criterion`` measures, by solving, whether the half-space model
+is enough for a geometry.
 
-The solver's public names are re-exported here, so ``from roughcontact import
-contact; contact.solve(...)`` works as it always has.
+The solver's public names are importable from here: ``from roughcontact
+import contact; contact.solve(...)``.
 """
 
-from roughcontact.contact.solver import (
-    METHODS,
-    PRECISIONS,
-    ContactResult,
-    SweepResult,
-    kkt_residual,
-    solve,
-    solve_many,
-    sweep,
-    tangent_stiffness,
-)
+from roughcontact.contact.kkt import kkt_residual
+from roughcontact.contact.methods import METHODS, PRECISIONS, resolve_method, solve, solve_many
+from roughcontact.contact.result import ContactResult, SweepResult
+from roughcontact.contact.stiffness import tangent_stiffness
+from roughcontact.contact.sweeps import sweep
 
 __all__ = [
     "METHODS",
@@ -30,6 +32,7 @@ __all__ = [
     "ContactResult",
     "SweepResult",
     "kkt_residual",
+    "resolve_method",
     "solve",
     "solve_many",
     "sweep",

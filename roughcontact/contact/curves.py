@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from roughcontact.contact import solver
+from roughcontact.contact.checks import check_positive
+from roughcontact.contact.result import SweepResult, zero_plastic_area
 
 __all__ = [
     "DIAGNOSTICS",
@@ -32,7 +33,6 @@ __all__ = [
     "CellSweep",
     "NondimSweep",
     "PhysicalSweep",
-    "positive",
     "solver_arrays",
 ]
 
@@ -102,7 +102,7 @@ class CellSweep:
     plastic_area_fraction: np.ndarray | None = None
 
     def __post_init__(self):
-        solver.zero_plastic_area(self)
+        zero_plastic_area(self)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -191,7 +191,7 @@ class PhysicalSweep(CellSweep):
         return np.where(self.plastic_area_fraction > 0.0, share, 0.0)
 
     @classmethod
-    def from_contact_sweep(cls, result: solver.SweepResult, *, thickness: float,
+    def from_contact_sweep(cls, result: SweepResult, *, thickness: float,
                            nominal_area: float, sigma: float = float("nan"),
                            E: float = float("nan")) -> PhysicalSweep:
         """Wrap a :func:`roughcontact.contact.sweep` solved directly in SI units.
@@ -200,11 +200,11 @@ class PhysicalSweep(CellSweep):
         [m^2] is ``n dA`` of that sweep. Unconverged flags are kept and steps
         with non-finite values are flagged unconverged.
         """
-        thickness = positive(thickness, "thickness")
-        nominal_area = positive(nominal_area, "nominal_area")
+        thickness = check_positive(thickness, "thickness")
+        nominal_area = check_positive(nominal_area, "nominal_area")
         arrays = solver_arrays(result, {**SOLVER_FIELDS, "load": "load",
                                         "nominal_pressure": "nominal_pressure",
-                                        "contact_stiffness": "tangent_stiffness"},
+                                        "contact_stiffness": "contact_stiffness"},
                                stiffness="contact_stiffness")
         return cls(**arrays,
                    normalized_stiffness=thickness / nominal_area * arrays["contact_stiffness"],
@@ -283,14 +283,3 @@ def solver_arrays(result, names: Mapping[str, str], stiffness: str) -> dict:
     arrays["converged"] = arrays["converged"] & finite
     arrays["stiffness_converged"] = arrays["stiffness_converged"] & np.isfinite(arrays[stiffness])
     return arrays
-
-
-def positive(value, name: str) -> float:
-    """``value`` as a finite positive float; else ``ValueError`` naming it ``name``."""
-    try:
-        out = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a finite positive number, got {value!r}") from None
-    if not np.isfinite(out) or out <= 0.0:
-        raise ValueError(f"{name} must be a finite positive number, got {value!r}")
-    return out

@@ -59,16 +59,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughcontact.contact import solver, validity
+from roughcontact.contact import validity
+from roughcontact.contact.checks import approach_steps, check_positive
 from roughcontact.contact.curves import (
     DIAGNOSTICS,
     PROFILES,
     SOLVER_FIELDS,
     NondimSweep,
     PhysicalSweep,
-    positive,
     solver_arrays,
 )
+from roughcontact.contact.methods import resolve_method
+from roughcontact.contact.sweeps import sweep
 
 __all__ = [
     "SI_SCALES",
@@ -103,7 +105,7 @@ SI_SCALES = {
 #: nominal area 1, so the solver's load is ``Phat`` and its tangent stiffness
 #: ``dPhat / ddhat = k_P / E``.
 FROM_SOLVER = {**SOLVER_FIELDS, "nominal_pressure": "load",
-               "normalized_stiffness": "tangent_stiffness"}
+               "normalized_stiffness": "contact_stiffness"}
 
 
 @dataclass(frozen=True)
@@ -230,14 +232,14 @@ def dimensionless_operator(unit_influence, thickness: float):
     ndarray or operator object
         ``K`` [-], of the same kind as ``unit_influence``.
     """
-    thickness = positive(thickness, "thickness")
+    thickness = check_positive(thickness, "thickness")
     if isinstance(unit_influence, np.ndarray) or not hasattr(unit_influence, "matvec"):
         return np.asarray(unit_influence, dtype=float) / thickness
     return _ScaledOperator(unit_influence, thickness)
 
 
 def _check_steps(approaches, m: int) -> np.ndarray:
-    steps = solver._approach_steps(approaches, m, "units of sigma")
+    steps = approach_steps(approaches, m, "units of sigma")
     if (np.diff(steps, axis=1) <= 0.0).any():
         raise ValueError("approaches must increase strictly along the steps (units of sigma)")
     return np.ascontiguousarray(steps)
@@ -314,16 +316,16 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         solver's last iterate and must not be used as results. A warning is
         logged with their count.
     """
-    thickness = positive(thickness, "thickness")
-    element_area = positive(element_area, "element_area")
+    thickness = check_positive(thickness, "thickness")
+    element_area = check_positive(element_area, "element_area")
     gaps = initial_separation(heights)
     m, n = gaps.shape
     steps = _check_steps(approaches, m)
     batch_size = _check_batch_size(batch_size, m)
     operator = dimensionless_operator(unit_influence, thickness)
-    method = solver.resolve_method(method, operator)  # recorded as solved
+    method = resolve_method(method, operator)  # recorded as solved
     hardness = (None if nondim_hardness is None
-                else positive(nondim_hardness, "nondim_hardness (H L / (E sigma))"))
+                else check_positive(nondim_hardness, "nondim_hardness (H L / (E sigma))"))
     ranks = validity.rank_grid(n) if profile else None
     arrays = _sweep_batches(operator, gaps, steps, batch_size, progress, method=method, tol=tol,
                             max_iter=max_iter, stiffness_tol=stiffness_tol, precision=precision,
@@ -345,10 +347,10 @@ def _sweep_batches(operator, gaps, steps, batch_size: int, progress, *, method, 
     start = time.perf_counter()
     for first in range(0, m, batch_size):
         rows = slice(first, min(m, first + batch_size))
-        result = solver.sweep(operator, gaps[rows], steps[rows], method=method, tol=tol,
-                               max_iter=max_iter, element_area=1.0 / n, stiffness=True,
-                               stiffness_tol=stiffness_tol, precision=precision,
-                               hardness=hardness, profile=profile)
+        result = sweep(operator, gaps[rows], steps[rows], method=method, tol=tol,
+                       max_iter=max_iter, element_area=1.0 / n, stiffness=True,
+                       stiffness_tol=stiffness_tol, precision=precision,
+                       hardness=hardness, profile=profile)
         batch = solver_arrays(result, FROM_SOLVER, stiffness="normalized_stiffness")
         if profile:
             batch.update({name: getattr(result, name) for name in PROFILES})
@@ -424,8 +426,8 @@ def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None
     PhysicalSweep
         Converged flags carried over unchanged.
     """
-    sigma = positive(sigma, "sigma")
-    E = positive(E, "E")
+    sigma = check_positive(sigma, "sigma")
+    E = check_positive(E, "E")
     _check_geometry(nd, thickness, area)
     length = nd.thickness
     scales = {"sigma": sigma, "E sigma / L": E * sigma / length, "E": E, "1": 1.0}
@@ -449,7 +451,9 @@ def _check_geometry(nd: NondimSweep, thickness, area) -> None:
     """Refuse a ``thickness`` or ``area`` other than the solve's (:func:`to_physical`)."""
     for name, given, recorded in (("thickness", thickness, nd.thickness),
                                   ("area", area, nd.nominal_area)):
-        if given is not None and abs(positive(given, name) - recorded) > GEOMETRY_RTOL * recorded:
+        if given is None:
+            continue
+        if abs(check_positive(given, name) - recorded) > GEOMETRY_RTOL * recorded:
             raise ValueError(
                 f"{name} = {given!r} differs from the {recorded!r} of the dimensionless solve; "
                 f"the influence matrix fixes the geometry, solve the other geometry separately"
@@ -470,7 +474,7 @@ def _check_cap(nd: NondimSweep, hardness, pressure_scale: float) -> float | None
         raise ValueError(
             f"the sweep was solved with the cap H L / (E sigma) = {cap:.6g}; give the "
             f"hardness H [Pa] so that the scaling can be checked")
-    H = positive(hardness, "hardness")
+    H = check_positive(hardness, "hardness")
     wanted = H / pressure_scale
     if abs(wanted - cap) > HARDNESS_RTOL * cap:
         raise ValueError(

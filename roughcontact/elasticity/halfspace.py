@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
+from roughcontact.elasticity.protocol import RestrictedInfluence
+
 __all__ = ["PeriodicHalfSpace", "halfspace_influence", "love_rectangle"]
 
 
@@ -281,6 +283,9 @@ class PeriodicHalfSpace:
         ``dx * dy`` [m^2].
     spectrum : ndarray, shape (ny, nx // 2 + 1)
         Real eigenvalues of ``C`` [m/Pa] on the ``rfft2`` frequency grid.
+
+    It is an :class:`roughcontact.elasticity.protocol.InfluenceOperator`
+    (matrix-free: ``matrix`` is None).
     """
 
     grid: tuple[int, int]
@@ -290,6 +295,7 @@ class PeriodicHalfSpace:
     mean_compliance: float = 0.0
     images: int = 3
     spectrum: np.ndarray = field(init=False, repr=False, compare=False)
+    matrix = None
 
     def __post_init__(self):
         E, nu = _check_material(self.E, self.nu)
@@ -324,6 +330,11 @@ class PeriodicHalfSpace:
         """Area of one contact element ``dx * dy`` [m^2]."""
         return self.size[0] * self.size[1] / (self.grid[0] * self.grid[1])
 
+    @property
+    def dtype(self) -> np.dtype:
+        """float64."""
+        return np.dtype(float)
+
     def diagonal(self) -> np.ndarray:
         """Self-compliances ``C[i, i]`` [m/Pa], shape (n,), all equal."""
         nx, ny = self.grid
@@ -356,3 +367,7 @@ class PeriodicHalfSpace:
     def __matmul__(self, pressure) -> np.ndarray:
         """``C @ p``, see :meth:`matvec`."""
         return self.matvec(pressure)
+
+    def restrict(self, indices) -> RestrictedInfluence:
+        """``C_AA`` on the elements ``indices``, matrix-free."""
+        return RestrictedInfluence(self, indices)

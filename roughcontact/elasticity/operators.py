@@ -59,6 +59,7 @@ from roughcontact.elasticity.influence import (
     finite_body_correction,
     unit_modulus_influence,
 )
+from roughcontact.elasticity.protocol import RestrictedInfluence
 
 __all__ = [
     "COARSE_MAX",
@@ -147,6 +148,10 @@ class BlockOperator:
         grid (symmetric), or None for the half-space alone.
     coarse_grid : (int, int) or None
         Coarse contact elements ``(ncx, ncy)`` of ``correction``.
+
+    It is an :class:`roughcontact.elasticity.protocol.InfluenceOperator`
+    (matrix-free: ``matrix`` is None; it fixes no common row sum, so
+    ``mean_compliance`` is None).
     """
 
     grid: tuple[int, int]
@@ -158,6 +163,8 @@ class BlockOperator:
     _px: np.ndarray | None = field(init=False, repr=False, compare=False)
     _py: np.ndarray | None = field(init=False, repr=False, compare=False)
     _diagonal: np.ndarray = field(init=False, repr=False, compare=False)
+    matrix = None
+    mean_compliance = None
 
     def __post_init__(self):
         nx, ny, lx, ly = _check_grid(self.grid, self.size)
@@ -214,6 +221,11 @@ class BlockOperator:
         return self.size[0] * self.size[1] / (self.grid[0] * self.grid[1])
 
     @property
+    def dtype(self) -> np.dtype:
+        """float64."""
+        return np.dtype(float)
+
+    @property
     def kind(self) -> str:
         """"hybrid" (with a finite-body correction) or "halfspace"."""
         return "halfspace" if self.correction is None else "hybrid"
@@ -242,6 +254,10 @@ class BlockOperator:
 
     def __matmul__(self, pressure) -> np.ndarray:
         return self.matvec(pressure)
+
+    def restrict(self, indices) -> RestrictedInfluence:
+        """``E C_AA`` on the elements ``indices``, matrix-free."""
+        return RestrictedInfluence(self, indices)
 
     def to_dense(self, max_elements: int = 6000) -> np.ndarray:
         """The (n, n) matrix, for small grids (checks and the exact solver)."""

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from approach_targets import target_grid
 
+from roughcontact import contact
 from roughcontact.contact import cell as cell_module
 from roughcontact.contact import nondim
-from roughcontact.contact import solver as contact
 from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence

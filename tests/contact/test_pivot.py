@@ -2,15 +2,16 @@
 
 Checked against things it does not use: scipy's NNLS on the Cholesky factor of
 C (the same problem solved independently), the constrained CG sweep, and the
-active-set CG of ``tangent_stiffness``.
+free-set CG of ``tangent_stiffness``.
 """
 
 import numpy as np
 import pytest
 from test_solver import nnls_reference  # scipy NNLS on the Cholesky factor of C
 
-from roughcontact.contact.solver import resolve_method, sweep, tangent_stiffness
+from roughcontact.contact import resolve_method, solve, solve_many, sweep, tangent_stiffness
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
+from roughcontact.elasticity.protocol import DenseInfluence
 
 E, NU = 2.1e11, 0.3
 
@@ -49,17 +50,17 @@ def test_agrees_with_the_cg_sweep_and_costs_fewer_products(problem):
     cg = sweep(C, gaps, approaches, method="cg", tol=1e-10, element_area=area)
     assert np.array_equal(pivot.real_area_fraction, cg.real_area_fraction)
     assert pivot.load == pytest.approx(cg.load, rel=1e-7)
-    assert pivot.tangent_stiffness == pytest.approx(cg.tangent_stiffness, rel=1e-5)
+    assert pivot.contact_stiffness == pytest.approx(cg.contact_stiffness, rel=1e-5)
     assert pivot.matvecs.sum() < cg.matvecs.sum()
 
 
-def test_tangent_from_the_factor_equals_the_active_set_cg(problem):
+def test_tangent_from_the_factor_equals_the_free_set_cg(problem):
     C, gaps, approaches, area = problem
     result = sweep(C, gaps[:1], approaches[:1], method="pivot", tol=1e-10, element_area=area,
                    return_fields=True)
     for k in (1, 3, 5):
         expected = tangent_stiffness(C, result.pressure[0, k], element_area=area, tol=1e-13)
-        assert result.tangent_stiffness[0, k] == pytest.approx(expected, rel=1e-9)
+        assert result.contact_stiffness[0, k] == pytest.approx(expected, rel=1e-9)
     assert result.stiffness_converged.all()
 
 
@@ -85,11 +86,37 @@ def test_ill_conditioned_matrix_is_solved_to_rounding():
 
 
 def test_auto_picks_pivot_for_dense_and_cg_for_matrix_free(problem):
-    C = problem[0]
+    C, gaps, approaches, area = problem
     assert resolve_method("auto", C) == "pivot"
+    assert resolve_method("auto", DenseInfluence(C, area)) == "pivot"
     periodic = PeriodicHalfSpace((16, 16), (1e-3, 1e-3), E, NU)
     assert resolve_method("auto", periodic) == "cg"
     assert resolve_method("steepest", C) == "steepest"
+    # "auto" is the default of the entry points: the study's solver
+    assert solve(C, gaps[0], approaches[0, 2], element_area=area).method == "pivot"
+    assert sweep(C, gaps[:1], approaches[:1, :2], element_area=area).method == "pivot"
+    ramp = np.linspace(0.0, 1e-6, 256).reshape(16, 16)
+    assert solve(periodic, ramp, 1e-7).method == "cg"
+
+
+def test_single_solves_and_the_sweep_share_the_pivoting(problem):
+    """solve_many("pivot"/"exact") runs the rounds of the sweep for one step: the same
+    solutions to rounding, a dense matrix passed plain or wrapped alike."""
+    C, gaps, approaches, area = problem
+    swept = sweep(C, gaps, approaches, method="pivot", tol=1e-10, element_area=area,
+                  return_fields=True)
+    for k in (0, 3, 5):
+        for method, operator, given in (("pivot", C, area), ("exact", DenseInfluence(C, area),
+                                                            None)):
+            results = solve_many(operator, gaps, approaches[:, k], method=method, tol=1e-10,
+                                 element_area=given)
+            for j, result in enumerate(results):
+                assert result.method == method and result.converged
+                assert result.matvecs == result.iterations + 2  # rounds, then C p
+                expected = swept.pressure[j, k]
+                assert np.array_equal(result.contact_set, expected > 0)
+                np.testing.assert_allclose(result.pressure, expected, rtol=0,
+                                           atol=1e-12 * expected.max())
 
 
 def test_not_positive_definite_is_refused(problem):

@@ -13,7 +13,7 @@ import pytest
 import scipy.linalg
 import scipy.optimize
 
-from roughcontact.contact.solver import kkt_residual, solve, solve_many, sweep, tangent_stiffness
+from roughcontact.contact import kkt_residual, solve, solve_many, sweep, tangent_stiffness
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
 
 E = 1.0e9
@@ -173,8 +173,9 @@ def test_periodic_operator_matches_nnls():
 
 def test_mixed_precision_meets_tolerance(small_problem):
     C, gaps, area = small_problem
-    double = solve(C, gaps[2], 3e-6, element_area=area, tol=1e-11)
-    mixed = solve(C, gaps[2], 3e-6, element_area=area, tol=1e-11, precision="mixed")
+    double = solve(C, gaps[2], 3e-6, method="cg", element_area=area, tol=1e-11)
+    mixed = solve(C, gaps[2], 3e-6, method="cg", element_area=area, tol=1e-11,
+                  precision="mixed")
     assert mixed.converged and mixed.residual <= 1e-11
     assert kkt_residual(C, gaps[2], 3e-6, mixed.pressure) <= 1e-11
     np.testing.assert_allclose(mixed.pressure, double.pressure, rtol=0,
@@ -263,9 +264,9 @@ def test_sweep_matches_solve_and_is_monotone(small_problem):
                 single.mean_plane_deflection, rel=1e-8)
     # The stiffness grows as contact spreads and bounds the secant slope from
     # below at the end of each interval (load convex in d for these surfaces).
-    assert (result.tangent_stiffness > 0).all()
+    assert (result.contact_stiffness > 0).all()
     secant = np.diff(result.load, axis=1) / np.diff(approaches)
-    assert (result.tangent_stiffness[:, 1:] >= secant * (1 - 1e-9)).all()
+    assert (result.contact_stiffness[:, 1:] >= secant * (1 - 1e-9)).all()
 
 
 # --- tangent stiffness --------------------------------------------------------
@@ -283,7 +284,7 @@ def test_tangent_stiffness_matches_finite_difference(small_problem):
     stiffness = tangent_stiffness(C, centre.pressure, element_area=area, tol=1e-12)
     assert stiffness == pytest.approx(finite_difference, rel=1e-5)
     swept = sweep(C, gaps[:1], [approach], element_area=area, stiffness_tol=1e-10)
-    assert swept.tangent_stiffness[0, 0] == pytest.approx(finite_difference, rel=1e-5)
+    assert swept.contact_stiffness[0, 0] == pytest.approx(finite_difference, rel=1e-5)
 
 
 def test_tangent_stiffness_full_contact_is_closed_form(small_problem):
@@ -390,8 +391,9 @@ def test_sweep_extrapolation_same_solution_fewer_iterations(small_problem, stiff
     """The predictor (tangent or secant dp/dd) changes the start, not the solution."""
     C, gaps, area = small_problem
     approaches = np.linspace(0.5e-6, 5e-6, 10)
-    runs = [sweep(C, gaps, approaches, element_area=area, tol=1e-10, stiffness=stiffness,
-                  stiffness_tol=1e-10, extrapolate=flag, return_fields=True)
+    runs = [sweep(C, gaps, approaches, method="cg", element_area=area, tol=1e-10,
+                  stiffness=stiffness, stiffness_tol=1e-10, extrapolate=flag,
+                  return_fields=True)
             for flag in (True, False)]
     predicted, plain = runs
     assert predicted.converged.all() and plain.converged.all()
@@ -408,7 +410,7 @@ def test_sweep_extrapolation_same_solution_fewer_iterations(small_problem, stiff
 
 def test_predict_is_exact_on_a_fixed_contact_set(small_problem):
     """Full contact never changes the set, so the tangent prediction is the solution."""
-    from roughcontact.contact.solver import _predict
+    from roughcontact.contact.sweeps import predict
 
     C, gaps, area = small_problem
     f = gaps[0].ravel()
@@ -417,12 +419,12 @@ def test_predict_is_exact_on_a_fixed_contact_set(small_problem):
     p2 = np.linalg.solve(C, second - f)
     assert (p1 > 0).all()
     rate = np.linalg.solve(C, np.ones_like(f))
-    predicted = _predict(p1[None], np.array([second]), np.array([first]), rate[None])
+    predicted = predict(p1[None], np.array([second]), np.array([first]), rate[None])
     np.testing.assert_allclose(predicted[0], p2, rtol=1e-9)
     # No rate yet (NaN): the start stays the last solution; negatives are clipped.
-    kept = _predict(p1[None], np.array([second]), np.array([first]), np.full((1, 400), np.nan))
+    kept = predict(p1[None], np.array([second]), np.array([first]), np.full((1, 400), np.nan))
     np.testing.assert_array_equal(kept[0], p1)
-    clipped = _predict(p1[None], np.array([0.0]), np.array([first]), rate[None])
+    clipped = predict(p1[None], np.array([0.0]), np.array([first]), rate[None])
     assert (clipped >= 0).all()
 
 
@@ -430,7 +432,8 @@ def test_sweep_extrapolation_nonconvergence_is_flagged_not_nan(small_problem, ca
     C, gaps, area = small_problem
     approaches = np.linspace(0.5e-6, 5e-6, 4)
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = sweep(C, gaps, approaches, element_area=area, max_iter=2, stiffness=False)
+        result = sweep(C, gaps, approaches, method="cg", element_area=area, max_iter=2,
+                       stiffness=False)
     assert not result.converged[:, 1:].all()
     assert np.isfinite(result.load).all() and np.isfinite(result.residual).all()
     assert "did not converge" in caplog.text

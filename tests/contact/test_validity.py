@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 
 from roughcontact.contact import cell as cell_module
-from roughcontact.contact import nondim, validity
-from roughcontact.contact.solver import sweep
+from roughcontact.contact import nondim, sweep, validity
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many
 

@@ -10,7 +10,7 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from roughcontact.contact import solver as contact
+from roughcontact import contact
 from roughcontact.elasticity.influence import (
     MESH_PRESETS,
     BlockGeometry,

@@ -7,10 +7,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from roughcontact.contact import solver as contact
+from roughcontact import contact
 from roughcontact.elasticity import operators
-from roughcontact.elasticity.halfspace import halfspace_influence
+from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, hybrid_unit_modulus_influence
+from roughcontact.elasticity.protocol import DenseInfluence, InfluenceOperator
 from roughcontact.study import cells as study
 from roughcontact.study import jobs as pipeline
 from roughcontact.study.config import validated
@@ -83,6 +84,40 @@ def test_contact_with_operator_equals_contact_with_its_matrix(small_hybrid):
         assert ra.converged and rb.converged
         np.testing.assert_allclose(ra.pressure, rb.pressure, rtol=1e-6,
                                    atol=1e-7 * rb.pressure.max())
+
+
+def test_every_operator_offers_the_influence_protocol(small_hybrid):
+    """Dense matrix, hybrid block, half-space and periodic FFT operators: one interface,
+    whose restrict(A) is the operator C_AA on a contact set A (the submatrix)."""
+    geom, op, dense = small_hybrid
+    n = op.shape[0]
+    half = operators.halfspace_operator(geom.grid, geom.size, 0.3)
+    periodic = PeriodicHalfSpace(geom.grid, geom.size, 1.0, 0.3)
+    cases = [(DenseInfluence(dense, op.element_area, geom.grid), dense), (op, dense),
+             (half, half.to_dense()), (periodic, periodic.matvec(np.eye(n)))]
+    rng = np.random.default_rng(5)
+    subset = np.sort(rng.choice(n, 40, replace=False))
+    p = rng.random((40, 2))
+    full = rng.random(n)
+    for operator, matrix in cases:
+        assert isinstance(operator, InfluenceOperator)
+        assert operator.shape == (n, n) and operator.dtype == np.float64
+        assert operator.grid == geom.grid
+        assert operator.element_area == pytest.approx(geom.spacing[0] * geom.spacing[1])
+        np.testing.assert_allclose(operator.matvec(full), matrix @ full, rtol=1e-10)
+        restricted = operator.restrict(subset)
+        assert isinstance(restricted, InfluenceOperator) and restricted.shape == (40, 40)
+        expected = matrix[np.ix_(subset, subset)]
+        np.testing.assert_allclose(restricted.matvec(p), expected @ p, rtol=1e-10)
+        np.testing.assert_allclose(restricted @ p[:, 1], expected @ p[:, 1], rtol=1e-10)
+        np.testing.assert_allclose(restricted.diagonal(), np.diag(expected), rtol=1e-12)
+        inner = restricted.restrict([0, 5, 7])
+        np.testing.assert_allclose(inner.matvec(np.ones(3)),
+                                   expected[np.ix_([0, 5, 7], [0, 5, 7])].sum(axis=1),
+                                   rtol=1e-10)
+    assert np.array_equal(cases[0][0].restrict(subset).matrix, dense[np.ix_(subset, subset)])
+    assert op.matrix is None and half.matrix is None and periodic.matrix is None
+    assert periodic.mean_compliance == 0.0 and op.mean_compliance is None
 
 
 def test_hybrid_refuses_inaccurate_coarse_meshes():

@@ -17,7 +17,7 @@ import logging
 import numpy as np
 import pytest
 
-from roughcontact.contact import solver
+from roughcontact import contact
 
 #: cg meets negative curvature at its third iteration (eigenvalues -0.37, 1.11, 4.26).
 CG_MATRIX = np.array([[1.0, -0.5, 0.0], [-0.5, 1.0, 2.0], [0.0, 2.0, 3.0]])
@@ -42,13 +42,13 @@ def test_the_matrices_are_symmetric_indefinite_with_a_positive_diagonal():
 @pytest.mark.parametrize(("method", "matrix", "gap"), CASES)
 def test_exact_refuses_these_matrices(method, matrix, gap):
     with pytest.raises(ValueError, match=REFUSAL):
-        solver.solve(matrix, gap, APPROACH, method="exact", element_area=1.0)
+        contact.solve(matrix, gap, APPROACH, method="exact", element_area=1.0)
 
 
 @pytest.mark.parametrize(("method", "matrix", "gap"), CASES)
 def test_solve_refuses_negative_curvature(method, matrix, gap):
     with pytest.raises(ValueError, match=REFUSAL + r".*non-positive curvature") as info:
-        solver.solve(matrix, gap, APPROACH, method=method, element_area=1.0)
+        contact.solve(matrix, gap, APPROACH, method=method, element_area=1.0)
     assert method in str(info.value)
 
 
@@ -56,12 +56,12 @@ def test_mixed_precision_refuses_negative_curvature():
     # Single-precision products take another path; where it meets the negative
     # direction the refusal is confirmed in double precision.
     with pytest.raises(ValueError, match=REFUSAL):
-        solver.solve(CG_MATRIX, CG_GAP, APPROACH, method="cg", element_area=1.0,
+        contact.solve(CG_MATRIX, CG_GAP, APPROACH, method="cg", element_area=1.0,
                      precision="mixed")
     # From this warm start the first steepest direction is (-1, 1), curvature -2.
     matrix = np.array([[1.0, 2.0], [2.0, 1.0]])
     with pytest.raises(ValueError, match=REFUSAL + r".*s\.C s / s\.s = -1 "):
-        solver.solve(matrix, np.array([0.0, 3.0]), 3.0, method="steepest", element_area=1.0,
+        contact.solve(matrix, np.array([0.0, 3.0]), 3.0, method="steepest", element_area=1.0,
                      p0=np.array([0.0, 1.0]), precision="mixed", max_iter=50)
 
 
@@ -70,14 +70,14 @@ def test_solve_many_names_the_surface_with_negative_curvature(method, matrix, ga
     # surface 0 stays clear of the matrix's negative direction (one element in contact)
     clear = np.array([0.0, 5.0, 5.0])
     with pytest.raises(ValueError, match=REFUSAL + r".*surface 1 "):
-        solver.solve_many(matrix, np.stack([clear, gap]), APPROACH, method=method,
+        contact.solve_many(matrix, np.stack([clear, gap]), APPROACH, method=method,
                           element_area=1.0)
 
 
 @pytest.mark.parametrize(("method", "matrix", "gap"), CASES)
 def test_sweep_refuses_negative_curvature(method, matrix, gap):
     with pytest.raises(ValueError, match=REFUSAL):
-        solver.sweep(matrix, gap[None], [APPROACH, 1.5 * APPROACH], method=method,
+        contact.sweep(matrix, gap[None], [APPROACH, 1.5 * APPROACH], method=method,
                      element_area=1.0)
 
 
@@ -108,11 +108,11 @@ def test_positive_definite_solves_are_unchanged(method, condition, caplog):
     matrix = (basis * np.logspace(0.0, -np.log10(condition), n)) @ basis.T
     matrix = 0.5 * (matrix + matrix.T)
     gaps = rng.uniform(0.0, 1.0, (3, n))
-    reference = solver.solve_many(matrix, gaps, 0.5, method="exact", element_area=1.0)
+    reference = contact.solve_many(matrix, gaps, 0.5, method="exact", element_area=1.0)
     operator = _CountingOperator(matrix)
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        results = solver.solve_many(operator, gaps, 0.5, method=method, tol=1e-9)
-        mixed = solver.solve_many(matrix, gaps, 0.5, method=method, tol=1e-9,
+        results = contact.solve_many(operator, gaps, 0.5, method=method, tol=1e-9)
+        mixed = contact.solve_many(matrix, gaps, 0.5, method=method, tol=1e-9,
                                   element_area=1.0, precision="mixed")
     assert not caplog.records
     for result, fast, exact in zip(results, mixed, reference, strict=True):

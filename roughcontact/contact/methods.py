@@ -1,0 +1,320 @@
+"""The contact methods by name, and the solves at one approach (:func:`solve`, :func:`solve_many`).
+
+Frictionless normal contact of a rigid flat with a rough elastic body
+(Section 3 of Kumar, Sadeghi & Krousgrill 2006): given the influence
+coefficients ``C`` (Eq 16), the initial separation ``f = z_max - z`` (Eq
+21) and the rigid-body approach ``d``, find the contact pressure ``p`` that
+minimizes the complementary energy (Eq 17, 18, 27)
+
+    V(p) = 1/2 p . C p - p . (d - f)    subject to    p >= 0,
+
+whose optimality (KKT) conditions are Eq 19-22: with the gap
+``g = u + f - d`` and ``u = C p``, ``g = 0`` where ``p > 0`` (contact) and
+``g >= 0`` where ``p = 0`` (separation). Every method stops on the same KKT
+residual (:mod:`roughcontact.contact.kkt`). All quantities are SI: ``p``
+in Pa, ``u``, ``f``, ``d``, ``g`` in m, ``C`` in m/Pa, loads in N.
+
+Hardness cap: with ``hardness = H`` [Pa] every method minimizes the same
+``V(p)`` over ``0 <= p <= H`` (elastic-perfectly-plastic elements); the
+elements at ``H`` are the plastic area (``plastic_area_fraction`` of the
+results, included in ``real_area_fraction``). ``hardness=None`` (the
+default) is the uncapped problem, computed exactly as without the keyword.
+A capped solution depends on ``H L / (E sigma)`` besides the surface shape
+and ``d / sigma``, so one dimensionless solve
+(:mod:`roughcontact.contact.nondim`) serves every (sigma, E, H) with the
+same ``H L / (E sigma)``.
+
+Methods (:data:`REGISTRY`; :data:`METHODS` also holds ``"auto"``):
+
+``"steepest"``
+    Projected steepest descent, the paper's method (Fig 6;
+    :mod:`roughcontact.contact.steepest`); a slow baseline.
+``"cg"``
+    Constrained conjugate gradients of Polonsky & Keer (1999)
+    (:mod:`roughcontact.contact.cg`).
+``"pivot"``
+    Block principal pivoting (:mod:`roughcontact.contact.pivot`), finite,
+    for dense matrices (or up to a few thousand unknowns): the reference.
+    Its sweep keeps every surface in flight at once.
+``"exact"``
+    The same pivoting, whose sweep solves one approach at a time with the
+    shared approach loop (:mod:`roughcontact.contact.sweeps`).
+``"auto"``
+    ``"pivot"`` for a dense matrix, ``"cg"`` for a matrix-free operator
+    (:func:`resolve_method`); the default.
+
+Operators: ``operator`` is a dense symmetric influence matrix (ndarray, n x
+n, m/Pa; then ``element_area`` [m^2] must be given), an
+:class:`roughcontact.elasticity.protocol.InfluenceOperator` (such as
+:class:`~roughcontact.elasticity.halfspace.PeriodicHalfSpace`), or any
+object with ``shape == (n, n)``, ``diagonal()`` and ``matvec(p)`` accepting
+(n,) and (n, m) arrays; it is checked and wrapped once
+(:func:`roughcontact.contact.checks.as_operator`).
+
+Performance: the products ``C p`` dominate the iterative methods.
+:func:`solve_many` and :func:`roughcontact.contact.sweep` apply ``C`` to all
+unfinished surfaces at once (BLAS 3), and ``precision="mixed"`` takes the
+search-direction products in single precision (about half the time; the
+result still meets ``tol`` in double precision). On a 2-core machine
+shared with other jobs one BLAS thread (``OPENBLAS_NUM_THREADS=1``) was
+faster than two.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughcontact.contact import cg, checks, pivot, steepest
+from roughcontact.contact.products import PRECISIONS, Products
+from roughcontact.contact.result import Batch, ContactResult
+from roughcontact.elasticity.protocol import InfluenceOperator
+
+__all__ = ["METHODS", "PRECISIONS", "REGISTRY", "Method", "Problem", "check_method",
+           "check_problem", "method_for", "resolve_method", "run", "solve", "solve_many"]
+
+logger = logging.getLogger("roughcontact.contact")
+
+
+@dataclass(frozen=True)
+class Method:
+    """A contact method: how it solves a batch at one approach, and its approach sweep.
+
+    Attributes
+    ----------
+    name : str
+        Its name in :data:`REGISTRY`, recorded in the results.
+    solve : callable
+        ``solve(products, gaps, d, pressure, tol, max_iter, hardness) -> Batch``.
+    default_max_iter : callable
+        Iteration limit for ``n`` unknowns when none is given.
+    single_precision : bool
+        Takes single-precision search products (``precision="mixed"``).
+    sweep : callable or None
+        ``sweep(method, products, gaps, steps, options, table)``, its own
+        approach loop; None: the shared loop of :mod:`roughcontact.contact.sweeps`.
+    """
+
+    name: str
+    solve: Callable[..., Batch]
+    default_max_iter: Callable[[int], int]
+    single_precision: bool
+    sweep: Callable[..., None] | None = None
+
+    def max_iter(self, max_iter, n: int) -> int:
+        """``max_iter`` as an int, or the method's default for ``n`` unknowns."""
+        return self.default_max_iter(n) if max_iter is None else int(max_iter)
+
+    def products(self, operator, precision: str) -> Products:
+        """The products of a solve with ``operator`` at ``precision``."""
+        return Products.of(operator, precision, self.single_precision)
+
+
+#: The methods by name.
+REGISTRY = {
+    "steepest": Method("steepest", steepest.solve, steepest.default_max_iter, True),
+    "cg": Method("cg", cg.solve, cg.default_max_iter, True),
+    "exact": Method("exact", pivot.solve, pivot.default_max_iter, False),
+    "pivot": Method("pivot", pivot.solve, pivot.default_max_iter, False, pivot.sweep),
+}
+
+
+def _auto(operator) -> str:
+    """Block principal pivoting needs the dense ``C`` (it factors its blocks
+    ``C_AA``); a matrix-free operator (hybrid, half-space) is solved by CG."""
+    return "cg" if checks.given_matrix(operator) is None else "pivot"
+
+
+#: Names that stand for a method chosen from the operator.
+_CHOSEN = {"auto": _auto}
+METHODS = (*REGISTRY, *_CHOSEN)
+
+
+def check_method(method) -> None:
+    """``method`` is one of :data:`METHODS`."""
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+
+
+def resolve_method(method: str, operator) -> str:
+    """The method ``"auto"`` stands for: ``"pivot"`` for a dense matrix, else ``"cg"``.
+
+    Other methods are returned unchanged. Block principal pivoting needs the
+    dense ``C`` (its blocks ``C_AA`` are factored); a matrix-free operator
+    (hybrid, half-space) is solved by CG.
+    """
+    choose = _CHOSEN.get(method)
+    return method if choose is None else choose(operator)
+
+
+def method_for(method: str, operator) -> Method:
+    """The :class:`Method` ``method`` names for ``operator`` (``"auto"`` resolved)."""
+    return REGISTRY[resolve_method(method, operator)]
+
+
+def run(method: Method, products: Products, gaps, d, pressure, tol: float, max_iter: int,
+        hardness=None) -> Batch:
+    """Solve the rows of ``gaps`` at approaches ``d`` with ``method``; warn if some
+    surfaces did not converge (on the ``roughcontact.contact`` logger)."""
+    batch = method.solve(products, gaps, d, pressure, tol, max_iter, hardness)
+    failed = np.flatnonzero(~batch.converged)
+    if failed.size:
+        logger.warning(
+            "contact solve (%s) did not converge in %d iterations for %d of %d surfaces; "
+            "largest KKT residual %.3g > tol %.3g",
+            method.name, max_iter, failed.size, gaps.shape[0],
+            float(batch.residual[failed].max()), tol,
+        )
+    return batch
+
+
+@dataclass(frozen=True)
+class Problem:
+    """The checked arguments every entry point shares.
+
+    ``operator`` and the :class:`Method` chosen for it, the initial
+    separations ``gaps`` (m, n) [m] and the ``shape`` of one surface as
+    given, ``tol``, ``max_iter`` (the method's default filled in), the
+    ``products`` of the solve and the cap ``hardness`` [Pa] or None.
+    """
+
+    operator: InfluenceOperator
+    method: Method
+    gaps: np.ndarray
+    shape: tuple
+    tol: float
+    max_iter: int
+    products: Products
+    hardness: float | None
+
+
+def check_problem(operator, gaps0, name: str, *, method, tol, max_iter, precision,
+                  element_area, hardness, batched: bool) -> Problem:
+    """Check the arguments shared by the entry points, in the order of their messages;
+    the gaps are named ``name``."""
+    check_method(method)
+    tol = checks.check_positive(tol)
+    checks.check_max_iter(max_iter)
+    checks.check_precision(precision)
+    hardness = checks.check_hardness(hardness)
+    op = checks.as_operator(operator, element_area)
+    chosen = method_for(method, op)
+    gaps, shape = checks.check_surfaces(gaps0, op, name, batched=batched)
+    return Problem(op, chosen, gaps, shape, tol, chosen.max_iter(max_iter, gaps.shape[1]),
+                   chosen.products(op, precision), hardness)
+
+
+def _solve_rows(problem: Problem, approach, p0) -> list[ContactResult]:
+    """Solve every surface of ``problem`` at ``approach``; one :class:`ContactResult` each."""
+    gaps, hardness = problem.gaps, problem.hardness
+    m, n = gaps.shape
+    d = checks.check_approach(approach, m)
+    checks.check_bounded(problem.operator, gaps, d, "approach")
+    pressure = checks.check_initial_pressure(p0, m, n, hardness=hardness)
+    batch = run(problem.method, problem.products, gaps, d, pressure, problem.tol,
+                problem.max_iter, hardness)
+    return [batch.contact_result(j, gaps[j] - d[j], problem.operator.element_area,
+                                 problem.shape, problem.method.name, problem.tol, d[j], hardness)
+            for j in range(m)]
+
+
+def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, p0=None,
+          element_area=None, precision="double", hardness=None) -> ContactResult:
+    """Contact pressure under a rigid flat at prescribed approach (Eq 27).
+
+    Minimizes ``V = 1/2 p.C p - p.(d - f)`` over ``p >= 0`` (Eq 17, 18, 27 of
+    Kumar et al. 2006): at the solution the gap ``u + f - d`` vanishes where
+    ``p > 0`` and is non-negative elsewhere (Eq 19-22), ``u = C p`` (Eq 16).
+
+    Parameters
+    ----------
+    operator : ndarray (n, n) or operator object
+        Influence coefficients ``C`` [m/Pa]: a dense symmetric matrix (then
+        ``element_area`` is required) or an operator object (module
+        docstring), e.g. ``PeriodicHalfSpace``.
+    gap0 : ndarray, (ny, nx) or (n,)
+        Initial separation ``f = z_max - z`` [m] (Eq 21), element order
+        ``k = iy * nx + ix``. Results come back in the same shape.
+    approach : float
+        Rigid-body approach ``d >= 0`` [m] (displacement control).
+    method : {"auto", "cg", "steepest", "exact", "pivot"}
+        See the module docstring; ``"pivot"`` and ``"exact"`` are the same
+        for a single solve; ``"auto"`` (default) is ``"pivot"`` for a dense
+        matrix and ``"cg"`` for a matrix-free operator (:func:`resolve_method`).
+    tol : float
+        Tolerance on the dimensionless KKT residual (:mod:`roughcontact.contact.kkt`).
+    max_iter : int, optional
+        Iteration limit; default ``max(1000, 2n)`` for ``"cg"``,
+        ``max(20000, 20n)`` for ``"steepest"``, ``10n + 100`` pivots for
+        ``"exact"`` and ``"pivot"``.
+    p0 : ndarray, optional
+        Non-negative starting pressure [Pa] (warm start), shape of ``gap0``;
+        default zero. Pivoting takes its support as the first contact set.
+    element_area : float, optional
+        Element area ``dA`` [m^2]; default ``operator.element_area``.
+    precision : {"double", "mixed"}
+        ``"mixed"`` takes the search-direction products of ``"cg"`` and
+        ``"steepest"`` with a single-precision copy of a dense ``C`` (about
+        twice as fast); convergence is still decided on double-precision
+        residuals, so the result meets ``tol`` either way. Ignored for
+        matrix-free operators and pivoting.
+    hardness : float, optional
+        Pressure cap ``H`` [Pa] (elastic-perfectly-plastic elements): solves
+        Eq 27 over ``0 <= p <= H`` instead of ``p >= 0``; default None (no
+        cap; ``+inf`` is the same). See the module docstring. ``p0`` is
+        clipped to ``H``.
+
+    Returns
+    -------
+    ContactResult
+        Solution and diagnostics. If the limit is reached first, the last
+        iterate is returned with ``converged=False`` and a warning is logged
+        on the ``roughcontact.contact`` logger.
+
+    Raises
+    ------
+    ValueError
+        On invalid input; the message names the argument.
+    """
+    problem = check_problem(operator, gap0, "gap0", method=method, tol=tol, max_iter=max_iter,
+                            precision=precision, element_area=element_area, hardness=hardness,
+                            batched=False)
+    return _solve_rows(problem, approach, p0)[0]
+
+
+def solve_many(operator, gaps0, approach, *, method="auto", tol=1e-10, max_iter=None, p0=None,
+               element_area=None, precision="double",
+               hardness=None) -> tuple[ContactResult, ...]:
+    """Solve m contact problems with one operator in one batched call (Eq 27).
+
+    Same problem as :func:`solve` for each surface; all unfinished surfaces
+    are worked on at once with matrix-matrix products ``[p_1 ... p_m]^T C``
+    (BLAS 3 for a dense matrix), each surface keeping its own contact set,
+    search direction and convergence flag; finished surfaces drop out of the
+    products.
+
+    Parameters
+    ----------
+    operator : ndarray (n, n) or operator object
+        Influence coefficients ``C`` [m/Pa], see :func:`solve`.
+    gaps0 : ndarray, (m, ny, nx) or (m, n)
+        Initial separations ``f`` [m] (Eq 21), one per surface.
+    approach : float or ndarray (m,)
+        Rigid-body approach ``d >= 0`` [m], shared or per surface.
+    method, tol, max_iter, element_area, precision, hardness
+        As in :func:`solve`.
+    p0 : ndarray, optional
+        Starting pressures [Pa], shape of ``gaps0``.
+
+    Returns
+    -------
+    tuple of ContactResult
+        One result per surface, fields shaped like one surface of ``gaps0``.
+    """
+    problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
+                            precision=precision, element_area=element_area, hardness=hardness,
+                            batched=True)
+    return tuple(_solve_rows(problem, approach, p0))

@@ -1,0 +1,310 @@
+"""What the contact solvers return, and the work records they fill on the way.
+
+:class:`ContactResult` (one surface at one approach) and :class:`SweepResult`
+(m surfaces over k approaches) are the frozen results of every method: the
+same fields whichever method solved, the method named in ``method``.
+:class:`Batch` and :class:`SweepTable` are the mutable records the methods
+fill (rows = surfaces) before the results are frozen. All quantities SI:
+pressures in Pa, lengths in m, loads in N, stiffnesses in N/m.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughcontact.contact import validity
+from roughcontact.contact.kkt import plastic_fraction
+
+__all__ = ["Batch", "ContactResult", "SweepResult", "SweepTable", "zero_plastic_area"]
+
+
+@dataclass(frozen=True)
+class ContactResult:
+    """Solution of one displacement-controlled contact problem (Eq 27).
+
+    Attributes
+    ----------
+    pressure : ndarray
+        Contact pressure ``p`` [Pa], same shape as the ``gap0`` passed in.
+    displacement : ndarray
+        Elastic surface displacement ``u = C p`` [m] (Eq 16).
+    gap : ndarray
+        ``u + f - d`` [m]; zero in contact, positive outside (Eq 19-22).
+    approach : float
+        Rigid-body approach ``d`` [m].
+    load : float
+        Total force ``F = sum p dA`` [N].
+    nominal_pressure : float
+        ``P = F / A_n`` [Pa], ``A_n = n dA`` the nominal area.
+    real_area_fraction : float
+        Fraction of elements with ``p > 0`` [-] (saturated ones included).
+    max_pressure : float
+        Largest element pressure [Pa].
+    mean_plane_deflection : float
+        Mean of ``u`` [m], the bulk deflection ``d_b`` of Eq 35.
+    iterations : int
+        Iterations (pivots for ``"exact"`` and ``"pivot"``) performed.
+    matvecs : int
+        Applications of ``C`` to a pressure field, counting partial
+        (column-subset) products by their share of a full product, rounded up.
+    residual : float
+        Dimensionless KKT residual (:mod:`roughcontact.contact.kkt`) of the
+        returned ``p``.
+    converged : bool
+        ``residual <= tol``.
+    method : str
+        Method used.
+    tol : float
+        Requested tolerance on ``residual``.
+    plastic_area_fraction : float
+        Fraction of elements at the cap, ``p = H`` [-]; 0 without a cap.
+    hardness : float or None
+        Pressure cap ``H`` [Pa] of the solve; None without a cap.
+    """
+
+    pressure: np.ndarray
+    displacement: np.ndarray
+    gap: np.ndarray
+    approach: float
+    load: float
+    nominal_pressure: float
+    real_area_fraction: float
+    max_pressure: float
+    mean_plane_deflection: float
+    iterations: int
+    matvecs: int
+    residual: float
+    converged: bool
+    method: str
+    tol: float
+    plastic_area_fraction: float = 0.0
+    hardness: float | None = None
+
+    @property
+    def contact_set(self) -> np.ndarray:
+        """The elements in contact, ``p > 0`` (bool, shape of ``pressure``)."""
+        return self.pressure > 0.0
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Force-deflection sweep of m surfaces over k approaches.
+
+    Every array has shape (m, k): surface by approach step, except
+    ``pressure`` (m, k, *surface shape), present only when fields were asked
+    for.
+
+    Attributes
+    ----------
+    approach : ndarray
+        Rigid-body approach ``d`` [m].
+    load : ndarray
+        Total force ``F`` [N].
+    nominal_pressure : ndarray
+        ``P = F / A_n`` [Pa].
+    mean_plane_deflection : ndarray
+        Mean of ``u`` [m] (Eq 35).
+    real_area_fraction : ndarray
+        Fraction of elements in contact, ``p > 0`` [-] (saturated ones included).
+    max_pressure : ndarray
+        Largest element pressure [Pa].
+    contact_stiffness : ndarray
+        ``dF/dd`` [N/m] at fixed contact set (and, with a cap, fixed
+        saturated set), see :func:`roughcontact.contact.tangent_stiffness`;
+        NaN where it was not computed. The normalized stiffness of Eq 33 is
+        ``k_P = (L / A_n) dF/dd``.
+    iterations, matvecs : ndarray of int
+        Work of the contact solve at each step.
+    residual : ndarray
+        KKT residual of each solution.
+    converged : ndarray of bool
+        Contact solve converged.
+    stiffness_converged : ndarray of bool
+        The free-set solve for ``contact_stiffness`` converged.
+    pressure : ndarray or None
+        Pressure fields [Pa] when ``return_fields=True``.
+    method : str
+        Contact method.
+    tol : float
+        Contact tolerance.
+    plastic_area_fraction : ndarray
+        Fraction of elements at the cap, ``p = H`` [-]; zeros without a cap
+        (also when not given to the constructor).
+    hardness : float or None
+        Pressure cap ``H`` [Pa] of the sweep; None without a cap.
+    profile_ranks : ndarray of int or None
+        Ranks of the profiles, (R,), when ``profile=True``.
+    pressure_profile : ndarray or None
+        (m, k, R): the ``r``-th largest element pressure [Pa] of each solution
+        at the ranks ``r`` of ``profile_ranks``.
+    load_profile : ndarray or None
+        (m, k, R): share of the load on the ``r`` most loaded elements [-].
+    """
+
+    approach: np.ndarray
+    load: np.ndarray
+    nominal_pressure: np.ndarray
+    mean_plane_deflection: np.ndarray
+    real_area_fraction: np.ndarray
+    max_pressure: np.ndarray
+    contact_stiffness: np.ndarray
+    iterations: np.ndarray
+    matvecs: np.ndarray
+    residual: np.ndarray
+    converged: np.ndarray
+    stiffness_converged: np.ndarray
+    pressure: np.ndarray | None
+    method: str
+    tol: float
+    plastic_area_fraction: np.ndarray | None = None
+    hardness: float | None = None
+    profile_ranks: np.ndarray | None = None
+    pressure_profile: np.ndarray | None = None
+    load_profile: np.ndarray | None = None
+
+    def __post_init__(self):
+        zero_plastic_area(self)
+
+
+def zero_plastic_area(result) -> None:
+    """Give a frozen result built without ``plastic_area_fraction`` zeros (no cap) of
+    its ``approach``'s shape (the ``__post_init__`` of the sweep results)."""
+    if result.plastic_area_fraction is None:
+        object.__setattr__(result, "plastic_area_fraction", np.zeros(np.shape(result.approach)))
+
+
+# ---------------------------------------------------------------------------
+# Work records
+
+
+@dataclass
+class Batch:
+    """Per-surface outputs of a batched solve at one approach (mutable), rows = surfaces."""
+
+    pressure: np.ndarray
+    displacement: np.ndarray
+    iterations: np.ndarray
+    matvecs: np.ndarray
+    residual: np.ndarray
+    converged: np.ndarray
+
+    @classmethod
+    def empty(cls, m: int, n: int) -> Batch:
+        return cls(
+            pressure=np.zeros((m, n)),
+            displacement=np.zeros((m, n)),
+            iterations=np.zeros(m, dtype=int),
+            matvecs=np.zeros(m),
+            residual=np.zeros(m),
+            converged=np.zeros(m, dtype=bool),
+        )
+
+    def store(self, target, pressure, displacement, iterations, matvecs, residual,
+              tol: float) -> None:
+        """The solutions of the surfaces ``target`` (rows of the batch)."""
+        self.pressure[target] = pressure
+        self.displacement[target] = displacement
+        self.iterations[target] = iterations
+        self.matvecs[target] = matvecs
+        self.residual[target] = residual
+        self.converged[target] = residual <= tol
+
+    def count_whole_products(self) -> None:
+        """Round the product counts up to whole products (partial ones count by share)."""
+        self.matvecs = np.ceil(self.matvecs - 1e-9).astype(int)
+
+    def contact_result(self, j: int, rigid_j, element_area: float, shape, method: str,
+                       tol: float, approach, hardness=None) -> ContactResult:
+        """The :class:`ContactResult` of surface ``j`` (rigid interference ``d - f``
+        of ``rigid_j`` [m]), fields in ``shape``."""
+        p = self.pressure[j]
+        u = self.displacement[j]
+        n = p.size
+        load = float(p.sum() * element_area)
+        return ContactResult(
+            pressure=p.reshape(shape).copy(),
+            displacement=u.reshape(shape).copy(),
+            gap=(u + rigid_j).reshape(shape),
+            approach=float(approach),
+            load=load,
+            nominal_pressure=load / (n * element_area),
+            real_area_fraction=float(np.count_nonzero(p > 0.0)) / n,
+            max_pressure=float(p.max()),
+            mean_plane_deflection=float(u.mean()),
+            iterations=int(self.iterations[j]),
+            matvecs=int(self.matvecs[j]),
+            residual=float(self.residual[j]),
+            converged=bool(self.converged[j]),
+            method=method,
+            tol=tol,
+            plastic_area_fraction=float(plastic_fraction(p, hardness)),
+            hardness=hardness,
+        )
+
+
+class SweepTable:
+    """The (m, k) columns of a :class:`SweepResult` being filled step by step (mutable).
+
+    ``columns`` holds every array field of the result by name; ``fields``
+    the pressure fields (m, k, *shape) or None; ``ranks`` the profile ranks
+    or None.
+    """
+
+    def __init__(self, m: int, k: int, shape, return_fields: bool, profile: bool):
+        n = int(np.prod(shape))
+        names = ("load", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
+                 "max_pressure", "residual", "plastic_area_fraction")
+        self.columns = {name: np.zeros((m, k)) for name in names}
+        self.columns["contact_stiffness"] = np.full((m, k), np.nan)
+        for name in ("iterations", "matvecs"):
+            self.columns[name] = np.zeros((m, k), dtype=int)
+        for name in ("converged", "stiffness_converged"):
+            self.columns[name] = np.zeros((m, k), dtype=bool)
+        self.fields = np.zeros((m, k, *shape)) if return_fields else None
+        self.ranks = validity.rank_grid(n) if profile else None
+        if profile:
+            self.columns["pressure_profile"] = np.zeros((m, k, self.ranks.size))
+            self.columns["load_profile"] = np.zeros((m, k, self.ranks.size))
+
+    def record(self, rows, step: int, pressure, displacement, residual, element_area: float,
+               hardness=None) -> None:
+        """A step's summary columns for ``rows`` (a surface or a slice), from the solved
+        pressure [Pa] and displacement [m] (last axis: elements); with profiles, also
+        its pressure and load profiles (:mod:`roughcontact.contact.validity`) and with
+        fields, the pressure field."""
+        columns = self.columns
+        n = pressure.shape[-1]
+        load = pressure.sum(axis=-1) * element_area
+        columns["load"][rows, step] = load
+        columns["nominal_pressure"][rows, step] = load / (n * element_area)
+        columns["mean_plane_deflection"][rows, step] = displacement.mean(axis=-1)
+        columns["real_area_fraction"][rows, step] = np.count_nonzero(pressure > 0.0, axis=-1) / n
+        columns["max_pressure"][rows, step] = pressure.max(axis=-1)
+        columns["plastic_area_fraction"][rows, step] = plastic_fraction(pressure, hardness)
+        columns["residual"][rows, step] = residual
+        if self.ranks is not None:
+            values, shares = validity.pressure_profile(pressure, self.ranks)
+            columns["pressure_profile"][rows, step] = values
+            columns["load_profile"][rows, step] = shares
+        if self.fields is not None:
+            self.fields[rows, step] = pressure.reshape(*np.shape(pressure)[:-1],
+                                                       *self.fields.shape[2:])
+
+    def record_work(self, rows, step: int, iterations, matvecs, converged) -> None:
+        """The work of a step's contact solve for ``rows``."""
+        self.columns["iterations"][rows, step] = iterations
+        self.columns["matvecs"][rows, step] = matvecs
+        self.columns["converged"][rows, step] = converged
+
+    def record_stiffness(self, rows, step: int, stiffness, converged) -> None:
+        """A step's tangent ``dF/dd`` [N/m] for ``rows`` and whether its solve converged."""
+        self.columns["contact_stiffness"][rows, step] = stiffness
+        self.columns["stiffness_converged"][rows, step] = converged
+
+    def result(self, steps, method: str, tol: float, hardness=None) -> SweepResult:
+        """The frozen :class:`SweepResult` at approaches ``steps`` (m, k) [m]."""
+        return SweepResult(approach=np.array(steps), pressure=self.fields, method=method,
+                           tol=tol, hardness=hardness, profile_ranks=self.ranks,
+                           **self.columns)

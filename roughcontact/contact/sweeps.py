@@ -1,0 +1,169 @@
+"""Force-deflection sweeps: every surface through its approaches, with warm starts.
+
+:func:`sweep` solves Eq 27 for m surfaces at k approaches each and records
+the load, areas, deflection and tangent stiffness of every solution (Eq 27,
+33, 35). A method with its own approach loop runs it
+(:func:`roughcontact.contact.pivot.sweep`: every surface in flight at
+once); the others share :func:`approach_loop`: all surfaces at one step at
+a time, each step started from the first-order prediction
+``max(p + (d' - d) dp/dd, 0)`` of :func:`predict`, exact on an unchanged
+contact set, with the tangent ``dp/dd = (C_FF)^-1 1`` from
+:func:`~roughcontact.contact.stiffness.free_set_cg`.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from roughcontact.contact import cg, checks
+from roughcontact.contact.checks import SweepOptions
+from roughcontact.contact.kkt import free_set
+from roughcontact.contact.methods import Method, check_problem, run
+from roughcontact.contact.products import Products
+from roughcontact.contact.result import SweepResult, SweepTable
+from roughcontact.contact.stiffness import free_set_cg
+
+__all__ = ["approach_loop", "predict", "sweep"]
+
+logger = logging.getLogger("roughcontact.contact")
+
+
+def predict(pressure, approach, last_approach, rate, hardness=None) -> np.ndarray:
+    """First-order predictor ``max(p + (d - d_last) dp/dd, 0)`` [Pa] for the next step.
+
+    On a fixed contact set the solution of Eq 27 is linear in ``d``
+    (``C_AA p_A = d 1 - f_A``), so with the exact ``dp/dd`` the prediction is
+    the solution whenever no element enters or leaves contact; rows of
+    ``rate`` that are not finite (no rate yet) keep ``p``. With a cap the
+    prediction is clipped to ``[0, H]``.
+    """
+    delta = (approach - last_approach)[:, None]
+    predicted = pressure + delta * np.nan_to_num(rate, nan=0.0, posinf=0.0, neginf=0.0)
+    if hardness is not None:
+        return np.clip(predicted, 0.0, hardness, out=predicted)
+    return np.maximum(predicted, 0.0, out=predicted)
+
+
+def _tangent(products: Products, pressure, tangent, options: SweepOptions, step: int,
+             table: SweepTable):
+    """The tangent ``(C_FF)^-1 1`` [Pa/m] of every surface at ``step`` (warm-started from
+    the last one), recorded as ``dF/dd``."""
+    tangent, ok, _ = free_set_cg(products, free_set(pressure, options.hardness), tangent,
+                                 options.stiffness_tol,
+                                 cg.default_max_iter(products.operator.shape[0]))
+    table.record_stiffness(slice(None), step,
+                           products.operator.element_area * tangent.sum(axis=1), ok)
+    if not ok.all():
+        logger.warning(
+            "tangent stiffness: free-set CG did not reach tol %.3g for %d surfaces "
+            "at step %d", options.stiffness_tol, int((~ok).sum()), step,
+        )
+    return tangent
+
+
+def approach_loop(method: Method, products: Products, gaps, steps, options: SweepOptions,
+                  table: SweepTable) -> None:
+    """The shared approach loop: all surfaces through step 1, 2, ... k together.
+
+    Each step starts from the previous solution or, with ``extrapolate``,
+    from :func:`predict` with ``dp/dd`` the tangent of the stiffness solve
+    (``stiffness``) or else the secant of the last two steps. Fills ``table``.
+    """
+    m, n = gaps.shape
+    operator = products.operator
+    pressure = np.zeros((m, n))
+    tangent = np.zeros((m, n))
+    rate = np.full((m, n), np.nan)
+    for step in range(steps.shape[1]):
+        start = pressure
+        if options.extrapolate and step > 0:
+            start = predict(pressure, steps[:, step], steps[:, step - 1], rate, options.hardness)
+        batch = run(method, products, gaps, steps[:, step].copy(), start, options.tol,
+                    options.max_iter, options.hardness)
+        if options.extrapolate and not options.stiffness:
+            # Secant dp/dd of this step, for the next prediction.
+            delta = steps[:, step] - (steps[:, step - 1] if step > 0 else np.nan)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                rate = (batch.pressure - pressure) / delta[:, None]
+        pressure = batch.pressure
+        table.record(slice(None), step, pressure, batch.displacement, batch.residual,
+                     operator.element_area, options.hardness)
+        table.record_work(slice(None), step, batch.iterations, batch.matvecs, batch.converged)
+        if options.stiffness:
+            tangent = _tangent(products, pressure, tangent, options, step, table)
+            rate = tangent
+
+
+def sweep(operator, gaps0, approaches, *, method="auto", tol=1e-10, max_iter=None,
+          element_area=None, return_fields=False, stiffness=True, stiffness_tol=1e-6,
+          precision="double", extrapolate=True, hardness=None, profile=False) -> SweepResult:
+    """Force-deflection curves of m surfaces over k approaches (Eq 27, 33, 35).
+
+    Solves Eq 27 for every surface at every approach, all surfaces at once
+    (see :func:`roughcontact.contact.solve_many`). With the default
+    ``"auto"`` method a dense matrix is swept by block principal pivoting
+    (:func:`roughcontact.contact.pivot.sweep`, every surface in flight at
+    once, the tangent from its factor); the other methods use
+    :func:`approach_loop`, each step warm-started from the previous
+    solution or, with ``extrapolate``, from its first-order extrapolation
+    ``max(p_k + (d_k+1 - d_k) dp/dd, 0)``: ``dp/dd`` is the tangent
+    ``(C_AA)^-1 1`` of the stiffness solve when ``stiffness`` is on, else the
+    secant of the last two steps. On an unchanged contact set the solution is
+    linear in ``d`` (Eq 27), so the prediction is then exact up to the
+    stiffness tolerance and the contact solve only corrects the elements
+    that enter or leave contact. With ``stiffness`` the tangent stiffness
+    ``dF/dd = dA 1^T (C_AA)^-1 1`` (see
+    :func:`~roughcontact.contact.tangent_stiffness`) is found at every step
+    by CG on the contact set, warm-started from the previous step's
+    ``(C_AA)^-1 1``.
+
+    Parameters
+    ----------
+    operator : ndarray (n, n) or operator object
+        Influence coefficients ``C`` [m/Pa], see :func:`roughcontact.contact.solve`.
+    gaps0 : ndarray, (m, ny, nx) or (m, n)
+        Initial separations ``f`` [m] (Eq 21).
+    approaches : ndarray, (k,) or (m, k)
+        Rigid-body approaches ``d >= 0`` [m] at each step, shared or per
+        surface; warm starts help most when they increase.
+    method, tol, max_iter, element_area, precision, hardness
+        As in :func:`roughcontact.contact.solve`; ``precision`` also applies
+        to the stiffness CG. With ``hardness`` the tangent and the
+        extrapolation hold the saturated elements (``p = H``) fixed.
+    return_fields : bool
+        Keep the pressure fields (m, k, *surface shape) [Pa].
+    stiffness : bool
+        Compute ``contact_stiffness`` (otherwise NaN).
+    stiffness_tol : float
+        Relative residual of the free-set CG for the stiffness; the
+        relative error of ``dF/dd`` is of the same order or smaller.
+    extrapolate : bool
+        Start each step from the extrapolated pressure (above) instead of the
+        previous solution. Only the starting point changes: every solution
+        still meets ``tol``.
+    profile : bool
+        Keep every solution's pressure and load profiles
+        (:func:`roughcontact.contact.validity.pressure_profile` at the ranks
+        of :func:`~roughcontact.contact.validity.rank_grid`): enough to tell,
+        for any hardness chosen later, how much of the contact area and load
+        lies above it (:func:`~roughcontact.contact.validity.fractions_above`).
+
+    Returns
+    -------
+    SweepResult
+    """
+    problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
+                            precision=precision, element_area=element_area, hardness=hardness,
+                            batched=True)
+    stiffness_tol = checks.check_positive(stiffness_tol, "stiffness_tol")
+    gaps = problem.gaps
+    steps = checks.approach_steps(approaches, gaps.shape[0], "m")
+    checks.check_bounded(problem.operator, gaps, steps.max(axis=1), "approaches")
+    options = SweepOptions(problem.tol, problem.max_iter, problem.hardness, bool(stiffness),
+                           stiffness_tol, bool(extrapolate))
+    table = SweepTable(gaps.shape[0], steps.shape[1], problem.shape, return_fields, profile)
+    loop = problem.method.sweep or approach_loop
+    loop(problem.method, problem.products, gaps, steps, options, table)
+    return table.result(steps, problem.method.name, problem.tol, problem.hardness)

@@ -1,0 +1,224 @@
+"""The interface every influence operator offers the contact solver.
+
+An influence operator maps element pressures ``p`` [Pa] to normal surface
+displacements ``u = C p`` [m] (Eq 16 of Kumar et al. 2006), elements in
+row-major order over y then x (``k = iy * nx + ix``). The contact solvers of
+:mod:`roughcontact.contact` use only the members of
+:class:`InfluenceOperator`, so a dense matrix (:class:`DenseInfluence`), the
+periodic half-space applied by FFT
+(:class:`roughcontact.elasticity.halfspace.PeriodicHalfSpace`) and the
+matrix-free block (:class:`roughcontact.elasticity.operators.BlockOperator`)
+serve alike; :class:`MatrixFreeInfluence` gives the interface to any other
+object with a ``matvec``, and :class:`RestrictedInfluence` is the
+sub-operator of a matrix-free operator on a set of elements.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = ["DenseInfluence", "InfluenceOperator", "MatrixFreeInfluence", "RestrictedInfluence"]
+
+
+@runtime_checkable
+class InfluenceOperator(Protocol):
+    """A symmetric influence operator ``C`` [m/Pa] of ``n`` contact elements.
+
+    Attributes
+    ----------
+    shape : (int, int)
+        ``(n, n)``.
+    dtype : numpy.dtype
+        Type of the products (float64).
+    element_area : float
+        Area ``dA`` of one contact element [m^2].
+    grid : (int, int) or None
+        ``(nx, ny)`` when the elements form that grid (surfaces are then
+        ``(ny, nx)``); None when any surface shape of ``n`` elements fits.
+    matrix : ndarray (n, n) or None
+        The dense matrix when the operator holds one (block principal
+        pivoting factors its blocks ``C_AA``); None for a matrix-free operator.
+    mean_compliance : float or None
+        The common row sum of ``C`` [m/Pa] (a uniform pressure ``P`` gives
+        ``u = mean_compliance P``) when the operator fixes it, else None.
+        Zero means the mean displacement is always zero: Eq 27 is then
+        bounded only for approaches below the mean initial separation.
+    """
+
+    @property
+    def shape(self) -> tuple[int, int]: ...
+
+    @property
+    def dtype(self) -> np.dtype: ...
+
+    @property
+    def element_area(self) -> float: ...
+
+    @property
+    def grid(self) -> tuple[int, int] | None: ...
+
+    @property
+    def matrix(self) -> np.ndarray | None: ...
+
+    @property
+    def mean_compliance(self) -> float | None: ...
+
+    def matvec(self, pressure) -> np.ndarray:
+        """``C p`` [m] for pressures [Pa] of shape (n,) or (n, m) (one field per column)."""
+
+    def __matmul__(self, pressure) -> np.ndarray:
+        """``C @ p``, the same as :meth:`matvec`."""
+
+    def diagonal(self) -> np.ndarray:
+        """Self-compliances ``C_ii`` [m/Pa], shape (n,)."""
+
+    def restrict(self, indices) -> InfluenceOperator:
+        """The operator ``C_AA`` on the elements ``indices`` (a contact set ``A``)."""
+
+
+@dataclass(frozen=True)
+class DenseInfluence:
+    """A dense symmetric influence matrix ``C`` [m/Pa] as an :class:`InfluenceOperator`.
+
+    Parameters
+    ----------
+    matrix : ndarray (n, n)
+        Influence coefficients [m/Pa], symmetric (not checked here; the
+        contact solver checks what it is given).
+    element_area : float
+        Contact element area [m^2].
+    grid : (int, int), optional
+        ``(nx, ny)`` of the elements, when known.
+    """
+
+    matrix: np.ndarray = field(repr=False)
+    element_area: float
+    grid: tuple[int, int] | None = None
+    mean_compliance = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "matrix", np.ascontiguousarray(self.matrix, dtype=float))
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(n, n)``."""
+        return self.matrix.shape
+
+    @property
+    def dtype(self) -> np.dtype:
+        """float64."""
+        return self.matrix.dtype
+
+    def matvec(self, pressure) -> np.ndarray:
+        """``C p`` [m]; for (n, m) pressures the rows of ``p^T C`` (C is symmetric), transposed."""
+        p = np.asarray(pressure, dtype=float)
+        if p.ndim == 1:
+            return self.matrix @ p
+        return (p.T @ self.matrix).T
+
+    def __matmul__(self, pressure) -> np.ndarray:
+        return self.matvec(pressure)
+
+    def diagonal(self) -> np.ndarray:
+        """``C_ii`` [m/Pa], shape (n,)."""
+        return np.diag(self.matrix).copy()
+
+    def restrict(self, indices) -> DenseInfluence:
+        """The submatrix ``C_AA`` on the elements ``indices``."""
+        index = np.asarray(indices)
+        return DenseInfluence(self.matrix[np.ix_(index, index)], self.element_area)
+
+
+@dataclass(frozen=True)
+class RestrictedInfluence:
+    """The sub-operator ``C_AA`` of a matrix-free operator on the elements ``indices``.
+
+    Its product scatters the pressures of ``A`` into the full grid, applies
+    the parent operator and gathers the displacements of ``A``.
+    """
+
+    parent: Any
+    indices: np.ndarray
+    grid = None
+    matrix = None
+    mean_compliance = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "indices", np.asarray(self.indices, dtype=np.intp))
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.indices.size, self.indices.size)
+
+    @property
+    def dtype(self) -> np.dtype:
+        return np.dtype(float)
+
+    @property
+    def element_area(self) -> float:
+        return self.parent.element_area
+
+    def matvec(self, pressure) -> np.ndarray:
+        p = np.asarray(pressure, dtype=float)
+        full = np.zeros((self.parent.shape[0], *p.shape[1:]))
+        full[self.indices] = p
+        return np.asarray(self.parent.matvec(full), dtype=float)[self.indices]
+
+    def __matmul__(self, pressure) -> np.ndarray:
+        return self.matvec(pressure)
+
+    def diagonal(self) -> np.ndarray:
+        return np.asarray(self.parent.diagonal(), dtype=float)[self.indices]
+
+    def restrict(self, indices) -> RestrictedInfluence:
+        return RestrictedInfluence(self.parent, self.indices[np.asarray(indices)])
+
+
+@dataclass(frozen=True)
+class MatrixFreeInfluence:
+    """Any object with ``shape`` and ``matvec`` as an :class:`InfluenceOperator`.
+
+    Parameters
+    ----------
+    base : object
+        Has ``shape == (n, n)`` and ``matvec`` accepting (n,) and (n, m).
+    element_area : float
+        Contact element area [m^2].
+    self_compliance : ndarray (n,)
+        ``C_ii`` [m/Pa], returned by :meth:`diagonal`.
+    grid : (int, int), optional
+        ``(nx, ny)`` of the elements.
+    mean_compliance : float, optional
+        Common row sum of ``C`` [m/Pa] (:class:`InfluenceOperator`).
+    """
+
+    base: Any
+    element_area: float
+    self_compliance: np.ndarray = field(repr=False)
+    grid: tuple[int, int] | None = None
+    mean_compliance: float | None = None
+    matrix = None
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        n = self.self_compliance.size
+        return (n, n)
+
+    @property
+    def dtype(self) -> np.dtype:
+        return np.dtype(float)
+
+    def matvec(self, pressure) -> np.ndarray:
+        return np.asarray(self.base.matvec(pressure), dtype=float)
+
+    def __matmul__(self, pressure) -> np.ndarray:
+        return self.matvec(pressure)
+
+    def diagonal(self) -> np.ndarray:
+        return self.self_compliance
+
+    def restrict(self, indices) -> RestrictedInfluence:
+        return RestrictedInfluence(self, indices)
