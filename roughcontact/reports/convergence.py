@@ -62,7 +62,8 @@ from matplotlib.figure import Figure
 from roughcontact.contact.cell import sweep_and_aggregate
 from roughcontact.elasticity.influence import GB, BlockGeometry, MeshSpec
 from roughcontact.reports.build_worker import HALFSPACE, build, centre_entries, run_isolated
-from roughcontact.reports.plotting import process_running, save_figure
+from roughcontact.reports.execution import process_running
+from roughcontact.reports.plotting import save_figure
 from roughcontact.study.storage import read_influence
 from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
 

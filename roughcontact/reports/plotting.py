@@ -1,66 +1,20 @@
-"""Figure output: atomic saving and papermill execution of figure notebooks.
+"""Figure code of the notebooks and reports: atomic saving, tables, curves, panels.
 
 Every file is written under a temporary name beside it and renamed when
-complete (:func:`roughcontact.study.provenance.atomic_path`:
-``.<stem>.tmp<PID><suffix>``). A writer killed with SIGKILL (``kill -9``,
-the out-of-memory killer, a cluster's wall-time limit) cannot remove its
-temporary file, so every writer here first removes those that processes no
-longer running left beside its output (:func:`remove_stale_temporaries`):
-the next run of the interrupted job cleans up after it.
+complete (:func:`roughcontact.study.provenance.atomic_path`); the temporaries
+that killed writers left are removed first
+(:func:`roughcontact.reports.execution.remove_stale_temporaries`).
 """
 
 from __future__ import annotations
 
-import logging
 import os
-import re
-import sys
-import time
 from pathlib import Path
 
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import file_sha256
+from roughcontact.reports.execution import remove_stale_temporaries
 from roughcontact.study.provenance import atomic_path
-
-log = logging.getLogger(__name__)
-
-
-def process_running(pid: int) -> bool:
-    """Whether a process ``pid`` runs on this machine (a zombie counts as running)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # runs, as another user
-        return True
-    return True
-
-
-def remove_stale_temporaries(path: str | os.PathLike) -> list[Path]:
-    """Remove the temporary files of ``path`` that killed writers left behind.
-
-    ``atomic_path`` writes ``path`` as ``.<stem>.tmp<PID><suffix>`` in the
-    same folder. Those whose process no longer runs on this machine are
-    removed; those of running processes (this one, or another writer of the
-    same file) are kept. The workflow never runs two jobs for one output at
-    once, so on a cluster's shared file system a temporary file of a job on
-    another node is a dead one too; it is kept only while its PID happens to
-    run here, which costs a file, never an output. Returns the removed paths.
-    """
-    path = Path(path)
-    pattern = re.compile(rf"\.{re.escape(path.stem)}\.tmp(\d+){re.escape(path.suffix)}")
-    removed = []
-    if not path.parent.is_dir():
-        return removed
-    for candidate in path.parent.iterdir():
-        match = pattern.fullmatch(candidate.name)
-        if match is None or process_running(int(match.group(1))):
-            continue
-        candidate.unlink(missing_ok=True)
-        log.warning("removed %s, left by an interrupted writer (process %s, no longer "
-                    "running)", candidate, match.group(1))
-        removed.append(candidate)
-    return removed
 
 
 def save_figure(fig, *paths, dpi: int = 150) -> None:
@@ -138,58 +92,6 @@ def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3):
         ax.set_title(title, fontsize=10, pad=0, y=1.0)
     fig.subplots_adjust(left=0.0, right=0.95, bottom=0.03, top=0.9, wspace=0.05, hspace=0.2)
     return fig
-
-
-def _kernel_name() -> str:
-    """A Jupyter kernel that runs this interpreter (so it sees this package)."""
-    from jupyter_client.kernelspec import KernelSpecManager, NoSuchKernel
-
-    manager = KernelSpecManager()
-    try:
-        spec = manager.get_kernel_spec("python3")
-        exe = spec.argv[0]
-        if exe in ("python", "python3", "{python}") or os.path.realpath(exe) == os.path.realpath(
-            sys.executable
-        ):
-            return "python3"
-    except NoSuchKernel:
-        pass
-    raise RuntimeError(
-        f"the Jupyter kernel 'python3' does not run {sys.executable}; "
-        "install ipykernel into this environment (make does this)"
-    )
-
-
-def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
-    """Execute ``notebook`` with papermill into ``output`` (atomically).
-
-    The notebook must have a cell tagged ``parameters``; the entries of
-    ``parameters`` that it declares there are injected after it (the workflow
-    passes one set to every figure; the others are logged, not passed). The
-    executed notebook is kept so a reader sees the code beside the figure. A
-    failing cell raises with the notebook's traceback. Temporary notebooks
-    that an earlier, killed execution left beside ``output`` are removed
-    first (:func:`remove_stale_temporaries`).
-    """
-    import papermill
-
-    start = time.perf_counter()
-    declared = papermill.inspect_notebook(str(notebook))
-    unused = sorted(set(parameters) - set(declared))
-    parameters = {k: v for k, v in parameters.items() if k in declared}
-    log.info("executing %s with parameters %s%s", notebook, sorted(parameters),
-             f" (not declared there, not passed: {unused})" if unused else "")
-    remove_stale_temporaries(output)
-    with atomic_path(output) as tmp:
-        papermill.execute_notebook(
-            str(notebook),
-            str(tmp),
-            parameters=parameters,
-            kernel_name=_kernel_name(),
-            cwd=os.getcwd(),
-            progress_bar=False,
-        )
-    log.info("executed %s in %.1f s -> %s", notebook, time.perf_counter() - start, output)
 
 
 def load_aggregates(paths) -> tuple:
