@@ -192,6 +192,66 @@ def plot_band(ax, frame, quantity: str, *, y_scale: float = 1.0, label=None, col
     return line
 
 
+def plot_by_mesh(table, validity, quantity: str, *, y_scale: float, ylabel: str, title: str,
+                 log_y: bool = False):
+    """One panel per mesh of ``quantity`` against nominal pressure [MPa] (Figs 7, 12, 13).
+
+    Each panel holds the mesh's cells of the aggregate table ``table``, one
+    curve with its band per cell (:func:`plot_band`, styled by
+    :func:`curve_style`), log P axis (and log ``quantity`` when ``log_y``),
+    shaded where ``validity`` (:func:`load_validity`) flags a cell above the
+    hardness (:func:`mark_hardness`); titled ``"<title> (<mesh> mesh)"``,
+    ``ylabel`` on the first panel, which shares its y axis with the others.
+    Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+
+    meshes = list(dict.fromkeys(table["mesh"]))
+    fig, axes = plt.subplots(1, len(meshes), figsize=(5.2 * len(meshes), 4.2), squeeze=False,
+                             sharey=True)
+    for ax, mesh in zip(axes[0], meshes, strict=True):
+        part = table[table["mesh"] == mesh]
+        for _, cell in part.groupby("cell", sort=True):
+            plot_band(ax, cell, quantity, y_scale=y_scale, **curve_style(cell.iloc[0]))
+        ax.set_xscale("log")
+        if log_y:
+            ax.set_yscale("log")
+        mark_hardness(ax, validity, part["cell"].unique())
+        ax.set_xlabel("nominal pressure $P$ [MPa]")
+        ax.set_title(f"{title} ({mesh} mesh)", fontsize=10)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[0][0].set_ylabel(ylabel)
+    fig.tight_layout()
+    return fig
+
+
+def plot_cells(table, quantity: str, *, y_scale: float, ylabel: str, title: str, label: str,
+               legend_fontsize: float | None = None):
+    """``quantity`` of every cell of ``table`` against nominal pressure [MPa], one panel.
+
+    One curve with its band per cell (:func:`plot_band`), labelled
+    ``label.format(**row)`` with the cell's first row of the aggregate table
+    (e.g. ``"$b$ = {b_mm:g} mm"``); log P axis. Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.4, 4.2))
+    for _, cell in table.groupby("cell", sort=True):
+        plot_band(ax, cell, quantity, y_scale=y_scale, label=label.format(**cell.iloc[0]))
+    ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]", ylabel=ylabel, title=title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=legend_fontsize)
+    fig.tight_layout()
+    return fig
+
+
+def describe_study(table) -> str:
+    """:func:`study_note` and the labels of the study's cells, one per line."""
+    return "\n".join([study_note(table), "cells:",
+                      *(f"   {label}" for label in table["label"].unique())])
+
+
 def study_note(table) -> str:
     """One line for a caption: surfaces per cell, confidence, unconverged solves."""
     cells = table.drop_duplicates("cell")
