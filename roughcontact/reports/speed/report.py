@@ -31,11 +31,11 @@ from roughcontact.reports.speed.experiments import (
     DEFAULT_COUNTS,
     DEFAULT_TOLERANCES,
     REFERENCE_TOL,
-    grid_study,
     mesh_errors,
     solver_speed_vs_error,
     surfaces_per_cell,
 )
+from roughcontact.reports.speed.grid import grid_study
 from roughcontact.reports.speed.machine import describe_machine
 from roughcontact.reports.speed.recommend import derive_presets, recommend
 from roughcontact.reports.speed.render import write_report
