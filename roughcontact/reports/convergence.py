@@ -64,7 +64,7 @@ from matplotlib.figure import Figure
 from roughcontact.contact.cell import sweep_and_aggregate
 from roughcontact.elasticity.influence import GB, BlockGeometry, MeshSpec
 from roughcontact.reports.build_worker import HALFSPACE, build, centre_entries, run_isolated
-from roughcontact.reports.execution import process_running
+from roughcontact.reports.execution import dead_writers
 from roughcontact.reports.plotting import save_figure
 from roughcontact.study.storage import read_influence
 from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
@@ -172,13 +172,11 @@ def remove_stale_scratch(root: str | os.PathLike | None = None) -> list[Path]:
     pattern = re.compile(rf"{re.escape(SCRATCH_PREFIX)}{re.escape(socket.gethostname())}"
                          r"-(\d+)-\w+")
     removed = []
-    for path in root.glob(SCRATCH_PREFIX + "*"):
-        match = pattern.fullmatch(path.name)
-        if match is None or not path.is_dir() or process_running(int(match.group(1))):
-            continue
+    folders = (path for path in root.glob(SCRATCH_PREFIX + "*") if path.is_dir())
+    for path, pid in dead_writers(folders, pattern):
         shutil.rmtree(path, ignore_errors=True)
         log.warning("removed %s, left by an interrupted report (process %s, no longer "
-                    "running)", path, match.group(1))
+                    "running)", path, pid)
         removed.append(path)
     return removed
 

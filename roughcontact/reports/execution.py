@@ -18,11 +18,12 @@ import os
 import re
 import sys
 import time
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from roughcontact.study.provenance import atomic_path
 
-__all__ = ["execute_notebook", "process_running", "remove_stale_temporaries"]
+__all__ = ["dead_writers", "execute_notebook", "process_running", "remove_stale_temporaries"]
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +37,18 @@ def process_running(pid: int) -> bool:
     except PermissionError:  # runs, as another user
         return True
     return True
+
+
+def dead_writers(candidates: Iterable[Path], pattern: re.Pattern) -> Iterator[tuple[Path, str]]:
+    """The ``candidates`` named after a process that no longer runs on this machine.
+
+    A candidate counts when ``pattern`` matches its whole name with the PID as
+    group 1; yields ``(candidate, PID)``.
+    """
+    for candidate in candidates:
+        match = pattern.fullmatch(candidate.name)
+        if match is not None and not process_running(int(match.group(1))):
+            yield candidate, match.group(1)
 
 
 def remove_stale_temporaries(path: str | os.PathLike) -> list[Path]:
@@ -54,13 +67,10 @@ def remove_stale_temporaries(path: str | os.PathLike) -> list[Path]:
     removed = []
     if not path.parent.is_dir():
         return removed
-    for candidate in path.parent.iterdir():
-        match = pattern.fullmatch(candidate.name)
-        if match is None or process_running(int(match.group(1))):
-            continue
+    for candidate, pid in dead_writers(path.parent.iterdir(), pattern):
         candidate.unlink(missing_ok=True)
         log.warning("removed %s, left by an interrupted writer (process %s, no longer "
-                    "running)", candidate, match.group(1))
+                    "running)", candidate, pid)
         removed.append(candidate)
     return removed
 
