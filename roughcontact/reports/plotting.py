@@ -59,6 +59,25 @@ def draw_table(frame, *, title: str | None = None, fontsize: float = 9):
     return fig
 
 
+def surface_moments(files, sigma_um: float):
+    """Realised moments of the first surface of each surface file, a row each.
+
+    Columns ``file``, ``sigma_um`` (the stored unit std times ``sigma_um``
+    [µm]), ``skew`` and ``kurt``: what the 3-D panels of
+    :func:`draw_surfaces` show. Returns a pandas DataFrame.
+    """
+    import pandas as pd
+
+    from roughcontact.study.storage import read_surfaces
+
+    rows = []
+    for path in files:
+        stats = read_surfaces(path, count=1)["stats"]
+        rows.append({"file": str(path), "sigma_um": stats["sigma"][0] * sigma_um,
+                     "skew": stats["skew"][0], "kurt": stats["kurt"][0]})
+    return pd.DataFrame(rows, columns=["file", "sigma_um", "skew", "kurt"])
+
+
 def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3):
     """3-D views of the first surface of each surface file, ``columns`` per row.
 

@@ -16,6 +16,7 @@ from roughcontact.reports.plotting import (  # noqa: E402
     plot_by_mesh,
     plot_cells,
     save_table,
+    surface_moments,
 )
 from roughcontact.study import storage  # noqa: E402
 
@@ -129,3 +130,16 @@ def test_describe_study_names_every_cell_under_the_note():
     assert lines[1] == "cells:"
     assert lines[2:] == ["   Sk 0, Ku 3, paper mesh", "   Sk -0.8, Ku 4, paper mesh",
                          "   Sk 0, Ku 3, refined mesh", "   Sk -0.8, Ku 4, refined mesh"]
+
+
+def test_surface_moments_are_those_of_each_files_first_surface(monkeypatch):
+    """Figs 3 and 4: realised std [um], Sk and Ku of the surface each panel shows."""
+    stored = {"a.h5": {"sigma": [0.9, 1.1], "skew": [0.1, 0.2], "kurt": [2.9, 3.1]},
+              "b.h5": {"sigma": [1.05], "skew": [-0.75], "kurt": [3.5]}}
+    monkeypatch.setattr(storage, "read_surfaces",
+                        lambda path, count=None: {"stats": stored[path]})
+    table = surface_moments(["a.h5", "b.h5"], 40.0)
+    assert list(table.columns) == ["file", "sigma_um", "skew", "kurt"]
+    assert table["file"].tolist() == ["a.h5", "b.h5"]
+    np.testing.assert_allclose(table["sigma_um"], [36.0, 42.0])
+    assert table["skew"].tolist() == [0.1, -0.75] and table["kurt"].tolist() == [2.9, 3.5]
