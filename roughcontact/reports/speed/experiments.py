@@ -296,7 +296,7 @@ def solver_speed_vs_error(
     rows = []
     for skew, kurt in cells:
         heights = cell_heights(geometry.grid, geometry.size, b, skew, kurt, surfaces, seed,
-                                "speed_vs_error")
+                               "speed_vs_error")
         fields = {"influence": label, "grid_x": geometry.grid[0], "grid_y": geometry.grid[1],
                   "skew": float(skew), "kurt": float(kurt), "surfaces": surfaces, "steps": steps}
         rows += _solver_cell(partial(timed_sweep, unit_influence, heights, geometry, end, steps),
@@ -482,11 +482,11 @@ def surfaces_per_cell(
     """
     skew, kurt = cell
     heights = cell_heights(geometry.grid, geometry.size, b, skew, kurt, surfaces, seed,
-                            "surfaces_per_cell")
+                           "surfaces_per_cell")
     end = nondim_pressure(max(pressures), thickness=geometry.thickness, E=geometry.E,
                           sigma=sigma)
     nd, solve_s = timed_sweep(unit_influence, heights, geometry, end, steps, method=method,
-                               tol=tol, precision=precision, batch_size=batch_size)
+                              tol=tol, precision=precision, batch_size=batch_size)
     reporter(progress)(f"{cell_key(skew, kurt)}: {surfaces} surfaces swept in {solve_s:.1f} s")
     table = band_vs_count(nondim.to_physical(nd, sigma, geometry.E), pressures, counts,
                           draws=draws, seed=seed)

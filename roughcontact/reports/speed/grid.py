@@ -188,8 +188,8 @@ def grid_study(
         build_s = time.perf_counter() - start
         for skew, kurt in cells:
             nd, solve_s = timed_sweep(unit, heights(g, skew, kurt), geometry, end, steps,
-                                       method=method, tol=tol, precision=precision,
-                                       stiffness_tol=1e-6, max_iter=None)
+                                      method=method, tol=tol, precision=precision,
+                                      stiffness_tol=1e-6, max_iter=None)
             _, frame = aggregate_sweep(nd, sigma, E, levels)
             say(f"grid {g} x {g} {cell_key(skew, kurt)}: influence {build_s:.1f} s, "
                 f"sweep {solve_s:.1f} s")

@@ -34,7 +34,7 @@ def cell_key(skew: float, kurt: float) -> str:
 
 
 def cell_heights(grid, size, b: float, skew: float, kurt: float, count: int, seed: int,
-                  tag: str, spectrum: Mapping | None = None) -> np.ndarray:
+                 tag: str, spectrum: Mapping | None = None) -> np.ndarray:
     """``count`` surfaces of one cell in units of sigma, shape (count, ny, nx).
 
     Exponential ACF (Eq 1) with 10 % correlation length ``b`` [m], periodic
@@ -54,7 +54,7 @@ def cell_heights(grid, size, b: float, skew: float, kurt: float, count: int, see
 
 
 def timed_sweep(unit_influence, heights, geometry: BlockGeometry, pressure_end: float,
-                 steps: int, **options) -> tuple[nondim.NondimSweep, float]:
+                steps: int, **options) -> tuple[nondim.NondimSweep, float]:
     """One :func:`~roughcontact.contact.cell.sweep_cell` and its wall time [s].
 
     ``options`` go to ``sweep_cell``; callers pass ``precision`` explicitly
