@@ -4,7 +4,7 @@ The same physical window (9 mm square, sigma = 24.5 um, Gaussian heights,
 E = 511 MPa, nu = 0) meshed with 30, 60, 120 and 240 elements per side, solved
 on Love's half-space (matrix-free FFT operator,
 :func:`roughcontact.elasticity.operators.halfspace_operator`, through
-:func:`roughcontact.reports.speed.experiments.grid_study` with
+:func:`roughcontact.reports.speed.grid.grid_study` with
 ``influence="halfspace_fft"``) at nominal pressures 0.3, 1 and 3 MPa, for
 
 - ``self-affine``: isotropic PSD, roll-off 3 mm, cut-off 0.6 mm, H = 0.8
@@ -82,7 +82,7 @@ sys.path.insert(0, str(ROOT))
 
 from roughcontact import contact  # noqa: E402
 from roughcontact.elasticity import operators  # noqa: E402
-from roughcontact.reports.speed.experiments import grid_study  # noqa: E402
+from roughcontact.reports.speed.grid import grid_study  # noqa: E402
 from roughcontact.surfaces import synthetic  # noqa: E402
 
 MM = 1e-3

@@ -1,6 +1,6 @@
 """Snakemake entry point of rule `figure`: execute a figure notebook with papermill."""
 
-from roughcontact.reports.plotting import execute_notebook
+from roughcontact.reports.execution import execute_notebook
 from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])

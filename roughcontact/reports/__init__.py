@@ -3,6 +3,7 @@
 ``convergence`` compares the mesh presets (influence entries and contact
 results); ``speed`` measures speed against error of the solver, the grid and
 the number of surfaces and recommends settings; ``audit`` checks every study
-cell's provenance and a seeded re-solve; ``plotting`` renders figures and
-runs the papermill notebooks.
+cell's provenance and a seeded re-solve; ``plotting`` draws and saves the
+figures; ``execution`` runs the papermill notebooks and removes what killed
+writers left.
 """

@@ -53,6 +53,8 @@ import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from types import MappingProxyType
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -62,7 +64,8 @@ from matplotlib.figure import Figure
 from roughcontact.contact.cell import sweep_and_aggregate
 from roughcontact.elasticity.influence import GB, BlockGeometry, MeshSpec
 from roughcontact.reports.build_worker import HALFSPACE, build, centre_entries, run_isolated
-from roughcontact.reports.plotting import process_running, save_figure
+from roughcontact.reports.execution import dead_writers
+from roughcontact.reports.plotting import save_figure
 from roughcontact.study.storage import read_influence
 from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
 
@@ -169,13 +172,11 @@ def remove_stale_scratch(root: str | os.PathLike | None = None) -> list[Path]:
     pattern = re.compile(rf"{re.escape(SCRATCH_PREFIX)}{re.escape(socket.gethostname())}"
                          r"-(\d+)-\w+")
     removed = []
-    for path in root.glob(SCRATCH_PREFIX + "*"):
-        match = pattern.fullmatch(path.name)
-        if match is None or not path.is_dir() or process_running(int(match.group(1))):
-            continue
+    folders = (path for path in root.glob(SCRATCH_PREFIX + "*") if path.is_dir())
+    for path, pid in dead_writers(folders, pattern):
         shutil.rmtree(path, ignore_errors=True)
         log.warning("removed %s, left by an interrupted report (process %s, no longer "
-                    "running)", path, match.group(1))
+                    "running)", path, pid)
         removed.append(path)
     return removed
 
@@ -301,90 +302,33 @@ def _refinement_sequence(meshes: Sequence[tuple[str, MeshSpec]]):
 # The study
 
 
-def influence_convergence(
-    base: BlockGeometry,
-    presets: Sequence[str | MeshSpec],
-    *,
-    halfspace: bool = True,
-    surfaces: int = 3,
-    seed: int = 2006,
-    sigma: float = 24.5e-6,
-    corr_length: float = 1e-3,
-    pressures: Sequence[float] = (0.3e6, 1e6, 2e6),
-    reference: str | None = None,
-    far: int = 10,
-    solver: str = "auto",
-    max_bytes: float = 16 * GB,
-    tol: float = 1e-10,
-    isolate: bool = True,
-    progress: Callable[[str], None] | None = None,
-    stored: Mapping[str, str | os.PathLike] | None = None,
-) -> pd.DataFrame:
-    """Cost, influence entries and rough-contact response per mesh, with errors.
+class _MeshJob(NamedTuple):
+    """One mesh of the study (or Love's half-space): what is built and how it is labelled."""
 
-    For each mesh in ``presets`` (and Love's half-space when ``halfspace``)
-    builds ``E * C`` for ``base`` with that mesh (``base.mesh`` is replaced),
-    records its cost and the centre row's entries, then sweeps ``surfaces``
-    Gaussian surfaces (exponential ACF, Eq 1; std ``sigma``, 10 % correlation
-    length ``corr_length``, sampled on the contact grid, seeds from
-    ``surface.derive_seeds(seed, "influence_convergence", surfaces)``) over
-    rigid approaches (displacement control, Eq 27), as a workflow contact job
-    does, and reads at each nominal pressure in ``pressures``, as the
-    aggregation does: ``k_P = (L / A_n) dF/dd`` (Eq 33), real area fraction,
-    peak pressure, approach d, mean-plane deflection d_b (Eq 35) and asperity
-    deflection d_a = d - d_b (Eq 45), each averaged over the surfaces at equal P.
+    label: str
+    kind: str  # "fe" or HALFSPACE
+    geometry: BlockGeometry
+    element: str  # finite element type; "" for the half-space
+    refinement: int  # finite elements per contact element; 0 for the half-space
+    stored: str | os.PathLike | None  # the workflow's build of this mesh, if any
 
-    Parameters
-    ----------
-    base : BlockGeometry
-        Block, grid, E, nu and support; its ``mesh`` is ignored.
-    presets : sequence of str or MeshSpec
-        Keys of ``influence.MESH_PRESETS`` or explicit meshes, coarse to fine.
-    halfspace : bool
-        Add Love's half-space (``kind == "halfspace"``) as a row.
-    surfaces : int
-        Rough surfaces per mesh (0: skip the contact part; its columns are NaN).
-    seed : int
-        Study seed of the surfaces (the same surfaces for every mesh).
-    sigma, corr_length : float
-        Height standard deviation and ACF correlation length of the surfaces [m].
-    pressures : sequence of float
-        Nominal pressures P [Pa] at which the contact quantities are read.
-    reference : str, optional
-        Mesh label the ``*_error`` columns compare against; default
-        ``"converged"`` when present, else the last mesh of ``presets``.
-    far : int
-        x offset of ``far_entry`` [contact elements], clipped to the grid.
-    solver, max_bytes
-        Passed to ``influence.unit_modulus_influence`` (a model whose
-        estimate exceeds ``max_bytes`` raises ``ModelTooLarge`` before building).
-    tol : float
-        KKT tolerance of the contact solves.
-    isolate : bool
-        Build each matrix in a fresh Python process (default), which gives an
-        honest per-build peak memory; ``False`` builds in this process and
-        leaves the memory columns NaN (ru_maxrss is process-wide and monotone).
-    progress : callable, optional
-        Called with a one-line message after each mesh (also logged to
-        ``logging.getLogger("roughcontact.convergence")`` at INFO).
-    stored : mapping, optional
-        Preset name -> influence file written by the workflow's ``influence``
-        rule for ``base`` with that mesh: the matrix is read instead of built,
-        and its build time and peak memory are those recorded by that build.
 
-    Returns
-    -------
-    pandas.DataFrame
-        One row per mesh and pressure (tidy); columns and units in
-        ``COLUMNS`` (also ``table.attrs["units"]``). Every quantity q of
-        ``ENTRY_QUANTITIES`` and ``CONTACT_QUANTITIES`` has ``q_error = q /
-        q_reference - 1``, zero on the reference rows. When three meshes
-        differ only in ``refinement`` by a constant ratio, ``kind ==
-        "richardson"`` rows hold the extrapolated values (NaN per quantity
-        where the differences are not monotone or the observed order lies
-        outside [0.5, 6]); ``table.attrs["richardson"]`` describes what was
-        done or why nothing was.
-    """
+def _mesh_jobs(base: BlockGeometry, presets, labels: list[str], halfspace: bool,
+               stored: Mapping) -> list[_MeshJob]:
+    """The meshes to build, in order: ``presets`` on ``base``, then the half-space."""
+    jobs = []
+    for label, preset in zip(labels, presets, strict=True):
+        geometry = dataclasses.replace(base, mesh=preset)
+        spec = geometry.mesh_spec
+        jobs.append(_MeshJob(label, "fe", geometry, spec.element, spec.refinement,
+                             stored.get(label)))
+    if halfspace:
+        jobs.append(_MeshJob(HALFSPACE, HALFSPACE, base, "", 0, None))
+    return jobs
+
+
+def _checked_pressures(presets, surfaces: int, pressures) -> np.ndarray:
+    """``pressures`` [Pa] as an array, after checking the study's arguments."""
     if not presets:
         raise ValueError("presets must name at least one mesh")
     if surfaces < 0 or int(surfaces) != surfaces:
@@ -392,52 +336,130 @@ def influence_convergence(
     pressures = np.asarray(pressures, dtype=float)
     if surfaces and (pressures.ndim != 1 or pressures.size == 0 or not (pressures > 0).all()):
         raise ValueError(f"pressures must be positive nominal pressures [Pa], got {pressures!r}")
-    meshes = [(mesh_label(p), dataclasses.replace(base, mesh=p).mesh_spec) for p in presets]
-    labels = [label for label, _ in meshes]
+    return pressures
+
+
+def _reference_label(labels: list[str], reference: str | None, halfspace: bool) -> str:
+    """The mesh the errors compare against: ``reference``, else "converged" if measured,
+    else the last preset; checked to be one of the meshes."""
     if len(set(labels)) != len(labels):
         raise ValueError(f"presets must be distinct, got {labels}")
     if reference is None:
         reference = "converged" if "converged" in labels else labels[-1]
     if reference not in labels and not (halfspace and reference == HALFSPACE):
         raise ValueError(f"reference {reference!r} is not one of the meshes {labels}")
-    remove_stale_scratch()
+    return reference
 
-    heights = None
-    if surfaces:
-        spec = SurfaceSpec(grid=base.grid, size=base.size, corr_length=(corr_length,) * 2,
-                           sigma=sigma)
-        heights = generate_many(spec, derive_seeds(seed, "influence_convergence", surfaces))
-    common = {"far": far, "solver": solver, "max_bytes": float(max_bytes), "tol": tol,
-              "heights": heights, "sigma": sigma, "pressures": pressures, "isolated": isolate}
-    jobs = [(label, "fe", dataclasses.replace(base, mesh=preset))
-            for (label, _), preset in zip(meshes, presets, strict=True)]
-    if halfspace:
-        jobs.append((HALFSPACE, HALFSPACE, base))
 
+def _study_surfaces(base: BlockGeometry, surfaces: int, seed: int, sigma: float,
+                    corr_length: float) -> np.ndarray | None:
+    """The Gaussian surfaces [m] every mesh is pressed with (None without a contact part)."""
+    if not surfaces:
+        return None
+    spec = SurfaceSpec(grid=base.grid, size=base.size, corr_length=(corr_length,) * 2,
+                       sigma=sigma)
+    return generate_many(spec, derive_seeds(seed, "influence_convergence", surfaces))
+
+
+def _measure(jobs: list[_MeshJob], common: Mapping, contact: bool,
+             progress: Callable[[str], None] | None) -> list[dict]:
+    """Build (or read) and measure each mesh of ``jobs``: the tidy rows of all of them."""
     start = time.perf_counter()
     rows = []
-    for label, kind, geom in jobs:
-        task = {"label": label, "kind": kind, "geometry": geom, **common,
-                "stored": (stored or {}).get(label) if kind == "fe" else None}
-        result = _run_task(task)
-        spec = geom.mesh_spec
+    for job in jobs:
+        geom = job.geometry
+        result = _run_task({"label": job.label, "kind": job.kind, "geometry": geom, **common,
+                            "stored": job.stored})
         info = {
-            "mesh": label, "kind": kind, "element": spec.element if kind == "fe" else "",
-            "refinement": spec.refinement if kind == "fe" else 0, "nu": geom.nu,
+            "mesh": job.label, "kind": job.kind, "element": job.element,
+            "refinement": job.refinement, "nu": geom.nu,
             "grid_x": geom.grid[0], "grid_y": geom.grid[1], "thickness_m": geom.thickness,
             "element_size_m": math.sqrt(geom.spacing[0] * geom.spacing[1]),
         }
-        rows.extend(_tidy_rows(info | result, pressures if surfaces else None))
-        message = (f"{label}: {result['dofs']} dofs, built in {result['build_s']:.1f} s, "
+        rows.extend(_tidy_rows(info | result, common["pressures"] if contact else None))
+        message = (f"{job.label}: {result['dofs']} dofs, built in {result['build_s']:.1f} s, "
                    f"peak {result['peak_memory_GB']:.2f} GB, E*C_cc/h = "
                    f"{result['self_compliance']:.4f}"
-                   + (f", contact {result['contact_s']:.1f} s" if surfaces else "")
+                   + (f", contact {result['contact_s']:.1f} s" if contact else "")
                    + f"; elapsed {time.perf_counter() - start:.1f} s")
         log.info(message)
         if progress is not None:
             progress(message)
+    return rows
 
-    table = pd.DataFrame(rows)
+
+def influence_convergence(
+    base: BlockGeometry, presets: Sequence[str | MeshSpec], *, halfspace: bool = True,
+    surfaces: int = 3, seed: int = 2006, sigma: float = 24.5e-6, corr_length: float = 1e-3,
+    pressures: Sequence[float] = (0.3e6, 1e6, 2e6), reference: str | None = None,
+    far: int = 10, solver: str = "auto", max_bytes: float = 16 * GB, tol: float = 1e-10,
+    isolate: bool = True, progress: Callable[[str], None] | None = None,
+    stored: Mapping[str, str | os.PathLike] | None = None,
+) -> pd.DataFrame:
+    """Cost, influence entries and rough-contact response per mesh, with errors.
+
+    For each mesh in ``presets`` (and Love's half-space when ``halfspace``),
+    ``E * C`` of ``base`` with that mesh: its cost, its centre row's entries
+    and the response of ``surfaces`` Gaussian surfaces (exponential ACF, Eq 1;
+    seeds ``derive_seeds(seed, "influence_convergence", surfaces)``, the same
+    for every mesh) swept over rigid approaches (Eq 27) and read at each of
+    ``pressures`` as the workflow's contact and aggregate jobs do: k_P (Eq 33),
+    real area fraction, peak pressure, d, d_b (Eq 35) and d_a (Eq 45), each
+    averaged over the surfaces at equal P.
+
+    Parameters
+    ----------
+    base : BlockGeometry
+        Block, grid, E, nu and support; its ``mesh`` is replaced by each preset.
+    presets : sequence of str or MeshSpec
+        Keys of ``influence.MESH_PRESETS`` or explicit meshes, coarse to fine.
+    halfspace : bool
+        Add Love's half-space (``kind == "halfspace"``) as a row.
+    surfaces, sigma, corr_length
+        Rough surfaces per mesh (0: no contact part, its columns NaN), their
+        height standard deviation and ACF correlation length [m].
+    pressures : sequence of float
+        Nominal pressures P [Pa] at which the contact quantities are read.
+    reference : str, optional
+        Mesh label the ``*_error`` columns compare against; default
+        ``"converged"`` when present, else the last mesh of ``presets``.
+    far : int
+        x offset of ``far_entry`` [contact elements], clipped to the grid.
+    solver, max_bytes, tol
+        Passed to ``influence.unit_modulus_influence`` (an estimate above
+        ``max_bytes`` raises ``ModelTooLarge`` before building); the KKT
+        tolerance of the contact solves.
+    isolate : bool
+        Build each matrix in a fresh Python process (default: an honest
+        per-build peak memory); ``False`` builds here and leaves the memory
+        columns NaN (ru_maxrss is process-wide and monotone).
+    progress : callable, optional
+        Given a line after each mesh (also logged at INFO on ``roughcontact.convergence``).
+    stored : mapping, optional
+        Preset name -> influence file of the workflow's ``influence`` rule for
+        ``base`` with that mesh: read instead of built, with the build time and
+        peak memory that build recorded.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per mesh and pressure (tidy); columns and units in ``COLUMNS``
+        (also ``table.attrs["units"]``); ``q_error = q / q_reference - 1`` for
+        every quantity q of ``ENTRY_QUANTITIES`` and ``CONTACT_QUANTITIES``.
+        Three meshes differing only in ``refinement`` by a constant ratio add
+        ``kind == "richardson"`` rows (module docstring);
+        ``table.attrs["richardson"]`` says what was done or why nothing was.
+    """
+    pressures = _checked_pressures(presets, surfaces, pressures)
+    meshes = [(mesh_label(p), dataclasses.replace(base, mesh=p).mesh_spec) for p in presets]
+    labels = [label for label, _ in meshes]
+    reference = _reference_label(labels, reference, halfspace)
+    remove_stale_scratch()
+    common = {"far": far, "solver": solver, "max_bytes": float(max_bytes), "tol": tol,
+              "heights": _study_surfaces(base, surfaces, seed, sigma, corr_length),
+              "sigma": sigma, "pressures": pressures, "isolated": isolate}
+    jobs = _mesh_jobs(base, presets, labels, halfspace, stored or {})
+    table = pd.DataFrame(_measure(jobs, common, bool(surfaces), progress))
     table, note = _add_richardson(table, meshes)
     table = _add_errors(table, reference)
     table.attrs["units"] = {k: v[0] for k, v in COLUMNS.items()}
@@ -513,6 +535,82 @@ def _add_errors(table: pd.DataFrame, reference: str) -> pd.DataFrame:
 # ---------------------------------------------------------------------------
 # Figure
 
+#: Centre-row entries drawn in panels (a) and (b), in order of their offsets.
+PLOTTED_ENTRIES = ("self_compliance", "neighbour_1_0", "neighbour_1_1", "neighbour_2_0",
+                   "far_entry")
+#: Line style of each kind of row that is not a finite-element mesh.
+KIND_LINESTYLES = MappingProxyType({HALFSPACE: "--", "richardson": ":"})
+#: Contact panels (c)-(e): quantity, scale to the axis unit, axis label, title.
+CONTACT_PANELS = (("k_P_Pa", 1e-6, "k_P [MPa]", "(c) normalized stiffness (Eq 33)"),
+                  ("real_area_fraction", 100.0, "real contact area [%]", "(d) real contact area"),
+                  ("max_pressure_Pa", 1e-6, "max pressure [MPa]", "(e) peak contact pressure"))
+
+
+def _entry_ticks(first: pd.DataFrame) -> list[str]:
+    """Offsets (x, y) of :data:`PLOTTED_ENTRIES` from the centre element, as tick labels."""
+    return ["(0,0)", "(1,0)", "(1,1)", "(2,0)", f"({int(first['far_offset'].max())},0)"]
+
+
+def _plot_entries(ax, first: pd.DataFrame, styles: Mapping) -> None:
+    """(a) the centre row's entries E C / h of each mesh."""
+    for mesh, style in styles.items():
+        ax.plot(range(len(PLOTTED_ENTRIES)), first.loc[mesh, list(PLOTTED_ENTRIES)].to_numpy(float),
+                **style)
+    ax.set_xticks(range(len(PLOTTED_ENTRIES)), _entry_ticks(first))
+    ax.set_yscale("log")
+    ax.set_xlabel("offset from the centre element (x, y)")
+    ax.set_ylabel("E C / h [-]")
+    ax.set_title("(a) influence coefficients, centre row")
+    ax.legend(fontsize=8)
+
+
+def _plot_entry_errors(ax, first: pd.DataFrame, meshes: list[str], reference) -> None:
+    """(b) |relative error| of each entry against the reference mesh (dotted: 5 %)."""
+    compared = [m for m in meshes if m != reference and first.loc[m, "kind"] != "richardson"]
+    width = 0.8 / len(PLOTTED_ENTRIES)
+    for k, (q, tick) in enumerate(zip(PLOTTED_ENTRIES, _entry_ticks(first), strict=True)):
+        errors = first.loc[compared, q + "_error"].abs().to_numpy(float)
+        ax.bar(np.arange(len(compared)) + (k - (len(PLOTTED_ENTRIES) - 1) / 2) * width,
+               np.where(errors > 0, errors, np.nan), width, label=tick)
+    ax.set_xticks(range(len(compared)),
+                  [f"{m}\n{int(first.loc[m, 'dofs'])} dofs" if first.loc[m, "dofs"] else m
+                   for m in compared], fontsize=8)
+    ax.set_yscale("log")
+    ax.axhline(0.05, color="grey", linewidth=0.8, linestyle=":")
+    ax.set_ylabel(f"|relative error| vs {reference}")
+    ax.set_title("(b) error of E C / h per offset (x, y)")
+    ax.legend(fontsize=8, ncol=2)
+
+
+def _plot_contact(axes, table: pd.DataFrame, styles: Mapping) -> None:
+    """(c)-(e) the contact quantities of :data:`CONTACT_PANELS` against nominal pressure."""
+    for ax, (q, scale, ylabel, title) in zip(axes, CONTACT_PANELS, strict=True):
+        for mesh, style in styles.items():
+            rows = table[table["mesh"] == mesh]
+            ax.plot(rows["pressure_Pa"] * 1e-6, rows[q] * scale, **style)
+        ax.set_xlabel("nominal pressure P [MPa]")
+        ax.set_ylabel(ylabel)
+        ax.set_title(title)
+        ax.grid(alpha=0.3)
+    axes[-1].set_yscale("log")
+
+
+def _plot_cost(ax, first: pd.DataFrame, meshes: list[str]) -> None:
+    """(f) build time and peak memory of each mesh."""
+    x = np.arange(len(meshes))
+    ax.bar(x - 0.2, first["build_s"].to_numpy(float), 0.4, color="C0", label="build time [s]")
+    ax.set_xticks(x, meshes, rotation=20, fontsize=8)
+    ax.set_ylabel("build time [s]")
+    twin = ax.twinx()
+    twin.bar(x + 0.2, first["peak_memory_GB"].to_numpy(float), 0.4, color="C1",
+             label="peak memory [GB]")
+    twin.set_ylabel("peak memory [GB]")
+    ax.set_ylim(0, 1.3 * np.nanmax(first["build_s"].to_numpy(float)))
+    twin.set_ylim(0, 1.3 * np.nanmax(first["peak_memory_GB"].to_numpy(float)))
+    ax.set_title("(f) cost of building E C")
+    ax.legend(loc="upper left", fontsize=8)
+    twin.legend(loc="upper center", fontsize=8)
+
 
 def plot_influence_convergence(table: pd.DataFrame, path_png: str | os.PathLike) -> None:
     """Six-panel summary of an ``influence_convergence`` table, saved as PNG (Agg).
@@ -529,72 +627,14 @@ def plot_influence_convergence(table: pd.DataFrame, path_png: str | os.PathLike)
     fig = Figure(figsize=(15, 9), layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(2, 3)
-    colours = {m: f"C{i}" for i, m in enumerate(meshes)}
-
-    def style(mesh: str) -> dict:
-        kind = first.loc[mesh, "kind"]
-        return {"color": colours[mesh], "linestyle": "--" if kind == HALFSPACE else
-                (":" if kind == "richardson" else "-"),
-                "linewidth": 2.5 if mesh == reference else 1.3, "marker": "o", "label": mesh}
-
-    ax = axes[0, 0]
-    names = ["self_compliance", "neighbour_1_0", "neighbour_1_1", "neighbour_2_0", "far_entry"]
-    ticks = ["(0,0)", "(1,0)", "(1,1)", "(2,0)", f"({int(first['far_offset'].max())},0)"]
-    for mesh in meshes:
-        ax.plot(range(len(names)), first.loc[mesh, names].to_numpy(float), **style(mesh))
-    ax.set_xticks(range(len(names)), ticks)
-    ax.set_yscale("log")
-    ax.set_xlabel("offset from the centre element (x, y)")
-    ax.set_ylabel("E C / h [-]")
-    ax.set_title("(a) influence coefficients, centre row")
-    ax.legend(fontsize=8)
-
-    ax = axes[0, 1]
-    compared = [m for m in meshes if m != reference and first.loc[m, "kind"] != "richardson"]
-    width = 0.8 / len(names)
-    for k, (q, tick) in enumerate(zip(names, ticks, strict=True)):
-        errors = first.loc[compared, q + "_error"].abs().to_numpy(float)
-        ax.bar(np.arange(len(compared)) + (k - (len(names) - 1) / 2) * width,
-               np.where(errors > 0, errors, np.nan), width, label=tick)
-    ax.set_xticks(range(len(compared)),
-                  [f"{m}\n{int(first.loc[m, 'dofs'])} dofs" if first.loc[m, "dofs"] else m
-                   for m in compared], fontsize=8)
-    ax.set_yscale("log")
-    ax.axhline(0.05, color="grey", linewidth=0.8, linestyle=":")
-    ax.set_ylabel(f"|relative error| vs {reference}")
-    ax.set_title("(b) error of E C / h per offset (x, y)")
-    ax.legend(fontsize=8, ncol=2)
-
-    contact_panels = ((axes[0, 2], "k_P_Pa", 1e-6, "k_P [MPa]", "(c) normalized stiffness (Eq 33)"),
-                      (axes[1, 0], "real_area_fraction", 100.0, "real contact area [%]",
-                       "(d) real contact area"),
-                      (axes[1, 1], "max_pressure_Pa", 1e-6, "max pressure [MPa]",
-                       "(e) peak contact pressure"))
-    for ax, q, scale, ylabel, title in contact_panels:
-        for mesh in meshes:
-            rows = table[table["mesh"] == mesh]
-            ax.plot(rows["pressure_Pa"] * 1e-6, rows[q] * scale, **style(mesh))
-        ax.set_xlabel("nominal pressure P [MPa]")
-        ax.set_ylabel(ylabel)
-        ax.set_title(title)
-        ax.grid(alpha=0.3)
-    axes[1, 1].set_yscale("log")
-
-    ax = axes[1, 2]
-    x = np.arange(len(meshes))
-    ax.bar(x - 0.2, first["build_s"].to_numpy(float), 0.4, color="C0", label="build time [s]")
-    ax.set_xticks(x, meshes, rotation=20, fontsize=8)
-    ax.set_ylabel("build time [s]")
-    twin = ax.twinx()
-    twin.bar(x + 0.2, first["peak_memory_GB"].to_numpy(float), 0.4, color="C1",
-             label="peak memory [GB]")
-    twin.set_ylabel("peak memory [GB]")
-    ax.set_ylim(0, 1.3 * np.nanmax(first["build_s"].to_numpy(float)))
-    twin.set_ylim(0, 1.3 * np.nanmax(first["peak_memory_GB"].to_numpy(float)))
-    ax.set_title("(f) cost of building E C")
-    ax.legend(loc="upper left", fontsize=8)
-    twin.legend(loc="upper center", fontsize=8)
-
+    styles = {mesh: {"color": f"C{i}",
+                     "linestyle": KIND_LINESTYLES.get(first.loc[mesh, "kind"], "-"),
+                     "linewidth": 2.5 if mesh == reference else 1.3, "marker": "o", "label": mesh}
+              for i, mesh in enumerate(meshes)}
+    _plot_entries(axes[0, 0], first, styles)
+    _plot_entry_errors(axes[0, 1], first, meshes, reference)
+    _plot_contact([axes[0, 2], axes[1, 0], axes[1, 1]], table, styles)
+    _plot_cost(axes[1, 2], first, meshes)
     row = table.iloc[0]
     fig.suptitle(f"Influence-coefficient mesh convergence: {int(row['grid_x'])} x "
                  f"{int(row['grid_y'])} contact elements of "

@@ -1,66 +1,20 @@
-"""Figure output: atomic saving and papermill execution of figure notebooks.
+"""Figure code of the notebooks and reports: atomic saving, tables, curves, panels.
 
 Every file is written under a temporary name beside it and renamed when
-complete (:func:`roughcontact.study.provenance.atomic_path`:
-``.<stem>.tmp<PID><suffix>``). A writer killed with SIGKILL (``kill -9``,
-the out-of-memory killer, a cluster's wall-time limit) cannot remove its
-temporary file, so every writer here first removes those that processes no
-longer running left beside its output (:func:`remove_stale_temporaries`):
-the next run of the interrupted job cleans up after it.
+complete (:func:`roughcontact.study.provenance.atomic_path`); the temporaries
+that killed writers left are removed first
+(:func:`roughcontact.reports.execution.remove_stale_temporaries`).
 """
 
 from __future__ import annotations
 
-import logging
 import os
-import re
-import sys
-import time
 from pathlib import Path
 
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import file_sha256
+from roughcontact.reports.execution import remove_stale_temporaries
 from roughcontact.study.provenance import atomic_path
-
-log = logging.getLogger(__name__)
-
-
-def process_running(pid: int) -> bool:
-    """Whether a process ``pid`` runs on this machine (a zombie counts as running)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # runs, as another user
-        return True
-    return True
-
-
-def remove_stale_temporaries(path: str | os.PathLike) -> list[Path]:
-    """Remove the temporary files of ``path`` that killed writers left behind.
-
-    ``atomic_path`` writes ``path`` as ``.<stem>.tmp<PID><suffix>`` in the
-    same folder. Those whose process no longer runs on this machine are
-    removed; those of running processes (this one, or another writer of the
-    same file) are kept. The workflow never runs two jobs for one output at
-    once, so on a cluster's shared file system a temporary file of a job on
-    another node is a dead one too; it is kept only while its PID happens to
-    run here, which costs a file, never an output. Returns the removed paths.
-    """
-    path = Path(path)
-    pattern = re.compile(rf"\.{re.escape(path.stem)}\.tmp(\d+){re.escape(path.suffix)}")
-    removed = []
-    if not path.parent.is_dir():
-        return removed
-    for candidate in path.parent.iterdir():
-        match = pattern.fullmatch(candidate.name)
-        if match is None or process_running(int(match.group(1))):
-            continue
-        candidate.unlink(missing_ok=True)
-        log.warning("removed %s, left by an interrupted writer (process %s, no longer "
-                    "running)", candidate, match.group(1))
-        removed.append(candidate)
-    return removed
 
 
 def save_figure(fig, *paths, dpi: int = 150) -> None:
@@ -105,6 +59,25 @@ def draw_table(frame, *, title: str | None = None, fontsize: float = 9):
     return fig
 
 
+def surface_moments(files, sigma_um: float):
+    """Realised moments of the first surface of each surface file, a row each.
+
+    Columns ``file``, ``sigma_um`` (the stored unit std times ``sigma_um``
+    [µm]), ``skew`` and ``kurt``: what the 3-D panels of
+    :func:`draw_surfaces` show. Returns a pandas DataFrame.
+    """
+    import pandas as pd
+
+    from roughcontact.study.storage import read_surfaces
+
+    rows = []
+    for path in files:
+        stats = read_surfaces(path, count=1)["stats"]
+        rows.append({"file": str(path), "sigma_um": stats["sigma"][0] * sigma_um,
+                     "skew": stats["skew"][0], "kurt": stats["kurt"][0]})
+    return pd.DataFrame(rows, columns=["file", "sigma_um", "skew", "kurt"])
+
+
 def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3):
     """3-D views of the first surface of each surface file, ``columns`` per row.
 
@@ -140,56 +113,14 @@ def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3):
     return fig
 
 
-def _kernel_name() -> str:
-    """A Jupyter kernel that runs this interpreter (so it sees this package)."""
-    from jupyter_client.kernelspec import KernelSpecManager, NoSuchKernel
-
-    manager = KernelSpecManager()
-    try:
-        spec = manager.get_kernel_spec("python3")
-        exe = spec.argv[0]
-        if exe in ("python", "python3", "{python}") or os.path.realpath(exe) == os.path.realpath(
-            sys.executable
-        ):
-            return "python3"
-    except NoSuchKernel:
-        pass
-    raise RuntimeError(
-        f"the Jupyter kernel 'python3' does not run {sys.executable}; "
-        "install ipykernel into this environment (make does this)"
-    )
-
-
-def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
-    """Execute ``notebook`` with papermill into ``output`` (atomically).
-
-    The notebook must have a cell tagged ``parameters``; the entries of
-    ``parameters`` that it declares there are injected after it (the workflow
-    passes one set to every figure; the others are logged, not passed). The
-    executed notebook is kept so a reader sees the code beside the figure. A
-    failing cell raises with the notebook's traceback. Temporary notebooks
-    that an earlier, killed execution left beside ``output`` are removed
-    first (:func:`remove_stale_temporaries`).
-    """
-    import papermill
-
-    start = time.perf_counter()
-    declared = papermill.inspect_notebook(str(notebook))
-    unused = sorted(set(parameters) - set(declared))
-    parameters = {k: v for k, v in parameters.items() if k in declared}
-    log.info("executing %s with parameters %s%s", notebook, sorted(parameters),
-             f" (not declared there, not passed: {unused})" if unused else "")
-    remove_stale_temporaries(output)
-    with atomic_path(output) as tmp:
-        papermill.execute_notebook(
-            str(notebook),
-            str(tmp),
-            parameters=parameters,
-            kernel_name=_kernel_name(),
-            cwd=os.getcwd(),
-            progress_bar=False,
-        )
-    log.info("executed %s in %.1f s -> %s", notebook, time.perf_counter() - start, output)
+def _check_sha256(path, meta: dict, key: str, meta_path) -> None:
+    """Raise :class:`~roughcontact.errors.StoredFileError` unless ``path`` has the SHA-256
+    that the sidecar ``meta`` (read from ``meta_path``) records under ``key``."""
+    if meta.get(key) != file_sha256(path):
+        raise StoredFileError(
+            f"{path}: does not match the SHA-256 in {meta_path} (changed or damaged after "
+            f"the aggregation, or written by an older version); delete it and run the "
+            "workflow again to rebuild it", path)
 
 
 def load_aggregates(paths) -> tuple:
@@ -205,11 +136,7 @@ def load_aggregates(paths) -> tuple:
     table_path, moduli_path, meta_path = paths[:3]
     meta = json.loads(Path(meta_path).read_text())
     for path, key in ((table_path, "table_sha256"), (moduli_path, "moduli_sha256")):
-        if meta.get(key) != file_sha256(path):
-            raise StoredFileError(
-                f"{path}: does not match the SHA-256 in {meta_path} (changed or damaged after "
-                f"the aggregation, or written by an older version); delete it and run the "
-                "workflow again to rebuild it", path)
+        _check_sha256(path, meta, key, meta_path)
     return pd.read_csv(table_path), pd.read_csv(moduli_path), meta
 
 
@@ -223,12 +150,7 @@ def load_validity(paths):
     if len(paths) < 4:
         return pd.DataFrame()
     meta_path, path = paths[2], paths[3]
-    meta = json.loads(Path(meta_path).read_text())
-    if meta.get("validity_sha256") != file_sha256(path):
-        raise StoredFileError(
-            f"{path}: does not match the SHA-256 in {meta_path} (changed or damaged after "
-            f"the aggregation, or written by an older version); delete it and run the "
-            "workflow again to rebuild it", path)
+    _check_sha256(path, json.loads(Path(meta_path).read_text()), "validity_sha256", meta_path)
     return pd.read_csv(path)
 
 
@@ -288,6 +210,66 @@ def plot_band(ax, frame, quantity: str, *, y_scale: float = 1.0, label=None, col
     if partial.any():
         ax.plot(x[partial], y[partial], "o", mfc="none", color=line.get_color(), ms=4)
     return line
+
+
+def plot_by_mesh(table, validity, quantity: str, *, y_scale: float, ylabel: str, title: str,
+                 log_y: bool = False):
+    """One panel per mesh of ``quantity`` against nominal pressure [MPa] (Figs 7, 12, 13).
+
+    Each panel holds the mesh's cells of the aggregate table ``table``, one
+    curve with its band per cell (:func:`plot_band`, styled by
+    :func:`curve_style`), log P axis (and log ``quantity`` when ``log_y``),
+    shaded where ``validity`` (:func:`load_validity`) flags a cell above the
+    hardness (:func:`mark_hardness`); titled ``"<title> (<mesh> mesh)"``,
+    ``ylabel`` on the first panel, which shares its y axis with the others.
+    Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+
+    meshes = list(dict.fromkeys(table["mesh"]))
+    fig, axes = plt.subplots(1, len(meshes), figsize=(5.2 * len(meshes), 4.2), squeeze=False,
+                             sharey=True)
+    for ax, mesh in zip(axes[0], meshes, strict=True):
+        part = table[table["mesh"] == mesh]
+        for _, cell in part.groupby("cell", sort=True):
+            plot_band(ax, cell, quantity, y_scale=y_scale, **curve_style(cell.iloc[0]))
+        ax.set_xscale("log")
+        if log_y:
+            ax.set_yscale("log")
+        mark_hardness(ax, validity, part["cell"].unique())
+        ax.set_xlabel("nominal pressure $P$ [MPa]")
+        ax.set_title(f"{title} ({mesh} mesh)", fontsize=10)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[0][0].set_ylabel(ylabel)
+    fig.tight_layout()
+    return fig
+
+
+def plot_cells(table, quantity: str, *, y_scale: float, ylabel: str, title: str, label: str,
+               legend_fontsize: float | None = None):
+    """``quantity`` of every cell of ``table`` against nominal pressure [MPa], one panel.
+
+    One curve with its band per cell (:func:`plot_band`), labelled
+    ``label.format(**row)`` with the cell's first row of the aggregate table
+    (e.g. ``"$b$ = {b_mm:g} mm"``); log P axis. Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.4, 4.2))
+    for _, cell in table.groupby("cell", sort=True):
+        plot_band(ax, cell, quantity, y_scale=y_scale, label=label.format(**cell.iloc[0]))
+    ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]", ylabel=ylabel, title=title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=legend_fontsize)
+    fig.tight_layout()
+    return fig
+
+
+def describe_study(table) -> str:
+    """:func:`study_note` and the labels of the study's cells, one per line."""
+    return "\n".join([study_note(table), "cells:",
+                      *(f"   {label}" for label in table["label"].unique())])
 
 
 def study_note(table) -> str:

@@ -27,11 +27,11 @@ from roughcontact.reports.convergence import (  # noqa: E402
     influence_convergence,
     remove_stale_scratch,
 )
-from roughcontact.reports.plotting import (  # noqa: E402
+from roughcontact.reports.execution import (  # noqa: E402
     execute_notebook,
     remove_stale_temporaries,
-    save_figure,
 )
+from roughcontact.reports.plotting import save_figure  # noqa: E402
 
 
 def exited_process() -> int:

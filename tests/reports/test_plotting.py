@@ -1,4 +1,5 @@
-"""Figure helpers of the notebooks: tables as CSV and as figures, 3-D surface panels."""
+"""Figure helpers of the notebooks: tables as CSV and as figures, 3-D surface panels,
+curves against nominal pressure per mesh or per cell, the study summary."""
 
 import matplotlib
 import numpy as np
@@ -8,7 +9,15 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from roughcontact.reports.plotting import draw_surfaces, draw_table, save_table  # noqa: E402
+from roughcontact.reports.plotting import (  # noqa: E402
+    describe_study,
+    draw_surfaces,
+    draw_table,
+    plot_by_mesh,
+    plot_cells,
+    save_table,
+    surface_moments,
+)
 from roughcontact.study import storage  # noqa: E402
 
 
@@ -66,3 +75,71 @@ def test_surface_panel_titles_are_legible(monkeypatch, panels):
             below = ax.get_tightbbox(renderer)
             assert j == k or not box.overlaps(below), (k, j)
     plt.close(fig)
+
+
+def aggregate_table() -> pd.DataFrame:
+    """Two cells on each of two meshes, three pressure levels each (an aggregate table)."""
+    rows = []
+    for cell, (mesh, skew, kurt) in enumerate([("paper", 0.0, 3.0), ("paper", -0.8, 4.0),
+                                               ("refined", 0.0, 3.0), ("refined", -0.8, 4.0)]):
+        for level, P in enumerate((1e5, 1e6, 5e6)):
+            rows.append({"cell": cell, "mesh": mesh, "skew": skew, "kurt": kurt, "b_mm": 0.5,
+                         "label": f"Sk {skew:g}, Ku {kurt:g}, {mesh} mesh", "surfaces": 4,
+                         "unconverged_steps": cell, "nominal_pressure": P,
+                         "normalized_stiffness_mean": (cell + 1) * 1e8 * (level + 1),
+                         "normalized_stiffness_half_width": 1e7,
+                         "normalized_stiffness_count": 4})
+    return pd.DataFrame(rows)
+
+
+def test_plot_by_mesh_draws_one_panel_per_mesh_with_a_curve_per_cell():
+    table = aggregate_table()
+    validity = pd.DataFrame({"cell": [3, 3], "flagged": [False, True],
+                             "nominal_pressure": [1e6, 5e6], "threshold": [0.05, 0.05],
+                             "hardness_MPa": [80.0, 80.0]})
+    fig = plot_by_mesh(table, validity, "normalized_stiffness", y_scale=1e-6,
+                       ylabel="$k_P$ [MPa]", title="Fig 7", log_y=True)
+    paper, refined = fig.axes
+    assert [ax.get_title() for ax in fig.axes] == ["Fig 7 (paper mesh)", "Fig 7 (refined mesh)"]
+    assert paper.get_ylabel() == "$k_P$ [MPa]"
+    assert all(ax.get_xscale() == "log" and ax.get_yscale() == "log" for ax in fig.axes)
+    assert [t.get_text() for t in paper.get_legend().get_texts()] == [
+        "Sk = 0, Ku = 3", "Sk = -0.8, Ku = 4"]
+    np.testing.assert_allclose(paper.lines[1].get_ydata(), [200.0, 400.0, 600.0])
+    assert not paper.texts and len(refined.texts) == 1  # cell 3 flagged from 5 MPa
+    assert "H = 80 MPa" in refined.texts[0].get_text()
+    plt.close(fig)
+
+
+def test_plot_cells_labels_each_cell_from_its_row():
+    table = aggregate_table()
+    fig = plot_cells(table[table["mesh"] == "paper"], "normalized_stiffness", y_scale=1e-6,
+                     ylabel="$k_P$ [MPa]", title="Fig 11", label="Sk {skew:g}, $b$ = {b_mm:g} mm",
+                     legend_fontsize=8)
+    (ax,) = fig.axes
+    assert ax.get_title() == "Fig 11" and ax.get_xscale() == "log"
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        "Sk 0, $b$ = 0.5 mm", "Sk -0.8, $b$ = 0.5 mm"]
+    assert ax.get_legend().get_texts()[0].get_fontsize() == 8
+    plt.close(fig)
+
+
+def test_describe_study_names_every_cell_under_the_note():
+    lines = describe_study(aggregate_table()).splitlines()
+    assert lines[0].startswith("4-4 surfaces per curve") and lines[0].endswith("excluded: 6")
+    assert lines[1] == "cells:"
+    assert lines[2:] == ["   Sk 0, Ku 3, paper mesh", "   Sk -0.8, Ku 4, paper mesh",
+                         "   Sk 0, Ku 3, refined mesh", "   Sk -0.8, Ku 4, refined mesh"]
+
+
+def test_surface_moments_are_those_of_each_files_first_surface(monkeypatch):
+    """Figs 3 and 4: realised std [um], Sk and Ku of the surface each panel shows."""
+    stored = {"a.h5": {"sigma": [0.9, 1.1], "skew": [0.1, 0.2], "kurt": [2.9, 3.1]},
+              "b.h5": {"sigma": [1.05], "skew": [-0.75], "kurt": [3.5]}}
+    monkeypatch.setattr(storage, "read_surfaces",
+                        lambda path, count=None: {"stats": stored[path]})
+    table = surface_moments(["a.h5", "b.h5"], 40.0)
+    assert list(table.columns) == ["file", "sigma_um", "skew", "kurt"]
+    assert table["file"].tolist() == ["a.h5", "b.h5"]
+    np.testing.assert_allclose(table["sigma_um"], [36.0, 42.0])
+    assert table["skew"].tolist() == [0.1, -0.75] and table["kurt"].tolist() == [2.9, 3.5]

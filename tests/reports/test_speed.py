@@ -336,3 +336,18 @@ def test_derive_presets_takes_what_the_tables_measure():
     for preset in ("paper", "fast"):
         for key in ("mesh", "tol", "surfaces", "description", "source"):
             assert fresh["accuracy_presets"][preset][key] == ACCURACY_PRESETS[preset][key]
+
+
+def test_report_builds_each_named_influence():
+    """A solver mesh of the report is a preset, "hybrid:<preset>" or Love's "halfspace"."""
+    from roughcontact.elasticity.influence import halfspace_influence
+    from roughcontact.reports.speed.report import _build_influence
+
+    geometry = small_block(6)
+    unit, geom = _build_influence(geometry, "halfspace")
+    np.testing.assert_array_equal(unit, halfspace_influence(geometry.grid, geometry.size, 1.0,
+                                                            geometry.nu))
+    assert geom == geometry
+    unit, geom = _build_influence(geometry, "paper")
+    assert geom.mesh == "paper" and unit.shape == (36, 36)
+    np.testing.assert_array_equal(unit, unit_modulus_influence(geom))

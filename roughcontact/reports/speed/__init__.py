@@ -6,11 +6,16 @@ finite-element mesh of Eq 16, contact grid, number of random surfaces). This
 package measures each against its cost on k_P (Eq 33), the real area
 fraction and the peak pressure, recommends the cheapest settings within a
 tolerance and re-measures the accuracy presets. One module per job, imported
-one way (``report`` -> ``experiments``, ``recommend``, ``render`` -> ``machine``):
+one way (``report`` -> ``experiments``, ``grid``, ``recommend``, ``render`` ->
+``sweeps``, ``machine``):
 
 - :mod:`~roughcontact.reports.speed.experiments` -- the runners:
-  :func:`solver_speed_vs_error`, :func:`mesh_errors`, :func:`grid_study`,
+  :func:`solver_speed_vs_error`, :func:`mesh_errors`,
   :func:`surfaces_per_cell`, :func:`band_vs_count`;
+- :mod:`~roughcontact.reports.speed.grid` -- the contact-grid runner,
+  :func:`grid_study`;
+- :mod:`~roughcontact.reports.speed.sweeps` -- what the runners share: a
+  cell's surfaces and a timed contact sweep;
 - :mod:`~roughcontact.reports.speed.recommend` -- decisions from their
   tables: :func:`recommend`, :func:`derive_presets`;
 - :mod:`~roughcontact.reports.speed.render` -- figures, Markdown and the tidy
@@ -23,11 +28,11 @@ one way (``report`` -> ``experiments``, ``recommend``, ``render`` -> ``machine``
 from roughcontact.reports.speed.experiments import (
     SOLVER_QUANTITIES,
     band_vs_count,
-    grid_study,
     mesh_errors,
     solver_speed_vs_error,
     surfaces_per_cell,
 )
+from roughcontact.reports.speed.grid import grid_study
 from roughcontact.reports.speed.recommend import derive_presets, recommend
 from roughcontact.reports.speed.render import write_report
 from roughcontact.reports.speed.report import speed_vs_error_report, write_presets

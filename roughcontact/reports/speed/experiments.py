@@ -18,9 +18,10 @@ nominal pressures P. Every sweep is a contact job
 2. :func:`mesh_errors` -- the mesh presets' cost and error, read from the
    influence-convergence table (:func:`roughcontact.reports.convergence.influence_convergence`)
    rather than recomputed; :data:`FALLBACK_MESH_ERRORS` when no table exists.
-3. :func:`grid_study` -- the same statistics on coarser and finer contact
-   grids over the same nominal area, and the change of k_P, real area and peak
-   pressure at equal P against the finest grid.
+3. :func:`~roughcontact.reports.speed.grid.grid_study` (its own module) -- the
+   same statistics on coarser and finer contact grids over the same nominal
+   area, and the change of k_P, real area and peak pressure at equal P
+   against the finest grid.
 4. :func:`surfaces_per_cell` / :func:`band_vs_count` -- half-width of the 95 %
    confidence band of the mean against the number of surfaces, by
    subsampling one set of solved surfaces (no re-solve).
@@ -34,25 +35,24 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 from collections.abc import Callable, Mapping, Sequence
+from functools import partial
 from pathlib import Path
 from types import MappingProxyType
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 import scipy.stats
 
 from roughcontact.contact import aggregate, nondim
-from roughcontact.contact.cell import aggregate_sweep, nondim_pressure, sweep_cell
+from roughcontact.contact.cell import nondim_pressure
 from roughcontact.contact.curves import NondimSweep, PhysicalSweep
-from roughcontact.elasticity import operators
-from roughcontact.elasticity.halfspace import halfspace_influence
-from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
+from roughcontact.elasticity.influence import BlockGeometry
 from roughcontact.reports.speed.machine import describe_machine
+from roughcontact.reports.speed.sweeps import cell_heights, cell_key, reporter, timed_sweep
 from roughcontact.study.jobs import BATCH_SIZE
 from roughcontact.study.presets import FALLBACK_MESH_ERRORS
-from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
 
 __all__ = [
     "DEFAULT_CELLS",
@@ -62,7 +62,6 @@ __all__ = [
     "REFERENCE_TOL",
     "SOLVER_QUANTITIES",
     "band_vs_count",
-    "grid_study",
     "mesh_errors",
     "solver_speed_vs_error",
     "surfaces_per_cell",
@@ -95,44 +94,7 @@ REFERENCE_STIFFNESS_TOL = 1e-10
 
 
 # ---------------------------------------------------------------------------
-# Shared pieces
-
-
-def _cell_key(skew: float, kurt: float) -> str:
-    """Name of a statistics cell (skewness, kurtosis) in seeds and messages, e.g. ``sk0_ku3``."""
-    return f"sk{float(skew):g}_ku{float(kurt):g}"
-
-
-def _cell_heights(grid, size, b: float, skew: float, kurt: float, count: int, seed: int,
-                  tag: str, spectrum: Mapping | None = None) -> np.ndarray:
-    """``count`` surfaces of one cell in units of sigma, shape (count, ny, nx).
-
-    Exponential ACF (Eq 1) with 10 % correlation length ``b`` [m], periodic
-    filter of the pipeline; seeds from ``derive_seeds(seed, tag|cell, count)``.
-    ``spectrum``: :class:`SurfaceSpec` fields replacing the ACF (e.g.
-    ``acf="self-affine"``, ``hurst``, ``rolloff_wavelength``,
-    ``cutoff_wavelength``); ``b`` is then unused.
-    """
-    if spectrum:
-        spec = SurfaceSpec(grid=tuple(grid), size=tuple(size), sigma=1.0, skew=float(skew),
-                           kurt=float(kurt), **spectrum)
-    else:
-        spec = SurfaceSpec(grid=tuple(grid), size=tuple(size), corr_length=(b, b), sigma=1.0,
-                           skew=float(skew), kurt=float(kurt))
-    seeds = derive_seeds(seed, f"{tag}|{_cell_key(skew, kurt)}", count)
-    return generate_many(spec, seeds)
-
-
-def _timed_sweep(unit_influence, heights, geometry: BlockGeometry, pressure_end: float,
-                 steps: int, **options) -> tuple[NondimSweep, float]:
-    """One :func:`~roughcontact.contact.cell.sweep_cell` and its wall time [s].
-
-    ``options`` go to ``sweep_cell``; callers pass ``precision`` explicitly
-    (the sweep's default is "mixed", the exact reference needs "double").
-    """
-    start = time.perf_counter()
-    sweep = sweep_cell(unit_influence, heights, geometry, pressure_end, steps, **options)
-    return sweep, time.perf_counter() - start
+# Solver errors at equal approach
 
 
 def _nearest_steps(nominal_pressure: np.ndarray, level: float) -> np.ndarray:
@@ -157,177 +119,241 @@ def _relative_error(value: np.ndarray, reference: np.ndarray) -> np.ndarray:
 # ---------------------------------------------------------------------------
 # 1. Solver
 
+#: How the solver table's errors are taken (its ``attrs["comparison"]``).
+SOLVER_COMPARISON = (f"relative error at equal approach against method='exact' (tol "
+                     f"{REFERENCE_TOL:g}, stiffness tol {REFERENCE_STIFFNESS_TOL:g}); largest "
+                     "over surfaces at the step nearest each pressure level")
+#: Methods solved in one precision whatever the study's: the exact reference, in double.
+FIXED_PRECISION = MappingProxyType({"exact": "double"})
+
+
+def _positive_levels(pressures: Sequence[float]) -> np.ndarray:
+    """``pressures`` [Pa] as an array, checked to be a non-empty list of positive values."""
+    levels = np.asarray(pressures, dtype=float)
+    if levels.ndim != 1 or levels.size == 0 or (levels <= 0).any():
+        raise ValueError("pressures must be positive nominal pressures [Pa]")
+    return levels
+
+
+class _Run(NamedTuple):
+    """One sweep of the solver study: its settings, result and wall time [s]."""
+
+    method: str
+    tol: float
+    precision: str
+    reference: bool
+    sweep: NondimSweep
+    seconds: float
+
+
+def _reference_run(sweep: Callable, name: str, cell: str, say: Callable[[str], None]) -> _Run:
+    """The exact solution of one cell's sweep (block principal pivoting, ``REFERENCE_TOL``).
+
+    ``sweep`` is :func:`timed_sweep` bound to the cell's surfaces and approaches.
+    """
+    result, seconds = sweep(method="exact", tol=REFERENCE_TOL, precision="double",
+                            stiffness_tol=REFERENCE_STIFFNESS_TOL, max_iter=None)
+    if not result.converged.all():
+        log.warning("exact reference did not converge on %d steps of cell %s",
+                    int((~result.converged).sum()), cell)
+    say(f"{name} {cell}: exact reference {seconds:.1f} s, "
+        f"final contact {100 * result.real_area_fraction[:, -1].mean():.2f} %")
+    return _Run("exact", REFERENCE_TOL, "double", True, result, seconds)
+
+
+def _compared_runs(sweep: Callable, name: str, say: Callable[[str], None], *, methods,
+                   tolerances, max_iter, precision: str, stiffness_tol: float) -> list[_Run]:
+    """One run per method and tolerance (as :func:`solver_speed_vs_error` takes them)."""
+    runs = []
+    for method in methods:
+        own = tolerances.get(method, ()) if isinstance(tolerances, Mapping) else tolerances
+        limit = max_iter.get(method) if isinstance(max_iter, Mapping) else max_iter
+        own_precision = FIXED_PRECISION.get(method, precision)
+        for tol in own:
+            result, seconds = sweep(method=method, tol=float(tol), precision=own_precision,
+                                    stiffness_tol=stiffness_tol, max_iter=limit)
+            runs.append(_Run(method, float(tol), own_precision, False, result, seconds))
+            say(f"{name}: {method} tol {tol:.0e} {seconds:.1f} s, "
+                f"{result.iterations.mean():.0f} iterations per solve, "
+                f"{100 * result.converged.mean():.0f} % converged")
+    return runs
+
+
+def _solver_rows(run: _Run, reference: _Run, levels: np.ndarray, chosen: Mapping,
+                 P_ref: np.ndarray, fields: Mapping) -> list[dict]:
+    """Rows of one run: its cost, and its errors against ``reference`` at each level.
+
+    ``chosen``: per level, each surface's step nearest it (:func:`_nearest_steps`
+    of the reference's nominal pressures ``P_ref`` [Pa]); ``fields``: the
+    columns the cell's rows share.
+    """
+    result, exact = run.sweep, reference.sweep
+    base = dict(fields) | {
+        "method": run.method, "tol": run.tol, "precision": run.precision,
+        "reference": run.reference, "wall_s": run.seconds, "solves": result.iterations.size,
+        "iterations_per_solve": float(result.iterations.mean()),
+        "matvecs_per_solve": float(result.matvecs.mean()),
+        "converged_fraction": float(result.converged.mean()),
+        "max_residual": float(np.nanmax(result.residual)),
+        "reference_wall_s": reference.seconds,
+        "final_real_area_exact": float(exact.real_area_fraction[:, -1].mean()),
+    }
+    surface_index = np.arange(P_ref.shape[0])
+    rows = []
+    for level in levels:
+        at = (surface_index, chosen[level])
+        row = base | {"pressure_Pa": float(level), "pressure_at_step_Pa": float(P_ref[at].mean()),
+                      "real_area_exact": float(exact.real_area_fraction[at].mean())}
+        for name, (attribute, _) in SOLVER_QUANTITIES.items():
+            error = _relative_error(getattr(result, attribute)[at], getattr(exact, attribute)[at])
+            row[f"{name}_error"] = float(np.max(error))
+        rows.append(row)
+    return rows
+
+
+def _solver_cell(sweep: Callable, fields: Mapping, levels: np.ndarray,
+                 geometry: BlockGeometry, sigma: float, say: Callable[[str], None],
+                 compared: Mapping) -> list[dict]:
+    """The rows of one cell: its exact reference and every compared run, each at every level.
+
+    ``sweep`` is :func:`timed_sweep` bound to the cell's surfaces and approaches.
+    """
+    name, cell = fields["influence"], cell_key(fields["skew"], fields["kurt"])
+    reference = _reference_run(sweep, name, cell, say)
+    P_ref = reference.sweep.nominal_pressure * geometry.E * sigma / geometry.thickness
+    chosen = {level: _nearest_steps(P_ref, level) for level in levels}
+    runs = [reference, *_compared_runs(sweep, f"{name} {cell}", say, **compared)]
+    return [row for run in runs
+            for row in _solver_rows(run, reference, levels, chosen, P_ref, fields)]
+
 
 def solver_speed_vs_error(
-    unit_influence,
-    geometry: BlockGeometry,
-    cells: Sequence[tuple[float, float]] = DEFAULT_CELLS,
-    *,
-    surfaces: int = 4,
-    sigma: float = 24.5e-6,
-    b: float = 1e-3,
+    unit_influence, geometry: BlockGeometry, cells: Sequence[tuple[float, float]] = DEFAULT_CELLS,
+    *, surfaces: int = 4, sigma: float = 24.5e-6, b: float = 1e-3,
     pressures: Sequence[float] = (0.3e6, 1e6, 3e6),
     tolerances: Sequence[float] | Mapping = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12),
-    methods: Sequence[str] = ("steepest", "cg"),
-    precision: str = "mixed",
-    steps: int = 30,
-    stiffness_tol: float = 1e-6,
-    max_iter: int | Mapping | None = None,
-    seed: int = 2006,
-    label: str | None = None,
-    progress: Callable[[str], None] | None = None,
+    methods: Sequence[str] = ("steepest", "cg"), precision: str = "mixed", steps: int = 30,
+    stiffness_tol: float = 1e-6, max_iter: int | Mapping | None = None, seed: int = 2006,
+    label: str | None = None, progress: Callable[[str], None] | None = None,
 ) -> pd.DataFrame:
     """Wall time and error of each solver and tolerance against the exact solution.
 
-    For each cell ``(skew, kurt)``, ``surfaces`` surfaces (exponential ACF,
-    Eq 1, 10 % correlation length ``b``, sampled on ``geometry.grid`` over
-    ``geometry.size``; seeds ``derive_seeds(seed, "speed_vs_error|<cell>")``)
-    are swept over the pipeline's approach grid
-    (:func:`roughcontact.contact.cell.approach_grid`, ``steps`` geometric
-    approaches up to one that carries ``max(pressures)`` on every surface)
-    with :func:`roughcontact.contact.cell.sweep_cell`, exactly as a contact job
-    does (all surfaces in one batch, warm starts and tangent predictor
-    between steps, tangent stiffness at every step). The reference is
-    ``method="exact"`` (block principal pivoting) at KKT tolerance
-    ``REFERENCE_TOL`` with the stiffness CG at ``REFERENCE_STIFFNESS_TOL``;
-    every other run uses ``stiffness_tol`` (the pipeline's 1e-6), so the k_P
-    error of a tight solve is floored near it.
-
-    Errors are taken at equal approach (the same problem): for each pressure
-    level in ``pressures`` and each surface, the step whose exact nominal
-    pressure is nearest the level (in log P); the columns ``<q>_error`` hold
-    the largest ``|q / q_exact - 1|`` over the surfaces, for q = load (F, or P
-    at equal approach), real_area (real area fraction), max_pressure and k_P
-    (Eq 33). All are dimensionless, so they hold for every sigma and E
-    (Eq 28-32); ``sigma`` and ``geometry.E`` only place the pressure levels.
+    Per cell, ``surfaces`` surfaces (exponential ACF, Eq 1, std ``sigma`` and
+    10 % correlation length ``b`` [m] on ``geometry``'s grid; seeds
+    ``derive_seeds(seed, "speed_vs_error|<cell>")``) are swept as a contact
+    job sweeps them (:func:`roughcontact.contact.cell.sweep_cell`: ``steps``
+    geometric approaches up to one carrying ``max(pressures)`` on every
+    surface, warm starts, tangent stiffness): first by the reference,
+    ``method="exact"`` (block principal pivoting at ``REFERENCE_TOL``,
+    stiffness CG at ``REFERENCE_STIFFNESS_TOL``), then by each method at each
+    of its tolerances (stiffness CG at ``stiffness_tol``, which floors a
+    tight solve's k_P error). Errors at equal approach: per level of
+    ``pressures`` and surface, the step whose exact P is nearest the level in
+    log P; ``<q>_error`` is the largest ``|q / q_exact - 1|`` over the
+    surfaces for q in :data:`SOLVER_QUANTITIES`, dimensionless (Eq 28-32).
 
     Parameters
     ----------
     unit_influence : ndarray (n, n) or operator
-        ``E * C`` [m] of ``geometry``
-        (:func:`roughcontact.elasticity.influence.unit_modulus_influence`).
-    geometry : BlockGeometry
-        Plan size [m], thickness L [m], grid and E [Pa] of that matrix.
+        ``E * C`` [m] of ``geometry`` (plan size [m], L [m], grid, E [Pa]).
     cells : sequence of (skew, kurt)
         Height statistics (Eq 4-5).
-    surfaces : int
-        Surfaces per cell.
-    sigma, b : float
-        Height standard deviation and ACF correlation length [m].
     pressures : sequence of float
         Nominal pressures P [Pa] at which the errors are read.
     tolerances : sequence of float, or dict method -> sequence
-        KKT tolerances (:mod:`roughcontact.contact`) of each method (a dict
-        gives each method its own; a method missing from it is skipped).
+        KKT tolerances of every method, or of each (a method missing is skipped).
     methods : sequence of str
-        Methods compared; ``"exact"`` may be included (errors ~0: the
-        reference solves the same problem).
-    precision : {"mixed", "double"}
-        Precision of the iterative solvers (the pipeline's default: mixed).
-    steps : int
-        Approaches per sweep (the pipeline's default: 30).
-    stiffness_tol : float
-        Relative residual of the stiffness CG of the compared runs.
-    max_iter : int, dict or None
-        Iteration limit per solve, or a dict method -> limit; None: the
-        solver's default. A run that hits it reports ``converged_fraction < 1``.
-    seed : int
-        Study seed of the surfaces.
-    label : str, optional
-        Name of the influence operator, stored in column ``influence``.
-    progress : callable, optional
-        Called with a one-line message after each run.
+        Methods compared; ``"exact"`` may be included (errors ~0).
+    precision, steps : str, int
+        Precision of the iterative solvers and approaches per sweep (the
+        pipeline's: mixed, 30).
+    max_iter : int, dict method -> int, or None
+        Iteration limit per solve (None: the solver's); a run that hits it
+        reports ``converged_fraction < 1``.
+    label, progress
+        Name of the influence operator (column ``influence``); a callable
+        given a line after each run.
 
     Returns
     -------
     pandas.DataFrame
-        One row per (cell, method, tol, pressure level), the exact reference
-        included (``method="exact"``, ``tol=REFERENCE_TOL``, ``reference=True``).
-        Columns: ``influence``, ``grid_x``, ``grid_y``, ``skew``, ``kurt``,
-        ``surfaces``, ``steps``, ``method``, ``tol``, ``precision``,
-        ``reference``, ``pressure_Pa`` (level), ``pressure_at_step_Pa`` (mean
-        exact P at the compared steps), ``real_area_exact`` (mean exact area
-        fraction there), ``wall_s`` (the whole sweep of the cell: all
-        surfaces, all steps), ``solves``, ``iterations_per_solve``,
+        One row per (cell, method, tol, pressure level), the reference included
+        (``method="exact"``, ``tol=REFERENCE_TOL``, ``reference=True``):
+        ``influence``, ``grid_x``, ``grid_y``, ``skew``, ``kurt``, ``surfaces``,
+        ``steps``, ``method``, ``tol``, ``precision``, ``reference``, ``wall_s``
+        (the cell's whole sweep), ``solves``, ``iterations_per_solve``,
         ``matvecs_per_solve`` (exact: pivots + 2), ``converged_fraction``,
-        ``max_residual``, ``load_error``, ``real_area_error``,
-        ``max_pressure_error``, ``k_P_error``, ``reference_wall_s``,
-        ``final_real_area_exact`` (mean exact area fraction at the last step).
+        ``max_residual``, ``reference_wall_s``, ``final_real_area_exact`` (at
+        the last step), ``pressure_Pa`` (level), ``pressure_at_step_Pa``,
+        ``real_area_exact`` (exact means at the compared steps), ``<q>_error``.
     """
     if surfaces < 1:
         raise ValueError(f"surfaces must be >= 1, got {surfaces!r}")
-    levels = np.asarray(pressures, dtype=float)
-    if levels.ndim != 1 or levels.size == 0 or (levels <= 0).any():
-        raise ValueError("pressures must be positive nominal pressures [Pa]")
+    levels = _positive_levels(pressures)
     label = label or (geometry.mesh if isinstance(geometry.mesh, str) else "custom")
-    say = progress or (lambda message: log.info("%s", message))
-    end = nondim_pressure(levels.max(), thickness=geometry.thickness, E=geometry.E,
-                          sigma=sigma)
+    say = reporter(progress)
+    end = nondim_pressure(levels.max(), thickness=geometry.thickness, E=geometry.E, sigma=sigma)
+    compared = dict(methods=methods, tolerances=tolerances, max_iter=max_iter,
+                    precision=precision, stiffness_tol=stiffness_tol)
     rows = []
     for skew, kurt in cells:
-        heights = _cell_heights(geometry.grid, geometry.size, b, skew, kurt, surfaces, seed,
-                                "speed_vs_error")
-        reference, reference_s = _timed_sweep(
-            unit_influence, heights, geometry, end, steps, method="exact", tol=REFERENCE_TOL,
-            precision="double", stiffness_tol=REFERENCE_STIFFNESS_TOL, max_iter=None)
-        if not reference.converged.all():
-            log.warning("exact reference did not converge on %d steps of cell %s",
-                        int((~reference.converged).sum()), _cell_key(skew, kurt))
-        say(f"{label} {_cell_key(skew, kurt)}: exact reference {reference_s:.1f} s, "
-            f"final contact {100 * reference.real_area_fraction[:, -1].mean():.2f} %")
-        P_ref = reference.nominal_pressure * geometry.E * sigma / geometry.thickness
-        chosen = {level: _nearest_steps(P_ref, level) for level in levels}
-        runs = [("exact", REFERENCE_TOL, True, reference, reference_s)]
-        for method in methods:
-            own = tolerances.get(method, ()) if isinstance(tolerances, Mapping) else tolerances
-            for tol in own:
-                limit = max_iter.get(method) if isinstance(max_iter, Mapping) else max_iter
-                nd, seconds = _timed_sweep(
-                    unit_influence, heights, geometry, end, steps, method=method,
-                    tol=float(tol), precision="double" if method == "exact" else precision,
-                    stiffness_tol=stiffness_tol, max_iter=limit)
-                runs.append((method, float(tol), False, nd, seconds))
-                say(f"{label} {_cell_key(skew, kurt)}: {method} tol {tol:.0e} {seconds:.1f} s, "
-                    f"{nd.iterations.mean():.0f} iterations per solve, "
-                    f"{100 * nd.converged.mean():.0f} % converged")
-        surface_index = np.arange(surfaces)
-        for method, tol, is_reference, nd, seconds in runs:
-            base = {
-                "influence": label, "grid_x": geometry.grid[0], "grid_y": geometry.grid[1],
-                "skew": float(skew), "kurt": float(kurt), "surfaces": surfaces, "steps": steps,
-                "method": method, "tol": tol,
-                "precision": "double" if method == "exact" else precision,
-                "reference": is_reference, "wall_s": seconds, "solves": nd.iterations.size,
-                "iterations_per_solve": float(nd.iterations.mean()),
-                "matvecs_per_solve": float(nd.matvecs.mean()),
-                "converged_fraction": float(nd.converged.mean()),
-                "max_residual": float(np.nanmax(nd.residual)),
-                "reference_wall_s": reference_s,
-                "final_real_area_exact": float(reference.real_area_fraction[:, -1].mean()),
-            }
-            for level in levels:
-                at = (surface_index, chosen[level])
-                row = base | {
-                    "pressure_Pa": float(level),
-                    "pressure_at_step_Pa": float(P_ref[at].mean()),
-                    "real_area_exact": float(reference.real_area_fraction[at].mean()),
-                }
-                for name, (attribute, _) in SOLVER_QUANTITIES.items():
-                    error = _relative_error(getattr(nd, attribute)[at],
-                                            getattr(reference, attribute)[at])
-                    row[f"{name}_error"] = float(np.max(error))
-                rows.append(row)
+        heights = cell_heights(geometry.grid, geometry.size, b, skew, kurt, surfaces, seed,
+                               "speed_vs_error")
+        fields = {"influence": label, "grid_x": geometry.grid[0], "grid_y": geometry.grid[1],
+                  "skew": float(skew), "kurt": float(kurt), "surfaces": surfaces, "steps": steps}
+        rows += _solver_cell(partial(timed_sweep, unit_influence, heights, geometry, end, steps),
+                             fields, levels, geometry, sigma, say, compared)
     table = pd.DataFrame(rows)
-    table.attrs.update(
-        comparison="relative error at equal approach against method='exact' "
-                   f"(tol {REFERENCE_TOL:g}, stiffness tol {REFERENCE_STIFFNESS_TOL:g}); "
-                   "largest over surfaces at the step nearest each pressure level",
-        stiffness_tol=stiffness_tol, sigma=sigma, b=b, seed=seed, machine=describe_machine())
+    table.attrs.update(comparison=SOLVER_COMPARISON, stiffness_tol=stiffness_tol, sigma=sigma,
+                       b=b, seed=seed, machine=describe_machine())
     return table
 
 
 # ---------------------------------------------------------------------------
 # 2. Mesh (read, not recomputed)
+
+
+def _error_summary(name: str, values: np.ndarray) -> dict:
+    """``<name>_error`` (largest |relative error|) and ``<name>_range`` (signed min...max
+    as text, in %) of one quantity's relative errors [-]."""
+    return {f"{name}_error": float(np.nanmax(np.abs(values))),
+            f"{name}_range": (f"{100 * np.nanmin(values):+.1f}..."
+                              f"{100 * np.nanmax(values):+.1f} %")}
+
+
+#: Quantities of the mesh table -> their error columns of the influence-convergence table.
+CONVERGENCE_ERRORS = MappingProxyType({"k_P": "k_P_Pa_error",
+                                       "real_area": "real_area_fraction_error",
+                                       "max_pressure": "max_pressure_Pa_error"})
+
+
+def _convergence_rows(path) -> list[dict]:
+    """The mesh rows of an influence-convergence table (extrapolated rows left out)."""
+    table = pd.read_csv(path)
+    table = table[table["kind"] != "richardson"]
+    rows = []
+    for mesh, group in table.groupby("mesh", sort=False):
+        row = {"mesh": mesh, "build_s": float(group["build_s"].iloc[0]),
+               "peak_memory_GB": float(group["peak_memory_GB"].iloc[0])}
+        for name, column in CONVERGENCE_ERRORS.items():
+            row |= _error_summary(name, group[column].to_numpy(float))
+        rows.append(row | {"reference": str(group["reference"].iloc[0]), "source": str(path)})
+    return rows
+
+
+def _hybrid_rows(path) -> list[dict]:
+    """The hybrid operators' rows of the benchmark's long table ``influence_hybrid.csv``."""
+    hybrid = pd.read_csv(path)
+    hybrid = hybrid[hybrid["operator"].str.startswith("hybrid")]
+    rows = []
+    for operator, group in hybrid.groupby("operator", sort=False):
+        row = {"mesh": operator, "build_s": float(group["seconds"].iloc[0]),
+               "peak_memory_GB": float(group["peak_gb"].iloc[0])}
+        for name, prefix in CONVERGENCE_ERRORS.items():
+            at = group["quantity"].str.startswith(f"{prefix}_at")
+            row |= _error_summary(name, group.loc[at, "value"].to_numpy(float))
+        rows.append(row | {"reference": "converged", "source": str(path)})
+    return rows
 
 
 def mesh_errors(convergence_csv=None, hybrid_csv=None) -> pd.DataFrame:
@@ -351,208 +377,14 @@ def mesh_errors(convergence_csv=None, hybrid_csv=None) -> pd.DataFrame:
         error|), ``k_P_range``, ``real_area_range``, ``max_pressure_range``
         (signed min..max as text), ``reference``, ``source``.
     """
-    rows = []
     if convergence_csv is not None and Path(convergence_csv).exists():
-        table = pd.read_csv(convergence_csv)
-        table = table[table["kind"] != "richardson"]
-        names = {"k_P": "k_P_Pa_error", "real_area": "real_area_fraction_error",
-                 "max_pressure": "max_pressure_Pa_error"}
-        for mesh, group in table.groupby("mesh", sort=False):
-            row = {"mesh": mesh, "build_s": float(group["build_s"].iloc[0]),
-                   "peak_memory_GB": float(group["peak_memory_GB"].iloc[0])}
-            for name, column in names.items():
-                values = group[column].to_numpy(float)
-                row[f"{name}_error"] = float(np.nanmax(np.abs(values)))
-                row[f"{name}_range"] = (f"{100 * np.nanmin(values):+.1f}..."
-                                        f"{100 * np.nanmax(values):+.1f} %")
-            row["reference"] = str(group["reference"].iloc[0])
-            row["source"] = str(convergence_csv)
-            rows.append(row)
+        rows = _convergence_rows(convergence_csv)
     else:
-        for mesh, values in FALLBACK_MESH_ERRORS.items():
-            rows.append({"mesh": mesh, **values, "reference": "converged",
-                         "source": "FALLBACK_MESH_ERRORS"})
+        rows = [{"mesh": mesh, **values, "reference": "converged",
+                 "source": "FALLBACK_MESH_ERRORS"} for mesh, values in FALLBACK_MESH_ERRORS.items()]
     if hybrid_csv is not None and Path(hybrid_csv).exists():
-        hybrid = pd.read_csv(hybrid_csv)
-        hybrid = hybrid[hybrid["operator"].str.startswith("hybrid")]
-        for operator, group in hybrid.groupby("operator", sort=False):
-            row = {"mesh": operator, "build_s": float(group["seconds"].iloc[0]),
-                   "peak_memory_GB": float(group["peak_gb"].iloc[0])}
-            for name, prefix in (("k_P", "k_P_Pa_error_at"),
-                                 ("real_area", "real_area_fraction_error_at"),
-                                 ("max_pressure", "max_pressure_Pa_error_at")):
-                values = group.loc[group["quantity"].str.startswith(prefix),
-                                   "value"].to_numpy(float)
-                row[f"{name}_error"] = float(np.nanmax(np.abs(values)))
-                row[f"{name}_range"] = (f"{100 * np.nanmin(values):+.1f}..."
-                                        f"{100 * np.nanmax(values):+.1f} %")
-            row["reference"] = "converged"
-            row["source"] = str(hybrid_csv)
-            rows.append(row)
+        rows += _hybrid_rows(hybrid_csv)
     return pd.DataFrame(rows)
-
-
-# ---------------------------------------------------------------------------
-# 3. Contact grid
-
-
-def _grid_influence(geometry: BlockGeometry, influence: str, coarsening: int):
-    if influence == "hybrid":
-        # matrix-free (the same operator as the dense hybrid matrix, without its
-        # 8 n^2 bytes)
-        coarse = operators.coarsened_side(geometry.grid[0], coarsening)
-        return operators.block_operator(geometry, coarse_grid=(coarse, coarse))
-    if influence == "halfspace":
-        return halfspace_influence(geometry.grid, geometry.size, 1.0, geometry.nu)
-    if influence == "halfspace_fft":
-        return operators.halfspace_operator(geometry.grid, geometry.size, geometry.nu)
-    if influence == "fe":
-        return unit_modulus_influence(geometry)
-    raise ValueError("influence must be 'hybrid', 'halfspace', 'halfspace_fft' or 'fe', "
-                     f"got {influence!r}")
-
-
-def grid_study(
-    cells: Sequence[tuple[float, float]] = ((0.0, 3.0),),
-    *,
-    grids: Sequence[int] = (30, 60, 120),
-    size: float = 9e-3,
-    thickness: float = 10e-3,
-    E: float = 5.11e8,
-    nu: float = 0.0,
-    base: str = "clamped",
-    influence: str = "hybrid",
-    mesh: str = "refined",
-    coarsening: int = 2,
-    surfaces: int = 4,
-    sigma: float = 24.5e-6,
-    b: float = 1e-3,
-    pressures: Sequence[float] = (0.3e6, 1e6, 3e6),
-    pairing: str = "nested",
-    method: str = "cg",
-    tol: float = 1e-8,
-    precision: str = "mixed",
-    steps: int = 30,
-    seed: int = 2006,
-    progress: Callable[[str], None] | None = None,
-    spectrum: Mapping | None = None,
-) -> pd.DataFrame:
-    """k_P, real area and peak pressure of the same statistics on several contact grids.
-
-    A square block ``size`` x ``size`` [m], ``thickness`` L [m], meshed with
-    ``g`` x ``g`` contact elements for each ``g`` in ``grids``. The influence
-    coefficients come from
-
-    - ``"hybrid"`` (default): the matrix-free
-      :class:`roughcontact.elasticity.operators.BlockOperator` (equal to
-      :func:`roughcontact.elasticity.influence.hybrid_unit_modulus_influence`) with
-      ``mesh`` (default ``"refined"``) on a grid ``coarsening`` times coarser,
-      at most ``operators.COARSE_MAX`` per side (no dense matrix, so 256 x 256
-      fits): Love's near field plus the finite-body correction, within
-      1.2 % of the converged preset in k_P, area and peak pressure at
-      60 x 60 for about 3 s; the refined finite-element model itself at
-      120 x 120 would be four times the 60 x 60 model (about 0.5 M dofs).
-    - ``"halfspace"``: Love's half-space (no finite-body bulk: k_P about
-      11-17 % high at 60 x 60, fine for the *change* between grids only).
-    - ``"halfspace_fft"``: the same Love half-space, matrix-free
-      (:func:`roughcontact.elasticity.operators.halfspace_operator`, FFT
-      convolution, no n^2 matrix), for grids of 240 x 240 and more.
-    - ``"fe"``: :func:`~roughcontact.elasticity.influence.unit_modulus_influence` with ``mesh``.
-
-    Surfaces (exponential ACF, Eq 1; ``sigma``, ``b``): with
-    ``pairing="nested"`` (default) ``surfaces`` surfaces are generated on the
-    finest grid and every coarser grid point-samples them (every k-th point:
-    the same random field, the same statistics, a coarser grid), so the change
-    between grids is the discretization alone; with ``"independent"`` each
-    grid gets its own surfaces (seeds per grid) and the change also holds
-    sampling noise (see the ``*_half_width`` columns). ``spectrum``, a mapping
-    of :class:`~roughcontact.surfaces.synthetic.SurfaceSpec` fields such as
-    ``{"acf": "self-affine", "hurst": 0.8, "rolloff_wavelength": 3e-3,
-    "cutoff_wavelength": 0.6e-3}``, replaces the exponential ACF (``b`` is then
-    unused): with the cut-off resolved, real area and peak pressure converge
-    with the grid, which they do not for Eq 1. Each grid is swept as a
-    contact job (:func:`roughcontact.contact.cell.sweep_cell`, ``method``, ``tol``,
-    ``precision``, ``steps``) and averaged at equal P
-    (:func:`roughcontact.contact.cell.aggregate_sweep`).
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per (cell, grid, pressure): ``skew``, ``kurt``, ``grid``,
-        ``element_size_m``, ``influence_model``, ``pairing``, ``build_s``
-        (influence), ``solve_s`` (all surfaces), ``surfaces``,
-        ``converged_fraction``, ``pressure_Pa``, ``k_P_Pa``,
-        ``k_P_half_width_Pa``, ``real_area_fraction``,
-        ``real_area_half_width``, ``max_pressure_Pa``,
-        ``max_pressure_half_width_Pa`` (95 % band of the mean), and
-        ``k_P_change``, ``real_area_change``, ``max_pressure_change``: the
-        relative change ``q / q_finest - 1`` against the finest grid.
-    """
-    grids = sorted(int(g) for g in grids)
-    finest = grids[-1]
-    if pairing not in ("nested", "independent"):
-        raise ValueError(f"pairing must be 'nested' or 'independent', got {pairing!r}")
-    if pairing == "nested" and any(finest % g for g in grids):
-        raise ValueError(f"nested pairing needs every grid to divide the finest, got {grids}")
-    say = progress or (lambda message: log.info("%s", message))
-    model = (f"hybrid ({mesh}, coarsening {coarsening})" if influence == "hybrid"
-             else (influence if influence.startswith("halfspace") else f"fe ({mesh})"))
-    levels = np.asarray(pressures, dtype=float)
-    rows = []
-    fine_heights = {}
-    if pairing == "nested":
-        for skew, kurt in cells:
-            fine_heights[(skew, kurt)] = _cell_heights((finest, finest), (size, size), b, skew,
-                                                       kurt, surfaces, seed, "grid_study",
-                                                       spectrum)
-    for g in reversed(grids):
-        geometry = BlockGeometry(size=(size, size), thickness=thickness, grid=(g, g), E=E,
-                                 nu=nu, base=base, mesh=mesh)
-        start = time.perf_counter()
-        unit = _grid_influence(geometry, influence, coarsening)
-        build_s = time.perf_counter() - start
-        for skew, kurt in cells:
-            if pairing == "nested":
-                k = finest // g
-                heights = fine_heights[(skew, kurt)][:, ::k, ::k]
-                heights = heights / heights.std(axis=(1, 2), keepdims=True)
-            else:
-                heights = _cell_heights((g, g), (size, size), b, skew, kurt, surfaces, seed,
-                                        f"grid_study|{g}", spectrum)
-            end = nondim_pressure(levels.max(), thickness=thickness, E=E, sigma=sigma)
-            nd, solve_s = _timed_sweep(unit, heights, geometry, end, steps, method=method,
-                                       tol=tol, precision=precision, stiffness_tol=1e-6,
-                                       max_iter=None)
-            _, frame = aggregate_sweep(nd, sigma, E, levels)
-            say(f"grid {g} x {g} {_cell_key(skew, kurt)}: influence {build_s:.1f} s, "
-                f"sweep {solve_s:.1f} s")
-            for _, agg in frame.iterrows():
-                rows.append({
-                    "skew": float(skew), "kurt": float(kurt), "grid": g,
-                    "element_size_m": size / g, "influence_model": model, "pairing": pairing,
-                    "build_s": build_s, "solve_s": solve_s, "surfaces": surfaces,
-                    "converged_fraction": float(nd.converged.mean()),
-                    "pressure_Pa": float(agg["nominal_pressure"]),
-                    "k_P_Pa": agg["normalized_stiffness_mean"],
-                    "k_P_half_width_Pa": agg["normalized_stiffness_half_width"],
-                    "real_area_fraction": agg["real_area_fraction_mean"],
-                    "real_area_half_width": agg["real_area_fraction_half_width"],
-                    "max_pressure_Pa": agg["max_pressure_mean"],
-                    "max_pressure_half_width_Pa": agg["max_pressure_half_width"],
-                })
-        del unit
-    table = pd.DataFrame(rows).sort_values(["skew", "kurt", "grid", "pressure_Pa"],
-                                           ignore_index=True)
-    keys = ["skew", "kurt", "pressure_Pa"]
-    finest_rows = table[table["grid"] == finest].set_index(keys)
-    for name, column in (("k_P", "k_P_Pa"), ("real_area", "real_area_fraction"),
-                         ("max_pressure", "max_pressure_Pa")):
-        reference = finest_rows[column].reindex(pd.MultiIndex.from_frame(table[keys]))
-        table[f"{name}_change"] = table[column].to_numpy() / reference.to_numpy() - 1.0
-    table.attrs.update(influence_model=model, pairing=pairing, method=method, tol=tol,
-                       spectrum=dict(spectrum or {}),
-                       machine=describe_machine())
-    return table
 
 
 # ---------------------------------------------------------------------------
@@ -651,14 +483,13 @@ def surfaces_per_cell(
     ``solve_s`` (all surfaces).
     """
     skew, kurt = cell
-    heights = _cell_heights(geometry.grid, geometry.size, b, skew, kurt, surfaces, seed,
-                            "surfaces_per_cell")
+    heights = cell_heights(geometry.grid, geometry.size, b, skew, kurt, surfaces, seed,
+                           "surfaces_per_cell")
     end = nondim_pressure(max(pressures), thickness=geometry.thickness, E=geometry.E,
                           sigma=sigma)
-    nd, solve_s = _timed_sweep(unit_influence, heights, geometry, end, steps, method=method,
-                               tol=tol, precision=precision, batch_size=batch_size)
-    (progress or (lambda message: log.info("%s", message)))(
-        f"{_cell_key(skew, kurt)}: {surfaces} surfaces swept in {solve_s:.1f} s")
+    nd, solve_s = timed_sweep(unit_influence, heights, geometry, end, steps, method=method,
+                              tol=tol, precision=precision, batch_size=batch_size)
+    reporter(progress)(f"{cell_key(skew, kurt)}: {surfaces} surfaces swept in {solve_s:.1f} s")
     table = band_vs_count(nondim.to_physical(nd, sigma, geometry.E), pressures, counts,
                           draws=draws, seed=seed)
     table.insert(0, "kurt", float(kurt))

@@ -14,15 +14,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from types import MappingProxyType
 
 import numpy as np
 import pandas as pd
 
-__all__ = ["FALLBACK_KEYS", "MESH_ERROR_KEYS", "PRESET_DIGITS", "derive_presets", "recommend"]
+__all__ = ["CHOOSERS", "FALLBACK_KEYS", "MESH_ERROR_KEYS", "PRESET_DIGITS", "derive_presets",
+           "recommend"]
 
 #: Significant digits of the measured relative errors [-] and costs written to the presets.
 PRESET_DIGITS = 3
-
 
 
 def _pick(candidates: pd.DataFrame, cost: str, meets: pd.Series):
@@ -32,6 +33,128 @@ def _pick(candidates: pd.DataFrame, cost: str, meets: pd.Series):
         return good.sort_values(cost, kind="stable").iloc[0], True, int(len(good))
     worst = candidates[["k_P_error", "real_area_error"]].max(axis=1)
     return candidates.loc[worst.idxmin()], False, 0
+
+
+def _within(frame: pd.DataFrame, share: float, tol_kP: float, tol_area: float) -> pd.Series:
+    """Rows whose k_P and real-area errors are within ``share`` of the tolerances."""
+    return (frame["k_P_error"] <= share * tol_kP) & (frame["real_area_error"] <= share * tol_area)
+
+
+def _choice(component: str, choice: str, cost: float, cost_unit: str, k_P_error: float,
+            real_area_error: float, meets, options_meeting: int, note: str) -> dict:
+    """One row of the recommendation table."""
+    return {"component": component, "choice": choice, "cost": cost, "cost_unit": cost_unit,
+            "k_P_error": k_P_error, "real_area_error": real_area_error, "meets": bool(meets),
+            "options_meeting": options_meeting, "note": note}
+
+
+def _mesh_choice(mesh_table: pd.DataFrame, share: float, tol_kP: float, tol_area: float) -> dict:
+    """Cheapest mesh to build within tolerance of its reference (:func:`mesh_errors`)."""
+    mesh = mesh_table.reset_index(drop=True)
+    row, ok, count = _pick(mesh, "build_s", _within(mesh, share, tol_kP, tol_area))
+    return _choice("mesh", row["mesh"], float(row["build_s"]), "s to build E*C (60 x 60)",
+                   float(row["k_P_error"]), float(row["real_area_error"]), ok, count,
+                   f"error against the {row.get('reference', 'converged')} preset "
+                   f"(p_max error {100 * float(row['max_pressure_error']):.1f} %)"
+                   + ("" if ok else "; no mesh meets the tolerance"))
+
+
+def _grid_choice(grid_table: pd.DataFrame, share: float, tol_kP: float, tol_area: float) -> dict:
+    """Cheapest contact grid coarser than the finest within tolerance of it (:func:`grid_study`);
+    else the finest, not shown converged (its own error unknown)."""
+    grid = grid_table.groupby("grid").agg(
+        k_P_error=("k_P_change", lambda s: float(np.nanmax(np.abs(s)))),
+        real_area_error=("real_area_change", lambda s: float(np.nanmax(np.abs(s)))),
+        cost=("build_s", "first"), solve_s=("solve_s", "sum"),
+        surfaces=("surfaces", "first")).reset_index()
+    grid["cost"] = grid["cost"] + grid["solve_s"]
+    finest = int(grid["grid"].max())
+    coarser = grid[grid["grid"] < finest].sort_values("grid")
+    per_quantity = []
+    for column, name, tol in (("k_P_error", "k_P", tol_kP), ("real_area_error", "area", tol_area)):
+        good = coarser[coarser[column] <= share * tol]
+        per_quantity.append(f"{name} alone: {int(good['grid'].iloc[0])} per side"
+                            if len(good) else f"{name} alone: none coarser than {finest}")
+    detail = "; ".join(f"{int(r['grid'])}: k_P {100 * r['k_P_error']:.1f} %, area "
+                       f"{100 * r['real_area_error']:.0f} %" for _, r in coarser.iterrows())
+    note = f"change against the finest grid ({finest}: {detail}); " + ", ".join(per_quantity)
+    meets = _within(coarser, share, tol_kP, tol_area)
+    if len(coarser) and meets.any():
+        row, ok, count = _pick(coarser, "cost", meets)
+        k_error, a_error = float(row["k_P_error"]), float(row["real_area_error"])
+    else:
+        row, ok, count = grid[grid["grid"] == finest].iloc[0], False, 0
+        k_error = a_error = math.nan
+        note += ("; no coarser grid is within the tolerance of the finest, whose own "
+                 "error is not measured: the grid is not shown converged")
+    return _choice("grid", f"{int(row['grid'])} per side", float(row["cost"]),
+                   "s (influence + sweeps)", k_error, a_error, ok, count, note)
+
+
+def _solver_choice(solver_table: pd.DataFrame, share: float, tol_kP: float,
+                   tol_area: float) -> dict:
+    """Cheapest solver setting within tolerance of the exact solution, every step converged
+    (:func:`solver_speed_vs_error`; cost: the summed sweeps of the measured cells)."""
+    keys = ["influence", "method", "tol", "precision"]
+    solver = solver_table.groupby(keys, sort=False).agg(
+        k_P_error=("k_P_error", "max"), real_area_error=("real_area_error", "max"),
+        load_error=("load_error", "max"), cost=("wall_s", "sum"),
+        converged=("converged_fraction", "min")).reset_index()
+    solver = solver.drop_duplicates(keys)
+    meets = _within(solver, share, tol_kP, tol_area) & (solver["converged"] >= 1.0)
+    row, ok, count = _pick(solver, "cost", meets)
+    return _choice("solver", f"{row['method']} tol {row['tol']:.0e} ({row['precision']}, "
+                   f"{row['influence']})", float(row["cost"]), "s (sweeps of all measured cells)",
+                   float(row["k_P_error"]), float(row["real_area_error"]), ok, count,
+                   "against the exact solution at equal approach (load error "
+                   f"{float(row['load_error']):.1e})"
+                   + ("" if ok else "; none meets the tolerance"))
+
+
+def _count_choice(count_table: pd.DataFrame, share: float, tol_kP: float,
+                  tol_area: float) -> dict:
+    """Fewest surfaces per cell whose relative 95 % half-width is within tolerance
+    (:func:`band_vs_count`)."""
+    counts = count_table.groupby("count").agg(
+        k_P_error=("k_P_relative_half_width", "max"),
+        real_area_error=("real_area_relative_half_width", "max")).reset_index()
+    counts["cost"] = counts["count"].astype(float)
+    row, ok, count = _pick(counts, "cost", _within(counts, share, tol_kP, tol_area))
+    solved = int(count_table["surfaces_solved"].max())
+    return _choice("surfaces", f"{int(row['count'])} per cell", float(row["count"]), "surfaces",
+                   float(row["k_P_error"]), float(row["real_area_error"]), ok, count,
+                   f"relative 95 % half-width of the cell mean (subsets of {solved} solved "
+                   "surfaces)" + ("" if ok else f"; more than {int(row['count'])} surfaces needed"))
+
+
+#: Components of the recommendation, in its order: name -> chooser of one row from the
+#: component's table, its share of the tolerance and the tolerances on k_P and real area.
+CHOOSERS = MappingProxyType({"mesh": _mesh_choice, "grid": _grid_choice,
+                             "solver": _solver_choice, "surfaces": _count_choice})
+
+
+def _combined(rows: list[dict], tol_kP: float, tol_area: float) -> dict:
+    """The chosen components' known errors added up (a bound for independent errors)."""
+    k_sum = float(np.nansum([r["k_P_error"] for r in rows]))
+    a_sum = float(np.nansum([r["real_area_error"] for r in rows]))
+    unknown = [r["component"] for r in rows
+               if not (np.isfinite(r["k_P_error"]) and np.isfinite(r["real_area_error"]))]
+    return _choice("combined", "the choices above", math.nan, "", k_sum, a_sum,
+                   all(r["meets"] for r in rows) and k_sum <= tol_kP and a_sum <= tol_area, 0,
+                   "sum of the components' errors (worst case of independent errors)"
+                   + (f"; without {', '.join(unknown)} (unknown)" if unknown else ""))
+
+
+def _summary(rows: list[dict], tol_kP: float, tol_area: float, shares: dict) -> str:
+    """The recommendation in plain language, a line per component."""
+    lines = [f"Tolerance: k_P within {100 * tol_kP:g} %, real area within {100 * tol_area:g} %"
+             + (f" (shares {shares})." if shares else ", each component alone.")]
+    for r in rows:
+        status = "meets" if r["meets"] else "does NOT meet"
+        lines.append(f"- {r['component']}: {r['choice']} ({status} it; k_P "
+                     f"{100 * r['k_P_error']:.2g} %, area {100 * r['real_area_error']:.2g} %). "
+                     f"{r['note']}.")
+    return "\n".join(lines)
 
 
 def recommend(solver_table: pd.DataFrame | None, mesh_table: pd.DataFrame | None,
@@ -74,100 +197,16 @@ def recommend(solver_table: pd.DataFrame | None, mesh_table: pd.DataFrame | None
         ``note``; ``attrs["text"]`` is a plain-language summary.
     """
     shares = dict(shares or {})
-    rows = []
-
-    def add(component, choice, cost, unit, k_error, a_error, meets, count, note):
-        rows.append({"component": component, "choice": choice, "cost": cost,
-                     "cost_unit": unit, "k_P_error": k_error, "real_area_error": a_error,
-                     "meets": bool(meets), "options_meeting": count, "note": note})
-
-    def within(frame, component):
-        share = float(shares.get(component, 1.0))
-        return ((frame["k_P_error"] <= share * tol_kP)
-                & (frame["real_area_error"] <= share * tol_area))
-
-    if mesh_table is not None and len(mesh_table):
-        mesh = mesh_table.reset_index(drop=True)
-        row, ok, count = _pick(mesh, "build_s", within(mesh, "mesh"))
-        add("mesh", row["mesh"], float(row["build_s"]), "s to build E*C (60 x 60)",
-            float(row["k_P_error"]), float(row["real_area_error"]), ok, count,
-            f"error against the {row.get('reference', 'converged')} preset "
-            f"(p_max error {100 * float(row['max_pressure_error']):.1f} %)"
-            + ("" if ok else "; no mesh meets the tolerance"))
-    if grid_table is not None and len(grid_table):
-        grid = grid_table.groupby("grid").agg(
-            k_P_error=("k_P_change", lambda s: float(np.nanmax(np.abs(s)))),
-            real_area_error=("real_area_change", lambda s: float(np.nanmax(np.abs(s)))),
-            cost=("build_s", "first"), solve_s=("solve_s", "sum"),
-            surfaces=("surfaces", "first")).reset_index()
-        grid["cost"] = grid["cost"] + grid["solve_s"]
-        finest = int(grid["grid"].max())
-        coarser = grid[grid["grid"] < finest].sort_values("grid")
-        share = float(shares.get("grid", 1.0))
-        per_quantity = []
-        for column, name, tol in (("k_P_error", "k_P", tol_kP),
-                                  ("real_area_error", "area", tol_area)):
-            good = coarser[coarser[column] <= share * tol]
-            per_quantity.append(f"{name} alone: {int(good['grid'].iloc[0])} per side"
-                                if len(good) else f"{name} alone: none coarser than {finest}")
-        detail = "; ".join(
-            f"{int(r['grid'])}: k_P {100 * r['k_P_error']:.1f} %, area "
-            f"{100 * r['real_area_error']:.0f} %" for _, r in coarser.iterrows())
-        note = f"change against the finest grid ({finest}: {detail}); " + ", ".join(per_quantity)
-        meets = within(coarser, "grid")
-        if len(coarser) and meets.any():
-            row, ok, count = _pick(coarser, "cost", meets)
-            k_error, a_error = float(row["k_P_error"]), float(row["real_area_error"])
-        else:
-            row, ok, count = grid[grid["grid"] == finest].iloc[0], False, 0
-            k_error = a_error = math.nan
-            note += ("; no coarser grid is within the tolerance of the finest, whose own "
-                     "error is not measured: the grid is not shown converged")
-        add("grid", f"{int(row['grid'])} per side", float(row["cost"]),
-            "s (influence + sweeps)", k_error, a_error, ok, count, note)
-    if solver_table is not None and len(solver_table):
-        keys = ["influence", "method", "tol", "precision"]
-        solver = solver_table.groupby(keys, sort=False).agg(
-            k_P_error=("k_P_error", "max"), real_area_error=("real_area_error", "max"),
-            load_error=("load_error", "max"), cost=("wall_s", "sum"),
-            converged=("converged_fraction", "min")).reset_index()
-        solver = solver.drop_duplicates(keys)
-        meets = within(solver, "solver") & (solver["converged"] >= 1.0)
-        row, ok, count = _pick(solver, "cost", meets)
-        add("solver", f"{row['method']} tol {row['tol']:.0e} ({row['precision']}, "
-            f"{row['influence']})", float(row["cost"]), "s (sweeps of all measured cells)",
-            float(row["k_P_error"]), float(row["real_area_error"]), ok, count,
-            f"against the exact solution at equal approach (load error "
-            f"{float(row['load_error']):.1e})" + ("" if ok else "; none meets the tolerance"))
-    if count_table is not None and len(count_table):
-        counts = count_table.groupby("count").agg(
-            k_P_error=("k_P_relative_half_width", "max"),
-            real_area_error=("real_area_relative_half_width", "max")).reset_index()
-        counts["cost"] = counts["count"].astype(float)
-        row, ok, count = _pick(counts, "cost", within(counts, "surfaces"))
-        solved = int(count_table["surfaces_solved"].max())
-        add("surfaces", f"{int(row['count'])} per cell", float(row["count"]), "surfaces",
-            float(row["k_P_error"]), float(row["real_area_error"]), ok, count,
-            f"relative 95 % half-width of the cell mean (subsets of {solved} solved surfaces)"
-            + ("" if ok else f"; more than {int(row['count'])} surfaces needed"))
+    tables = {"mesh": mesh_table, "grid": grid_table, "solver": solver_table,
+              "surfaces": count_table}
+    rows = [choose(tables[name], float(shares.get(name, 1.0)), tol_kP, tol_area)
+            for name, choose in CHOOSERS.items()
+            if tables[name] is not None and len(tables[name])]
     if rows:
-        k_sum = float(np.nansum([r["k_P_error"] for r in rows]))
-        a_sum = float(np.nansum([r["real_area_error"] for r in rows]))
-        unknown = [r["component"] for r in rows
-                   if not (np.isfinite(r["k_P_error"]) and np.isfinite(r["real_area_error"]))]
-        add("combined", "the choices above", math.nan, "", k_sum, a_sum,
-            all(r["meets"] for r in rows) and k_sum <= tol_kP and a_sum <= tol_area, 0,
-            "sum of the components' errors (worst case of independent errors)"
-            + (f"; without {', '.join(unknown)} (unknown)" if unknown else ""))
+        rows.append(_combined(rows, tol_kP, tol_area))
     table = pd.DataFrame(rows)
-    lines = [f"Tolerance: k_P within {100 * tol_kP:g} %, real area within {100 * tol_area:g} %"
-             + (f" (shares {shares})." if shares else ", each component alone.")]
-    for r in rows:
-        status = "meets" if r["meets"] else "does NOT meet"
-        lines.append(f"- {r['component']}: {r['choice']} ({status} it; k_P "
-                     f"{100 * r['k_P_error']:.2g} %, area {100 * r['real_area_error']:.2g} %). "
-                     f"{r['note']}.")
-    table.attrs.update(tol_kP=tol_kP, tol_area=tol_area, shares=shares, text="\n".join(lines))
+    table.attrs.update(tol_kP=tol_kP, tol_area=tol_area, shares=shares,
+                       text=_summary(rows, tol_kP, tol_area, shares))
     return table
 
 

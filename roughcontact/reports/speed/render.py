@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 import pandas as pd
@@ -32,6 +33,12 @@ def _is_reference(column: pd.Series) -> np.ndarray:
     return column.astype(str).str.lower().isin(("true", "1", "1.0")).to_numpy()
 
 
+#: Marker and line style of each solver method's curves; :data:`OTHER_METHOD_STYLE` for others.
+METHOD_STYLES = MappingProxyType({"cg": {"marker": "o", "linestyle": "-"},
+                                  "steepest": {"marker": "s", "linestyle": "--"}})
+OTHER_METHOD_STYLE = MappingProxyType({"marker": "^", "linestyle": "--"})
+
+
 def _plot_solver(axes, solver_table: pd.DataFrame) -> None:
     compared = solver_table[~_is_reference(solver_table["reference"])]
     keys = ["influence", "skew", "kurt", "method", "tol"]
@@ -45,8 +52,7 @@ def _plot_solver(axes, solver_table: pd.DataFrame) -> None:
         for k, ((influence, skew, kurt, method), group) in enumerate(
                 worst.groupby(["influence", "skew", "kurt", "method"], sort=False)):
             ax.plot(group["wall_s"], np.maximum(group[column], floor),
-                    marker="o" if method == "cg" else ("s" if method == "steepest" else "^"),
-                    linestyle="-" if method == "cg" else "--", color=f"C{k}",
+                    **METHOD_STYLES.get(method, OTHER_METHOD_STYLE), color=f"C{k}",
                     label=f"{method}, {influence}, Sk {skew:g} Ku {kurt:g}")
             for _, r in group.iterrows():
                 ax.annotate(f"{r['tol']:.0e}", (r["wall_s"], max(r[column], floor)),
@@ -66,10 +72,9 @@ def _plot_solver(axes, solver_table: pd.DataFrame) -> None:
 
 def _plot_counts(ax, count_table: pd.DataFrame) -> None:
     for k, (level, group) in enumerate(count_table.groupby("pressure_Pa")):
-        for name, style in (("k_P", "-"), ("real_area", "--")):
+        for name, label, style in (("k_P", "k_P", "-"), ("real_area", "area", "--")):
             ax.plot(group["count"], 100 * group[f"{name}_relative_half_width"], style,
-                    marker="o", color=f"C{k}",
-                    label=f"{'k_P' if name == 'k_P' else 'area'}, P = {level / MPA:g} MPa")
+                    marker="o", color=f"C{k}", label=f"{label}, P = {level / MPA:g} MPa")
     counts = np.sort(count_table["count"].unique())
     first = count_table[count_table["count"] == counts[0]]
     start = 100 * first["real_area_relative_half_width"].max()
@@ -158,6 +163,72 @@ def _attr_text(value) -> str:
     return f"{text[:ATTR_TEXT_LIMIT]} ... ({len(text)} characters)"
 
 
+#: Columns of the recommendation shown in the report.
+RECOMMENDATION_COLUMNS = ("component", "choice", "cost", "cost_unit", "k_P_error",
+                          "real_area_error", "meets", "options_meeting")
+#: Sections of the report's tables, in order: (title, table name, text before the
+#: table or None, columns shown).
+TABLE_SECTIONS = (
+    ("Solver", "solver",
+     "Largest error over surfaces at each pressure level; `wall_s` is the whole sweep of one "
+     "cell (all surfaces and steps).",
+     ("influence", "skew", "kurt", "method", "tol", "pressure_Pa", "real_area_exact", "wall_s",
+      "iterations_per_solve", "matvecs_per_solve", "converged_fraction", "load_error",
+      "real_area_error", "max_pressure_error", "k_P_error")),
+    ("Mesh", "mesh", None,
+     ("mesh", "build_s", "peak_memory_GB", "k_P_error", "real_area_error", "max_pressure_error",
+      "k_P_range", "real_area_range", "max_pressure_range", "source")),
+    ("Contact grid", "grid", None,
+     ("skew", "kurt", "grid", "element_size_m", "build_s", "solve_s", "pressure_Pa", "k_P_Pa",
+      "k_P_half_width_Pa", "real_area_fraction", "real_area_half_width", "max_pressure_Pa",
+      "k_P_change", "real_area_change", "max_pressure_change")),
+    ("Surfaces per cell", "surfaces", None,
+     ("skew", "kurt", "count", "pressure_Pa", "k_P_mean", "k_P_half_width",
+      "k_P_relative_half_width", "real_area_mean", "real_area_half_width",
+      "real_area_relative_half_width", "max_pressure_relative_half_width")),
+)
+#: Columns of the accuracy presets shown in the report.
+PRESET_COLUMNS = ("preset", "mesh", "grid_per_9mm", "method", "tol", "precision", "surfaces",
+                  "k_P_error", "real_area_error", "max_pressure_error", "solver_k_P_error",
+                  "grid_change_k_P", "grid_change_real_area", "sampling_k_P",
+                  "sampling_real_area")
+
+
+def _head(recommendation: pd.DataFrame) -> list[str]:
+    """Title, provenance and the ``## Recommendation`` section (lines of Markdown)."""
+    return ["# Speed against error", "",
+            f"Commit {git_commit()}, machine: {describe_machine()} (at writing). Every error is a "
+            "relative error; timings are wall-clock on a shared machine and vary with its load.",
+            "", "## Recommendation", "", recommendation.attrs.get("text", ""), "",
+            _markdown_table(recommendation, RECOMMENDATION_COLUMNS), ""]
+
+
+def _measured(notes: Sequence[str], tables: Mapping) -> list[str]:
+    """The ``## How it was measured`` section: ``notes`` and the tables' ``attrs``."""
+    out = ["## How it was measured", ""] + [f"- {note}" for note in notes]
+    for name, frame in tables.items():
+        if frame is not None and frame.attrs:
+            attrs = {k: v for k, v in frame.attrs.items() if k != "text"}
+            if attrs:
+                out.append(f"- {name}: " + "; ".join(f"{k} = {_attr_text(v)}"
+                                                     for k, v in attrs.items()))
+    return out + [""]
+
+
+def _table_sections(tables: Mapping) -> list[str]:
+    """One section per entry of :data:`TABLE_SECTIONS` ("Not measured." without its table)."""
+    out = []
+    for title, name, intro, columns in TABLE_SECTIONS:
+        frame = tables[name]
+        out += [f"## {title}", ""]
+        if frame is not None and len(frame):
+            out += ([intro, ""] if intro else []) + [_markdown_table(frame, columns)]
+        else:
+            out.append("Not measured.")
+        out.append("")
+    return out
+
+
 def write_report(solver_table: pd.DataFrame | None, mesh_table: pd.DataFrame | None,
                  grid_table: pd.DataFrame | None, count_table: pd.DataFrame | None,
                  recommendation: pd.DataFrame, md_path, csv_path, png_paths=(), *,
@@ -184,67 +255,11 @@ def write_report(solver_table: pd.DataFrame | None, mesh_table: pd.DataFrame | N
     tidy = tidy[["table"] + [c for c in tidy.columns if c != "table"]]
     with atomic_path(csv_path) as tmp:
         tidy.to_csv(tmp, index=False)
-
-    out = ["# Speed against error", ""]
-    out += [f"Commit {git_commit()}, machine: {describe_machine()} (at writing). Every error is a "
-            "relative error; timings are wall-clock on a shared machine and vary with its load.",
-            ""]
-    out += ["## Recommendation", "", recommendation.attrs.get("text", ""), "",
-            _markdown_table(recommendation, ["component", "choice", "cost", "cost_unit",
-                                             "k_P_error", "real_area_error", "meets",
-                                             "options_meeting"]), ""]
-    out += ["## How it was measured", ""]
-    out += [f"- {note}" for note in notes]
-    for name, frame in tables.items():
-        if frame is not None and frame.attrs:
-            attrs = {k: v for k, v in frame.attrs.items() if k != "text"}
-            if attrs:
-                out.append(f"- {name}: " + "; ".join(f"{k} = {_attr_text(v)}"
-                                                     for k, v in attrs.items()))
-    out.append("")
-    out += ["## Solver", ""]
-    if solver_table is not None and len(solver_table):
-        out += ["Largest error over surfaces at each pressure level; `wall_s` is the whole "
-                "sweep of one cell (all surfaces and steps).", ""]
-        out.append(_markdown_table(solver_table, [
-            "influence", "skew", "kurt", "method", "tol", "pressure_Pa", "real_area_exact",
-            "wall_s", "iterations_per_solve", "matvecs_per_solve", "converged_fraction",
-            "load_error", "real_area_error", "max_pressure_error", "k_P_error"]))
-    else:
-        out.append("Not measured.")
-    out += ["", "## Mesh", ""]
-    if mesh_table is not None and len(mesh_table):
-        out.append(_markdown_table(mesh_table, [
-            "mesh", "build_s", "peak_memory_GB", "k_P_error", "real_area_error",
-            "max_pressure_error", "k_P_range", "real_area_range", "max_pressure_range",
-            "source"]))
-    else:
-        out.append("Not measured.")
-    out += ["", "## Contact grid", ""]
-    if grid_table is not None and len(grid_table):
-        out.append(_markdown_table(grid_table, [
-            "skew", "kurt", "grid", "element_size_m", "build_s", "solve_s", "pressure_Pa",
-            "k_P_Pa", "k_P_half_width_Pa", "real_area_fraction", "real_area_half_width",
-            "max_pressure_Pa", "k_P_change", "real_area_change", "max_pressure_change"]))
-    else:
-        out.append("Not measured.")
-    out += ["", "## Surfaces per cell", ""]
-    if count_table is not None and len(count_table):
-        out.append(_markdown_table(count_table, [
-            "skew", "kurt", "count", "pressure_Pa", "k_P_mean", "k_P_half_width",
-            "k_P_relative_half_width", "real_area_mean", "real_area_half_width",
-            "real_area_relative_half_width", "max_pressure_relative_half_width"]))
-    else:
-        out.append("Not measured.")
-    out += ["", "## Accuracy presets", "",
-            f"Accuracy presets: {presets_caption} (errors: relative, of the cell means; "
-            "None where not measured).", "", _markdown_table(_presets_table(presets), [
-                "preset", "mesh", "grid_per_9mm", "method", "tol", "precision", "surfaces",
-                "k_P_error", "real_area_error", "max_pressure_error", "solver_k_P_error",
-                "grid_change_k_P", "grid_change_real_area", "sampling_k_P",
-                "sampling_real_area"]), ""]
+    out = (_head(recommendation) + _measured(notes, tables) + _table_sections(tables)
+           + ["## Accuracy presets", "",
+              f"Accuracy presets: {presets_caption} (errors: relative, of the cell means; "
+              "None where not measured).", "",
+              _markdown_table(_presets_table(presets), PRESET_COLUMNS), ""])
     with atomic_path(md_path) as tmp:
         Path(tmp).write_text("\n".join(out) + "\n")
     _save_figures(png_paths, solver_table, grid_table, count_table)
-
-

@@ -1,0 +1,205 @@
+"""The contact-grid experiment of the speed-against-error report.
+
+:func:`grid_study` sweeps the same statistics on coarser and finer contact
+grids over the same nominal area and reports the change of k_P (Eq 33), real
+area and peak pressure at equal nominal pressure against the finest grid;
+:data:`GRID_INFLUENCES` and :data:`PAIRINGS` hold its influence models and
+its ways of pairing the surfaces across the grids.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from types import MappingProxyType
+
+import numpy as np
+import pandas as pd
+
+from roughcontact.contact.cell import aggregate_sweep, nondim_pressure
+from roughcontact.elasticity import operators
+from roughcontact.elasticity.halfspace import halfspace_influence
+from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
+from roughcontact.reports.speed.machine import describe_machine
+from roughcontact.reports.speed.sweeps import cell_heights, cell_key, reporter, timed_sweep
+
+__all__ = ["GRID_COLUMNS", "GRID_INFLUENCES", "PAIRINGS", "grid_study"]
+
+
+def _hybrid_operator(geometry: BlockGeometry, coarsening: int):
+    """Matrix-free hybrid: the dense hybrid matrix's operator, without its 8 n^2 bytes."""
+    coarse = operators.coarsened_side(geometry.grid[0], coarsening)
+    return operators.block_operator(geometry, coarse_grid=(coarse, coarse))
+
+
+def _halfspace_matrix(geometry: BlockGeometry, coarsening: int):
+    """Love's half-space, dense (``coarsening`` unused)."""
+    return halfspace_influence(geometry.grid, geometry.size, 1.0, geometry.nu)
+
+
+def _halfspace_fft(geometry: BlockGeometry, coarsening: int):
+    """Love's half-space, matrix-free FFT convolution (``coarsening`` unused)."""
+    return operators.halfspace_operator(geometry.grid, geometry.size, geometry.nu)
+
+
+def _fe_matrix(geometry: BlockGeometry, coarsening: int):
+    """The finite-element ``E C`` of ``geometry.mesh`` (``coarsening`` unused)."""
+    return unit_modulus_influence(geometry)
+
+
+#: Influence models of :func:`grid_study`: name -> (builder of ``E C`` [m] from a
+#: geometry and a coarsening, the model's name in the table). ``"hybrid"``: the
+#: matrix-free :class:`roughcontact.elasticity.operators.BlockOperator` (equal to
+#: :func:`roughcontact.elasticity.influence.hybrid_unit_modulus_influence`), Love's
+#: near field plus the finite-body correction of ``mesh`` on a grid ``coarsening``
+#: times coarser (at most ``operators.COARSE_MAX`` per side): within 1.2 % of the
+#: converged preset in k_P, area and peak pressure at 60 x 60 for about 3 s, and no
+#: dense matrix (256 x 256 fits), where the refined finite-element model itself at
+#: 120 x 120 would be four times that of 60 x 60 (about 0.5 M dofs). ``"halfspace"``:
+#: Love's half-space (no finite-body bulk: k_P 11-17 % high at 60 x 60, fine for the
+#: *change* between grids only); ``"halfspace_fft"``: the same, matrix-free (FFT
+#: convolution, no n^2 matrix) for 240 x 240 and more; ``"fe"``: the finite-element
+#: model of ``mesh`` (:func:`~roughcontact.elasticity.influence.unit_modulus_influence`).
+GRID_INFLUENCES = MappingProxyType({
+    "hybrid": (_hybrid_operator, "hybrid ({mesh}, coarsening {coarsening})"),
+    "halfspace": (_halfspace_matrix, "halfspace"),
+    "halfspace_fft": (_halfspace_fft, "halfspace_fft"),
+    "fe": (_fe_matrix, "fe ({mesh})"),
+})
+
+
+def _nested_heights(cells, grids: list[int], generate: Callable) -> Callable:
+    """Surfaces of the finest grid, point-sampled on every coarser one (and rescaled to
+    unit std): ``heights(g, skew, kurt)``."""
+    finest = grids[-1]
+    if any(finest % g for g in grids):
+        raise ValueError(f"nested pairing needs every grid to divide the finest, got {grids}")
+    fine = {(skew, kurt): generate(finest, skew, kurt, "grid_study") for skew, kurt in cells}
+
+    def heights(g: int, skew: float, kurt: float) -> np.ndarray:
+        k = finest // g
+        sampled = fine[(skew, kurt)][:, ::k, ::k]
+        return sampled / sampled.std(axis=(1, 2), keepdims=True)
+
+    return heights
+
+
+def _independent_heights(cells, grids: list[int], generate: Callable) -> Callable:
+    """Surfaces of their own on every grid (seeds per grid): ``heights(g, skew, kurt)``."""
+    return lambda g, skew, kurt: generate(g, skew, kurt, f"grid_study|{g}")
+
+
+#: Pairings of the surfaces across the grids of :func:`grid_study`: name -> maker of
+#: ``heights(g, skew, kurt)`` from the cells, the sorted grids and a generator.
+#: ``"nested"``: the finest grid's surfaces point-sampled (the same random field, a
+#: coarser grid), so the change between grids is the discretization alone;
+#: ``"independent"``: each grid's own surfaces, so the change also holds sampling
+#: noise (see the ``*_half_width`` columns).
+PAIRINGS = MappingProxyType({"nested": _nested_heights, "independent": _independent_heights})
+
+#: Columns of the grid table -> the columns of the aggregated cell table
+#: (:func:`roughcontact.contact.cell.aggregate_sweep`) they hold.
+GRID_COLUMNS = MappingProxyType({
+    "k_P_Pa": "normalized_stiffness_mean",
+    "k_P_half_width_Pa": "normalized_stiffness_half_width",
+    "real_area_fraction": "real_area_fraction_mean",
+    "real_area_half_width": "real_area_fraction_half_width",
+    "max_pressure_Pa": "max_pressure_mean",
+    "max_pressure_half_width_Pa": "max_pressure_half_width",
+})
+
+
+def _grid_rows(frame: pd.DataFrame, fields: Mapping) -> list[dict]:
+    """The grid table's rows of one aggregated sweep ``frame``, after the shared ``fields``."""
+    return [dict(fields) | {"pressure_Pa": float(agg["nominal_pressure"])}
+            | {name: agg[column] for name, column in GRID_COLUMNS.items()}
+            for _, agg in frame.iterrows()]
+
+
+def _changes_against_finest(table: pd.DataFrame) -> pd.DataFrame:
+    """``table`` sorted, with the relative change ``q / q_finest - 1`` of k_P, real area and
+    peak pressure at equal cell and pressure against the finest grid."""
+    table = table.sort_values(["skew", "kurt", "grid", "pressure_Pa"], ignore_index=True)
+    keys = ["skew", "kurt", "pressure_Pa"]
+    finest_rows = table[table["grid"] == table["grid"].max()].set_index(keys)
+    for name, column in (("k_P", "k_P_Pa"), ("real_area", "real_area_fraction"),
+                         ("max_pressure", "max_pressure_Pa")):
+        reference = finest_rows[column].reindex(pd.MultiIndex.from_frame(table[keys]))
+        table[f"{name}_change"] = table[column].to_numpy() / reference.to_numpy() - 1.0
+    return table
+
+
+def grid_study(
+    cells: Sequence[tuple[float, float]] = ((0.0, 3.0),), *, grids: Sequence[int] = (30, 60, 120),
+    size: float = 9e-3, thickness: float = 10e-3, E: float = 5.11e8, nu: float = 0.0,
+    base: str = "clamped", influence: str = "hybrid", mesh: str = "refined",
+    coarsening: int = 2, surfaces: int = 4, sigma: float = 24.5e-6, b: float = 1e-3,
+    pressures: Sequence[float] = (0.3e6, 1e6, 3e6), pairing: str = "nested",
+    method: str = "cg", tol: float = 1e-8, precision: str = "mixed", steps: int = 30,
+    seed: int = 2006, progress: Callable[[str], None] | None = None,
+    spectrum: Mapping | None = None,
+) -> pd.DataFrame:
+    """k_P, real area and peak pressure of the same statistics on several contact grids.
+
+    A square block ``size`` x ``size`` [m], ``thickness`` L [m], meshed with
+    ``g`` x ``g`` contact elements for each ``g`` in ``grids``, its influence
+    coefficients from ``influence`` (:data:`GRID_INFLUENCES`; default: the
+    matrix-free hybrid of ``mesh``, ``coarsening`` times coarser). ``surfaces``
+    surfaces per cell (exponential ACF, Eq 1; ``sigma``, ``b`` [m]) are paired
+    across the grids by ``pairing`` (:data:`PAIRINGS`; default: generated on
+    the finest grid, point-sampled on the coarser ones). ``spectrum``, a
+    mapping of :class:`~roughcontact.surfaces.synthetic.SurfaceSpec` fields
+    (e.g. ``{"acf": "self-affine", "hurst": 0.8, "rolloff_wavelength": 3e-3,
+    "cutoff_wavelength": 0.6e-3}``), replaces the exponential ACF (``b`` is then
+    unused): with the cut-off resolved, real area and peak pressure converge
+    with the grid, which they do not for Eq 1. Each grid is swept as a
+    contact job (:func:`~roughcontact.contact.cell.sweep_cell`: ``method``,
+    ``tol``, ``precision``, ``steps``) and averaged at equal P
+    (:func:`~roughcontact.contact.cell.aggregate_sweep`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (cell, grid, pressure): ``skew``, ``kurt``, ``grid``,
+        ``element_size_m``, ``influence_model``, ``pairing``, ``build_s``
+        (influence), ``solve_s`` (all surfaces), ``surfaces``,
+        ``converged_fraction``, ``pressure_Pa``, the columns of
+        :data:`GRID_COLUMNS` (means and 95 % half-widths), and ``k_P_change``,
+        ``real_area_change``, ``max_pressure_change``: ``q / q_finest - 1``.
+    """
+    grids = sorted(int(g) for g in grids)
+    if pairing not in PAIRINGS:
+        raise ValueError(f"pairing must be 'nested' or 'independent', got {pairing!r}")
+    if influence not in GRID_INFLUENCES:
+        raise ValueError("influence must be 'hybrid', 'halfspace', 'halfspace_fft' or 'fe', "
+                         f"got {influence!r}")
+    build, model = GRID_INFLUENCES[influence]
+    model = model.format(mesh=mesh, coarsening=coarsening)
+    heights = PAIRINGS[pairing](cells, grids, lambda g, skew, kurt, tag: cell_heights(
+        (g, g), (size, size), b, skew, kurt, surfaces, seed, tag, spectrum))
+    levels = np.asarray(pressures, dtype=float)
+    end = nondim_pressure(levels.max(), thickness=thickness, E=E, sigma=sigma)
+    say, rows = reporter(progress), []
+    for g in reversed(grids):
+        geometry = BlockGeometry(size=(size, size), thickness=thickness, grid=(g, g), E=E,
+                                 nu=nu, base=base, mesh=mesh)
+        start = time.perf_counter()
+        unit = build(geometry, coarsening)
+        build_s = time.perf_counter() - start
+        for skew, kurt in cells:
+            nd, solve_s = timed_sweep(unit, heights(g, skew, kurt), geometry, end, steps,
+                                      method=method, tol=tol, precision=precision,
+                                      stiffness_tol=1e-6, max_iter=None)
+            _, frame = aggregate_sweep(nd, sigma, E, levels)
+            say(f"grid {g} x {g} {cell_key(skew, kurt)}: influence {build_s:.1f} s, "
+                f"sweep {solve_s:.1f} s")
+            rows += _grid_rows(frame, {
+                "skew": float(skew), "kurt": float(kurt), "grid": g, "element_size_m": size / g,
+                "influence_model": model, "pairing": pairing, "build_s": build_s,
+                "solve_s": solve_s, "surfaces": surfaces,
+                "converged_fraction": float(nd.converged.mean())})
+        del unit
+    table = _changes_against_finest(pd.DataFrame(rows))
+    table.attrs.update(influence_model=model, pairing=pairing, method=method, tol=tol,
+                       spectrum=dict(spectrum or {}), machine=describe_machine())
+    return table
