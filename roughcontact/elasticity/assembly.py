@@ -10,8 +10,8 @@ recomputes the same element matrix for every element).
 ``assemble_stiffness_generic`` is the slow reference path used to check the
 scatter.
 
-All lengths in metres; stiffnesses are for the modulus passed (N/m per unit
-``E`` when ``E = 1``).
+The global stiffness [N/m] is for the modulus passed (per unit modulus when
+``E = 1``); the load operators are in m^2 (force per unit pressure).
 """
 
 from __future__ import annotations
