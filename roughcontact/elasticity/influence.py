@@ -365,7 +365,7 @@ def build_mesh(geom: BlockGeometry) -> HexMesh:
     spec = geom.mesh_spec
     plan = (geom.grid[0] * spec.refinement, geom.grid[1] * spec.refinement)
     return structured_mesh(geom.size, geom.thickness, plan, layer_thicknesses(geom),
-                               spec.element, layer_coarsening(geom))
+                           spec.element, layer_coarsening(geom))
 
 
 @dataclass(frozen=True)
