@@ -23,7 +23,7 @@ A. Product time ``u = E C p`` for a batch of m = 20 pressure fields, as the
 B. The matrix-free alternative without FFT: products through one sparse
    factorization of the finite-element stiffness ("refined" mesh, 32, 60 and
    120 per side), ``u = R K^-1 F^T p`` with F the load and R the centre
-   operators of ``fem.top_face_operators``. Factorized once by MKL PARDISO
+   operators of ``assembly.top_face_operators``. Factorized once by MKL PARDISO
    (``pypardiso``): LU of the full matrix (pypardiso's default, mtype 11) and
    Cholesky of the upper triangle (mtype 2, the cheapest); scipy's SuperLU
    when pypardiso is missing (grids up to 60). Time of assembly,
@@ -79,7 +79,7 @@ sys.path.insert(0, str(ROOT))
 
 from roughcontact.contact import nondim  # noqa: E402
 from roughcontact.contact.cell import approach_grid  # noqa: E402
-from roughcontact.elasticity import fem  # noqa: E402
+from roughcontact.elasticity import assembly, sparse_solve  # noqa: E402
 from roughcontact.elasticity.influence import (  # noqa: E402
     BlockGeometry,
     build_mesh,
@@ -192,8 +192,8 @@ def case_fe_product(grid: int, solver: str) -> dict:
     geom = geometry(grid)
     start = time.perf_counter()
     mesh = build_mesh(geom)
-    upper = fem.assemble_stiffness(mesh, geom.nu, geom.base, E=1.0, upper=True)
-    load, centre = fem.top_face_operators(mesh, geom.grid, geom.base)
+    upper = assembly.assemble_stiffness(mesh, geom.nu, geom.base, E=1.0, upper=True)
+    load, centre = assembly.top_face_operators(mesh, geom.grid, geom.base)
     assemble_s = time.perf_counter() - start
     row = {"dofs": upper.shape[0], "stiffness_nonzeros": int(upper.nnz), "assemble_s": assemble_s}
     start = time.perf_counter()
@@ -201,7 +201,7 @@ def case_fe_product(grid: int, solver: str) -> dict:
         from pypardiso import PyPardisoSolver
 
         if solver == "pardiso-lu":  # pypardiso's default: real nonsymmetric, full matrix
-            matrix, mtype = fem._full_from_upper(upper).tocsr(), 11
+            matrix, mtype = sparse_solve.full_from_upper(upper).tocsr(), 11
         else:  # real symmetric positive definite: Cholesky of the upper triangle
             matrix, mtype = upper, 2
         del upper
@@ -214,7 +214,7 @@ def case_fe_product(grid: int, solver: str) -> dict:
     else:
         from scipy.sparse.linalg import splu
 
-        lu = splu(fem._full_from_upper(upper), permc_spec="MMD_AT_PLUS_A")
+        lu = splu(sparse_solve.full_from_upper(upper), permc_spec="MMD_AT_PLUS_A")
         del upper
         row["factor_nonzeros"] = int(lu.L.nnz + lu.U.nnz)
         solve = lu.solve

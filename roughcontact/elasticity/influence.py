@@ -17,7 +17,7 @@ The paper obtained C from an ANSYS model of the finite block (Table 1:
 used to model it; ``influence_matrix`` builds C from one sparse factorization
 of the finite-element stiffness, condensed onto the contact loads and
 observation points (a Schur complement, see
-``roughcontact.fem.condensed_flexibility``).
+``roughcontact.elasticity.sparse_solve.condensed_flexibility``).
 
 Scaling: C is proportional to 1/E for fixed geometry and nu, so
 ``unit_modulus_influence(geom)`` returns ``E * C`` (a function of geometry
@@ -73,8 +73,12 @@ from types import MappingProxyType
 import numpy as np
 import scipy.sparse as sp
 
-from roughcontact.elasticity import fem
+from roughcontact.elasticity.assembly import assemble_stiffness, top_face_operators
+from roughcontact.elasticity.dofs import SUPPORTS
+from roughcontact.elasticity.elements import ELEMENTS
 from roughcontact.elasticity.halfspace import halfspace_influence
+from roughcontact.elasticity.mesh import HexMesh, node_count, slabs, structured_mesh
+from roughcontact.elasticity.sparse_solve import condensed_flexibility, resolve_solver
 
 __all__ = [
     "MESH_PRESETS",
@@ -141,8 +145,8 @@ class MeshSpec:
     coarsen_at: float | None = None
 
     def __post_init__(self) -> None:
-        if self.element not in fem.ELEMENTS:
-            raise ValueError(f"MeshSpec.element must be one of {tuple(fem.ELEMENTS)}, "
+        if self.element not in ELEMENTS:
+            raise ValueError(f"MeshSpec.element must be one of {tuple(ELEMENTS)}, "
                              f"got {self.element!r}")
         if int(self.refinement) != self.refinement or self.refinement < 1:
             raise ValueError(f"MeshSpec.refinement must be a positive integer, "
@@ -243,8 +247,8 @@ class BlockGeometry:
             raise ValueError(f"BlockGeometry.E must be positive [Pa], got {self.E!r}")
         if not 0.0 <= self.nu < 0.5:
             raise ValueError(f"BlockGeometry.nu must satisfy 0 <= nu < 0.5, got {self.nu!r}")
-        if self.base not in fem.BASES:
-            raise ValueError(f"BlockGeometry.base must be one of {fem.BASES}, "
+        if self.base not in SUPPORTS:
+            raise ValueError(f"BlockGeometry.base must be one of {tuple(SUPPORTS)}, "
                              f"got {self.base!r}")
         if isinstance(self.mesh, str) and self.mesh not in MESH_PRESETS:
             raise ValueError(f"BlockGeometry.mesh must be one of {tuple(MESH_PRESETS)} "
@@ -356,12 +360,12 @@ def layer_coarsening(geom: BlockGeometry) -> tuple[int, ...]:
     return tuple(factors)
 
 
-def build_mesh(geom: BlockGeometry) -> fem.HexMesh:
-    """The structured finite-element mesh of the block (see ``roughcontact.fem``)."""
+def build_mesh(geom: BlockGeometry) -> HexMesh:
+    """The structured finite-element mesh of the block (``roughcontact.elasticity.mesh``)."""
     spec = geom.mesh_spec
     plan = (geom.grid[0] * spec.refinement, geom.grid[1] * spec.refinement)
-    return fem.structured_mesh(geom.size, geom.thickness, plan, layer_thicknesses(geom),
-                               spec.element, layer_coarsening(geom))
+    return structured_mesh(geom.size, geom.thickness, plan, layer_thicknesses(geom),
+                           spec.element, layer_coarsening(geom))
 
 
 @dataclass(frozen=True)
@@ -390,12 +394,13 @@ class CostEstimate:
 def _loads_match_observations(geom: BlockGeometry) -> bool:
     """True when the load operator is the element area times the centre evaluation.
 
-    Holds for one trilinear element per contact element: the consistent load
-    of a uniform pressure puts A/4 on each corner node and the centre value is
-    the mean of the four corner nodes. Then C = A R K^-1 R^T is symmetric.
+    Holds for one trilinear element (lattice order 1: corner nodes only) per
+    contact element: the consistent load of a uniform pressure puts A/4 on
+    each corner node and the centre value is the mean of the four corner
+    nodes. Then C = A R K^-1 R^T is symmetric.
     """
     spec = geom.mesh_spec
-    return spec.element == "hex8" and spec.refinement == 1
+    return ELEMENTS[spec.element].order == 1 and spec.refinement == 1
 
 
 #: Peak-memory model, fitted to measured peaks (resident set) of
@@ -405,6 +410,27 @@ def _loads_match_observations(geom: BlockGeometry) -> bool:
 #: adds that margin. The SuperLU path stores L and U and solves in blocks.
 _BYTES_PER_DOF = {"hex8": 8.2e3, "hex20": 10.9e3, "hex27": 12.1e3}
 _SUPERLU_FACTOR = 6.0
+
+#: Nodes coupled to one node through the elements around it, per element.
+_COUPLED_NODES = {"hex8": 27, "hex20": 65, "hex27": 125}
+
+
+def _pardiso_memory(factor: float, nb: int) -> float:
+    """Peak of the PARDISO path before the dense results [bytes]: its factor."""
+    return factor
+
+
+def _superlu_memory(factor: float, nb: int) -> float:
+    """Peak of the SuperLU path before the dense results [bytes].
+
+    L and U, the ordering pass, and the dense trailing blocks of L and U.
+    """
+    return _SUPERLU_FACTOR * factor + 0.3 * GB + 4 * 8.0 * nb * nb
+
+
+#: Sparse solver (``resolve_solver``'s name) -> its memory from the PARDISO
+#: factor estimate and the condensed size nb.
+_SOLVER_MEMORY = {"pardiso": _pardiso_memory, "superlu": _superlu_memory}
 
 
 def estimate_cost(geom: BlockGeometry, solver: str = "auto") -> CostEstimate:
@@ -424,35 +450,22 @@ def estimate_cost(geom: BlockGeometry, solver: str = "auto") -> CostEstimate:
         the dense trailing blocks of its factors.
     """
     spec = geom.mesh_spec
-    parts = fem.slabs(build_mesh(geom))  # edge tuples only, nothing large
+    parts = slabs(build_mesh(geom))  # edge tuples only, nothing large
     dofs = 0
     for slab in parts:
         ex, ey, ez = slab.n_elements
-        nodes = _node_count(spec.element, ex, ey, ez)
-        dofs += 3 * (nodes - _node_count(spec.element, ex, ey, 0))  # tied or fixed plane
-    if geom.base == "sliding":
-        ex, ey, _ = parts[0].n_elements
-        dofs += 2 * _node_count(spec.element, ex, ey, 0) - 3
-    coupling = {"hex8": 27, "hex20": 65, "hex27": 125}[spec.element] * 3 / 2
+        nodes = node_count(spec.element, ex, ey, ez)
+        dofs += 3 * (nodes - node_count(spec.element, ex, ey, 0))  # tied or fixed plane
+    ex, ey, _ = parts[0].n_elements
+    bottom = node_count(spec.element, ex, ey, 0)
+    dofs += 3 * bottom - SUPPORTS[geom.base].fixed_count(bottom)  # left free by the support
+    coupling = _COUPLED_NODES[spec.element] * 3 / 2
     nnz = int(dofs * coupling)
     nb = geom.n_elements * (1 if _loads_match_observations(geom) else 2)
     factor = 1.25 * _BYTES_PER_DOF[spec.element] * dofs * (dofs / 1e5) ** 0.2
-    if solver == "superlu" or (solver == "auto" and not fem.pardiso_available()):
-        # L and U, the ordering pass, and the dense trailing blocks of L and U
-        factor = _SUPERLU_FACTOR * factor + 0.3 * GB + 4 * 8.0 * nb * nb
+    factor = _SOLVER_MEMORY[resolve_solver(solver)](factor, nb)
     peak = factor + 1.5 * 8.0 * nb * nb + 8.0 * geom.n_elements**2 + 0.15 * GB
     return CostEstimate(dofs, nnz, nb, peak)
-
-
-def _node_count(element: str, ex: int, ey: int, ez: int) -> int:
-    """Nodes of a structured mesh of ex x ey x ez elements (ez = 0: one plane)."""
-    if element == "hex8":
-        return (ex + 1) * (ey + 1) * (ez + 1)
-    lattice = (2 * ex + 1) * (2 * ey + 1) * (2 * ez + 1)
-    if element == "hex27":
-        return lattice
-    face_centres = ex * ey * (ez + 1) + ex * ez * (ey + 1) + ey * ez * (ex + 1)
-    return lattice - face_centres - ex * ey * ez
 
 
 class ModelTooLarge(MemoryError):
@@ -487,7 +500,7 @@ def unit_modulus_influence(
     C is proportional to 1/E (linear elasticity with fixed nu), so
     ``C(E) = unit_modulus_influence(geom) / E``; ``geom.E`` is not used.
 
-    Method: the stiffness K of the supported block (``roughcontact.fem``) is
+    Method: the stiffness K of the supported block (``roughcontact.elasticity.assembly``) is
     condensed onto the contact grid. With R (n x N) the interpolation of the
     normal displacement at the centre of each contact element and F (n x N)
     the consistent nodal forces of unit pressure on each contact element,
@@ -518,7 +531,7 @@ def unit_modulus_influence(
     symmetric : bool, optional
         Return the symmetric part (default) or the raw centre-point matrix.
     solver : {"auto", "pardiso", "superlu"}
-        Sparse solver (``roughcontact.fem.condensed_flexibility``).
+        Sparse solver (``roughcontact.elasticity.sparse_solve.condensed_flexibility``).
     max_bytes : float, optional
         Memory allowed [bytes]; a larger estimate raises ``ModelTooLarge``
         before anything is built.
@@ -528,8 +541,7 @@ def unit_modulus_influence(
     ndarray, shape (n, n), n = nx * ny
         ``E * C`` [m], rows and columns row-major over y then x.
     """
-    if solver not in fem.SOLVERS:
-        raise ValueError(f"solver must be one of {fem.SOLVERS}, got {solver!r}")
+    solver = resolve_solver(solver)
     check_memory(geom, max_bytes, solver)
     element_width = max(geom.spacing) / geom.mesh_spec.refinement
     if element_width > geom.thickness:
@@ -539,14 +551,14 @@ def unit_modulus_influence(
             "refinement of at least %d", geom.mesh, element_width, geom.thickness,
             math.ceil(max(geom.spacing) / geom.thickness * (1.0 - 1e-9)))
     mesh = build_mesh(geom)
-    stiffness = fem.assemble_stiffness(mesh, geom.nu, geom.base, E=1.0, upper=True)
-    load, centre = fem.top_face_operators(mesh, geom.grid, geom.base)
+    stiffness = assemble_stiffness(mesh, geom.nu, geom.base, E=1.0, upper=True)
+    load, centre = top_face_operators(mesh, geom.grid, geom.base)
     if _loads_match_observations(geom):
         hx, hy = geom.spacing
         del load
-        flexibility = hx * hy * fem.condensed_flexibility(stiffness, centre, solver=solver)
+        flexibility = hx * hy * condensed_flexibility(stiffness, centre, solver=solver)
     else:
-        flexibility = fem.condensed_flexibility(stiffness, centre, load, solver=solver)
+        flexibility = condensed_flexibility(stiffness, centre, load, solver=solver)
     del stiffness
     if symmetric:
         flexibility = 0.5 * (flexibility + flexibility.T)

@@ -1,15 +1,23 @@
-"""Tests of the finite-element influence coefficients (roughcontact.influence, .fem)."""
+"""Tests of the finite-element influence coefficients (roughcontact.elasticity: influence,
+mesh, assembly, sparse_solve)."""
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from roughcontact.elasticity import fem
+from roughcontact.elasticity import sparse_solve
+from roughcontact.elasticity.assembly import (
+    assemble_stiffness,
+    assemble_stiffness_generic,
+    top_face_operators,
+)
+from roughcontact.elasticity.dofs import dof_map
 from roughcontact.elasticity.influence import (
     MESH_PRESETS,
     BlockGeometry,
     MeshSpec,
     ModelTooLarge,
+    build_mesh,
     estimate_cost,
     halfspace_influence,
     hybrid_unit_modulus_influence,
@@ -18,6 +26,7 @@ from roughcontact.elasticity.influence import (
     layer_thicknesses,
     unit_modulus_influence,
 )
+from roughcontact.elasticity.mesh import node_count, node_numbers, slabs, structured_mesh
 
 H = 0.15e-3  # contact element size of the paper's model [m]
 GRADED_R2 = MeshSpec(element="hex8", refinement=2, layers=None, top_layer=1.0, growth=1.5)
@@ -100,18 +109,18 @@ def test_graded_layers_sum_to_thickness_and_grow_at_most_the_ratio():
 @pytest.mark.parametrize("element", ["hex8", "hex20", "hex27"])
 @pytest.mark.parametrize("base", ["clamped", "sliding"])
 def test_scatter_assembly_equals_generic_asm(element, base):
-    mesh = fem.structured_mesh((1.2e-3, 0.9e-3), 1.0e-3, (4, 3), (0.1, 0.3, 0.6), element)
-    fast = fem.assemble_stiffness(mesh, 0.3, base, E=2.0)
-    reference = fem.assemble_stiffness_generic(mesh, 0.3, base, E=2.0)
+    mesh = structured_mesh((1.2e-3, 0.9e-3), 1.0e-3, (4, 3), (0.1, 0.3, 0.6), element)
+    fast = assemble_stiffness(mesh, 0.3, base, E=2.0)
+    reference = assemble_stiffness_generic(mesh, 0.3, base, E=2.0)
     assert abs(fast - reference).max() <= 1e-12 * abs(reference).max()
-    upper = fem.assemble_stiffness(mesh, 0.3, base, E=2.0, upper=True)
+    upper = assemble_stiffness(mesh, 0.3, base, E=2.0, upper=True)
     assert abs(sp.triu(fast) - upper).max() <= 1e-14 * abs(reference).max()
 
 
 def test_top_face_operators_integrate_pressure_and_interpolate_constants():
     for element, r in [("hex8", 1), ("hex8", 2), ("hex20", 1), ("hex27", 3)]:
-        mesh = fem.structured_mesh((0.6e-3, 0.4e-3), 1e-3, (3 * r, 2 * r), (1.0,), element)
-        load, centre = fem.top_face_operators(mesh, (3, 2))
+        mesh = structured_mesh((0.6e-3, 0.4e-3), 1e-3, (3 * r, 2 * r), (1.0,), element)
+        load, centre = top_face_operators(mesh, (3, 2))
         np.testing.assert_allclose(load.sum(axis=1), 0.2e-3 * 0.2e-3, rtol=1e-12)
         np.testing.assert_allclose(centre.sum(axis=1), 1.0, rtol=1e-12)
 
@@ -127,9 +136,24 @@ def test_coarsening_factors_divide_and_grow_downwards():
 
 def test_hex_mesh_rejects_inconsistent_coarsening():
     with pytest.raises(ValueError, match="coarsening"):
-        fem.structured_mesh((1e-3, 1e-3), 1e-3, (4, 4), (0.5, 0.5), "hex8", (2, 1))
+        structured_mesh((1e-3, 1e-3), 1e-3, (4, 4), (0.5, 0.5), "hex8", (2, 1))
     with pytest.raises(ValueError, match="coarsened"):
-        fem.structured_mesh((1e-3, 1e-3), 1e-3, (4, 4), (0.5, 0.5), "hex8", (1, 3))
+        structured_mesh((1e-3, 1e-3), 1e-3, (4, 4), (0.5, 0.5), "hex8", (1, 3))
+
+
+@pytest.mark.parametrize("element", ["hex8", "hex20", "hex27"])
+@pytest.mark.parametrize("base", ["clamped", "sliding"])
+def test_cost_estimate_counts_the_equations_exactly(element, base):
+    spec = MeshSpec(element, refinement=2, layers=None, top_layer=1.0, growth=1.5,
+                    coarsen_at=1.0)
+    geom = small_block(grid=(6, 4), thickness=6 * H, base=base, mesh=spec)
+    mesh = build_mesh(geom)
+    parts = slabs(mesh)
+    assert len(parts) > 1  # coarsened: hanging nodes are tied
+    for slab in parts:
+        ex, ey, ez = slab.n_elements
+        assert node_count(element, ex, ey, ez) == node_numbers(slab).max() + 1
+    assert estimate_cost(geom).dofs == dof_map(mesh, base).n_free
 
 
 @pytest.mark.parametrize("element", ["hex8", "hex20"])
@@ -263,7 +287,8 @@ def test_paper_mesh_underestimates_self_compliance():
 # --- solvers and memory guard -------------------------------------------------
 
 
-@pytest.mark.skipif(not fem.pardiso_available(), reason="PARDISO (pypardiso) not installed")
+@pytest.mark.skipif(not sparse_solve.pardiso_available(),
+                    reason="PARDISO (pypardiso) not installed")
 def test_superlu_fallback_matches_pardiso():
     geom = small_block(grid=(4, 4), thickness=4 * H, nu=0.3, mesh=GRADED_R2)
     a = unit_modulus_influence(geom, solver="pardiso", symmetric=False)
@@ -278,8 +303,8 @@ def test_auto_solver_falls_back_to_superlu(monkeypatch):
     def missing():
         raise ImportError("no MKL")
 
-    monkeypatch.setattr(fem, "_pardiso_library", missing)
-    assert not fem.pardiso_available()
+    monkeypatch.setattr(sparse_solve, "_pardiso_library", missing)
+    assert not sparse_solve.pardiso_available()
     np.testing.assert_allclose(unit_modulus_influence(geom), expected, rtol=1e-12)
     with pytest.raises(ValueError, match="solver"):
         unit_modulus_influence(geom, solver="cholmod")
