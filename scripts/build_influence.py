@@ -2,19 +2,16 @@
 
 import os
 
-from roughcontact.study.config import BuildSettings
 from roughcontact.study.jobs import build_influence
 from roughcontact.study.logs import route_logging
-from roughcontact.study.records import Geometry
 
 route_logging(snakemake.log[0])
 # the sparse factorization is the one multithreaded step of the pipeline
 os.environ["MKL_NUM_THREADS"] = str(snakemake.threads)
 build_influence(
-    Geometry.from_params(snakemake.params.geometry),
+    snakemake.params.geometry,
     snakemake.output[0],
-    BuildSettings.from_section(
-        {"solver": snakemake.params.solver, "max_memory_gb": snakemake.params.max_memory_gb}
-    ),
+    solver=snakemake.params.solver,
+    max_memory_gb=snakemake.params.max_memory_gb,
     config=snakemake.config,
 )

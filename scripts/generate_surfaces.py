@@ -2,11 +2,10 @@
 
 from roughcontact.study.jobs import build_surface_cell
 from roughcontact.study.logs import route_logging
-from roughcontact.study.records import surface_cell_from_params
 
 route_logging(snakemake.log[0])
 build_surface_cell(
-    surface_cell_from_params(snakemake.params.cell),
+    snakemake.params.cell,
     snakemake.params.study_seed,
     snakemake.output[0],
     config=snakemake.config,

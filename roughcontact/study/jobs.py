@@ -11,9 +11,11 @@ An *aggregation* turns the contact results of a figure's (or sweep's) cells
 into SI curves for each cell's sigma and E (Eq 28-32) and averages them on a
 common nominal-pressure axis (:mod:`roughcontact.contact.aggregate`).
 
-Each job takes the typed records of :mod:`roughcontact.study.records` (a job
-script builds them from its rule's params with ``from_params``). The layouts
-of the files are described in :mod:`roughcontact.study.storage`.
+The surfaces, influence and contact jobs take their rule's params: the plain
+``params()`` of the records of :mod:`roughcontact.study.records`, which
+their first lines turn into those records (the job's edge); everything after
+works on the records. The aggregation takes the study cells' records. The
+layouts of the files are described in :mod:`roughcontact.study.storage`.
 """
 
 from __future__ import annotations
@@ -40,7 +42,6 @@ from roughcontact.study.config import BuildSettings, ContactSettings, in_unit
 from roughcontact.study.provenance import (
     atomic_path,
     canonical_json,
-    config_hash,
     peak_rss_bytes,
     provenance,
 )
@@ -52,6 +53,7 @@ from roughcontact.study.records import (
     InfluenceModel,
     MeasuredCell,
     StudyCell,
+    surface_cell_from_params,
 )
 from roughcontact.study.storage import (
     read_contact,
@@ -101,9 +103,11 @@ class _Surfaces(NamedTuple):
     heights_attrs: dict  # further attributes of the heights
 
 
-def build_surface_cell(cell: GeneratedCell | MeasuredCell, study_seed: int, path,
-                       config=None) -> dict:
-    """Make a cell's surfaces and write them, with statistics, to ``path``.
+def build_surface_cell(params: dict, study_seed: int, path, config=None) -> dict:
+    """Make a surface cell's surfaces and write them, with statistics, to ``path``.
+
+    ``params``: the cell's :meth:`~roughcontact.study.records.GeneratedCell.params`
+    (or a measured cell's).
 
     Heights are stored in units of sigma (dimensionless, zero mean per
     surface) with the realised moments (Eq 2-5) and 10 % ACF lags [m] per
@@ -116,6 +120,7 @@ def build_surface_cell(cell: GeneratedCell | MeasuredCell, study_seed: int, path
     one surface (seed -1) with its import and measured statistics. Returns
     the root attributes.
     """
+    cell = surface_cell_from_params(params)
     start = time.perf_counter()
     made = _SURFACE_JOBS[type(cell)](cell, study_seed)
     stats = height_stats(made.heights)
@@ -359,10 +364,14 @@ def _halfspace_choice(fe, model, geometry: Geometry, key: str) -> tuple[dict, bo
     return {"halfspace_errors": errors, "halfspace_tolerance": tolerance}, meets
 
 
-def build_influence(geometry: Geometry, path, build: BuildSettings, config=None) -> dict:
+def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
+                    config=None) -> dict:
     """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
 
-    The influence model is the geometry's ``operator``: dense (the
+    ``params``: the geometry's :meth:`~roughcontact.study.records.Geometry.params`;
+    ``solver`` and ``max_memory_gb`` the ``body`` section's
+    (:class:`~roughcontact.study.config.BuildSettings`). The influence model is
+    the geometry's ``operator``: dense (the
     finite-element matrix, the paper's), hybrid (matrix-free: Love's
     half-space plus a coarse finite-element correction,
     :mod:`roughcontact.elasticity.operators`), half-space (Love only) or auto (dense
@@ -371,11 +380,12 @@ def build_influence(geometry: Geometry, path, build: BuildSettings, config=None)
     model, is within the geometry's ``halfspace_tolerance`` for every
     quantity it names).
 
-    The peak memory is estimated first; a geometry that would not fit within
-    ``build.max_bytes`` raises :class:`~roughcontact.influence.ModelTooLarge` with
-    the estimate and the options before anything is built. Returns the root
-    attributes.
+    The peak memory is estimated first; a geometry that would not fit raises
+    :class:`~roughcontact.influence.ModelTooLarge` with the estimate and the
+    options before anything is built. Returns the root attributes.
     """
+    geometry = Geometry.from_params(params)
+    build = BuildSettings.from_section({"solver": solver, "max_memory_gb": max_memory_gb})
     key, block = geometry.key, geometry.block()
     operator = geometry.planned_model(build.max_bytes)
     model = geometry.finite_element_model(build.max_bytes)
@@ -387,7 +397,7 @@ def build_influence(geometry: Geometry, path, build: BuildSettings, config=None)
     log.info(
         "geometry %s: operator %s (requested %s); finite-element model %s grid %s, %d dofs, "
         "estimated peak %.2f GB (limit %.1f GB)", key, operator.value, geometry.operator.value,
-        model.mesh, model.grid, cost.dofs, cost.peak_bytes / 1e9, in_unit(build.max_bytes, GB),
+        model.mesh, model.grid, cost.dofs, cost.peak_bytes / GB, in_unit(build.max_bytes, GB),
     )
     start = time.perf_counter()
     fe = influence.unit_modulus_influence(model, solver=build.solver, max_bytes=build.max_bytes)
@@ -413,7 +423,7 @@ def build_influence(geometry: Geometry, path, build: BuildSettings, config=None)
         **criterion,
         "mesh_spec": canonical_json(dataclasses.asdict(model.mesh_spec)),
         "dofs": int(cost.dofs),
-        "estimated_peak_gb": cost.peak_bytes / 1e9,
+        "estimated_peak_gb": cost.peak_bytes / GB,
         "build_seconds": seconds,
         "peak_rss_gb": peak_rss_bytes() / GB,
         "solver": build.solver,
@@ -463,15 +473,18 @@ def _solver_stats(result, seconds: float) -> dict:
     }
 
 
-def solve_contact_job(job: ContactJob, surfaces_path, influence_path, out_path,
-                      settings: ContactSettings, config=None) -> dict:
+def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, settings: dict,
+                      config=None) -> dict:
     """Solve one contact job and write its non-dimensional sweep to ``out_path``.
 
-    ``job`` holds the surface cell, the geometry, the non-dimensional pressure
-    P L / (E sigma) the sweep must reach and a capped job's cap H L / (E
-    sigma); ``settings`` the solver's (:func:`roughcontact.study.studies.contact_settings`).
-    Returns the root attributes written.
+    ``params``: the job's :meth:`~roughcontact.study.records.ContactJob.params`,
+    whose record ``job`` holds the surface cell, the geometry, the
+    non-dimensional pressure P L / (E sigma) the sweep must reach and a capped
+    job's cap H L / (E sigma); ``settings`` the solver's
+    (:meth:`~roughcontact.study.config.ContactSettings.params`). Returns the
+    root attributes written.
     """
+    job, settings = ContactJob.from_params(params), ContactSettings.from_section(settings)
     start = time.perf_counter()
     surfaces = read_surfaces(surfaces_path)
     unit, geometry_attrs = read_influence(influence_path)
@@ -640,8 +653,7 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
         "interpolation": aggregate.INTERPOLATION,
         "cells": [cell.params() for cell in cells],
         "mean_plane_modulus": [part.summary for part in parts],
-        "config_hash": config_hash(config) if config is not None else "",
-        **{k: v for k, v in provenance(config).items() if k != "config_hash"},
+        **provenance(config),  # with the config hash
         # what the figures check before they read the tables
         "table_sha256": file_sha256(table_path),
         "moduli_sha256": file_sha256(moduli_path),

@@ -8,8 +8,9 @@ with the result, with the configuration's units (lengths in mm, sigma in um,
 pressures and moduli in MPa); ``from_params`` builds the record again in the
 job. The choices the configuration writes as strings are resolved here once:
 :class:`Generator` (``surfaces.method``), :class:`InfluenceModel`
-(``body.operator``), a type per spectrum kind (:data:`SPECTRA`) and per
-surface source (:class:`GeneratedCell`, :class:`MeasuredCell`).
+(``body.operator``), a type per spectrum kind
+(:data:`roughcontact.study.sources.SPECTRA`) and per surface source
+(:class:`GeneratedCell`, :class:`MeasuredCell`).
 
 A *surface cell* is one set of surface statistics and sampling (skewness,
 kurtosis, correlation lengths, grid, size, ACF or spectrum, periodicity,
@@ -82,7 +83,20 @@ class InfluenceModel(Enum):
 
 
 @dataclass(frozen=True)
-class GeneratedCell:
+class _SurfaceStatistics:
+    """What every surface cell has: skewness ``skew`` and kurtosis ``kurt`` (Pearson),
+    correlation lengths ``corr_length`` (bx, by) [m], contact ``grid`` (nx, ny) over the
+    plan ``size`` (Lx, Ly) [m]."""
+
+    skew: float
+    kurt: float
+    corr_length: tuple[float, float]
+    grid: tuple[int, int]
+    size: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class GeneratedCell(_SurfaceStatistics):
     """A surface cell of ``count`` seeded realisations of one set of statistics.
 
     ``skew``, ``kurt`` (Pearson); correlation lengths ``corr_length`` (bx, by)
@@ -92,11 +106,6 @@ class GeneratedCell:
     or padded filter; the ``method`` that generates them.
     """
 
-    skew: float
-    kurt: float
-    corr_length: tuple[float, float]
-    grid: tuple[int, int]
-    size: tuple[float, float]
     acf: str
     periodic: bool
     method: Generator
@@ -167,7 +176,7 @@ class GeneratedCell:
 
 
 @dataclass(frozen=True)
-class MeasuredCell:
+class MeasuredCell(_SurfaceStatistics):
     """A surface cell of one measured surface, imported as ``source`` describes.
 
     ``skew``, ``kurt``, ``corr_length`` [m] are the measured values (the labels
@@ -177,11 +186,6 @@ class MeasuredCell:
     deviation; ``file_sha256`` the file's content the workflow was planned with.
     """
 
-    skew: float
-    kurt: float
-    corr_length: tuple[float, float]
-    grid: tuple[int, int]
-    size: tuple[float, float]
     source: MeasurementImport
     file_sha256: str
     sigma: float
@@ -197,8 +201,8 @@ class MeasuredCell:
         dense influence matrix allows)."""
         stats = sources.measurement_statistics(source)
         return cls(skew=in_unit(stats["skew"], 1.0), kurt=in_unit(stats["kurt"], 1.0),
-                   corr_length=(in_unit(stats["corr_length_x"], MM) * MM,
-                                in_unit(stats["corr_length_y"], MM) * MM),
+                   corr_length=from_unit(in_units((stats["corr_length_x"],
+                                                   stats["corr_length_y"]))),
                    grid=grid_pair(stats["grid"]), size=from_unit(in_units(stats["size"])),
                    source=source,
                    file_sha256=sources.load_measurement(source).sha256,

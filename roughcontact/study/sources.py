@@ -155,14 +155,6 @@ def _psd_file(path: str, stamp) -> tuple[str, tuple]:
 # Spectra: ``surfaces.spectrum`` (or a study's ``spectrum``) in place of the ACF
 
 
-def _planned(path: str, sha: str, planned: str) -> None:
-    """Raise :class:`MeasurementError` unless a spectrum's file is the one planned."""
-    if sha != planned:
-        raise MeasurementError(
-            f"{path}: the spectrum's file changed after the workflow was planned (sha256 "
-            f"{sha[:12]}, planned {planned[:12]}); run again", path)
-
-
 @dataclass(frozen=True)
 class SelfAffineSpectrum:
     """An isotropic self-affine PSD: Hurst exponent, roll-off and cut-off wavelengths [m]."""
@@ -196,15 +188,31 @@ class SelfAffineSpectrum:
                 "cutoff_wavelength": self.cutoff}
 
 
+class _FileSpectrum:
+    """A spectrum read from a file: a table (q [1/m], C), checked against the file's
+    content the workflow was planned with (``file_sha256``)."""
+
+    acf: ClassVar[str] = "psd"
+
+    def spec_fields(self) -> dict:
+        """``acf="psd"`` with the table; raises :class:`MeasurementError` if the file's
+        content is no longer the one planned."""
+        sha, table = self._read()
+        if sha != self.file_sha256:
+            raise MeasurementError(
+                f"{self.file}: the spectrum's file changed after the workflow was planned "
+                f"(sha256 {sha[:12]}, planned {self.file_sha256[:12]}); run again", self.file)
+        return {"acf": self.acf, "psd": table}
+
+
 @dataclass(frozen=True)
-class TableSpectrum:
+class TableSpectrum(_FileSpectrum):
     """An isotropic PSD read from a CSV table (``q_per_mm,C``,
     :func:`roughcontact.surfaces.measured.read_psd_table`) and the file's SHA-256."""
 
     file: str
     file_sha256: str
     kind: ClassVar[str] = "table"
-    acf: ClassVar[str] = "psd"
 
     @classmethod
     def from_entry(cls, entry: dict) -> TableSpectrum:
@@ -223,23 +231,18 @@ class TableSpectrum:
         """``tab-<12 hex>``: the file's SHA-256 as ``sha256sum`` prints it."""
         return f"tab-{self.file_sha256[:12]}"
 
-    def spec_fields(self) -> dict:
-        """``acf="psd"`` with the table (q [1/m], C); raises :class:`MeasurementError`
-        if the file's content is no longer the one planned."""
-        sha, table = psd_file(self.file)
-        _planned(self.file, sha, self.file_sha256)
-        return {"acf": self.acf, "psd": table}
+    def _read(self) -> tuple[str, tuple]:
+        return psd_file(self.file)
 
 
 @dataclass(frozen=True)
-class MeasuredSpectrum:
+class MeasuredSpectrum(_FileSpectrum):
     """The isotropic PSD of a measured height map (its import, without decimation or
     resampling: the measurement's own grid) and the file's SHA-256."""
 
     source: MeasurementImport
     file_sha256: str
     kind: ClassVar[str] = "measured"
-    acf: ClassVar[str] = "psd"
 
     @property
     def file(self) -> str:
@@ -264,12 +267,8 @@ class MeasuredSpectrum:
         options = short_hash({"kind": self.kind, **self.source.options()}, 8)
         return f"mpsd-{self.file_sha256[:12]}-{options}"
 
-    def spec_fields(self) -> dict:
-        """``acf="psd"`` with the measurement's table; raises :class:`MeasurementError`
-        if the file's content is no longer the one planned."""
-        sha, table = measured_psd(self.source)
-        _planned(self.file, sha, self.file_sha256)
-        return {"acf": self.acf, "psd": table}
+    def _read(self) -> tuple[str, tuple]:
+        return measured_psd(self.source)
 
 
 Spectrum = SelfAffineSpectrum | TableSpectrum | MeasuredSpectrum

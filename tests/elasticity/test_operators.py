@@ -133,7 +133,7 @@ def _build(tmp_path, body, grid, monkeypatch, coarse_max=None):
         monkeypatch.setattr(operators, "COARSE_MAX", coarse_max)
     params = Geometry.from_params({**complete(body), "grid": [grid, grid], "size_mm": [4.8, 4.8]})
     path = tmp_path / f"{params.key}.h5"
-    attrs = pipeline.build_influence(params, path, BuildSettings("auto", 16e9))
+    attrs = pipeline.build_influence(params.params(), path, solver="auto", max_memory_gb=16.0)
     unit, stored = read_influence(path)
     return params, attrs, unit, stored
 

@@ -1,6 +1,5 @@
 """Study bookkeeping: the plan's records, their keys and params, and influence files."""
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -111,7 +110,7 @@ def test_a_cells_sweep_end_and_key_follow_its_nondimensional_pressure():
 
 def test_build_influence_writes_rows_summing_to_the_thickness(tmp_path):
     path = tmp_path / "g.h5"
-    build_influence(geometry(), path, BUILD)
+    build_influence(geometry().params(), path, solver="auto", max_memory_gb=16.0)
     unit, attrs = read_influence(path)
     assert unit.shape == (64, 64)
     assert np.allclose(unit.sum(axis=1), 2e-3, rtol=1e-10)
@@ -122,7 +121,7 @@ def test_build_influence_writes_rows_summing_to_the_thickness(tmp_path):
 def test_build_influence_refuses_a_model_too_large_before_building(tmp_path):
     path = tmp_path / "g.h5"
     with pytest.raises(ModelTooLarge, match=r"GB.*Options"):
-        build_influence(geometry(), path, dataclasses.replace(BUILD, max_bytes=1e6))
+        build_influence(geometry().params(), path, solver="auto", max_memory_gb=0.001)
     assert not path.exists()
 
 

@@ -133,7 +133,7 @@ def test_the_surfaces_job_writes_the_table_hash_and_refuses_a_changed_file(tmp_p
     path = write_table(tmp_path / "psd.csv")
     (cell,) = study_plan(config({"kind": "table", "file": str(path)})).surfaces.values()
     out = tmp_path / "cell.h5"
-    build_surface_cell(cell, 1, out)
+    build_surface_cell(cell.params(), 1, out)
     with h5py.File(out, "r") as f:
         attrs = dict(f.attrs)
         heights = f["heights"][()]
@@ -149,7 +149,7 @@ def test_the_surfaces_job_writes_the_table_hash_and_refuses_a_changed_file(tmp_p
     assert above.any() and power[:, above].sum() < 1e-24 * power.sum()
     write_table(path, rolloff_mm=1.0)
     with pytest.raises(MeasurementError, match="changed after the workflow was planned"):
-        build_surface_cell(cell, 1, tmp_path / "again.h5")
+        build_surface_cell(cell.params(), 1, tmp_path / "again.h5")
 
 
 def test_a_measured_spectrum_is_keyed_by_the_file_and_its_options():

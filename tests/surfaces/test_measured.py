@@ -378,9 +378,9 @@ def test_check_studies_reports_unusable_measured_studies(change, message):
 
 def test_measured_cell_file_has_the_generated_layout(tmp_path):
     config = measured_config(EXAMPLE)
-    params = contact_cells(config, "plateau_honed")[0].surface
+    surface = contact_cells(config, "plateau_honed")[0].surface
     path = tmp_path / "cell.h5"
-    build_surface_cell(params, 7, path, config=config)
+    build_surface_cell(surface.params(), 7, path, config=config)
     cell = read_surfaces(path)
     m = measured.load_measurement(EXAMPLE, "xyz", height_unit="um", fill_holes=0.01)
     s = measured.statistics(m)
@@ -392,7 +392,7 @@ def test_measured_cell_file_has_the_generated_layout(tmp_path):
     assert attrs["measured_sigma_m"] == pytest.approx(s["sigma"])
     assert attrs["filled_points"] == 10
     assert json.loads(attrs["import_options"])["fill_holes"] == 0.01
-    assert attrs["johnson_family"] == "SB" and attrs["cell"] == params.key
+    assert attrs["johnson_family"] == "SB" and attrs["cell"] == surface.key
 
 
 # ------------------------------------------------------------------ the workflow
