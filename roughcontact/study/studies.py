@@ -18,7 +18,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 
-from roughcontact.study.config import ContactSettings, as_pair, from_unit
+from roughcontact.study.config import ContactSettings, as_pair, from_unit, grid_pair
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.records import (
     Accuracy,
@@ -118,7 +118,7 @@ def generated_cell(surfaces: dict, spectrum, *, skew, kurt, corr_length, count, 
     periodicity, method, grid and plan size (unless given, SI) and these statistics."""
     return GeneratedCell(
         skew=float(skew), kurt=float(kurt), corr_length=corr_length,
-        grid=tuple(int(v) for v in as_pair(surfaces["grid"])) if grid is None else grid,
+        grid=grid_pair(surfaces["grid"]) if grid is None else grid,
         size=from_unit(as_pair(surfaces["size_mm"])) if size is None else size,
         acf=str(surfaces["acf"]) if spectrum is None else spectrum.acf,
         periodic=bool(surfaces["periodic"]), method=Generator(surfaces["method"]),

@@ -169,3 +169,21 @@ def test_a_measured_map_too_large_for_the_dense_model_stops_when_the_plan_is_mad
     (geom,) = plan.geometries.values()
     assert geom.grid == (1024, 1024)
     assert geom.planned_model(16e9) is InfluenceModel.HYBRID
+
+
+def test_the_schema_fills_the_axes_of_a_generated_study_only():
+    config = validated({"figures": {"fig07": {"sigma_um": 1.0, "pressure_MPa": [0.1, 1.0]},
+                                    "fig12": {"from": "fig07"}},
+                        "sweeps": {"m": {"surface": {"file": "x.xyz"},
+                                         "pressure_MPa": [1.0, 2.0]}}})
+    # the paper's b = 1 mm and Gaussian moments; nothing for a study from another
+    # or on a measured surface (whose statistics are the measurement's)
+    assert config["figures"]["fig07"]["b_mm"] == 1.0
+    assert config["figures"]["fig07"]["moments"] == [[0.0, 3.0]]
+    assert config["figures"]["fig12"] == {"from": "fig07"}
+    measured = config["sweeps"]["m"]
+    assert "b_mm" not in measured and "moments" not in measured
+    assert measured["compare_synthetic"] is False
+    (cell,) = contact_cells(config, "fig12")
+    assert (cell.surface.skew, cell.surface.kurt, cell.surface.corr_length) == \
+        (0.0, 3.0, (1e-3, 1e-3))
