@@ -1,6 +1,6 @@
 """Snakemake entry point of rule `aggregate`: a figure's or sweep's tables."""
 
-from roughcontact.study.jobs import aggregate_study
+from roughcontact.study.aggregation import aggregate_study
 from roughcontact.study.logs import route_logging
 from roughcontact.study.records import StudyCell
 

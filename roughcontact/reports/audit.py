@@ -22,7 +22,7 @@ from roughcontact import __version__
 from roughcontact.contact.aggregate import pressure_axis
 from roughcontact.contact.cell import sweep_cell
 from roughcontact.errors import StoredFileError
-from roughcontact.study.jobs import validity_rows, validity_summary
+from roughcontact.study.aggregation import validity_rows, validity_summary
 from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.study.records import Geometry, StudyCell
 from roughcontact.study.storage import (
