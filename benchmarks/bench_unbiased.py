@@ -45,7 +45,7 @@ from scipy import stats  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact.study.cells import spec_from_params, study_plan  # noqa: E402
+from roughcontact.study.cells import study_plan  # noqa: E402
 from roughcontact.study.config import apply_schema  # noqa: E402
 from roughcontact.surfaces import synthetic  # noqa: E402
 
@@ -64,10 +64,11 @@ def windows() -> dict[str, tuple[str, synthetic.SurfaceSpec]]:
                                      skew=skew, kurt=kurt)
         out[f"{grid}x{grid} over {size:g} mm, b 1 mm, ({skew:g}, {kurt:g})"] = ("issue", spec)
     config = apply_schema(yaml.safe_load((ROOT / "config" / "config.yaml").read_text()))
-    for params in study_plan(config).cells.values():
+    for cell in study_plan(config).surfaces.values():
+        params = cell.params()
         if params["method"] != "filter":
             continue
-        spec = spec_from_params(params)
+        spec = cell.spec()
         name = (f"{spec.grid[0]}x{spec.grid[1]} over {params['size_mm'][0]:g} mm, "
                 f"b {params['b_mm'][0]:g} mm, ({spec.skew:g}, {spec.kurt:g})")
         out.setdefault(name, ("config", spec))

@@ -16,16 +16,14 @@ import yaml
 from scipy import stats as scipy_stats
 
 from roughcontact.errors import MeasurementError
-from roughcontact.study.cells import (
-    cell_key,
-    check_studies,
-    contact_cells,
-    contact_jobs,
-    measured_cell_params,
-)
+from roughcontact.study.cells import contact_jobs
+from roughcontact.study.checks import check_studies
 from roughcontact.study.config import validated
 from roughcontact.study.jobs import build_surface_cell
+from roughcontact.study.records import MeasuredCell
+from roughcontact.study.sources import MeasurementImport
 from roughcontact.study.storage import read_surfaces
+from roughcontact.study.studies import contact_cells
 from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces import synthetic as surface
 
@@ -323,18 +321,23 @@ def surface_entry(**surface) -> dict:
     return config["sweeps"]["s"]["surface"]
 
 
+def cell_key(entry: dict) -> str:
+    """The key of the surface cell of a measured ``surface:`` entry."""
+    return MeasuredCell.from_source(MeasurementImport.from_entry(entry)).key
+
+
 def test_measured_key_follows_content_and_options_not_the_name(tmp_path):
     copy = tmp_path / "elsewhere" / "example_plateau_honed.xyz"
     copy.parent.mkdir()
     copy.write_bytes(EXAMPLE.read_bytes())
     entry = surface_entry(file=str(EXAMPLE), format="xyz", height_unit="um", fill_holes=0.01)
-    key = cell_key(measured_cell_params(entry))
+    key = cell_key(entry)
     assert key.startswith("measured-example-plateau-honed_") and key.endswith("_n1")
-    assert cell_key(measured_cell_params({**entry, "file": str(copy)})) == key
-    assert cell_key(measured_cell_params({**entry, "fill_holes": 0.02})) != key
-    assert cell_key(measured_cell_params({**entry, "height_unit": "nm"})) != key
+    assert cell_key({**entry, "file": str(copy)}) == key
+    assert cell_key({**entry, "fill_holes": 0.02}) != key
+    assert cell_key({**entry, "height_unit": "nm"}) != key
     copy.write_text(EXAMPLE.read_text().replace("SYNTHETIC", "Synthetic", 1))
-    assert cell_key(measured_cell_params({**entry, "file": str(copy)})) != key
+    assert cell_key({**entry, "file": str(copy)}) != key
 
 
 def test_measured_study_cells_follow_the_measurement():
@@ -342,19 +345,19 @@ def test_measured_study_cells_follow_the_measurement():
     assert check_studies(config, ["plateau_honed"]) == []
     cells = contact_cells(config, "plateau_honed")
     assert len(cells) == 2
-    meas, twin = (c["surface"] for c in cells)
-    assert meas["method"] == "measured" and meas["count"] == 1
-    assert twin["method"] == config["surfaces"]["method"] and twin["count"] == 5
-    for key in ("skew", "kurt", "b_mm", "grid", "size_mm"):
-        assert twin[key] == meas[key], key
+    meas, twin = (c.surface for c in cells)
+    assert meas.method.value == "measured" and meas.count == 1
+    assert twin.method.value == config["surfaces"]["method"] and twin.count == 5
+    for key in ("skew", "kurt", "corr_length", "grid", "size"):
+        assert getattr(twin, key) == getattr(meas, key), key
     for cell in cells:
-        assert cell["geometry"]["grid"] == [64, 64]
-        assert cell["geometry"]["size_mm"] == [6.4, 6.4]
-        assert cell["sigma_um"] == pytest.approx(meas["measured"]["sigma_um"])
-    assert len(contact_jobs(config, ["plateau_honed"])) == 2
+        assert cell.geometry.grid == (64, 64)
+        assert cell.geometry.params()["size_mm"] == [6.4, 6.4]
+        assert cell.sigma == pytest.approx(meas.sigma)
+    assert len(contact_jobs(cells)) == 2
     # an explicit sigma rescales both; no twin without compare_synthetic
     config = measured_config(EXAMPLE, sigma_um=[1.0, 2.0], compare_synthetic=False)
-    assert [c["sigma_um"] for c in contact_cells(config, "plateau_honed")] == [1.0, 2.0]
+    assert [c.params()["sigma_um"] for c in contact_cells(config, "plateau_honed")] == [1.0, 2.0]
 
 
 @pytest.mark.parametrize(
@@ -375,9 +378,9 @@ def test_check_studies_reports_unusable_measured_studies(change, message):
 
 def test_measured_cell_file_has_the_generated_layout(tmp_path):
     config = measured_config(EXAMPLE)
-    params = contact_cells(config, "plateau_honed")[0]["surface"]
+    surface = contact_cells(config, "plateau_honed")[0].surface
     path = tmp_path / "cell.h5"
-    build_surface_cell(params, 7, path, config=config)
+    build_surface_cell(surface.params(), 7, path, config=config)
     cell = read_surfaces(path)
     m = measured.load_measurement(EXAMPLE, "xyz", height_unit="um", fill_holes=0.01)
     s = measured.statistics(m)
@@ -389,7 +392,7 @@ def test_measured_cell_file_has_the_generated_layout(tmp_path):
     assert attrs["measured_sigma_m"] == pytest.approx(s["sigma"])
     assert attrs["filled_points"] == 10
     assert json.loads(attrs["import_options"])["fill_holes"] == 0.01
-    assert attrs["johnson_family"] == "SB" and attrs["cell"] == cell_key(params)
+    assert attrs["johnson_family"] == "SB" and attrs["cell"] == surface.key
 
 
 # ------------------------------------------------------------------ the workflow
@@ -433,7 +436,7 @@ def test_measured_surface_runs_end_to_end_beside_its_twin(tmp_path):
     m = measured.load_measurement(data, "xyz", height_unit="um", fill_holes=0.01)
     s = measured.statistics(m)
     cells = contact_cells(config, "plateau_honed")
-    meas_key, twin_key = (c["surface_key"] for c in cells)
+    meas_key, twin_key = (c.surface.key for c in cells)
     with h5py.File(tmp_path / "results" / "surfaces" / f"{meas_key}.h5", "r") as f:
         attrs = dict(f.attrs)
         heights = f["heights"][()]
