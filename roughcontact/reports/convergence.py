@@ -64,7 +64,8 @@ from roughcontact.elasticity.influence import GB, BlockGeometry, MeshSpec
 from roughcontact.reports.build_worker import HALFSPACE, build, centre_entries, run_isolated
 from roughcontact.reports.plotting import process_running, save_figure
 from roughcontact.study.storage import read_influence
-from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.synthetic import derive_seeds, generate_many
 
 __all__ = [
     "COLUMNS",

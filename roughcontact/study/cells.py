@@ -30,13 +30,9 @@ from roughcontact.hashes import file_sha256
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.provenance import canonical_json
 from roughcontact.surfaces import johnson, measured
-from roughcontact.surfaces.synthetic import (
-    SurfaceSpec,
-    calibrate_filter,
-    filter_kernel,
-    input_moments,
-    kurt_min,
-)
+from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.spectra import filter_kernel
 from roughcontact.units import GB, MM, MPA, UM
 
 log = logging.getLogger(__name__)

@@ -51,7 +51,8 @@ from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influe
 from roughcontact.reports.speed.machine import describe_machine
 from roughcontact.study.jobs import BATCH_SIZE
 from roughcontact.study.presets import FALLBACK_MESH_ERRORS
-from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.synthetic import derive_seeds, generate_many
 
 __all__ = [
     "DEFAULT_CELLS",
