@@ -48,7 +48,7 @@ MESH_DIAGONAL_ERROR = {"paper": -0.82, "graded": -0.51, "refined": -0.024, "conv
 OPERATOR_DIAGONAL_ERROR = {"hybrid": 0.009, "halfspace": float("nan")}
 #: Relative tolerance on the moments of the "exact" generator's cells: every
 #: realisation's sample Sk and Ku equal the targets to rounding (about 1e-13,
-#: ``synthetic.target_heights``); surfaces stored before that correction (whose
+#: ``exact.target_heights``); surfaces stored before that correction (whose
 #: midpoint quantiles had Ku 3.8 % low at (-1.5, 7)) are flagged.
 EXACT_MOMENT_TOL = 1e-6
 

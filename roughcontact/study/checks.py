@@ -30,13 +30,9 @@ from roughcontact.study.studies import (
     study_surfaces,
 )
 from roughcontact.surfaces import johnson
-from roughcontact.surfaces.synthetic import (
-    SurfaceSpec,
-    calibrate_filter,
-    filter_kernel,
-    input_moments,
-    kurt_min,
-)
+from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.spectra import filter_kernel
 from roughcontact.units import GB, MM, MPA, UM
 
 

@@ -54,17 +54,11 @@ from roughcontact.study.storage import (
     write_surfaces,
 )
 from roughcontact.surfaces import johnson, measured
-from roughcontact.surfaces.synthetic import (
-    calibrate_filter,
-    correlation_length,
-    derive_seeds,
-    filter_kernel,
-    generate_exact,
-    generate_many,
-    height_stats,
-    input_moments,
-    moment_transfer,
-)
+from roughcontact.surfaces.calibration import calibrate_filter, input_moments, moment_transfer
+from roughcontact.surfaces.exact import generate_exact
+from roughcontact.surfaces.spectra import filter_kernel
+from roughcontact.surfaces.statistics import correlation_length, height_stats
+from roughcontact.surfaces.synthetic import derive_seeds, generate_many
 from roughcontact.units import GB, MM, UM
 
 log = logging.getLogger(__name__)

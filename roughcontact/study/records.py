@@ -48,7 +48,7 @@ from roughcontact.study.config import (
 )
 from roughcontact.study.provenance import short_hash
 from roughcontact.study.sources import MeasurementImport, Spectrum, spectrum_from_params
-from roughcontact.surfaces.synthetic import SurfaceSpec
+from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.units import MM, MPA, UM
 
 

@@ -19,7 +19,7 @@ from roughcontact.study.config import ConfigError, validated
 from roughcontact.study.jobs import build_surface_cell
 from roughcontact.study.sources import spectrum_from_entry
 from roughcontact.study.studies import contact_cells
-from roughcontact.surfaces import synthetic
+from roughcontact.surfaces import spectra
 
 REPO = Path(__file__).resolve().parents[2]
 MEASURED = REPO / "data" / "example_plateau_honed.xyz"
@@ -35,7 +35,7 @@ def _quiet(caplog):
 def write_table(path: Path, rolloff_mm: float = 1.2) -> Path:
     """A self-affine PSD (H 0.8, cut-off 0.8 mm) as a q_per_mm,C table."""
     q = np.geomspace(0.5, 2 * math.pi / CUTOFF_MM, 30)
-    c = synthetic.self_affine_psd(q / 1e-3, 0.8, rolloff_mm * 1e-3, CUTOFF_MM * 1e-3)
+    c = spectra.self_affine_psd(q / 1e-3, 0.8, rolloff_mm * 1e-3, CUTOFF_MM * 1e-3)
     rows = "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(q, c, strict=True))
     path.write_text("q_per_mm,C\n" + rows)
     return path

@@ -14,6 +14,7 @@ import pytest
 from scipy import stats
 
 from roughcontact.surfaces import synthetic
+from roughcontact.surfaces.spec import SurfaceSpec
 
 MM = 1e-3
 SIZE = 9 * MM
@@ -31,7 +32,7 @@ def self_affine(**kw):
     base = dict(grid=GRID, size=SIZE, sigma=1.0, acf="self-affine", hurst=0.8,
                 rolloff_wavelength=ROLLOFF, cutoff_wavelength=CUTOFF)
     base.update(kw)
-    return synthetic.SurfaceSpec(**base)
+    return SurfaceSpec(**base)
 
 
 @pytest.fixture(autouse=True)
@@ -88,8 +89,8 @@ def test_exact_moments_on_target(skew, kurt, grid, size):
 def test_as_dict_round_trip_and_corr_length_default():
     spec = self_affine(skew=1.0, kurt=5.0)
     assert spec.corr_length == (ROLLOFF, ROLLOFF)
-    assert synthetic.SurfaceSpec(**spec.as_dict()) == spec
-    assert synthetic.SurfaceSpec(**spec.as_dict()).as_dict() == spec.as_dict()
+    assert SurfaceSpec(**spec.as_dict()) == spec
+    assert SurfaceSpec(**spec.as_dict()).as_dict() == spec.as_dict()
 
 
 @pytest.mark.parametrize("kw, name", [
@@ -117,9 +118,9 @@ def test_cutoff_at_two_spacings_is_accepted():
 
 def test_self_affine_fields_refused_for_acf_kinds():
     with pytest.raises(ValueError, match="hurst"):
-        synthetic.SurfaceSpec(grid=32, size=SIZE, corr_length=MM, hurst=0.5)
+        SurfaceSpec(grid=32, size=SIZE, corr_length=MM, hurst=0.5)
     with pytest.raises(ValueError, match="corr_length"):
-        synthetic.SurfaceSpec(grid=32, size=SIZE)
+        SurfaceSpec(grid=32, size=SIZE)
 
 
 def test_self_affine_is_periodic_only():
