@@ -167,8 +167,9 @@ def spectral_moments(z, size, *, derivative: str = "fourier",
         |Z|^2 / N^2``, ``q = 2 pi k / L``. The Nyquist mode of an even axis,
         ``a (-1)^i``, is the real interpolant ``a cos(pi x / dx)``: its first
         derivative along that axis is zero at every grid point, its second
-        is ``-(pi / dx)^2`` times it, so odd derivatives drop it (as
-        ``scipy.fft`` based differentiation does) and even ones keep it.
+        is ``-(pi / dx)^2`` times it, so odd derivatives drop it and even
+        ones keep it (S. G. Johnson 2011, "Notes on FFT-based
+        differentiation", MIT; ``scipy.fftpack.diff`` drops it from both).
         SurfaceTopography's ``moment_power_spectrum`` keeps it in both; the
         two agree wherever the spectrum has no power at the Nyquist
         wavenumber (a resolved cut-off).
