@@ -16,9 +16,11 @@ of the autocorrelation function (Eq 1,
 estimate; NaN, with a warning, where it does not fall to 10 % within half the
 window) and the Johnson law with the same moments
 (:func:`roughcontact.surfaces.johnson.fit`); with ``spectral=True`` also the
-rms slope, the rms curvature and the isotropic power spectral density,
-computed by SurfaceTopography. Arrays are ``(ny, nx)``, row-major over y then
-x, as everywhere in the package.
+rms slope and the rms curvature
+(:func:`roughcontact.surfaces.statistics.spectral_moments`, finite
+differences) and the isotropic power spectral density (SurfaceTopography).
+Arrays are ``(ny, nx)``, row-major over y then x, as everywhere in the
+package.
 
 An isotropic PSD can also stand in for the autocorrelation of generated
 surfaces (``SurfaceSpec(acf="psd")``): :func:`psd_table_from_measurement`
@@ -41,7 +43,7 @@ from roughcontact.surfaces import johnson
 from roughcontact.surfaces.preparation import prepare
 from roughcontact.surfaces.readers import HEIGHT_UNITS, read_heights, resolve_format, unit_scale
 from roughcontact.surfaces.spec import check_psd_table
-from roughcontact.surfaces.statistics import correlation_length, height_stats
+from roughcontact.surfaces.statistics import correlation_length, height_stats, spectral_moments
 from roughcontact.units import MM
 
 log = logging.getLogger(__name__)
@@ -211,10 +213,11 @@ def statistics(measurement: Measurement, spectral: bool = False) -> dict:
     of the law fitted to (Sk, Ku) for heights in units of sigma (zero mean,
     unit standard deviation).
 
-    With ``spectral``, by SurfaceTopography on the prepared heights (not
-    periodic): ``rms_slope`` [1] (rms gradient), ``rms_curvature`` [1/m]
-    (from the area's Laplacian) and the isotropic power spectral density
-    ``psd_q`` [1/m] (wavevectors) and ``psd_C`` [m^4].
+    With ``spectral``, on the prepared heights (not periodic,
+    :func:`spectral_statistics`): ``rms_slope`` [1] (the rms gradient
+    h'_rms), ``rms_curvature`` [1/m] (h''_rms, half the rms Laplacian) and
+    the isotropic power spectral density ``psd_q`` [1/m] (wavevectors) and
+    ``psd_C`` [m^4].
     """
     z = measurement.heights
     moments = height_stats(z)
@@ -251,18 +254,28 @@ def statistics(measurement: Measurement, spectral: bool = False) -> dict:
 
 
 def spectral_statistics(measurement: Measurement) -> dict:
-    """``rms_slope``, ``rms_curvature``, ``psd_q`` and ``psd_C`` of :func:`statistics`."""
+    """``rms_slope``, ``rms_curvature``, ``psd_q`` and ``psd_C`` of :func:`statistics`.
+
+    The rms gradient and the rms curvature (half the rms Laplacian) are
+    :func:`~roughcontact.surfaces.statistics.spectral_moments` of the
+    non-periodic heights by finite differences (SurfaceTopography's
+    ``rms_gradient`` and ``rms_curvature_from_area``: the same stencils on
+    the same points); the PSD is SurfaceTopography's
+    ``power_spectrum_from_area``.
+    """
     # SurfaceTopography takes 1-3 s to import: only the jobs that store these pay it
     from SurfaceTopography import Topography
 
+    slopes = spectral_moments(measurement.heights, measurement.size, derivative="difference",
+                              periodic=False)
     topography = Topography(np.ascontiguousarray(measurement.heights.T), measurement.size,
                             periodic=False, unit="m")
     q, C = (np.ma.filled(np.ma.asarray(v, dtype=float), np.nan)
             for v in topography.power_spectrum_from_area())
     keep = np.isfinite(q) & np.isfinite(C) & (q > 0)
     return {
-        "rms_slope": float(topography.rms_gradient()),
-        "rms_curvature": float(topography.rms_curvature_from_area()),
+        "rms_slope": slopes.rms_gradient,
+        "rms_curvature": slopes.rms_curvature,
         "psd_q": [float(v) for v in q[keep]],
         "psd_C": [float(v) for v in C[keep]],
     }

@@ -5,8 +5,8 @@ function (ACF, Eq 1) by filtering white noise ``x`` with a zero-phase filter
 ``h`` whose power spectrum is the Fourier transform of the ACF (Eq 9-11):
 
 - the target spectrum: the ACF of Eq 1 (:func:`autocorrelation`), or, beyond
-  the paper, an isotropic self-affine PSD (:func:`self_affine_psd`) or a
-  tabulated one (:func:`tabulated_psd`);
+  the paper, an isotropic self-affine PSD (:func:`self_affine_psd`, its
+  moments :func:`self_affine_moments`) or a tabulated one (:func:`tabulated_psd`);
 - the filter on the surface's grid (:func:`filter_kernel`, :class:`FilterKernel`,
   :func:`kernel_shape`) and its application to white noise
   (:func:`white_noise`, :func:`noise_shape`, :func:`apply_filter`);
@@ -27,6 +27,7 @@ import numpy as np
 from scipy import signal
 
 from roughcontact.surfaces.spec import Q_RTOL, SurfaceSpec, mm_text
+from roughcontact.surfaces.statistics import SpectralMoments
 
 log = logging.getLogger(__name__)
 
@@ -82,6 +83,37 @@ def self_affine_psd(q, hurst: float, rolloff_wavelength: float, cutoff_wavelengt
     q_s = 2.0 * math.pi / cutoff_wavelength
     band = (np.maximum(q, q_r) / q_r) ** (-2.0 * (1.0 + hurst))
     return np.where(q > q_s * (1.0 + 1e-12), 0.0, band)
+
+
+def self_affine_moments(hurst: float, rolloff_wavelength: float, cutoff_wavelength: float,
+                        sigma: float = 1.0) -> SpectralMoments:
+    """The spectral moments of the continuous :func:`self_affine_psd` with rms height ``sigma``.
+
+    The areal moments ``M_n = (1 / 2 pi) int_0^q_s q^(n + 1) C(q) dq`` of the
+    isotropic PSD (``M_0 = sigma^2``, ``M_2 = <|grad h|^2>``,
+    ``M_4 = <(lap h)^2>``) in closed form, with ``u = q_s / q_r``:
+    ``M_n ~ q_r^(n + 2) [1 / (n + 2) + (u^(n - 2H) - 1) / (n - 2H)]`` (the
+    plateau, then the power law; ``n - 2H != 0`` for H in (0, 1)), scaled so
+    that ``M_0 = sigma^2`` [m^2]. Returned as
+    :class:`~roughcontact.surfaces.statistics.SpectralMoments` of an isotropic
+    surface (``rms_slope_x = rms_slope_y``), for an infinite surface: a
+    periodic grid samples the PSD at ``q = 2 pi k / L`` and its surfaces'
+    moments approach these as ``L / rolloff_wavelength`` grows.
+    """
+    if not 0.0 < hurst < 1.0 or not rolloff_wavelength > cutoff_wavelength > 0.0:
+        raise ValueError(f"need 0 < hurst < 1 and rolloff_wavelength > cutoff_wavelength > 0; "
+                         f"got {hurst!r}, {rolloff_wavelength!r}, {cutoff_wavelength!r}")
+    q_r = 2.0 * math.pi / rolloff_wavelength
+    ratio = rolloff_wavelength / cutoff_wavelength
+
+    def moment(n: int) -> float:
+        return q_r ** (n + 2) * (1.0 / (n + 2) + (ratio ** (n - 2.0 * hurst) - 1.0)
+                                 / (n - 2.0 * hurst))
+
+    variance = float(sigma) ** 2
+    gradient = variance * moment(2) / moment(0)
+    return SpectralMoments.from_mean_squares(variance, gradient / 2.0, gradient / 2.0,
+                                             variance * moment(4) / moment(0))
 
 
 def _grid_wavenumber(spec: SurfaceSpec) -> np.ndarray:

@@ -103,7 +103,10 @@ def generate(spec: SurfaceSpec, seed: int, method: str = "filter", *,
         moments of the infinite process, and a finite window's sample kurtosis
         is biased (-1.4 % at (0, 4.5) on 60 x 60 over 9 mm with b = 1 mm, -3 %
         on 30 x 30 over 4.5 mm). "exact": iterative amplitude adjustment, see
-        :func:`~roughcontact.surfaces.exact.generate_exact`.
+        :func:`~roughcontact.surfaces.exact.generate_exact`. For a Gaussian
+        process (skew 0, kurt 3) use "paper": "filter" and "exact" are not
+        Gaussian, least of all for a self-affine spectrum without roll-off
+        (see :class:`~roughcontact.surfaces.spec.SurfaceSpec`).
     max_bytes : float
         Memory budget [bytes], default
         :data:`~roughcontact.surfaces.memory.MAX_GENERATION_BYTES` (8 GB).

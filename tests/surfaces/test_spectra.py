@@ -126,3 +126,45 @@ def test_self_affine_fields_refused_for_acf_kinds():
 def test_self_affine_is_periodic_only():
     with pytest.raises(ValueError, match="periodic"):
         self_affine(periodic=False)
+
+
+# --------------------------------------------------------------------------- Gaussian or not
+
+
+def test_paper_method_is_a_linear_filter_of_gaussian_noise():
+    """skew 0, kurt 3, method="paper": the seed's Gaussian noise, filtered by sqrt(PSD).
+
+    The PSD is written out here; a linear map of Gaussian noise is a Gaussian process.
+    """
+    sigma, seed, hurst = 2e-6, 5, 0.8
+    spec = self_affine(grid=(64, 48), size=(SIZE, 0.75 * SIZE), sigma=sigma, hurst=hurst,
+                       rolloff_wavelength=SIZE, cutoff_wavelength=8 * SIZE / 64)
+    z = synthetic.generate(spec, seed, method="paper")
+    ny, nx = spec.shape
+    qx = 2 * np.pi * np.fft.fftfreq(nx, spec.spacing[0])
+    qy = 2 * np.pi * np.fft.fftfreq(ny, spec.spacing[1])
+    q = np.hypot(qx[None, :], qy[:, None])
+    q_r, q_s = 2 * np.pi / spec.rolloff_wavelength, 2 * np.pi / spec.cutoff_wavelength
+    psd = np.where(q <= q_s * (1 + 1e-12), (np.maximum(q, q_r) / q_r) ** (-2 * (1 + hurst)), 0.0)
+    noise = np.random.default_rng(seed).standard_normal((ny, nx))
+    # unit variance: sum over bins of the transfer squared / N = 1
+    expected = np.fft.ifft2(np.fft.fft2(noise) * np.sqrt(psd / psd.mean())).real
+    expected = sigma * (expected - expected.mean())
+    assert np.allclose(z, expected, rtol=0, atol=1e-12 * sigma)
+
+
+def test_default_calibration_makes_a_self_affine_surface_without_rolloff_non_gaussian():
+    # 32 x 32, cut-off at 4 spacings: the window holds one roll-off wavelength, and the
+    # Gaussian process's sample kurtosis averages well below 3 (2.6); the default method
+    # calibrates that to 3 with a process of kurtosis ~4 (heavy-tailed SU white noise);
+    # with a roll-off at L / 4 the process stays close to Gaussian
+    from roughcontact.surfaces.calibration import calibrate_filter
+
+    base = dict(grid=32, size=SIZE, cutoff_wavelength=SIZE / 8)
+    no_rolloff = calibrate_filter(self_affine(rolloff_wavelength=SIZE, **base), rse=1e-2)
+    assert no_rolloff.paper_kurt < 2.8
+    assert no_rolloff.kurt > 3.5
+    assert no_rolloff.expected_kurt == pytest.approx(3.0, abs=0.01)
+    rolloff = calibrate_filter(self_affine(rolloff_wavelength=SIZE / 4, **base), rse=1e-2)
+    assert rolloff.kurt == pytest.approx(3.0, abs=0.1)
+    assert rolloff.paper_kurt > 2.9
