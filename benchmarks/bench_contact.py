@@ -160,7 +160,8 @@ def study_gaps(count: int, sigma: float) -> np.ndarray:
     ``generate_many`` with seeds 0..count-1: sigma [m], Sk 0, Ku 3, exponential
     ACF with b = 1 mm, 60 x 60 over 9 mm x 9 mm.
     """
-    from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many
+    from roughcontact.surfaces.spec import SurfaceSpec
+    from roughcontact.surfaces.synthetic import generate_many
 
     spec = SurfaceSpec(grid=(60, 60), size=(SIZE, SIZE), sigma=sigma, skew=0, kurt=3,
                        corr_length=(CORRELATION, CORRELATION))

@@ -4,7 +4,7 @@ For each target (Sk, Ku) of a grid spanning the Johnson plane -- normal
 (0, 3), skewed (2, 10) and (-1.5, 7), heavy-tailed (0, 20) and one just above
 the absolute limit Ku = Sk^2 + 1, (1, 2.05) -- generates ``--seeds`` periodic
 60 x 60 surfaces of the paper's spec (9 mm square, exponential ACF,
-b = 1 mm, sigma = 1) with :func:`roughcontact.surfaces.synthetic.generate_exact`
+b = 1 mm, sigma = 1) with :func:`roughcontact.surfaces.exact.generate_exact`
 and reports:
 
 - ``ms_per_surface``: wall time per surface, the minimum over 3 repeats of
@@ -65,30 +65,31 @@ from scipy import stats  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact.surfaces import synthetic  # noqa: E402
+from roughcontact.surfaces import exact, statistics  # noqa: E402
+from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402
 
 TARGETS = ((0.0, 3.0), (2.0, 10.0), (-1.5, 7.0), (0.0, 20.0), (1.0, 2.05))
 MM = 1e-3
 
 
-def paper_spec(skew: float, kurt: float) -> synthetic.SurfaceSpec:
-    return synthetic.SurfaceSpec(grid=60, size=9 * MM, corr_length=1 * MM, sigma=1.0,
+def paper_spec(skew: float, kurt: float) -> SurfaceSpec:
+    return SurfaceSpec(grid=60, size=9 * MM, corr_length=1 * MM, sigma=1.0,
                                  skew=skew, kurt=kurt)
 
 
 def measure(skew: float, kurt: float, seeds, repeats: int = 3) -> dict:
     spec = paper_spec(skew, kurt)
-    synthetic.generate_exact(spec, 0)  # warm-up (imports, FFT plans)
+    exact.generate_exact(spec, 0)  # warm-up (imports, FFT plans)
     walls = []
     for _ in range(repeats):
         start = time.perf_counter()
-        results = [synthetic.generate_exact(spec, s) for s in seeds]
+        results = [exact.generate_exact(spec, s) for s in seeds]
         walls.append((time.perf_counter() - start) / len(seeds))
     flat = np.stack([z.ravel() for z, _ in results])
     sigma = flat.std(axis=1)
     sk = stats.skew(flat, axis=1)
     ku = stats.kurtosis(flat, axis=1, fisher=False)
-    lags = np.array([synthetic.correlation_length(z, spec.spacing) for z, _ in results])
+    lags = np.array([statistics.correlation_length(z, spec.spacing) for z, _ in results])
     iterations = np.array([info.iterations for _, info in results])
     return dict(
         skew=skew, kurt=kurt, seeds=len(seeds),

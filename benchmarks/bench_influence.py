@@ -269,7 +269,8 @@ def run_hybrid(which: str) -> dict:
     from roughcontact.contact.cell import sweep_and_aggregate
     from roughcontact.elasticity.influence import hybrid_unit_modulus_influence
     from roughcontact.reports.convergence import CONTACT_COLUMNS
-    from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
+    from roughcontact.surfaces.spec import SurfaceSpec
+    from roughcontact.surfaces.synthetic import derive_seeds, generate_many
 
     geom = paper_block("converged")
     start = time.perf_counter()

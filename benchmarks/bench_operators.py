@@ -92,7 +92,8 @@ from roughcontact.elasticity.operators import (  # noqa: E402
     default_coarse_grid,
     halfspace_operator,
 )
-from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many  # noqa: E402
+from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402
+from roughcontact.surfaces.synthetic import generate_many  # noqa: E402
 
 OUT = ROOT / "results" / "benchmarks"
 SIZE = (9e-3, 9e-3)  # plan size of the block [m]

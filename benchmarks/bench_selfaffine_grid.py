@@ -84,6 +84,7 @@ from roughcontact import contact  # noqa: E402
 from roughcontact.elasticity import operators  # noqa: E402
 from roughcontact.reports.speed.grid import grid_study  # noqa: E402
 from roughcontact.surfaces import synthetic  # noqa: E402
+from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402
 
 MM = 1e-3
 COLUMNS = ["spectrum", "grid", "pressure_Pa", "real_area_fraction", "real_area_change",
@@ -114,9 +115,9 @@ def interior_peaks(spectrum: dict | None, label: str, args) -> pd.DataFrame:
     finest = max(args.grids)
     size = 9 * MM
     if spectrum:
-        spec = synthetic.SurfaceSpec(grid=finest, size=size, sigma=1.0, **spectrum)
+        spec = SurfaceSpec(grid=finest, size=size, sigma=1.0, **spectrum)
     else:
-        spec = synthetic.SurfaceSpec(grid=finest, size=size, corr_length=1 * MM, sigma=1.0)
+        spec = SurfaceSpec(grid=finest, size=size, corr_length=1 * MM, sigma=1.0)
     fine = synthetic.generate_many(spec, synthetic.derive_seeds(2006, "interior", args.surfaces))
     rows = []
     for g in sorted(args.grids):

@@ -12,7 +12,7 @@ max(1, |Sk|)).
 
 - ``paper``: Eq 12-13 as the paper uses them (targets = the process's moments);
 - ``filter``: the white noise calibrated so that the expected sample moments
-  are the targets (:func:`roughcontact.surfaces.synthetic.calibrate_filter`);
+  are the targets (:func:`roughcontact.surfaces.calibration.calibrate_filter`);
   ``cal_s`` is the calibration's wall time (one thread) and ``process`` the
   moments it feeds to Eq 12-13.
 
@@ -45,9 +45,10 @@ from scipy import stats  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact.study.cells import spec_from_params, study_plan  # noqa: E402
+from roughcontact.study.cells import study_plan  # noqa: E402
 from roughcontact.study.config import apply_schema  # noqa: E402
-from roughcontact.surfaces import synthetic  # noqa: E402
+from roughcontact.surfaces import calibration, synthetic  # noqa: E402
+from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402
 
 MM = 1e-3
 TOLERANCE = 5e-3
@@ -57,17 +58,18 @@ ISSUE_WINDOWS = [  # (grid, size [mm], Sk, Ku)
 ]
 
 
-def windows() -> dict[str, tuple[str, synthetic.SurfaceSpec]]:
+def windows() -> dict[str, tuple[str, SurfaceSpec]]:
     out = {}
     for grid, size, skew, kurt in ISSUE_WINDOWS:
-        spec = synthetic.SurfaceSpec(grid=grid, size=size * MM, corr_length=MM,
+        spec = SurfaceSpec(grid=grid, size=size * MM, corr_length=MM,
                                      skew=skew, kurt=kurt)
         out[f"{grid}x{grid} over {size:g} mm, b 1 mm, ({skew:g}, {kurt:g})"] = ("issue", spec)
     config = apply_schema(yaml.safe_load((ROOT / "config" / "config.yaml").read_text()))
-    for params in study_plan(config).cells.values():
+    for cell in study_plan(config).surfaces.values():
+        params = cell.params()
         if params["method"] != "filter":
             continue
-        spec = spec_from_params(params)
+        spec = cell.spec()
         name = (f"{spec.grid[0]}x{spec.grid[1]} over {params['size_mm'][0]:g} mm, "
                 f"b {params['b_mm'][0]:g} mm, ({spec.skew:g}, {spec.kurt:g})")
         out.setdefault(name, ("config", spec))
@@ -76,14 +78,14 @@ def windows() -> dict[str, tuple[str, synthetic.SurfaceSpec]]:
     return out
 
 
-def measure(name: str, source: str, spec: synthetic.SurfaceSpec, count: int) -> list[dict]:
+def measure(name: str, source: str, spec: SurfaceSpec, count: int) -> list[dict]:
     seeds = synthetic.derive_seeds(1602, f"verify|{name}", count)
     rows = []
     for method in ("paper", "filter"):
         extra = {}
         if method == "filter":
             start = time.perf_counter()
-            cal = synthetic.calibrate_filter(spec)
+            cal = calibration.calibrate_filter(spec)
             extra = {"cal_s": time.perf_counter() - start, "cal_samples": cal.samples,
                      "process": f"({cal.skew:.4f}, {cal.kurt:.4f})"}
         skews, kurts = [], []

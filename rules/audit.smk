@@ -51,7 +51,7 @@ rule audit_verify:
         mem_mb=get_audit_verify_mem_mb,
         runtime=get_audit_verify_runtime,
     params:
-        jobs=CONTACT_JOBS,
+        jobs=get_audit_jobs,
         sample=config["audit"]["verify_sample"],
         seed=config["audit"].get("verify_seed", config["study_seed"]),
     script:

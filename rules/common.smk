@@ -1,5 +1,6 @@
 # Shared workflow logic: environment, the study grid from the config, input
 # functions (get_*) and wildcard constraints.
+import dataclasses
 import hashlib
 import json
 import os
@@ -8,18 +9,26 @@ import re
 from snakemake.exceptions import WorkflowError
 from snakemake.logging import logger
 
-from roughcontact.study import cells as study
 from roughcontact.study import resources
-from roughcontact.study.config import report_section
-from roughcontact.study.provenance import config_hash
+from roughcontact.study.cells import CONTACT_FIGURES, convergence_presets, study_plan
+from roughcontact.study.checks import ConfigProblems
+from roughcontact.study.config import (
+    ConvergenceSettings,
+    SpeedReportSettings,
+    report_section,
+)
+from roughcontact.study.provenance import canonical_json, config_hash
+from roughcontact.study.sources import spectrum_from_entry
+from roughcontact.study.studies import resolve_source, source_name
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = str(config["blas_threads"])
 
 NOTEBOOKS = os.path.join(workflow.basedir, "notebooks")
+# every job, cell and file key of the study, as typed records: made once per run
 try:
-    PLAN = study.study_plan(config)
-except study.ConfigProblems as err:
+    PLAN = study_plan(config)
+except ConfigProblems as err:
     raise WorkflowError(str(err)) from None
 for _problem in resources.machine_problems(config, plan=PLAN):
     logger.warning(f"Warning: {_problem}")
@@ -27,7 +36,7 @@ FIGURES = PLAN.figures
 # contact studies: the paper's figures and the user's own sweeps
 STUDIES = PLAN.studies
 CONTACT_JOBS = PLAN.jobs
-SURFACE_CELLS = PLAN.cells
+SURFACE_CELLS = PLAN.surfaces
 GEOMETRIES = PLAN.geometries
 # aggregates are computed once per source ("fig12: {from: fig07}" reuses fig07's)
 AGGREGATES = PLAN.aggregates
@@ -45,7 +54,7 @@ def canonical(obj):
     """``obj`` with every dict's keys sorted: rule params that do not depend on
     the order of keys in the config file (Snakemake reruns a job when the text
     of its params changes)."""
-    return json.loads(study.canonical_json(obj))
+    return json.loads(canonical_json(obj))
 
 
 def get_final_outputs():
@@ -72,16 +81,18 @@ def get_final_outputs():
     return figures + influence + aggregates + audit + reports + ["results/config.yaml"]
 
 
+# ---- Params of the jobs: the plan's records in their plain form (params()) --
+
+
 def get_body_geometry(wildcards):
-    return study.geometry_params(config["body"], config["surfaces"])
+    return PLAN.body.params()
 
 
 def get_convergence_stored(wildcards):
     """Preset -> influence file of the body's geometry with that mesh."""
-    params = study.geometry_params(config["body"], config["surfaces"])
     return {
-        mesh: f"results/influence/{study.geometry_key({**params, 'mesh': mesh})}.h5"
-        for mesh in study.convergence_presets(config)
+        mesh: f"results/influence/{dataclasses.replace(PLAN.body, mesh=mesh).key}.h5"
+        for mesh in convergence_presets(config)
     }
 
 
@@ -92,7 +103,7 @@ def get_convergence_inputs(wildcards):
 def get_audit_studies(wildcards):
     # each cell once: a study "from:" another (fig12 from fig07, the measured figure
     # from its sweep) has the same cells
-    return {name: study.contact_cells(config, name) for name in AGGREGATES}
+    return {name: [c.params() for c in PLAN.cells[name]] for name in AGGREGATES}
 
 
 def get_audit_stamp(wildcards):
@@ -111,70 +122,60 @@ def get_audit_stamp(wildcards):
 
 def get_audit_inputs(wildcards):
     files = set()
-    for job in CONTACT_JOBS.values():
-        files.add(f"results/contact/{study.contact_key(job)}.h5")
-        files.add(f"results/surfaces/{job['surface_key']}.h5")
-        files.add(f"results/influence/{job['geometry_key']}.h5")
+    for key, job in CONTACT_JOBS.items():
+        files.add(f"results/contact/{key}.h5")
+        files.add(f"results/surfaces/{job.surface.key}.h5")
+        files.add(f"results/influence/{job.geometry.key}.h5")
     return sorted(files)
 
 
+def get_audit_jobs(wildcards):
+    return {key: job.params() for key, job in CONTACT_JOBS.items()}
+
+
 def get_contact_params(wildcards):
-    return CONTACT_JOBS[wildcards.job]
+    return CONTACT_JOBS[wildcards.job].params()
 
 
 def get_contact_inputs(wildcards):
     job = CONTACT_JOBS[wildcards.job]
     return {
-        "surfaces": f"results/surfaces/{job['surface_key']}.h5",
-        "influence": f"results/influence/{job['geometry_key']}.h5",
+        "surfaces": f"results/surfaces/{job.surface.key}.h5",
+        "influence": f"results/influence/{job.geometry.key}.h5",
     }
 
 
 def get_aggregate_cells(wildcards):
-    return study.contact_cells(config, wildcards.study)
+    return [cell.params() for cell in PLAN.cells[wildcards.study]]
 
 
 def get_aggregate_inputs(wildcards):
-    cells = study.contact_cells(config, wildcards.study)
-    return sorted({f"results/contact/{study.contact_key(c)}.h5" for c in cells})
+    cells = PLAN.cells[wildcards.study]
+    return sorted({f"results/contact/{cell.contact_key}.h5" for cell in cells})
 
 
 def get_geometry_params(wildcards):
-    return GEOMETRIES[wildcards.geometry]
-
-
-def get_influence_mem_mb(wildcards):
-    """Estimated peak memory of an influence build [MB], for the scheduler."""
-    geometry = GEOMETRIES[wildcards.geometry]
-    return resources.influence_mem_mb(geometry, config["body"])
+    return GEOMETRIES[wildcards.geometry].params()
 
 
 def get_surface_params(wildcards):
-    return SURFACE_CELLS[wildcards.cell]
+    return SURFACE_CELLS[wildcards.cell].params()
 
 
 def get_surface_inputs(wildcards):
     """The measured file of a measured surface cell, the spectrum's file (a PSD
     table or a measurement) of a generated cell with one; else none."""
-    cell = SURFACE_CELLS[wildcards.cell]
-    if cell["method"] == "measured":
-        return [cell["measured"]["file"]]
-    spectrum_file = study.spectrum_file(cell.get("spectrum"))
-    return [spectrum_file] if spectrum_file else []
-
-
-def get_surface_path(params):
-    return f"results/surfaces/{study.cell_key(params)}.h5"
+    return list(SURFACE_CELLS[wildcards.cell].input_files)
 
 
 def get_figure_surfaces(wildcards):
-    return [get_surface_path(p) for p in study.figure_cells(config, wildcards.fig)]
+    return [f"results/surfaces/{c.key}.h5" for c in PLAN.figure_surfaces[wildcards.fig]]
 
 
 def get_figure_aggregates(wildcards):
-    if wildcards.fig not in study.CONTACT_FIGURES:
+    if wildcards.fig not in CONTACT_FIGURES:
         return []
-    name = study.source_name(config, wildcards.fig)
+    name = source_name(config, wildcards.fig)
     return [
         f"results/aggregates/{name}.csv",
         f"results/aggregates/{name}.moduli.csv",
@@ -185,14 +186,14 @@ def get_figure_aggregates(wildcards):
 
 def get_figure_parameters(wildcards):
     """Everything a figure notebook needs, passed to it by papermill."""
-    cells = study.figure_cells(config, wildcards.fig)
+    cells = PLAN.figure_surfaces[wildcards.fig]
     return canonical(
         {
             "figure": wildcards.fig,
-            "settings": study.resolve_source(config, wildcards.fig),
-            "surface_files": [get_surface_path(p) for p in cells],
+            "settings": resolve_source(config, wildcards.fig),
+            "surface_files": get_figure_surfaces(wildcards),
             "aggregate_files": get_figure_aggregates(wildcards),
-            "cells": cells,
+            "cells": [c.params() for c in cells],
             "fig04": config["figures"].get("fig04", {}),
         }
     )
@@ -207,18 +208,21 @@ def get_figure_parameters(wildcards):
 
 def get_contact_runtime(wildcards, attempt):
     job = CONTACT_JOBS[wildcards.job]
-    return resources.contact_runtime(
-        job, study.contact_settings(config), config["body"], attempt
-    )
+    return resources.contact_runtime(job, PLAN.contact, PLAN.build, attempt)
 
 
 def get_contact_mem_mb(wildcards):
-    return resources.contact_mem_mb(CONTACT_JOBS[wildcards.job], config["body"])
+    return resources.contact_mem_mb(CONTACT_JOBS[wildcards.job], PLAN.build)
 
 
 def get_influence_runtime(wildcards, attempt):
     geometry = GEOMETRIES[wildcards.geometry]
-    return resources.influence_runtime(geometry, config["body"], attempt)
+    return resources.influence_runtime(geometry, PLAN.build, attempt)
+
+
+def get_influence_mem_mb(wildcards):
+    """Estimated peak memory of an influence build [MB], for the scheduler."""
+    return resources.influence_mem_mb(GEOMETRIES[wildcards.geometry], PLAN.build)
 
 
 def get_surfaces_runtime(wildcards, attempt):
@@ -238,20 +242,19 @@ def get_audit_runtime(wildcards, attempt):
 
 
 def get_audit_mem_mb(wildcards):
-    return resources.audit_mem_mb(GEOMETRIES.values(), config["body"])
+    return resources.audit_mem_mb(GEOMETRIES.values(), PLAN.build)
 
 
 def get_audit_verify_runtime(wildcards, attempt):
-    jobs, settings = CONTACT_JOBS.values(), study.contact_settings(config)
     sample = config["audit"]["verify_sample"]
     return resources.audit_verify_runtime(
-        jobs, settings, config["body"], sample, attempt
+        CONTACT_JOBS.values(), PLAN.contact, PLAN.build, sample, attempt
     )
 
 
 def get_audit_verify_mem_mb(wildcards):
     return resources.audit_verify_mem_mb(
-        CONTACT_JOBS.values(), GEOMETRIES.values(), config["body"]
+        CONTACT_JOBS.values(), GEOMETRIES.values(), PLAN.build
     )
 
 
@@ -260,28 +263,28 @@ def _report_settings(name):
 
 
 def get_convergence_runtime(wildcards, attempt):
-    geometry, presets = get_body_geometry(wildcards), study.convergence_presets(config)
-    section = _report_settings("influence_convergence")
-    return resources.convergence_runtime(geometry, presets, section, attempt)
+    section = ConvergenceSettings.from_section(
+        _report_settings("influence_convergence")
+    )
+    presets = convergence_presets(config)
+    return resources.convergence_runtime(PLAN.body, presets, section, attempt)
 
 
 def get_convergence_mem_mb(wildcards):
-    presets = study.convergence_presets(config)
-    return resources.convergence_mem_mb(get_body_geometry(wildcards), presets)
+    return resources.convergence_mem_mb(PLAN.body, convergence_presets(config))
 
 
 def get_speed_vs_error_spectrum_files(wildcards):
     """The file of the grid study's spectrum (a PSD table or a measurement), if any."""
-    spectrum = _report_settings("speed_vs_error").get("spectrum")
-    path = study.spectrum_file(study.spectrum_params(spectrum))
-    return [path] if path else []
+    spectrum = spectrum_from_entry(_report_settings("speed_vs_error").get("spectrum"))
+    return [] if spectrum is None or spectrum.file is None else [spectrum.file]
 
 
 def get_speed_vs_error_runtime(wildcards, attempt):
-    geometry, section = get_body_geometry(wildcards), _report_settings("speed_vs_error")
-    return resources.speed_vs_error_runtime(geometry, section, attempt)
+    section = SpeedReportSettings.from_section(_report_settings("speed_vs_error"))
+    return resources.speed_vs_error_runtime(PLAN.body, section, attempt)
 
 
 def get_speed_vs_error_mem_mb(wildcards):
-    geometry, section = get_body_geometry(wildcards), _report_settings("speed_vs_error")
-    return resources.speed_vs_error_mem_mb(geometry, section, config["body"])
+    section = SpeedReportSettings.from_section(_report_settings("speed_vs_error"))
+    return resources.speed_vs_error_mem_mb(PLAN.body, section, PLAN.build)

@@ -18,7 +18,7 @@ rule contact:
         runtime=get_contact_runtime,
     params:
         job=get_contact_params,
-        solver=canonical(study.contact_settings(config)),
+        solver=canonical(PLAN.contact.params()),
         # version of the stored layout (2: plastic area and the solutions' pressure profiles)
         layout=2,
     script:

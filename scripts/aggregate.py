@@ -1,12 +1,12 @@
 """Snakemake entry point of rule `aggregate`: a figure's or sweep's tables."""
 
-from roughcontact.study.cells import contact_key
-from roughcontact.study.jobs import aggregate_study
+from roughcontact.study.aggregation import aggregate_study
 from roughcontact.study.logs import route_logging
+from roughcontact.study.records import StudyCell
 
 route_logging(snakemake.log[0])
-cells = snakemake.params.cells
-paths = {contact_key(c): f"results/contact/{contact_key(c)}.h5" for c in cells}
+cells = [StudyCell.from_params(params) for params in snakemake.params.cells]
+paths = {cell.contact_key: f"results/contact/{cell.contact_key}.h5" for cell in cells}
 missing = sorted(set(paths.values()) - set(snakemake.input))
 if missing:
     raise RuntimeError(f"contact files not among the rule's inputs: {missing}")

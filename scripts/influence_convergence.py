@@ -3,16 +3,16 @@
 import logging
 
 from roughcontact.reports.convergence import influence_convergence, plot_influence_convergence
-from roughcontact.study.cells import block_geometry
 from roughcontact.study.config import ConvergenceSettings
 from roughcontact.study.logs import route_logging
 from roughcontact.study.provenance import atomic_path
+from roughcontact.study.records import Geometry
 from roughcontact.units import MPA
 
 route_logging(snakemake.log[0])
 log = logging.getLogger("roughcontact.report")
 settings = ConvergenceSettings.from_section(snakemake.params.settings)
-base = block_geometry(snakemake.params.geometry, E=snakemake.params.E_MPa * MPA)
+base = Geometry.from_params(snakemake.params.geometry).block(E=snakemake.params.E_MPa * MPA)
 table = influence_convergence(
     base,
     list(settings.presets),

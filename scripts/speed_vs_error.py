@@ -3,15 +3,16 @@
 import logging
 
 from roughcontact.reports.speed import speed_vs_error_report
-from roughcontact.study.cells import block_geometry, spectrum_fields, spectrum_params
 from roughcontact.study.config import SpeedReportSettings
 from roughcontact.study.logs import route_logging
+from roughcontact.study.records import Geometry
+from roughcontact.study.sources import spectrum_from_entry
 from roughcontact.units import MPA
 
 route_logging(snakemake.log[0])
 settings = SpeedReportSettings.from_section(snakemake.params.settings)
-body = block_geometry(snakemake.params.geometry, E=snakemake.params.E_MPa * MPA)
-spectrum = spectrum_params(snakemake.params.settings.get("spectrum"))
+body = Geometry.from_params(snakemake.params.geometry).block(E=snakemake.params.E_MPa * MPA)
+spectrum = spectrum_from_entry(snakemake.params.settings.get("spectrum"))
 speed_vs_error_report(
     snakemake.output.md,
     snakemake.output.csv,
@@ -24,7 +25,7 @@ speed_vs_error_report(
     nu=body.nu,
     mesh_table_path=snakemake.input.mesh_table,
     seed=snakemake.params.study_seed,
-    spectrum=None if spectrum is None else spectrum_fields(spectrum),
+    spectrum=None if spectrum is None else spectrum.spec_fields(),
     progress=logging.getLogger("roughcontact.report").info,
     **settings.as_kwargs(),
 )

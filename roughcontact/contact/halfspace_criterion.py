@@ -11,7 +11,8 @@ import numpy as np
 
 from roughcontact.contact import nondim
 from roughcontact.elasticity.operators import halfspace_operator
-from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.synthetic import generate_many
 
 __all__ = ["CALIBRATION", "CRITERION_QUANTITIES", "halfspace_errors", "halfspace_meets"]
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
-from roughcontact.elasticity.protocol import RestrictedInfluence
+from roughcontact.elasticity.protocol import GridOperator
 
 __all__ = ["PeriodicHalfSpace", "halfspace_influence", "love_rectangle"]
 
@@ -224,7 +224,7 @@ def _periodic_kernel(
 
 
 @dataclass(frozen=True)
-class PeriodicHalfSpace:
+class PeriodicHalfSpace(GridOperator):
     """Influence operator of the periodic elastic half-space, applied by FFT.
 
     Discretization as :func:`halfspace_influence` (uniform pressure on each
@@ -295,7 +295,6 @@ class PeriodicHalfSpace:
     mean_compliance: float = 0.0
     images: int = 3
     spectrum: np.ndarray = field(init=False, repr=False, compare=False)
-    matrix = None
 
     def __post_init__(self):
         E, nu = _check_material(self.E, self.nu)
@@ -319,55 +318,13 @@ class PeriodicHalfSpace:
         spectrum.setflags(write=False)
         object.__setattr__(self, "spectrum", spectrum)
 
-    @property
-    def shape(self) -> tuple[int, int]:
-        """``(n, n)``, ``n = nx * ny`` elements."""
-        n = self.grid[0] * self.grid[1]
-        return (n, n)
-
-    @property
-    def element_area(self) -> float:
-        """Area of one contact element ``dx * dy`` [m^2]."""
-        return self.size[0] * self.size[1] / (self.grid[0] * self.grid[1])
-
-    @property
-    def dtype(self) -> np.dtype:
-        """float64."""
-        return np.dtype(float)
-
     def diagonal(self) -> np.ndarray:
         """Self-compliances ``C[i, i]`` [m/Pa], shape (n,), all equal."""
         nx, ny = self.grid
         c_ii = self.spectrum.sum() + self.spectrum[:, 1 : (nx + 1) // 2].sum()
         return np.full(nx * ny, c_ii / (nx * ny))
 
-    def matvec(self, pressure) -> np.ndarray:
-        """Displacement ``u = C p`` [m] for pressure ``p`` [Pa] (Eq 16).
-
-        Parameters
-        ----------
-        pressure : array_like, shape (n,) or (n, m)
-            Element pressures [Pa], flat index ``k = iy * nx + ix``; a second
-            axis holds ``m`` independent pressure fields.
-
-        Returns
-        -------
-        ndarray
-            Displacements [m], same shape as ``pressure``.
-        """
+    def _apply(self, fields: np.ndarray) -> np.ndarray:
+        """Displacements [m] of pressure fields [Pa] of shape (m, ny, nx) (circulant ``C``)."""
         nx, ny = self.grid
-        n = nx * ny
-        p = np.asarray(pressure, dtype=float)
-        if p.ndim not in (1, 2) or p.shape[0] != n:
-            raise ValueError(f"pressure must have shape (n,) or (n, m) with n = {n}, got {p.shape}")
-        fields = p.reshape(n, -1).T.reshape(-1, ny, nx)
-        u = scipy.fft.irfft2(scipy.fft.rfft2(fields) * self.spectrum, s=(ny, nx))
-        return u.reshape(-1, n).T.reshape(p.shape)
-
-    def __matmul__(self, pressure) -> np.ndarray:
-        """``C @ p``, see :meth:`matvec`."""
-        return self.matvec(pressure)
-
-    def restrict(self, indices) -> RestrictedInfluence:
-        """``C_AA`` on the elements ``indices``, matrix-free."""
-        return RestrictedInfluence(self, indices)
+        return scipy.fft.irfft2(scipy.fft.rfft2(fields) * self.spectrum, s=(ny, nx))

@@ -59,7 +59,7 @@ from roughcontact.elasticity.influence import (
     finite_body_correction,
     unit_modulus_influence,
 )
-from roughcontact.elasticity.protocol import RestrictedInfluence
+from roughcontact.elasticity.protocol import GridOperator
 
 __all__ = [
     "COARSE_MAX",
@@ -127,7 +127,7 @@ def _padded_love_spectrum(nx: int, ny: int, dx: float, dy: float, nu: float) -> 
 
 
 @dataclass(frozen=True)
-class BlockOperator:
+class BlockOperator(GridOperator):
     """Matrix-free unit-modulus compliance ``E C`` [m] of the finite block.
 
     ``u = matvec(p)`` is the displacement [m] times Young's modulus [Pa] for
@@ -163,7 +163,6 @@ class BlockOperator:
     _px: np.ndarray | None = field(init=False, repr=False, compare=False)
     _py: np.ndarray | None = field(init=False, repr=False, compare=False)
     _diagonal: np.ndarray = field(init=False, repr=False, compare=False)
-    matrix = None
     mean_compliance = None
 
     def __post_init__(self):
@@ -210,22 +209,6 @@ class BlockOperator:
         set_(self, "_diagonal", diagonal)
 
     @property
-    def shape(self) -> tuple[int, int]:
-        """``(n, n)``, ``n = nx * ny``."""
-        n = self.grid[0] * self.grid[1]
-        return (n, n)
-
-    @property
-    def element_area(self) -> float:
-        """Contact element area ``dx * dy`` [m^2]."""
-        return self.size[0] * self.size[1] / (self.grid[0] * self.grid[1])
-
-    @property
-    def dtype(self) -> np.dtype:
-        """float64."""
-        return np.dtype(float)
-
-    @property
     def kind(self) -> str:
         """"hybrid" (with a finite-body correction) or "halfspace"."""
         return "halfspace" if self.correction is None else "hybrid"
@@ -234,14 +217,9 @@ class BlockOperator:
         """Self-compliances ``E C_ii`` [m], shape (n,)."""
         return self._diagonal
 
-    def matvec(self, pressure) -> np.ndarray:
-        """``E C p`` [m * Pa / Pa = m] for element pressures ``p``, shape (n,) or (n, m)."""
+    def _apply(self, fields: np.ndarray) -> np.ndarray:
+        """``E C p`` [m * Pa / Pa = m] of pressure fields of shape (m, ny, nx)."""
         nx, ny = self.grid
-        n = nx * ny
-        p = np.asarray(pressure, dtype=float)
-        if p.ndim not in (1, 2) or p.shape[0] != n:
-            raise ValueError(f"pressure must have shape (n,) or (n, m) with n = {n}, got {p.shape}")
-        fields = p.reshape(n, -1).T.reshape(-1, ny, nx)
         m = fields.shape[0]
         u = scipy.fft.irfft2(scipy.fft.rfft2(fields, s=(2 * ny, 2 * nx)) * self._spectrum,
                              s=(2 * ny, 2 * nx))[:, :ny, :nx]
@@ -250,14 +228,7 @@ class BlockOperator:
             coarse = (self._py.T @ fields @ self._px).reshape(m, ncx * ncy)
             coarse = (coarse @ self.correction).reshape(m, ncy, ncx)  # K symmetric
             u = u + self.element_area * (self._py @ coarse @ self._px.T)
-        return np.ascontiguousarray(u).reshape(m, n).T.reshape(p.shape)
-
-    def __matmul__(self, pressure) -> np.ndarray:
-        return self.matvec(pressure)
-
-    def restrict(self, indices) -> RestrictedInfluence:
-        """``E C_AA`` on the elements ``indices``, matrix-free."""
-        return RestrictedInfluence(self, indices)
+        return u
 
     def to_dense(self, max_elements: int = 6000) -> np.ndarray:
         """The (n, n) matrix, for small grids (checks and the exact solver)."""

@@ -20,7 +20,13 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["DenseInfluence", "InfluenceOperator", "MatrixFreeInfluence", "RestrictedInfluence"]
+__all__ = [
+    "DenseInfluence",
+    "GridOperator",
+    "InfluenceOperator",
+    "MatrixFreeInfluence",
+    "RestrictedInfluence",
+]
 
 
 @runtime_checkable
@@ -221,4 +227,64 @@ class MatrixFreeInfluence:
         return self.self_compliance
 
     def restrict(self, indices) -> RestrictedInfluence:
+        return RestrictedInfluence(self, indices)
+
+
+class GridOperator:
+    """Members shared by the matrix-free operators of a regular grid of elements.
+
+    A subclass holds ``grid = (nx, ny)`` and ``size = (Lx, Ly)`` [m] and
+    defines ``_apply(fields)``, the displacements [m] of pressure fields [Pa]
+    of shape (m, ny, nx); this base gives the rest of
+    :class:`InfluenceOperator`: ``shape``, ``dtype``, ``element_area``,
+    ``matrix`` (None: matrix-free), ``matvec`` and ``@`` on (n,) and (n, m)
+    pressures, and ``restrict``.
+    """
+
+    matrix = None
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(n, n)``, ``n = nx * ny`` elements."""
+        n = self.grid[0] * self.grid[1]
+        return (n, n)
+
+    @property
+    def element_area(self) -> float:
+        """Area of one contact element ``dx * dy`` [m^2]."""
+        return self.size[0] * self.size[1] / (self.grid[0] * self.grid[1])
+
+    @property
+    def dtype(self) -> np.dtype:
+        """float64."""
+        return np.dtype(float)
+
+    def matvec(self, pressure) -> np.ndarray:
+        """Displacement ``u = C p`` [m] for pressure ``p`` [Pa] (Eq 16).
+
+        Parameters
+        ----------
+        pressure : array_like, shape (n,) or (n, m)
+            Element pressures [Pa], flat index ``k = iy * nx + ix``; a second
+            axis holds ``m`` independent pressure fields.
+
+        Returns
+        -------
+        ndarray
+            Displacements [m], same shape as ``pressure``.
+        """
+        nx, ny = self.grid
+        n = nx * ny
+        p = np.asarray(pressure, dtype=float)
+        if p.ndim not in (1, 2) or p.shape[0] != n:
+            raise ValueError(f"pressure must have shape (n,) or (n, m) with n = {n}, got {p.shape}")
+        u = self._apply(p.reshape(n, -1).T.reshape(-1, ny, nx))
+        return np.ascontiguousarray(u).reshape(-1, n).T.reshape(p.shape)
+
+    def __matmul__(self, pressure) -> np.ndarray:
+        """``C @ p``, see :meth:`matvec`."""
+        return self.matvec(pressure)
+
+    def restrict(self, indices) -> RestrictedInfluence:
+        """``C_AA`` on the elements ``indices``, matrix-free."""
         return RestrictedInfluence(self, indices)

@@ -24,9 +24,9 @@ from roughcontact import __version__
 from roughcontact.contact.aggregate import pressure_axis
 from roughcontact.contact.cell import sweep_cell
 from roughcontact.errors import StoredFileError
-from roughcontact.study.cells import block_geometry, contact_key
-from roughcontact.study.jobs import validity_rows, validity_summary
+from roughcontact.study.aggregation import validity_rows, validity_summary
 from roughcontact.study.provenance import atomic_path, git_commit
+from roughcontact.study.records import Geometry, StudyCell
 from roughcontact.study.storage import (
     contact_datasets,
     read_contact,
@@ -48,7 +48,7 @@ MESH_DIAGONAL_ERROR = {"paper": -0.82, "graded": -0.51, "refined": -0.024, "conv
 OPERATOR_DIAGONAL_ERROR = {"hybrid": 0.009, "halfspace": float("nan")}
 #: Relative tolerance on the moments of the "exact" generator's cells: every
 #: realisation's sample Sk and Ku equal the targets to rounding (about 1e-13,
-#: ``synthetic.target_heights``); surfaces stored before that correction (whose
+#: ``exact.target_heights``); surfaces stored before that correction (whose
 #: midpoint quantiles had Ku 3.8 % low at (-1.5, 7)) are flagged.
 EXACT_MOMENT_TOL = 1e-6
 
@@ -113,7 +113,7 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
     ``levels``: nominal-pressure levels of the hardness check (:func:`_hardness_check`).
     """
     root = Path(root)
-    key = contact_key(cell)
+    key = StudyCell.from_params(cell).contact_key
     surf_path = root / "results" / "surfaces" / f"{cell['surface_key']}.h5"
     infl_path = root / "results" / "influence" / f"{cell['geometry_key']}.h5"
     cont_path = root / "results" / "contact" / f"{key}.h5"
@@ -198,7 +198,7 @@ def _hardness_check(row: dict, cell: dict, stored, levels: int) -> list[str]:
         return []
     flags = []
     axis = pressure_axis(*(p * MPA for p in cell["pressure_MPa"]), levels)
-    for part in validity_rows(cell, stored, axis):
+    for part in validity_rows(StudyCell.from_params(cell), stored, axis):
         H = float(part["hardness_MPa"].iloc[0])
         summary = validity_summary(part)
         row[f"area_above_{H:g}MPa"] = summary["max_area_above"]
@@ -295,7 +295,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
         heights = surfaces["heights"]
         start = time.perf_counter()
         again = sweep_cell(
-            unit, heights, block_geometry(job["geometry"]), job["pressure_end"],
+            unit, heights, Geometry.from_params(job["geometry"]).block(), job["pressure_end"],
             stored.approach.shape[1], method=stored.method, tol=stored.tol,
             precision=stored.precision, max_iter=stored.max_iter, rows=slice(first, last),
             nondim_hardness=stored.nondim_hardness,

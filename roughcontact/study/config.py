@@ -5,7 +5,9 @@ when the configuration is validated: by the Snakefile, or by
 :func:`validated` for library users and tests). The dataclasses below take a
 validated section and convert its units once (``*_mm`` -> m, ``*_um`` -> m,
 ``*_MPa`` -> Pa, ``*_gb`` -> bytes); nothing past this module converts units
-of configuration values or repeats a default.
+of configuration values or repeats a default. :func:`from_unit` and
+:func:`in_unit` are the two directions of that conversion, for the records
+of :mod:`roughcontact.study.records` and their plain ``params()``.
 """
 
 from __future__ import annotations
@@ -23,6 +25,39 @@ from roughcontact.units import GB, MM, MPA, UM
 
 #: The schema of every configuration (with its defaults).
 SCHEMA = Path(__file__).resolve().parents[2] / "config" / "schema.yaml"
+
+
+def in_unit(value: float, unit: float) -> float:
+    """``value`` [SI] in ``unit`` (e.g. :data:`~roughcontact.units.MM`), to 12 significant digits.
+
+    The form of a value for people and files (parameters, keys, labels,
+    table columns): a value read from the configuration comes back as it was
+    written, free of the rounding of the conversion.
+    """
+    return float(f"{value / unit:.12g}")
+
+
+def as_pair(value) -> tuple:
+    """``(a, b)`` of a pair, or ``(value, value)`` of a scalar (the configuration allows both)."""
+    if isinstance(value, list | tuple):
+        return (value[0], value[1])
+    return (value, value)
+
+
+def from_unit(values, unit: float = MM) -> tuple[float, ...] | None:
+    """Values written in ``unit`` (the configuration's) as a tuple in SI units (None stays
+    None)."""
+    return None if values is None else tuple(float(v) * unit for v in values)
+
+
+def in_units(values, unit: float = MM) -> list[float] | None:
+    """SI values as a list in ``unit`` (:func:`in_unit`; None stays None)."""
+    return None if values is None else [in_unit(v, unit) for v in values]
+
+
+def grid_pair(value) -> tuple[int, int]:
+    """A grid (nx, ny) of a pair or of a scalar (square)."""
+    return tuple(int(v) for v in as_pair(value))
 
 
 class ConfigError(ValueError):
@@ -73,7 +108,7 @@ def report_section(config: dict, name: str) -> dict:
     """The validated ``reports: <name>`` section, or its schema defaults when it
     is not configured (another report may need it: the speed report reads the
     mesh-convergence table)."""
-    section = config.get("reports", {}).get(name)
+    section = config["reports"].get(name)  # optional: a report not configured
     if section is not None:
         return section
     return apply_schema({"reports": {name: {}}})["reports"][name]
@@ -104,6 +139,11 @@ class ContactSettings:
         return cls(method=str(section["method"]), tol=float(section["tol"]),
                    precision=str(section["precision"]), steps=int(section["steps"]),
                    pressure_levels=int(section["pressure_levels"]))
+
+    def params(self) -> dict:
+        """The settings as the ``contact`` section writes them (a contact job's params)."""
+        return {"method": self.method, "tol": self.tol, "precision": self.precision,
+                "steps": self.steps, "pressure_levels": self.pressure_levels}
 
 
 @dataclass(frozen=True)

@@ -103,3 +103,8 @@ def atomic_path(path: str | os.PathLike):
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def short_hash(obj, digits: int) -> str:
+    """The first ``digits`` hex digits of the SHA-256 of ``obj``'s canonical JSON."""
+    return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:digits]

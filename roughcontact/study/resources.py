@@ -5,7 +5,10 @@ scaled from runs on the reference machine (2 cores, see README). The measured
 numbers live in ``config/cost_model.yaml`` (each with what was measured); this
 module holds the formulas. A job that outlives its wall time is killed, so a
 time estimate is multiplied by the margin and by the attempt (``retries`` in
-the profile). ``rules/common.smk`` passes the jobs' plain dicts here.
+the profile). ``rules/common.smk`` passes the plan's typed records here
+(:mod:`roughcontact.study.records`) with the settings of the contact jobs
+(:class:`~roughcontact.study.config.ContactSettings`) and of the influence
+builds (:class:`~roughcontact.study.config.BuildSettings`).
 
 Check the model against a run's benchmarks::
 
@@ -17,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import math
 import os
 import sys
@@ -26,13 +30,16 @@ from types import MappingProxyType
 import yaml
 
 from roughcontact.elasticity.operators import COARSE_MAX, coarsened_side
-from roughcontact.study.cells import (
-    contact_settings,
-    influence_cost,
-    planned_operator,
-    study_plan,
+from roughcontact.study.cells import study_plan
+from roughcontact.study.config import (
+    SCHEMA,
+    BuildSettings,
+    ContactSettings,
+    ConvergenceSettings,
+    SpeedReportSettings,
+    load_config,
 )
-from roughcontact.study.config import SCHEMA, load_config
+from roughcontact.study.records import ContactJob, Generator, Geometry, InfluenceModel
 from roughcontact.units import GB
 
 #: The stored cost model of the source tree.
@@ -116,19 +123,19 @@ def dense_scale(grid) -> float:
     return (grid[0] * grid[1] / contact["reference_elements"]) ** contact["dense_exponent"]
 
 
-def tolerance_factor(settings: dict) -> float:
-    """Iterations of a solve to tolerance ``settings["tol"]`` relative to 1e-8 (the
+def tolerance_factor(settings: ContactSettings) -> float:
+    """Iterations of a solve to tolerance ``settings.tol`` relative to 1e-8 (the
     reference), in proportion to its digits and never below 1."""
     digits = _MODEL["contact"]["reference_tol_digits"]
-    return max(1.0, math.log10(1.0 / float(settings["tol"])) / digits)
+    return max(1.0, math.log10(1.0 / settings.tol) / digits)
 
 
-def method_factor(settings: dict) -> float:
-    """Matrix products per solve of ``settings["method"]`` relative to CG."""
-    return _MODEL["contact"]["method_cost"][settings["method"]]
+def method_factor(settings: ContactSettings) -> float:
+    """Matrix products per solve of ``settings.method`` relative to CG."""
+    return _MODEL["contact"]["method_cost"][settings.method]
 
 
-def dense_solve_seconds(grid, settings: dict) -> float:
+def dense_solve_seconds(grid, settings: ContactSettings) -> float:
     """Wall time [s] of one dense contact solve (one surface, one step) on ``grid``:
     0.11 s at 60 x 60 (the slowest measured cell: 186 s for 60 surfaces x
     30 steps, paper mesh, CG 1e-8) times :func:`dense_scale`."""
@@ -146,42 +153,42 @@ def matrix_free_solve_seconds(grid) -> float:
                per_solve / contact["matrix_free_reference_elements"])
 
 
-def contact_seconds(job: dict, settings: dict, body: dict) -> float:
+def _dense(geometry: Geometry, build: BuildSettings) -> bool:
+    """Whether a geometry's build is planned as the dense matrix (within ``build``'s limit)."""
+    return geometry.planned_model(build.max_bytes) is InfluenceModel.DENSE
+
+
+def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSettings) -> float:
     """Wall time [s] of a contact job: surfaces x approach steps x one solve.
 
-    ``job`` is a dict of :func:`roughcontact.study.cells.contact_jobs`,
-    ``settings`` :func:`roughcontact.study.cells.contact_settings`, ``body``
-    the validated config's ``body`` (its ``max_memory_gb`` plans the model). Measured
+    ``settings`` are the contact jobs' (:func:`roughcontact.study.studies.contact_settings`),
+    ``build`` the influence builds' (its memory limit plans the model). Measured
     35-186 s per cell of 60 surfaces x 30 steps on 60 x 60 (paper mesh; the
     converged mesh needs fewer iterations) and 4 s on 30 x 30. A sweep beyond
     P L / (E sigma) = 4 (the study's) reaches larger contact fractions, where
     CG needs more iterations: counted in proportion.
     """
-    solves = job["surface"]["count"] * int(settings["steps"])
-    reach = max(1.0, job["pressure_end"] / _MODEL["contact"]["reference_reach"])
-    grid = job["geometry"]["grid"]
-    if planned_operator(job["geometry"], body["max_memory_gb"]) != "dense":
+    solves = job.surface.count * settings.steps
+    reach = max(1.0, job.pressure_end / _MODEL["contact"]["reference_reach"])
+    grid = job.geometry.grid
+    if not _dense(job.geometry, build):
         return (solves * matrix_free_solve_seconds(grid) * tolerance_factor(settings)
                 * method_factor(settings) * reach)
     return solves * dense_solve_seconds(grid, settings) * reach
 
 
-def contact_runtime(job: dict, settings: dict, body: dict, attempt: int = 1) -> int:
+def contact_runtime(job: ContactJob, settings: ContactSettings, build: BuildSettings,
+                    attempt: int = 1) -> int:
     """Requested wall time [min] of a contact job (:func:`contact_seconds`)."""
-    return runtime_minutes(contact_seconds(job, settings, body), attempt)
+    return runtime_minutes(contact_seconds(job, settings, build), attempt)
 
 
-def influence_build_settings(body: dict) -> dict:
-    """``solver`` and ``max_memory_gb`` of an influence build from the validated ``body``."""
-    return {"solver": body["solver"], "max_memory_gb": body["max_memory_gb"]}
-
-
-def influence_seconds(geometry: dict, body: dict) -> float:
+def influence_seconds(geometry: Geometry, build: BuildSettings) -> float:
     """Wall time [s] of an influence build, from its estimated peak memory.
 
     The work of the sparse factorization and of the dense Schur complement
     grows with the memory they need. Build times on 2 cores (MKL PARDISO)
-    against :func:`roughcontact.study.cells.influence_cost`'s peak: 60 x 60
+    against :meth:`~roughcontact.study.records.Geometry.influence_cost`'s peak: 60 x 60
     paper 4.2 s (0.92 GB), graded 12.5 s (2.0 GB), refined 12.3 s (2.1 GB),
     converged 116-132 s (9.6 GB); 120 x 120 paper 63 s (6.9 GB), graded
     248 s (12.6 GB). 4.2 s (GB / 0.92)^1.56 passes through the first and the
@@ -189,28 +196,28 @@ def influence_seconds(geometry: dict, body: dict) -> float:
     predicted).
     """
     fit = _MODEL["influence"]
-    peak_gb = influence_cost(geometry, **influence_build_settings(body)).peak_bytes / GB
+    peak_gb = geometry.influence_cost(build).peak_bytes / GB
     return fit["anchor_seconds"] * (peak_gb / fit["anchor_peak_gb"]) ** fit["exponent"]
 
 
-def influence_runtime(geometry: dict, body: dict, attempt: int = 1) -> int:
+def influence_runtime(geometry: Geometry, build: BuildSettings, attempt: int = 1) -> int:
     """Requested wall time [min] of an influence build (:func:`influence_seconds`)."""
-    return runtime_minutes(influence_seconds(geometry, body), attempt)
+    return runtime_minutes(influence_seconds(geometry, build), attempt)
 
 
-def surfaces_seconds(cell: dict) -> float:
+def surfaces_seconds(cell) -> float:
     """Wall time [s] of a surface cell: 60 surfaces of 60 x 60 take 0.01 s by the
     filter and 0.15-0.30 s by IAAFT (``exact``); 120 x 120: 0.04 s, 0.47-0.92 s.
     Counted as 0.001 s (filter, paper) or 0.01 s (IAAFT) per surface times
     (n / 3600)^1.5, plus the calibration of ``filter`` (at most about 15 s a cell)."""
     fit = _MODEL["surfaces"]
-    per_surface = fit["exact_seconds"] if cell["method"] == "exact" else fit["filter_seconds"]
-    size = cell["grid"][0] * cell["grid"][1] / fit["reference_elements"]
-    calibration = fit["calibration_seconds"] if cell["method"] == "filter" else 0.0
-    return calibration + cell["count"] * per_surface * size ** fit["exponent"]
+    per_surface = fit["exact_seconds"] if cell.method is Generator.EXACT else fit["filter_seconds"]
+    size = cell.grid[0] * cell.grid[1] / fit["reference_elements"]
+    calibration = fit["calibration_seconds"] if cell.method is Generator.FILTER else 0.0
+    return calibration + cell.count * per_surface * size ** fit["exponent"]
 
 
-def surfaces_runtime(cell: dict, attempt: int = 1) -> int:
+def surfaces_runtime(cell, attempt: int = 1) -> int:
     """Requested wall time [min] of a surface cell (:func:`surfaces_seconds`)."""
     return runtime_minutes(surfaces_seconds(cell), attempt)
 
@@ -227,43 +234,44 @@ def audit_runtime(files: int, attempt: int = 1) -> int:
     return runtime_minutes(audit["base_seconds"] + audit["seconds_per_file"] * files, attempt)
 
 
-def audit_verify_runtime(jobs, settings: dict, body: dict, sample: int, attempt: int = 1) -> int:
+def audit_verify_runtime(jobs, settings: ContactSettings, build: BuildSettings, sample: int,
+                         attempt: int = 1) -> int:
     """Wall time [min] of audit_verify: at most ``sample`` of the contact ``jobs``
     re-solved, each as long as the slowest."""
-    slowest = max((contact_seconds(job, settings, body) for job in jobs), default=0)
+    slowest = max((contact_seconds(job, settings, build) for job in jobs), default=0)
     return runtime_minutes(sample * slowest, attempt)
 
 
-def convergence_runtime(geometry: dict, presets, report: dict, attempt: int = 1) -> int:
+def convergence_runtime(geometry: Geometry, presets, report: ConvergenceSettings,
+                        attempt: int = 1) -> int:
     """Wall time [min] of the mesh-convergence report: it reads the stored
     matrices and solves its surfaces on each of ``presets`` and on the
     half-space (measured about 10 s per preset for 3 surfaces on 60 x 60;
-    counted as 4 s per solve, scaled as :func:`dense_scale`). ``report`` is
-    the config's ``reports: influence_convergence`` section."""
+    counted as 4 s per solve, scaled as :func:`dense_scale`)."""
     fit = _MODEL["convergence"]
-    solves = (len(presets) + 1) * report["surfaces"]
-    seconds = fit["base_seconds"] + solves * fit["solve_seconds"] * dense_scale(geometry["grid"])
+    solves = (len(presets) + 1) * report.surfaces
+    seconds = fit["base_seconds"] + solves * fit["solve_seconds"] * dense_scale(geometry.grid)
     return runtime_minutes(seconds, attempt)
 
 
-def speed_vs_error_runtime(geometry: dict, report: dict, attempt: int = 1) -> int:
+def speed_vs_error_runtime(geometry: Geometry, report: SpeedReportSettings,
+                           attempt: int = 1) -> int:
     """Wall time [min] of the speed-against-error report, from its parts as
     measured with the defaults (2026-11-24, 2 cores, 401 s in all): the solver
     study on the body's grid with dense matrices (240 s at 60 x 60, 4 surfaces,
     scaled as the contact jobs), the grid study with the matrix-free hybrid
     operator (30 s per grid plus 50 s at 240 x 240, in proportion to n) and
-    the surface-count study (70 s for 120 surfaces at 60 x 60). ``report`` is
-    the config's ``reports: speed_vs_error`` section."""
+    the surface-count study (70 s for 120 surfaces at 60 x 60)."""
     fit = _MODEL["speed_vs_error"]
-    grid = geometry["grid"]
-    surfaces = report["surfaces"]
+    grid = geometry.grid
+    surfaces = report.surfaces
     solver = fit["solver_seconds"] * dense_scale(grid) * surfaces / fit["reference_surfaces"]
     grids = sum(
         (fit["grid_seconds"] + fit["grid_reference_seconds"]
          * (g / fit["grid_reference_side"]) ** 2) * surfaces / fit["reference_surfaces"]
-        for g in report["grids"]
+        for g in report.grids
     )
-    counts = (fit["count_seconds"] * report["count_surfaces"] / fit["count_surfaces"]
+    counts = (fit["count_seconds"] * report.count_surfaces / fit["count_surfaces"]
               * grid[0] * grid[1] / fit["reference_elements"])
     return runtime_minutes(solver + grids + counts, attempt)
 
@@ -272,7 +280,7 @@ def speed_vs_error_runtime(geometry: dict, report: dict, attempt: int = 1) -> in
 # Memory
 
 
-def contact_mem_mb(job: dict, body: dict) -> int:
+def contact_mem_mb(job: ContactJob, build: BuildSettings) -> int:
     """Peak memory [MB] of a contact job.
 
     Dense model: E * C in double and single precision and the contact-set
@@ -283,79 +291,79 @@ def contact_mem_mb(job: dict, body: dict) -> int:
     (30 (count, n) arrays: 4 padded copies per surface).
     """
     fit = _MODEL["contact"]
-    nx, ny = job["geometry"]["grid"]
+    nx, ny = job.geometry.grid
     n = nx * ny
-    count = job["surface"]["count"]
-    if planned_operator(job["geometry"], body["max_memory_gb"]) != "dense":
+    count = job.surface.count
+    if not _dense(job.geometry, build):
         return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2
                    + fit["matrix_free_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
     return int(fit["memory_base_mb"] + (fit["dense_matrices"] * DOUBLE_BYTES * n**2
                + fit["dense_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
 
 
-def influence_mem_mb(geometry: dict, body: dict) -> int:
+def influence_mem_mb(geometry: Geometry, build: BuildSettings) -> int:
     """Peak memory [MB] of an influence build: the estimated peak of its
     finite-element solve plus 200 MB."""
-    cost = influence_cost(geometry, **influence_build_settings(body))
+    cost = geometry.influence_cost(build)
     return int(cost.peak_bytes / MB) + _MODEL["influence"]["memory_margin_mb"]
 
 
-def surfaces_mem_mb(cell: dict) -> int:
+def surfaces_mem_mb(cell) -> int:
     """Peak memory [MB] of a surface cell: 300 MB of interpreter and libraries
     (measured 92 MB in all) and 20 work arrays per surface."""
     fit = _MODEL["surfaces"]
-    n = cell["grid"][0] * cell["grid"][1]
-    return int(fit["memory_base_mb"] + fit["work_arrays"] * DOUBLE_BYTES * cell["count"] * n / MB)
+    n = cell.grid[0] * cell.grid[1]
+    return int(fit["memory_base_mb"] + fit["work_arrays"] * DOUBLE_BYTES * cell.count * n / MB)
 
 
-def stored_bytes(geometry: dict, body: dict) -> int:
+def stored_bytes(geometry: Geometry, build: BuildSettings) -> int:
     """Bytes of a stored influence model: the dense matrix, or a matrix-free
     operator's coarse correction (at most 64^2 x 64^2 doubles)."""
-    nx, ny = geometry["grid"]
-    if planned_operator(geometry, body["max_memory_gb"]) != "dense":
+    nx, ny = geometry.grid
+    if not _dense(geometry, build):
         return DOUBLE_BYTES * (COARSE_MAX**2) ** 2
     return DOUBLE_BYTES * (nx * ny) ** 2
 
 
-def audit_mem_mb(geometries, body: dict) -> int:
+def audit_mem_mb(geometries, build: BuildSettings) -> int:
     """Peak memory [MB] of the audit: one influence model of ``geometries`` (held
     twice while hashed) at a time, plus 1 GB."""
     audit = _MODEL["audit"]
-    largest = max((stored_bytes(g, body) for g in geometries), default=0)
+    largest = max((stored_bytes(g, build) for g in geometries), default=0)
     return int(audit["memory_base_mb"] + audit["model_copies"] * largest / MB)
 
 
-def audit_verify_mem_mb(jobs, geometries, body: dict) -> int:
+def audit_verify_mem_mb(jobs, geometries, build: BuildSettings) -> int:
     """Peak memory [MB] of audit_verify: the audit's or the largest contact job's."""
-    largest = max((contact_mem_mb(job, body) for job in jobs), default=0)
-    return max(audit_mem_mb(geometries, body), largest)
+    largest = max((contact_mem_mb(job, build) for job in jobs), default=0)
+    return max(audit_mem_mb(geometries, build), largest)
 
 
-def convergence_mem_mb(geometry: dict, presets) -> int:
+def convergence_mem_mb(geometry: Geometry, presets) -> int:
     """Peak memory [MB] of the mesh-convergence report: the matrix of each of
     ``presets`` and the half-space's at once, plus 1 GB (2 GB at least)."""
     fit = _MODEL["convergence"]
-    n = geometry["grid"][0] * geometry["grid"][1]
+    n = geometry.grid[0] * geometry.grid[1]
     matrices = len(presets) + 1
     return max(fit["memory_floor_mb"],
                int(fit["memory_base_mb"] + matrices * DOUBLE_BYTES * n**2 / MB))
 
 
-def speed_vs_error_mem_mb(geometry: dict, report: dict, body: dict) -> int:
+def speed_vs_error_mem_mb(geometry: Geometry, report: SpeedReportSettings,
+                          build: BuildSettings) -> int:
     """Peak memory [MB] of the speed-against-error report: the largest
     finite-element build it makes (the body's grid with the "paper" mesh of
     the solver study; the hybrid operators' coarse "refined" models), three
     dense matrices of the body's grid, and 500 MB (measured 1.4 GB with the
     defaults, against 2.9 GB from this estimate)."""
     fit = _MODEL["speed_vs_error"]
-    n = geometry["grid"][0] * geometry["grid"][1]
-    dense = dict(geometry, operator="dense")
-    builds = [dict(dense, mesh="paper")] + [
-        dict(dense, mesh="refined", grid=[coarsened_side(g)] * 2)
-        for g in [*report["grids"], geometry["grid"][0]]
+    n = geometry.grid[0] * geometry.grid[1]
+    dense = dataclasses.replace(geometry, operator=InfluenceModel.DENSE, halfspace_tolerance=())
+    builds = [dataclasses.replace(dense, mesh="paper")] + [
+        dataclasses.replace(dense, mesh="refined", grid=(coarsened_side(g),) * 2)
+        for g in [*report.grids, geometry.grid[0]]
     ]
-    settings = influence_build_settings(body)
-    peak = max(influence_cost(b, **settings).peak_bytes for b in builds)
+    peak = max(b.influence_cost(build).peak_bytes for b in builds)
     return int(fit["memory_base_mb"] + (peak + fit["dense_matrices"] * DOUBLE_BYTES * n**2) / MB)
 
 
@@ -368,14 +376,14 @@ def predictions(config: dict, plan=None) -> dict[str, dict[str, tuple[float, int
     contact, influence and surfaces jobs of a validated ``config`` (of its
     :func:`~roughcontact.study.cells.study_plan`, made here unless given)."""
     plan = study_plan(config) if plan is None else plan
-    settings = contact_settings(config)
-    body = config["body"]
+    settings, build = plan.contact, plan.build
     return {
-        "contact": {key: (contact_seconds(job, settings, body), contact_mem_mb(job, body))
+        "contact": {key: (contact_seconds(job, settings, build), contact_mem_mb(job, build))
                     for key, job in plan.jobs.items()},
-        "influence": {k: (influence_seconds(g, body), influence_mem_mb(g, body))
+        "influence": {k: (influence_seconds(g, build), influence_mem_mb(g, build))
                       for k, g in plan.geometries.items()},
-        "surfaces": {k: (surfaces_seconds(c), surfaces_mem_mb(c)) for k, c in plan.cells.items()},
+        "surfaces": {k: (surfaces_seconds(c), surfaces_mem_mb(c))
+                     for k, c in plan.surfaces.items()},
     }
 
 

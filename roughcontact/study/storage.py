@@ -152,12 +152,6 @@ def write_h5(path: str | os.PathLike, datasets: dict, attrs: dict) -> None:
                 f.attrs[key] = _attr_value(value)
 
 
-def read_attrs(path: str | os.PathLike) -> dict:
-    """Root attributes of an HDF5 file (JSON text left as text; datasets not verified)."""
-    with open_h5(path) as f:
-        return _decoded(f.attrs)
-
-
 # ---------------------------------------------------------------------------
 # Surface files
 

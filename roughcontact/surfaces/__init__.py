@@ -1,8 +1,18 @@
 """Stage 1, surfaces: the heights a contact cell is solved on.
 
-``johnson`` fits Johnson's translator curves by moments (Section 2.1 of Kumar
-et al. 2006); ``synthetic`` generates seeded random surfaces (white noise ->
-Johnson translator -> linear filter from the ACF, Eq 1-13, or the exact
-generator); ``measured`` imports and prepares measured height maps. Nothing
-here knows about the elastic body, the contact problem or the workflow.
+Generated surfaces (Section 2 of Kumar et al. 2006): ``spec`` says what to
+generate (``SurfaceSpec``); ``johnson`` fits Johnson's translator curves by
+moments (Eq 6-8; their moments in ``johnson_moments``, the AS 99 and
+bracketing solvers in ``johnson_solvers``); ``spectra`` holds the ACF of
+Eq 1, the self-affine and tabulated PSDs and the linear filter built from
+them (Eq 9-11); ``calibration`` the moment transfer of the filter and its
+bound (Eq 12-15) and the calibration of a window's expected sample moments;
+``synthetic`` the seeded generators (white noise -> Johnson translator ->
+filter), ``exact`` the exact generator (IAAFT) and ``memory`` their memory
+estimate. Measured surfaces: ``measured`` imports and prepares a measured
+height map (``load_measurement``; formats in ``readers``, crop, holes, form
+and resampling in ``preparation``) and gives its statistics. ``statistics``
+holds the sample statistics of any height map (moments, ACF, correlation
+lengths). Nothing here knows about the elastic body, the contact problem or
+the workflow.
 """

@@ -14,7 +14,8 @@ from approach_targets import target_grid
 
 from roughcontact.contact import aggregate, nondim
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
-from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.synthetic import generate_many
 
 SIZE = 1.8e-3  # plan size [m]
 GRID = 12

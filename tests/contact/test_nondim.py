@@ -18,7 +18,8 @@ from roughcontact.contact import nondim
 from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
-from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.synthetic import generate_many
 
 SIZE = 1.0e-3  # plan size [m]
 GRID = 16

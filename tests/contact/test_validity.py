@@ -13,7 +13,8 @@ import pytest
 from roughcontact.contact import cell as cell_module
 from roughcontact.contact import nondim, sweep, validity
 from roughcontact.elasticity.halfspace import halfspace_influence
-from roughcontact.surfaces.synthetic import SurfaceSpec, generate_many
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.synthetic import generate_many
 
 SIZE, GRID, NU = 1.0e-3, 24, 0.3
 LENGTH = 2.0e-3

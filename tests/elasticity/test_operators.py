@@ -12,9 +12,9 @@ from roughcontact.elasticity import operators
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, hybrid_unit_modulus_influence
 from roughcontact.elasticity.protocol import DenseInfluence, InfluenceOperator
-from roughcontact.study import cells as study
 from roughcontact.study import jobs as pipeline
-from roughcontact.study.config import validated
+from roughcontact.study.config import BuildSettings, validated
+from roughcontact.study.records import Geometry
 from roughcontact.study.storage import influence_sha256, read_influence
 
 SIZE = (9e-3, 7.5e-3)
@@ -145,30 +145,30 @@ def complete(body: dict) -> dict:
 
 def test_dense_geometry_keys_unchanged_and_operators_keyed():
     surfaces = {"grid": [60, 60], "size_mm": [9.0, 9.0]}
-    dense = study.geometry_params(complete(BODY), surfaces)
-    assert "operator" not in dense
-    assert study.geometry_key(dense) == "nu0_L9x9mm_t10mm_g60x60_clamped_refined"
-    hybrid = study.geometry_params(complete({**BODY, "operator": "hybrid"}), surfaces)
-    assert study.geometry_key(hybrid).endswith("_refined_hybrid")
-    auto = study.geometry_params(complete({**BODY, "operator": "auto",
-                                           "halfspace_tolerance": {"k_P": None}}), surfaces)
-    assert auto["halfspace_tolerance"] == {"k_P": None, "max_pressure": 0.05,
-                                           "real_area": 0.05}
-    assert study.geometry_key(auto).endswith("_autox-0.05-0.05")
-    assert study.planned_operator(auto, 16.0) == "dense"
-    big = study.geometry_params(complete({**BODY, "operator": "auto"}),
-                                {**surfaces, "grid": [256, 256]})
-    assert study.planned_operator(big, 16.0) == "hybrid"
+    dense = Geometry.from_params({**complete(BODY), **surfaces})
+    assert "operator" not in dense.params()
+    assert dense.key == "nu0_L9x9mm_t10mm_g60x60_clamped_refined"
+    hybrid = Geometry.from_params({**complete({**BODY, "operator": "hybrid"}), **surfaces})
+    assert hybrid.key.endswith("_refined_hybrid")
+    auto = Geometry.from_params({**complete({**BODY, "operator": "auto",
+                                             "halfspace_tolerance": {"k_P": None}}), **surfaces})
+    assert auto.params()["halfspace_tolerance"] == {"k_P": None, "max_pressure": 0.05,
+                                                    "real_area": 0.05}
+    assert auto.key.endswith("_autox-0.05-0.05")
+    assert auto.planned_model(16e9).value == "dense"
+    big = Geometry.from_params({**complete({**BODY, "operator": "auto"}), **surfaces,
+                                "grid": [256, 256]})
+    assert big.planned_model(16e9).value == "hybrid"
     # the build's memory is that of the 64 x 64 coarse model, not of a 34 GB matrix
-    assert study.influence_cost(big, "auto", 16.0).peak_bytes < 4e9
+    assert big.influence_cost(BuildSettings("auto", 16e9)).peak_bytes < 4e9
 
 
 def _build(tmp_path, body, grid, monkeypatch, coarse_max=None):
     if coarse_max is not None:
         monkeypatch.setattr(operators, "COARSE_MAX", coarse_max)
-    params = study.geometry_params(complete(body), {"grid": [grid, grid], "size_mm": [4.8, 4.8]})
-    path = tmp_path / f"{study.geometry_key(params)}.h5"
-    attrs = pipeline.build_influence(params, path, solver="auto", max_memory_gb=16.0)
+    params = Geometry.from_params({**complete(body), "grid": [grid, grid], "size_mm": [4.8, 4.8]})
+    path = tmp_path / f"{params.key}.h5"
+    attrs = pipeline.build_influence(params.params(), path, solver="auto", max_memory_gb=16.0)
     unit, stored = read_influence(path)
     return params, attrs, unit, stored
 
@@ -180,7 +180,7 @@ def test_build_and_read_hybrid_operator(tmp_path, monkeypatch):
     assert isinstance(unit, operators.BlockOperator)
     assert unit.coarse_grid == (8, 8) and unit.grid == (16, 16)
     assert stored["content_sha256"] == influence_sha256(unit)
-    geom = study.block_geometry(params)
+    geom = params.block()
     reference = hybrid_unit_modulus_influence(dataclasses.replace(geom), coarsening=2)
     assert np.abs(unit.to_dense() - reference).max() <= 1e-12 * reference.max()
 

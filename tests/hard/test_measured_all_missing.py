@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 from roughcontact.errors import MeasurementError
-from roughcontact.surfaces import measured
+from roughcontact.surfaces import measured, preparation
 
 SCHEMA = Path(__file__).resolve().parents[2] / "config" / "schema.yaml"
 
@@ -55,7 +55,7 @@ def _assert_cannot_be_filled(message, source):
 def test_all_missing_map_cannot_be_filled(fill_holes):
     heights = np.full((8, 6), np.nan)
     with pytest.raises(MeasurementError) as info:
-        measured.fill_missing(heights, fill_holes, source="scans/plate_07.xyz")
+        preparation.fill_missing(heights, fill_holes, source="scans/plate_07.xyz")
     _assert_cannot_be_filled(str(info.value), "scans/plate_07.xyz")
     assert "48 of 48 points" in str(info.value)
     assert info.value.path == "scans/plate_07.xyz"
@@ -77,7 +77,7 @@ def test_more_missing_than_the_schema_allows_cannot_be_filled(missing):
     heights = np.arange(400.0).reshape(20, 20)
     heights.ravel()[: int(missing * heights.size)] = np.nan
     with pytest.raises(MeasurementError) as info:
-        measured.fill_missing(heights, maximum, source="scan.txt")
+        preparation.fill_missing(heights, maximum, source="scan.txt")
     _assert_cannot_be_filled(str(info.value), "scan.txt")
 
 
@@ -86,11 +86,11 @@ def test_fillable_map_still_gets_a_possible_fill_holes():
     heights = np.arange(100.0).reshape(10, 10)
     heights.ravel()[:20] = np.nan
     with pytest.raises(MeasurementError) as info:
-        measured.fill_missing(heights, 0.1, source="scan.txt")
+        preparation.fill_missing(heights, 0.1, source="scan.txt")
     suggested = _suggested_fill_holes(str(info.value))
     assert suggested == [pytest.approx(0.2)]
     assert suggested[0] <= _fill_holes_maximum()
-    filled, count = measured.fill_missing(heights, suggested[0], source="scan.txt")
+    filled, count = preparation.fill_missing(heights, suggested[0], source="scan.txt")
     assert count == 20
     # a linear ramp is filled exactly (Laplace interpolation reproduces planes)
     np.testing.assert_allclose(filled, np.arange(100.0).reshape(10, 10), atol=1e-9)

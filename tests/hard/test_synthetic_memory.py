@@ -15,11 +15,12 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from roughcontact.surfaces import synthetic
+from roughcontact.surfaces import calibration, exact, memory, synthetic
+from roughcontact.surfaces.spec import SurfaceSpec
 
-HUGE = synthetic.SurfaceSpec(grid=20000, size=1e-2, corr_length=1e-4)
-HUGE_PADDED = synthetic.SurfaceSpec(grid=20000, size=1e-2, corr_length=1e-4, periodic=False)
-SMALL = synthetic.SurfaceSpec(grid=60, size=1e-3, corr_length=1e-4, sigma=1e-6, skew=0.3,
+HUGE = SurfaceSpec(grid=20000, size=1e-2, corr_length=1e-4)
+HUGE_PADDED = SurfaceSpec(grid=20000, size=1e-2, corr_length=1e-4, periodic=False)
+SMALL = SurfaceSpec(grid=60, size=1e-3, corr_length=1e-4, sigma=1e-6, skew=0.3,
                               kurt=3.5)
 
 
@@ -42,7 +43,7 @@ def _traced_peak(call):
     "call",
     [lambda: synthetic.generate(HUGE, 1),
      lambda: synthetic.generate_many(HUGE, [1, 2, 3]),
-     lambda: synthetic.generate_exact(HUGE, 1),
+     lambda: exact.generate_exact(HUGE, 1),
      lambda: synthetic.generate(HUGE, 1, method="exact"),
      lambda: synthetic.generate(HUGE_PADDED, 1),
      lambda: synthetic.generate(HUGE, 1)],
@@ -52,7 +53,7 @@ def test_huge_grid_is_refused_fast_without_allocating(call):
     start = time.perf_counter()
     peak, error = _traced_peak(call)
     elapsed = time.perf_counter() - start
-    assert isinstance(error, synthetic.SurfaceTooLarge)
+    assert isinstance(error, memory.SurfaceTooLarge)
     assert isinstance(error, MemoryError)
     assert elapsed < 1.0
     assert peak < 1e6  # bytes: nothing grid-sized (one 20000 x 20000 float64 is 3.2 GB)
@@ -65,8 +66,8 @@ def test_huge_grid_is_refused_fast_without_allocating(call):
 
 
 def test_refusal_follows_max_bytes():
-    estimate = synthetic.estimate_generation_bytes(SMALL)
-    with pytest.raises(synthetic.SurfaceTooLarge, match=r"60 x 60"):
+    estimate = memory.estimate_generation_bytes(SMALL)
+    with pytest.raises(memory.SurfaceTooLarge, match=r"60 x 60"):
         synthetic.generate(SMALL, 3, max_bytes=0.5 * estimate)
     with pytest.raises(ValueError, match="max_bytes"):
         synthetic.generate(SMALL, 3, max_bytes=-1.0)
@@ -75,8 +76,8 @@ def test_refusal_follows_max_bytes():
     default = synthetic.generate(SMALL, 3)
     assert np.array_equal(allowed, default) and np.array_equal(unlimited, default)
     # more surfaces per call need more
-    one = synthetic.estimate_generation_bytes(SMALL, 1, "paper")
-    assert synthetic.estimate_generation_bytes(SMALL, 10, "paper") > one
+    one = memory.estimate_generation_bytes(SMALL, 1, "paper")
+    assert memory.estimate_generation_bytes(SMALL, 10, "paper") > one
     # the calibration's batches are the calibrated filter's peak at small counts
     assert estimate > one
 
@@ -93,23 +94,23 @@ def test_normal_surface_still_generated():
 
 @pytest.mark.parametrize(
     ("spec", "count", "method"),
-    [(synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 1, "filter"),
-     (synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 3, "filter"),
-     (synthetic.SurfaceSpec(grid=64, size=1e-3, corr_length=1e-4, periodic=False), 2, "filter"),
-     (synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 1, "paper"),
-     (synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 3, "paper"),
-     (synthetic.SurfaceSpec(grid=64, size=1e-3, corr_length=1e-4, periodic=False), 2, "paper"),
-     (synthetic.SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 2, "exact")],
+    [(SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 1, "filter"),
+     (SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 3, "filter"),
+     (SurfaceSpec(grid=64, size=1e-3, corr_length=1e-4, periodic=False), 2, "filter"),
+     (SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 1, "paper"),
+     (SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 3, "paper"),
+     (SurfaceSpec(grid=64, size=1e-3, corr_length=1e-4, periodic=False), 2, "paper"),
+     (SurfaceSpec(grid=(256, 192), size=1e-3, corr_length=5e-5), 2, "exact")],
     ids=["periodic", "periodic-3", "padded-2", "paper", "paper-3", "paper-padded-2", "exact-2"],
 )
 def test_estimate_matches_the_traced_peak(spec, count, method, caplog):
     seeds = list(range(count))
-    synthetic._calibrate.cache_clear()  # the calibration's batches are part of the peak
+    calibration._calibrate.cache_clear()  # the calibration's batches are part of the peak
     options = {"max_iter": 5} if method == "exact" else {}
     with caplog.at_level(logging.ERROR):
         peak, error = _traced_peak(
             lambda: synthetic.generate_many(spec, seeds, method=method, **options)
         )
     assert error is None
-    estimate = synthetic.estimate_generation_bytes(spec, count, method)
+    estimate = memory.estimate_generation_bytes(spec, count, method)
     assert 0.9 * peak <= estimate <= 1.2 * peak

@@ -1,88 +1,151 @@
-"""Study bookkeeping: geometry keys, and building influence files."""
+"""Study bookkeeping: the plan's records, their keys and params, and influence files."""
+
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from roughcontact.elasticity.influence import ModelTooLarge
-from roughcontact.study.cells import block_geometry, geometry_key, geometry_params
-from roughcontact.study.config import load_config, validated
+from roughcontact.study.cells import study_plan
+from roughcontact.study.checks import ConfigProblems
+from roughcontact.study.config import BuildSettings, in_unit, load_config, validated
 from roughcontact.study.jobs import build_influence
+from roughcontact.study.presets import ACCURACY_PRESETS
+from roughcontact.study.records import (
+    ContactJob,
+    Geometry,
+    InfluenceModel,
+    StudyCell,
+    surface_cell_from_params,
+)
 from roughcontact.study.storage import read_influence
+from roughcontact.study.studies import body_geometry, contact_cells, contact_settings
+from roughcontact.units import MM, MPA, UM
 
+REPO = Path(__file__).resolve().parents[2]
 #: A minimal config completed by the schema's defaults (base clamped, mesh paper, ...).
 CONFIG = validated({"study_seed": 0, "figures": {},
                     "surfaces": {"grid": [8, 8], "size_mm": [1.2, 1.2], "count": 1},
                     "body": {"thickness_mm": 2.0, "E_MPa": 511.0, "nu": 0.0}})
-BODY, SURFACES = CONFIG["body"], CONFIG["surfaces"]
+BUILD = BuildSettings.from_section(CONFIG["body"])
+
+
+def geometry(**change) -> Geometry:
+    """The body's geometry with some of its configuration's values changed (mm)."""
+    surfaces = CONFIG["surfaces"]
+    return Geometry.from_params({**CONFIG["body"], "grid": surfaces["grid"],
+                                 "size_mm": surfaces["size_mm"], **change})
+
+
+def quick_config():
+    return load_config(REPO / "config" / "quick.yaml")
 
 
 def test_every_geometry_parameter_but_young_modulus_changes_the_key():
-    base = geometry_params(BODY, SURFACES)
-    keys = {geometry_key(base)}
+    keys = {geometry().key}
     for change in ({"nu": 0.3}, {"thickness_mm": 3.0}, {"mesh": "refined"},
                    {"base": "sliding"}, {"grid": [8, 10]}, {"size_mm": [1.2, 1.5]}):
-        keys.add(geometry_key(geometry_params(BODY, SURFACES, **change)))
+        keys.add(geometry(**change).key)
     assert len(keys) == 7
-    assert geometry_key(geometry_params({**BODY, "E_MPa": 1.0}, SURFACES)) == geometry_key(base)
+    assert geometry(E_MPa=1.0).key == geometry().key == "nu0_L1.2x1.2mm_t2mm_g8x8_clamped_paper"
+    assert body_geometry(CONFIG) == geometry()
 
 
-def test_block_geometry_converts_millimetres():
-    geom = block_geometry(geometry_params(BODY, SURFACES, grid=[8, 10]))
+def test_geometry_holds_si_values_and_its_params_the_configured_ones():
+    geom = geometry(grid=[8, 10])
     assert geom.size == pytest.approx((1.2e-3, 1.2e-3))
     assert geom.thickness == pytest.approx(2e-3)
-    assert geom.grid == (8, 10)
+    assert geom.grid == (8, 10) and geom.operator is InfluenceModel.DENSE
+    block = geom.block(E=5e8)
+    assert (block.size, block.thickness, block.grid, block.E) == (geom.size, geom.thickness,
+                                                                  (8, 10), 5e8)
+    # the paper's dense model names no operator in its params: its files keep their names
+    assert geom.params() == {"nu": 0.0, "size_mm": [1.2, 1.2], "thickness_mm": 2.0,
+                             "grid": [8, 10], "base": "clamped", "mesh": "paper"}
+
+
+@pytest.mark.parametrize("value", [0.7, 24.5, 2.325, 1e-3, 511.0, 9.0, 0.15, 123.456789012])
+def test_values_come_back_in_their_unit_as_written(value):
+    for unit in (MM, UM, MPA):
+        assert in_unit(value * unit, unit) == value
+
+
+def test_every_record_of_a_plan_round_trips_through_its_params():
+    plan = study_plan(quick_config())
+    for job in plan.jobs.values():
+        again = ContactJob.from_params(job.params())
+        assert again == job and again.params() == job.params() and again.key == job.key
+    for cells in plan.cells.values():
+        for cell in cells:
+            assert StudyCell.from_params(cell.params()) == cell
+    for key, cell in plan.surfaces.items():
+        assert surface_cell_from_params(cell.params()) == cell and cell.key == key
+    for key, geom in plan.geometries.items():
+        assert Geometry.from_params(geom.params()) == geom and geom.key == key
+
+
+def test_the_plan_computes_each_study_once_and_its_jobs_from_its_cells():
+    config = quick_config()
+    plan = study_plan(config)
+    assert plan.cells["fig12"] is plan.cells["fig07"]  # fig12: {from: fig07}
+    assert plan.aggregates == ("fig07", "fig09", "fig11", "fig14", "hardness", "table_Eu")
+    keys = {cell.contact_key for name in plan.studies for cell in plan.cells[name]}
+    assert keys == set(plan.jobs)
+    assert plan.cells["fig07"] == contact_cells(config, "fig07")
+    # Fig 10 draws the surfaces of its cells (those of Fig 9), Figs 4 and 5 Fig 4's
+    assert [s.key for s in plan.figure_surfaces["fig10"]] == \
+        [c.surface.key for c in plan.cells["fig09"]]
+    assert plan.figure_surfaces["fig05"] == plan.figure_surfaces["fig04"]
+    assert plan.figure_surfaces["fig07"] == ()
+
+
+def test_a_cells_sweep_end_and_key_follow_its_nondimensional_pressure():
+    cell = study_plan(quick_config()).cells["fig07"][0]
+    # P L / (E sigma) = 5 MPa x 10 mm / (511 MPa x 24.5 um) = 3.99 -> 4
+    assert cell.sweep_end == 4.0
+    assert cell.contact_key == ("sk0_ku3_b0.5x0.5mm_L4.8x4.8mm_g32x32_exp_per_filter_n4"
+                                "__nu0_L4.8x4.8mm_t10mm_g32x32_clamped_paper__end4")
+    assert cell.params()["sigma_um"] == 24.5 and cell.params()["pressure_MPa"] == [0.1, 5.0]
 
 
 def test_build_influence_writes_rows_summing_to_the_thickness(tmp_path):
-    params = geometry_params(BODY, SURFACES)
     path = tmp_path / "g.h5"
-    build_influence(params, path, solver="auto", max_memory_gb=16.0)
+    build_influence(geometry().params(), path, solver="auto", max_memory_gb=16.0)
     unit, attrs = read_influence(path)
     assert unit.shape == (64, 64)
     assert np.allclose(unit.sum(axis=1), 2e-3, rtol=1e-10)
     assert attrs["check_min_eigenvalue_m"] > 0
-    assert attrs["geometry"] == geometry_key(params)
+    assert attrs["geometry"] == geometry().key
 
 
 def test_build_influence_refuses_a_model_too_large_before_building(tmp_path):
-    params = geometry_params(BODY, SURFACES)
     path = tmp_path / "g.h5"
     with pytest.raises(ModelTooLarge, match=r"GB.*Options"):
-        build_influence(params, path, solver="auto", max_memory_gb=0.001)
+        build_influence(geometry().params(), path, solver="auto", max_memory_gb=0.001)
     assert not path.exists()
 
 
-def quick_config():
-    from pathlib import Path
-
-    return load_config(Path(__file__).resolve().parents[2] / "config" / "quick.yaml")
-
-
 def test_accuracy_preset_sets_mesh_count_and_solver_and_records_its_errors():
-    from roughcontact.study.cells import contact_cells, contact_jobs, contact_settings
-    from roughcontact.study.presets import ACCURACY_PRESETS
-
     config = quick_config()
     plain = contact_cells(config, "fig11")
-    assert {c["geometry"]["mesh"] for c in plain} == {config["body"]["mesh"]}
-    assert plain[0]["accuracy"] == "as configured"
+    assert {c.geometry.mesh for c in plain} == {config["body"]["mesh"]}
+    assert plain[0].accuracy.name == "as configured"
+    assert "expected_error" not in plain[0].params()
     config["accuracy"] = "fast"
     preset = ACCURACY_PRESETS["fast"]
     cells = contact_cells(config, "fig11")
-    assert {c["geometry"]["mesh"] for c in cells} == {preset["mesh"]}
-    assert {c["surface"]["count"] for c in cells} == {preset["surfaces"]}
-    assert cells[0]["expected_error"]["real_area_error"] == preset["real_area_error"]
-    assert contact_settings(config)["tol"] == preset["tol"]
+    assert {c.geometry.mesh for c in cells} == {preset["mesh"]}
+    assert {c.surface.count for c in cells} == {preset["surfaces"]}
+    assert cells[0].params()["expected_error"]["real_area_error"] == preset["real_area_error"]
+    assert contact_settings(config).tol == preset["tol"]
     # a figure that names its meshes keeps them
     named = contact_cells(config, "fig07")
-    assert {c["geometry"]["mesh"] for c in named} == set(config["figures"]["fig07"]["meshes"])
-    job = next(iter(contact_jobs(config, ["fig11"]).values()))
+    assert {c.geometry.mesh for c in named} == set(config["figures"]["fig07"]["meshes"])
+    job = cells[0].job.params()
     assert job["accuracy"] == "fast" and job["expected_error"]
 
 
 def test_a_measured_map_too_large_for_the_dense_model_stops_when_the_plan_is_made(tmp_path):
-    from roughcontact.study.cells import ConfigProblems, planned_operator, study_plan
-
     path = tmp_path / "big.npy"
     np.save(path, np.random.default_rng(3).standard_normal((1024, 1024)))
     surface = {"file": str(path), "format": "npy", "height_unit": "um",
@@ -103,6 +166,24 @@ def test_a_measured_map_too_large_for_the_dense_model_stops_when_the_plan_is_mad
     # the matrix-free operator plans the same file within the limit
     config["body"]["operator"] = "auto"
     plan = study_plan(validated(config))
-    (params,) = plan.geometries.values()
-    assert params["grid"] == [1024, 1024]
-    assert planned_operator(params, 16.0) == "hybrid"
+    (geom,) = plan.geometries.values()
+    assert geom.grid == (1024, 1024)
+    assert geom.planned_model(16e9) is InfluenceModel.HYBRID
+
+
+def test_the_schema_fills_the_axes_of_a_generated_study_only():
+    config = validated({"figures": {"fig07": {"sigma_um": 1.0, "pressure_MPa": [0.1, 1.0]},
+                                    "fig12": {"from": "fig07"}},
+                        "sweeps": {"m": {"surface": {"file": "x.xyz"},
+                                         "pressure_MPa": [1.0, 2.0]}}})
+    # the paper's b = 1 mm and Gaussian moments; nothing for a study from another
+    # or on a measured surface (whose statistics are the measurement's)
+    assert config["figures"]["fig07"]["b_mm"] == 1.0
+    assert config["figures"]["fig07"]["moments"] == [[0.0, 3.0]]
+    assert config["figures"]["fig12"] == {"from": "fig07"}
+    measured = config["sweeps"]["m"]
+    assert "b_mm" not in measured and "moments" not in measured
+    assert measured["compare_synthetic"] is False
+    (cell,) = contact_cells(config, "fig12")
+    assert (cell.surface.skew, cell.surface.kurt, cell.surface.corr_length) == \
+        (0.0, 3.0, (1e-3, 1e-3))

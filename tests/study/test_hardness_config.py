@@ -4,8 +4,10 @@ import copy
 
 import pytest
 
-from roughcontact.study import cells as study
+from roughcontact.study.cells import study_plan
+from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import load_config, validated
+from roughcontact.study.studies import contact_cells, contact_settings
 
 STUDY = {"sigma_um": [10.0, 20.0], "b_mm": 0.5, "pressure_MPa": [0.1, 2.0]}
 BASE = {"study_seed": 0,
@@ -25,39 +27,43 @@ def test_without_a_hardness_cells_keys_and_settings_are_unchanged():
     default = load_config("config/config.yaml")
     assert default["body"]["hardness_MPa"] is None and default["contact"]["cap"] is False
     for name in ("fig07", "fig11", "fig14", "table_Eu"):
-        for cell in study.contact_cells(default, name):
-            assert "hardness_MPa" not in cell and "cap_MPa" not in cell
-            assert "__cap" not in study.contact_key(cell)
-    assert "cap" not in study.contact_settings(default)  # not a solver setting: no rerun
+        for cell in contact_cells(default, name):
+            assert cell.hardness is None and cell.checked_hardness == ()
+            assert "hardness_MPa" not in cell.params() and "cap_MPa" not in cell.params()
+            assert "__cap" not in cell.contact_key
+    assert "cap" not in contact_settings(default).params()  # not a solver setting: no rerun
 
 
 def test_a_hardness_checks_every_elastic_cell_and_solves_nothing_more():
-    plain = study.contact_cells(config(), "fig07")
-    checked = study.contact_cells(config(body={"hardness_MPa": [50.0, 200.0]}), "fig07")
-    assert [study.contact_key(c) for c in checked] == [study.contact_key(c) for c in plain]
-    assert all(c["hardness_MPa"] == [50.0, 200.0] and c["hardness_threshold"] == 0.05
-               for c in checked)
-    assert study.contact_jobs(config(body={"hardness_MPa": 50.0}), ["fig07"]).keys() == \
-        study.contact_jobs(config(), ["fig07"]).keys()
+    plain = contact_cells(config(), "fig07")
+    checked = contact_cells(config(body={"hardness_MPa": [50.0, 200.0]}), "fig07")
+    assert [c.contact_key for c in checked] == [c.contact_key for c in plain]
+    assert all(c.checked_hardness == (50e6, 200e6) and c.hardness_threshold == 0.05
+               and c.params()["hardness_MPa"] == [50.0, 200.0] for c in checked)
+    assert study_plan(config(body={"hardness_MPa": 50.0})).jobs.keys() == \
+        study_plan(config()).jobs.keys()
 
 
 def test_cap_both_adds_one_capped_cell_per_hardness_keyed_by_its_cap():
     cfg = config(body={"hardness_MPa": [50.0, 200.0]}, contact={"cap": "both"})
-    cells = study.contact_cells(cfg, "fig07")
-    elastic = [c for c in cells if "cap_MPa" not in c]
-    capped = [c for c in cells if "cap_MPa" in c]
+    cells = contact_cells(cfg, "fig07")
+    elastic = [c for c in cells if c.hardness is None]
+    capped = [c for c in cells if c.hardness is not None]
     assert len(elastic) == 2 and len(capped) == 4
-    jobs = study.contact_jobs(cfg, ["fig07"])
+    jobs = study_plan(cfg).jobs
     assert len(jobs) == 6
     for cell in capped:
-        key = study.contact_key(cell)
-        # H L / (E sigma), computed here from the cell's values
-        cap = cell["cap_MPa"] * 2.0e-3 / (500.0 * cell["sigma_um"] * 1e-6)
+        key = cell.contact_key
+        # H L / (E sigma), computed here from the cell's values in the config's units
+        params = cell.params()
+        cap = params["cap_MPa"] * 2.0e-3 / (500.0 * params["sigma_um"] * 1e-6)
         assert key.endswith(f"__cap{cap:.7g}")
-        assert jobs[key]["hardness"] == pytest.approx(cap, rel=1e-12)
-    only_capped = study.contact_cells(config(body={"hardness_MPa": 50.0},
-                                             contact={"cap": True}), "fig07")
-    assert [c["cap_MPa"] for c in only_capped] == [50.0, 50.0]
+        assert jobs[key].nondim_hardness == pytest.approx(cap, rel=1e-12)
+        assert jobs[key].params()["hardness"] == jobs[key].nondim_hardness
+    only_capped = contact_cells(config(body={"hardness_MPa": 50.0}, contact={"cap": True}),
+                                "fig07")
+    assert [c.hardness for c in only_capped] == [50e6, 50e6]
+    assert [c.params()["cap_MPa"] for c in only_capped] == [50.0, 50.0]
 
 
 def test_capped_cells_share_a_job_only_when_their_cap_is_the_same():
@@ -68,17 +74,17 @@ def test_capped_cells_share_a_job_only_when_their_cap_is_the_same():
     other = {**study_cells, "sigma_um": [20.0]}                     # E sigma doubled
     cfg = validated({**BASE, "figures": {}, "sweeps": {"a": study_cells, "b": twin,
                                                        "c": other}})
-    key = {name: study.contact_key(study.contact_cells(cfg, name)[0]) for name in "abc"}
+    key = {name: contact_cells(cfg, name)[0].contact_key for name in "abc"}
     assert key["a"] == key["b"] != key["c"]
 
 
 def test_a_cap_without_a_hardness_and_a_hardness_figure_without_both_are_refused():
-    with pytest.raises(study.ConfigProblems, match="body.hardness_MPa"):
-        study.study_plan(config(contact={"cap": True}))
+    with pytest.raises(ConfigProblems, match="body.hardness_MPa"):
+        study_plan(config(contact={"cap": True}))
     raw = copy.deepcopy(BASE)
     raw["figures"]["hardness"] = {**STUDY, "hardness_MPa": 100.0}
-    with pytest.raises(study.ConfigProblems, match="cap: both"):
-        study.study_plan(validated(raw))
+    with pytest.raises(ConfigProblems, match="cap: both"):
+        study_plan(validated(raw))
 
 
 def test_bad_hardness_values_are_named_by_the_schema():

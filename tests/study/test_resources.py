@@ -1,6 +1,7 @@
 """The cost model of the job resources (roughcontact.study.resources): values
 worked by hand from the documented formulas and config/cost_model.yaml."""
 
+import dataclasses
 import math
 
 import pytest
@@ -8,129 +9,148 @@ import yaml
 from snakemake.utils import validate
 
 from roughcontact.study import resources
-from roughcontact.study.cells import influence_cost, study_plan
-from roughcontact.study.config import validated
+from roughcontact.study.cells import study_plan
+from roughcontact.study.config import (
+    BuildSettings,
+    ContactSettings,
+    ConvergenceSettings,
+    validated,
+)
+from roughcontact.study.records import (
+    ContactJob,
+    GeneratedCell,
+    Generator,
+    Geometry,
+    InfluenceModel,
+)
 
-CG = {"method": "cg", "tol": 1e-8, "steps": 30}
-#: The body section of a minimal config, completed by the schema's defaults.
-BODY = validated({"study_seed": 0, "figures": {},
-                  "surfaces": {"grid": 60, "size_mm": 9.0, "count": 60},
-                  "body": {"thickness_mm": 10.0, "E_MPa": 511.0, "nu": 0.0}})["body"]
+CG = ContactSettings(method="cg", tol=1e-8, precision="mixed", steps=30, pressure_levels=30)
+#: The influence builds of a minimal config, completed by the schema's defaults (16 GB).
+BUILD = BuildSettings.from_section(validated({
+    "study_seed": 0, "figures": {}, "surfaces": {"grid": 60, "size_mm": 9.0, "count": 60},
+    "body": {"thickness_mm": 10.0, "E_MPa": 511.0, "nu": 0.0}})["body"])
 
 
-def dense_job(grid=60, count=60, pressure_end=4.0):
-    geometry = {"nu": 0.0, "size_mm": [9.0, 9.0], "thickness_mm": 10.0, "grid": [grid, grid],
-                "base": "clamped", "mesh": "paper"}
-    return {"surface": {"count": count, "grid": [grid, grid]}, "geometry": geometry,
-            "pressure_end": pressure_end}
+def cell(grid=60, count=60, method=Generator.FILTER) -> GeneratedCell:
+    return GeneratedCell(skew=0.0, kurt=3.0, corr_length=(1e-3, 1e-3), grid=(grid, grid),
+                         size=(9e-3, 9e-3), acf="exponential", periodic=True, method=method,
+                         count=count)
+
+
+def dense_job(grid=60, count=60, pressure_end=4.0, operator=InfluenceModel.DENSE):
+    geometry = Geometry(nu=0.0, size=(9e-3, 9e-3), thickness=10e-3, grid=(grid, grid),
+                        base="clamped", mesh="paper", operator=operator)
+    return ContactJob(surface=cell(grid, count), geometry=geometry, pressure_end=pressure_end)
 
 
 def hybrid_job(grid=256, count=20):
-    job = dense_job(grid, count)
-    job["geometry"]["operator"] = "hybrid"
-    return job
+    return dense_job(grid, count, operator=InfluenceModel.HYBRID)
 
 
 def test_contact_runtime_at_the_measured_cell():
     # 60 surfaces x 30 steps x 0.11 s = 198 s; 3 x 198 / 60 = 9.9 -> 10 min, + 5 min start
-    assert resources.contact_seconds(dense_job(), CG, BODY) == pytest.approx(198.0)
-    assert resources.contact_runtime(dense_job(), CG, BODY) == 15
-    assert resources.contact_runtime(dense_job(), CG, BODY, attempt=2) == 30
+    assert resources.contact_seconds(dense_job(), CG, BUILD) == pytest.approx(198.0)
+    assert resources.contact_runtime(dense_job(), CG, BUILD) == 15
+    assert resources.contact_runtime(dense_job(), CG, BUILD, attempt=2) == 30
 
 
 def test_contact_runtime_scales_with_surfaces_steps_grid_and_reach():
-    base = resources.contact_seconds(dense_job(), CG, BODY)
-    assert resources.contact_seconds(dense_job(count=30), CG, BODY) == pytest.approx(base / 2)
-    assert resources.contact_seconds(dense_job(), {**CG, "steps": 60}, BODY) == \
+    base = resources.contact_seconds(dense_job(), CG, BUILD)
+    assert resources.contact_seconds(dense_job(count=30), CG, BUILD) == pytest.approx(base / 2)
+    assert resources.contact_seconds(dense_job(), dataclasses.replace(CG, steps=60), BUILD) == \
         pytest.approx(2 * base)
     # a quarter of the elements: (900 / 3600)^2.5 = 1/32
-    assert resources.contact_seconds(dense_job(grid=30), CG, BODY) == pytest.approx(base / 32)
+    assert resources.contact_seconds(dense_job(grid=30), CG, BUILD) == pytest.approx(base / 32)
     # a sweep to P L / (E sigma) = 12 reaches three times the study's 4
-    assert resources.contact_seconds(dense_job(pressure_end=12.0), CG, BODY) == \
+    assert resources.contact_seconds(dense_job(pressure_end=12.0), CG, BUILD) == \
         pytest.approx(3 * base)
     # steepest descent: 3 times the products; tol 1e-12: 12 / 8 digits
-    assert resources.contact_seconds(dense_job(), {**CG, "method": "steepest"}, BODY) == \
-        pytest.approx(3 * base)
-    assert resources.contact_seconds(dense_job(), {**CG, "tol": 1e-12}, BODY) == \
+    steepest = dataclasses.replace(CG, method="steepest")
+    assert resources.contact_seconds(dense_job(), steepest, BUILD) == pytest.approx(3 * base)
+    assert resources.contact_seconds(dense_job(), dataclasses.replace(CG, tol=1e-12), BUILD) == \
         pytest.approx(1.5 * base)
 
 
 def test_matrix_free_contact_runtime_in_proportion_to_n():
     # 20 surfaces x 30 steps x 0.62 s at 256 x 256
-    assert resources.contact_seconds(hybrid_job(), CG, BODY) == pytest.approx(20 * 30 * 0.62)
+    assert resources.contact_seconds(hybrid_job(), CG, BUILD) == pytest.approx(20 * 30 * 0.62)
     # 128 x 128: a quarter of n; 16 x 16 hits the 0.05 s floor
-    assert resources.contact_seconds(hybrid_job(128), CG, BODY) == pytest.approx(600 * 0.62 / 4)
-    assert resources.contact_seconds(hybrid_job(16), CG, BODY) == pytest.approx(600 * 0.05)
+    assert resources.contact_seconds(hybrid_job(128), CG, BUILD) == pytest.approx(600 * 0.62 / 4)
+    assert resources.contact_seconds(hybrid_job(16), CG, BUILD) == pytest.approx(600 * 0.05)
 
 
 def test_contact_memory_dense_and_matrix_free():
     n = 60 * 60
-    assert resources.contact_mem_mb(dense_job(), BODY) == int(400 + (24 * n**2 + 80 * 60 * n) / 1e6)
+    assert resources.contact_mem_mb(dense_job(), BUILD) == \
+        int(400 + (24 * n**2 + 80 * 60 * n) / 1e6)
     n = 256 * 256
     # the 64 x 64 coarse correction, not a 34 GB dense matrix
-    assert resources.contact_mem_mb(hybrid_job(), BODY) == \
+    assert resources.contact_mem_mb(hybrid_job(), BUILD) == \
         int(400 + (8 * 4096**2 + 240 * 20 * n) / 1e6)
-    assert resources.contact_mem_mb(hybrid_job(), BODY) < 1000
+    assert resources.contact_mem_mb(hybrid_job(), BUILD) < 1000
 
 
 def test_the_body_memory_limit_plans_the_model_of_every_estimate():
     # operator auto on 60 x 60: dense within the default 16 GB, hybrid when the
     # body allows less than the dense build's estimated peak (about 0.9 GB)
-    job = dense_job()
-    job["geometry"]["operator"] = "auto"
-    tight = {**BODY, "max_memory_gb": 0.1}
-    assert resources.contact_mem_mb(job, BODY) == resources.contact_mem_mb(dense_job(), BODY)
+    job = dense_job(operator=InfluenceModel.AUTO)
+    tight = dataclasses.replace(BUILD, max_bytes=0.1e9)
+    assert resources.contact_mem_mb(job, BUILD) == resources.contact_mem_mb(dense_job(), BUILD)
     hybrid = hybrid_job(60, 60)
-    assert resources.contact_mem_mb(job, tight) == resources.contact_mem_mb(hybrid, BODY)
+    assert resources.contact_mem_mb(job, tight) == resources.contact_mem_mb(hybrid, BUILD)
     assert resources.contact_seconds(job, CG, tight) == \
-        pytest.approx(resources.contact_seconds(hybrid, CG, BODY))
+        pytest.approx(resources.contact_seconds(hybrid, CG, BUILD))
     # stored: the dense matrix, or the coarse correction bound (64^2 x 64^2 doubles)
-    assert resources.stored_bytes(job["geometry"], BODY) == 8 * 3600**2
-    assert resources.stored_bytes(job["geometry"], tight) == 8 * 4096**2
+    assert resources.stored_bytes(job.geometry, BUILD) == 8 * 3600**2
+    assert resources.stored_bytes(job.geometry, tight) == 8 * 4096**2
 
 
 def test_memory_and_time_grow_with_the_grid():
     grids = [16, 30, 60, 120]
     for small, large in zip(grids, grids[1:], strict=False):
-        assert resources.contact_mem_mb(dense_job(small), BODY) < \
-            resources.contact_mem_mb(dense_job(large), BODY)
-        assert resources.contact_seconds(dense_job(small), CG, BODY) < \
-            resources.contact_seconds(dense_job(large), CG, BODY)
-        cell = {"method": "filter", "count": 60}
-        assert resources.surfaces_mem_mb({**cell, "grid": [small] * 2}) <= \
-            resources.surfaces_mem_mb({**cell, "grid": [large] * 2})
+        assert resources.contact_mem_mb(dense_job(small), BUILD) < \
+            resources.contact_mem_mb(dense_job(large), BUILD)
+        assert resources.contact_seconds(dense_job(small), CG, BUILD) < \
+            resources.contact_seconds(dense_job(large), CG, BUILD)
+        assert resources.surfaces_mem_mb(cell(small)) <= resources.surfaces_mem_mb(cell(large))
 
 
 def test_influence_runtime_through_the_measured_anchor():
-    geometry = dense_job()["geometry"]
-    peak_gb = influence_cost(geometry, "auto", 16.0).peak_bytes / 1e9
+    geometry = dense_job().geometry
+    peak_gb = geometry.influence_cost(BUILD).peak_bytes / 1e9
     expected = 4.2 * (peak_gb / 0.92) ** 1.56
-    assert resources.influence_seconds(geometry, BODY) == pytest.approx(expected)
+    assert resources.influence_seconds(geometry, BUILD) == pytest.approx(expected)
     # at the anchor itself (0.92 GB -> 4.2 s): 3 x 4.2 / 60 -> 1 min, + 5 min start
     assert resources.runtime_minutes(4.2 * (0.92 / 0.92) ** 1.56) == 6
     # 9.6 GB (converged, measured 116-132 s): 4.2 x (9.6 / 0.92)^1.56 = 162 s -> 9 + 5 min
     seconds = 4.2 * (9.6 / 0.92) ** 1.56
     assert 132 < seconds < 170
     assert resources.runtime_minutes(seconds, attempt=2) == 2 * (5 + math.ceil(3 * seconds / 60))
-    assert resources.influence_mem_mb(geometry, BODY) == \
-        int(influence_cost(geometry, "auto", 16.0).peak_bytes / 1e6) + 200
+    assert resources.influence_mem_mb(geometry, BUILD) == \
+        int(geometry.influence_cost(BUILD).peak_bytes / 1e6) + 200
 
 
 def test_surfaces_runtime_and_memory():
     # IAAFT, 60 surfaces of 120 x 120: 60 x 0.01 s x 4^1.5 = 4.8 s -> 1 min, + 5 min
-    cell = {"method": "exact", "count": 60, "grid": [120, 120]}
-    assert resources.surfaces_seconds(cell) == pytest.approx(4.8)
-    assert resources.surfaces_runtime(cell, attempt=3) == 18
-    assert resources.surfaces_mem_mb(cell) == int(300 + 160 * 60 * 14400 / 1e6)
+    exact = cell(120, method=Generator.EXACT)
+    assert resources.surfaces_seconds(exact) == pytest.approx(4.8)
+    assert resources.surfaces_runtime(exact, attempt=3) == 18
+    assert resources.surfaces_mem_mb(exact) == int(300 + 160 * 60 * 14400 / 1e6)
+    # the filter adds its calibration (15 s at most); the paper's filter has none
+    assert resources.surfaces_seconds(cell(120)) == pytest.approx(15.0 + 60 * 0.001 * 4**1.5)
+    assert resources.surfaces_seconds(cell(120, method=Generator.PAPER)) == \
+        pytest.approx(60 * 0.001 * 4**1.5)
 
 
 def test_convergence_and_summaries():
-    geometry = dense_job()["geometry"]
+    geometry = dense_job().geometry
+    report = ConvergenceSettings(presets=("a",) * 4, surfaces=3, sigma=24.5e-6,
+                                 corr_length=1e-3, pressures=(1e6,))
     # 4 presets + half-space, 3 surfaces: 30 + 15 x 4 s = 90 s -> 5 + 5 min
-    assert resources.convergence_runtime(geometry, ["a"] * 4, {"surfaces": 3}) == 10
+    assert resources.convergence_runtime(geometry, ["a"] * 4, report) == 10
     # 60 x 60: 5 matrices of 104 MB, below the 2 GB floor; 120 x 120: 8.3 GB
     assert resources.convergence_mem_mb(geometry, ["a"] * 4) == 2000
-    assert resources.convergence_mem_mb({"grid": [120, 120]}, ["a"] * 4) == \
+    assert resources.convergence_mem_mb(dense_job(120).geometry, ["a"] * 4) == \
         int(1000 + 5 * 8 * 14400**2 / 1e6)
     assert resources.summary_runtime(attempt=2) == 2 * (5 + 2)
 
@@ -154,8 +174,9 @@ def test_compare_prints_predictions_against_benchmarks(tmp_path, capsys):
     config = yaml.safe_load(quick.read_text())
     validate(config, str(resources.SCHEMA_FILE))
     key, geometry = sorted(study_plan(config).geometries.items())[0]
-    seconds = resources.influence_seconds(geometry, config["body"])
-    mem_mb = resources.influence_mem_mb(geometry, config["body"])
+    build = BuildSettings.from_section(config["body"])
+    seconds = resources.influence_seconds(geometry, build)
+    mem_mb = resources.influence_mem_mb(geometry, build)
     folder = tmp_path / "influence"
     folder.mkdir()
     (folder / f"{key}.tsv").write_text(HEADER + "2.00\t0:00:02\t100.0\t1\t1\t1\t0\t0\t50\t1\n")

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from roughcontact.surfaces import synthetic
+from roughcontact.surfaces import exact, spectra, synthetic
+from roughcontact.surfaces.spec import SurfaceSpec
 
 MM = 1e-3
 #: The benchmark's targets: normal, skewed both ways, heavy-tailed, next to Ku = Sk^2 + 1.
@@ -23,7 +24,7 @@ SEEDS = (1, 2, 3)
 def paper_spec(**kw):
     base = dict(grid=60, size=9 * MM, corr_length=1 * MM, sigma=1.0)
     base.update(kw)
-    return synthetic.SurfaceSpec(**base)
+    return SurfaceSpec(**base)
 
 
 @pytest.fixture(autouse=True)
@@ -58,7 +59,7 @@ def _zero_mean_target_lag(spec):
     lx = np.minimum(np.arange(nx), nx - np.arange(nx)) * dx
     ly = np.minimum(np.arange(ny), ny - np.arange(ny)) * dy
     r = np.hypot(lx[None, :] / spec.corr_length[0], ly[:, None] / spec.corr_length[1])
-    acf = np.exp(-synthetic.ACF_DECAY * r)
+    acf = np.exp(-spectra.ACF_DECAY * r)
     acf = acf - acf.mean()
     return _decay_lag(acf[0, : nx // 2 + 1] / acf[0, 0], dx)
 
@@ -68,7 +69,7 @@ def _zero_mean_target_lag(spec):
 def test_every_realisation_has_the_target_moments_to_1e_6(skew, kurt, sigma):
     spec = paper_spec(skew=skew, kurt=kurt, sigma=sigma)
     for seed in SEEDS:
-        z, _ = synthetic.generate_exact(spec, seed)
+        z, _ = exact.generate_exact(spec, seed)
         flat = z.ravel()
         assert abs(flat.mean()) < 1e-12 * sigma
         assert abs(flat.std() / sigma - 1.0) < 1e-6  # population std, as height_stats
@@ -79,11 +80,11 @@ def test_every_realisation_has_the_target_moments_to_1e_6(skew, kurt, sigma):
 @pytest.mark.parametrize(("skew", "kurt"), TARGETS)
 def test_height_set_moments_and_it_is_the_surfaces_sorted(skew, kurt):
     spec = paper_spec(skew=skew, kurt=kurt, grid=(48, 40))
-    heights = synthetic.target_heights(spec)
+    heights = exact.target_heights(spec)
     assert np.all(np.diff(heights) >= 0)
     assert abs(stats.skew(heights) - skew) < 1e-9
     assert abs(stats.kurtosis(heights, fisher=False) - kurt) < 1e-9
-    z, _ = synthetic.generate_exact(spec, 5)
+    z, _ = exact.generate_exact(spec, 5)
     assert np.array_equal(np.sort(z, axis=None), heights)
 
 
@@ -92,7 +93,7 @@ def test_acf_lag_is_the_zero_mean_target_lag(skew, kurt):
     """Mean 10 % lag over 5 seeds, x and y: within 1 % of b of the lag of the
     zero-mean target ACF (0.953 b on this grid), so within 6 % of b."""
     spec = paper_spec(skew=skew, kurt=kurt)
-    lags = [_lags(synthetic.generate_exact(spec, seed)[0], spec.spacing) for seed in range(5)]
+    lags = [_lags(exact.generate_exact(spec, seed)[0], spec.spacing) for seed in range(5)]
     expected = _zero_mean_target_lag(spec)
     assert expected == pytest.approx(0.953 * MM, abs=0.002 * MM)
     assert np.mean(lags) == pytest.approx(expected, abs=0.01 * MM)
@@ -103,7 +104,7 @@ def test_acf_lag_next_to_the_absolute_limit():
     """At (1, 2.05) the heights are nearly two-valued: the rank constraint
     shortens the lag further (0.89 b measured); bound 0.85-0.96 b."""
     spec = paper_spec(skew=1.0, kurt=2.05)
-    lags = [_lags(synthetic.generate_exact(spec, seed)[0], spec.spacing) for seed in range(5)]
+    lags = [_lags(exact.generate_exact(spec, seed)[0], spec.spacing) for seed in range(5)]
     assert 0.85 * MM < np.mean(lags) < 0.96 * MM
 
 
@@ -114,7 +115,7 @@ def _spectral_error(z, spec):
     lag_x = np.fft.fftfreq(nx, 1.0 / nx) * dx
     lag_y = np.fft.fftfreq(ny, 1.0 / ny) * dy
     r = np.hypot(lag_x[None, :] / spec.corr_length[0], lag_y[:, None] / spec.corr_length[1])
-    power = np.clip(np.fft.fft2(np.exp(-synthetic.ACF_DECAY * r)).real, 0.0, None)
+    power = np.clip(np.fft.fft2(np.exp(-spectra.ACF_DECAY * r)).real, 0.0, None)
     power[0, 0] = 0.0
     target = np.sqrt(power * (z.size**2 / power.sum()))
     amp = np.abs(np.fft.fft2(z / spec.sigma))
@@ -126,7 +127,7 @@ def _spectral_error(z, spec):
                           (0.0, 20.0, 3e-3), (1.0, 2.05, 0.3)])
 def test_spectral_error_reported_and_small(skew, kurt, bound):
     spec = paper_spec(skew=skew, kurt=kurt)
-    z, info = synthetic.generate_exact(spec, 4)
+    z, info = exact.generate_exact(spec, 4)
     assert info.spectral_error == pytest.approx(_spectral_error(z, spec), rel=1e-9)
     assert info.spectral_error < bound
 
@@ -136,16 +137,16 @@ def test_stagnation_stops_the_iterations(skew, kurt):
     """Default rtol 1e-2: 20-57 rounds measured over 10 seeds; bound 70 (cap 100)."""
     spec = paper_spec(skew=skew, kurt=kurt)
     for seed in SEEDS:
-        _, info = synthetic.generate_exact(spec, seed)
+        _, info = exact.generate_exact(spec, seed)
         assert info.converged
         assert 1 <= info.iterations <= 70
 
 
 def test_tolerance_and_cap():
     spec = paper_spec(skew=2.0, kurt=10.0)
-    _, loose = synthetic.generate_exact(spec, 3, rtol=0.1)
-    _, default = synthetic.generate_exact(spec, 3)
-    _, capped = synthetic.generate_exact(spec, 3, max_iter=3, rtol=0.0)
+    _, loose = exact.generate_exact(spec, 3, rtol=0.1)
+    _, default = exact.generate_exact(spec, 3)
+    _, capped = exact.generate_exact(spec, 3, max_iter=3, rtol=0.0)
     assert loose.iterations < default.iterations
     assert loose.spectral_error > default.spectral_error
     assert capped.iterations == 3 and not capped.converged
@@ -154,12 +155,12 @@ def test_tolerance_and_cap():
 
 def test_same_seed_same_bits():
     spec = paper_spec(skew=-1.5, kurt=7.0)
-    a, info_a = synthetic.generate_exact(spec, 17)
-    b, info_b = synthetic.generate_exact(spec, 17)
+    a, info_a = exact.generate_exact(spec, 17)
+    b, info_b = exact.generate_exact(spec, 17)
     assert np.array_equal(a, b) and info_a == info_b
     assert np.array_equal(synthetic.generate(spec, 17, method="exact"), a)
     assert np.array_equal(synthetic.generate_many(spec, [3, 17], method="exact")[1], a)
-    assert not np.array_equal(synthetic.generate_exact(spec, 18)[0], a)
+    assert not np.array_equal(exact.generate_exact(spec, 18)[0], a)
 
 
 @pytest.mark.parametrize("grid", [(61, 47), (45, 64)])
@@ -167,7 +168,7 @@ def test_odd_and_oblong_grids(grid):
     """The half-spectrum bookkeeping (odd nx, no Nyquist column) and nx != ny."""
     spec = paper_spec(grid=grid, size=(9 * MM, 7 * MM), corr_length=(1 * MM, 0.7 * MM),
                       skew=-1.0, kurt=6.0, sigma=3e-6)
-    z, info = synthetic.generate_exact(spec, 2)
+    z, info = exact.generate_exact(spec, 2)
     assert z.shape == (grid[1], grid[0])
     assert info.spectral_error == pytest.approx(_spectral_error(z, spec), rel=1e-9)
     assert info.converged and info.spectral_error < 2e-3

@@ -6,16 +6,10 @@ import numpy as np
 import pytest
 
 from roughcontact import InfeasibleMoments
-from roughcontact.surfaces.synthetic import (
-    SurfaceSpec,
-    calibrate_filter,
-    correlation_length,
-    generate,
-    generate_many,
-    height_stats,
-    input_moments,
-    kurt_min,
-)
+from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.statistics import correlation_length, height_stats
+from roughcontact.surfaces.synthetic import generate, generate_many
 
 MM = 1e-3
 

@@ -18,13 +18,9 @@ from scipy import ndimage
 
 from roughcontact.errors import MeasurementError
 from roughcontact.surfaces import measured
-from roughcontact.surfaces.measured import (
-    load_measurement,
-    read_instrument,
-    read_text_grid,
-    remove_polynomial,
-    statistics,
-)
+from roughcontact.surfaces.measured import load_measurement, statistics
+from roughcontact.surfaces.preparation import remove_polynomial
+from roughcontact.surfaces.readers import read_instrument, read_text_grid
 
 #: Real instrument files (SurfaceTopography's test collection), read in place: the folder
 #: ROUGHCONTACT_TOPOGRAPHIES names, else ``shared/data/topographies`` beside the checkout.

@@ -16,18 +16,15 @@ import yaml
 from scipy import stats as scipy_stats
 
 from roughcontact.errors import MeasurementError
-from roughcontact.study.cells import (
-    cell_key,
-    check_studies,
-    contact_cells,
-    contact_jobs,
-    measured_cell_params,
-)
+from roughcontact.study.cells import contact_jobs
+from roughcontact.study.checks import check_studies
 from roughcontact.study.config import validated
 from roughcontact.study.jobs import build_surface_cell
+from roughcontact.study.records import MeasuredCell
+from roughcontact.study.sources import MeasurementImport
 from roughcontact.study.storage import read_surfaces
-from roughcontact.surfaces import johnson, measured
-from roughcontact.surfaces import synthetic as surface
+from roughcontact.study.studies import contact_cells
+from roughcontact.surfaces import johnson, measured, preparation, readers, statistics
 
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLE = REPO / "data" / "example_plateau_honed.xyz"
@@ -38,7 +35,7 @@ def rough_field(ny=12, nx=16, seed=3):
     """A rough, plane-free, zero-mean field with a heavy lower tail (arbitrary unit)."""
     rng = np.random.default_rng(seed)
     z = rng.standard_normal((ny, nx)) - 0.5 * rng.exponential(1.0, (ny, nx))
-    return measured.remove_plane(z, (1.0, 1.0))[0]
+    return preparation.remove_plane(z, (1.0, 1.0))[0]
 
 
 def with_plane(z, spacing, a=0.3, b=0.02, c=-0.05):
@@ -67,7 +64,7 @@ def test_npy_round_trip_converts_units_and_keeps_the_orientation(tmp_path):
     path = tmp_path / "map.npy"
     np.save(path, z_um)
     m = measured.load_measurement(path, "npy", height_unit="um", spacing=(0.1 * MM, 0.2 * MM))
-    expected, _ = measured.remove_plane(z_um * UM, (0.1 * MM, 0.2 * MM))
+    expected, _ = preparation.remove_plane(z_um * UM, (0.1 * MM, 0.2 * MM))
     assert m.heights.shape == (12, 16) and m.grid == (16, 12)
     assert m.spacing == pytest.approx((1e-4, 2e-4))
     assert m.size == pytest.approx((1.6e-3, 2.4e-3))
@@ -83,9 +80,9 @@ def test_text_grid_round_trip_with_comments_in_nanometres(tmp_path, separator):
     rows = [separator.join(f"{v:.17g}" for v in row) for row in z_nm]
     path.write_text("# exported by a profilometer\n# unit: nm\n\n" + "\n".join(rows[:3])
                     + "\n# a comment between rows\n" + "\n".join(rows[3:]) + "  # trailing\n")
-    assert np.array_equal(measured.read_text_grid(path), z_nm)  # rows = y, columns = x
+    assert np.array_equal(readers.read_text_grid(path), z_nm)  # rows = y, columns = x
     m = measured.load_measurement(path, "text", height_unit="nm", spacing=(2e-6, 2e-6))
-    assert np.allclose(m.heights, measured.remove_plane(z_nm * 1e-9, (2e-6, 2e-6))[0],
+    assert np.allclose(m.heights, preparation.remove_plane(z_nm * 1e-9, (2e-6, 2e-6))[0],
                        rtol=0, atol=1e-21)
     assert m.grid == (9, 7)
 
@@ -96,12 +93,12 @@ def test_xyz_round_trip_infers_the_spacing_from_shuffled_points(tmp_path):
     path = tmp_path / "points.xyz"
     rng = np.random.default_rng(0)
     write_xyz(path, z_mm, dx_um, dy_um, order=rng.permutation)
-    raw, spacing, absent = measured.read_xyz(path, "um")
+    raw, spacing, absent = readers.read_xyz(path, "um")
     assert np.array_equal(raw, z_mm) and absent == 0
     assert spacing == pytest.approx((dx_um, dy_um), rel=1e-12)
     m = measured.load_measurement(path, "xyz", height_unit="mm", lateral_unit="um")
     assert m.spacing == pytest.approx((2.5e-6, 4e-6), rel=1e-12)
-    assert np.allclose(m.heights, measured.remove_plane(z_mm * MM, m.spacing)[0],
+    assert np.allclose(m.heights, preparation.remove_plane(z_mm * MM, m.spacing)[0],
                        rtol=0, atol=1e-18)
 
 
@@ -109,7 +106,7 @@ def test_xyz_tolerates_coordinates_rounded_in_print(tmp_path):
     z = rough_field(ny=6, nx=30)
     path = tmp_path / "rounded.xyz"
     write_xyz(path, z, 1 / 30, 1 / 30, fmt="{:.4f} {:.4f} {:.17g}")  # 0.0333, 0.0667, ...
-    raw, spacing, _ = measured.read_xyz(path)
+    raw, spacing, _ = readers.read_xyz(path)
     assert np.array_equal(raw, z)
     assert spacing == pytest.approx((1 / 30, 1 / 30), rel=2e-3)
 
@@ -121,7 +118,7 @@ def test_plane_removal_removes_an_added_plane_exactly():
     z = rough_field()
     spacing = (1e-4, 2e-4)
     tilted = with_plane(z, spacing, a=2e-6, b=3e-3, c=-1e-3)
-    residual, (a, b, c) = measured.remove_plane(tilted, spacing)
+    residual, (a, b, c) = preparation.remove_plane(tilted, spacing)
     assert np.allclose(residual, z, rtol=0, atol=1e-15)
     assert (a, b, c) == pytest.approx((2e-6, 3e-3, -1e-3), rel=1e-9)
     assert abs(residual.mean()) < 1e-15
@@ -130,10 +127,10 @@ def test_plane_removal_removes_an_added_plane_exactly():
 def test_statistics_are_those_of_the_surface_module_and_the_johnson_fit():
     m = measured.load_measurement(EXAMPLE, "xyz", height_unit="um", fill_holes=0.01)
     s = measured.statistics(m)
-    moments = surface.height_stats(m.heights)
+    moments = statistics.height_stats(m.heights)
     assert s["sigma"] == pytest.approx(moments["sigma"], rel=1e-14)
     assert (s["skew"], s["kurt"]) == pytest.approx((moments["skew"], moments["kurt"]), rel=1e-14)
-    bx, by = surface.correlation_length(m.heights, m.spacing, periodic=False)
+    bx, by = statistics.correlation_length(m.heights, m.spacing, periodic=False)
     assert (s["corr_length_x"], s["corr_length_y"]) == pytest.approx((bx, by))
     assert s["grid"] == [64, 64] and s["size"] == pytest.approx([6.4e-3, 6.4e-3])
     assert s["filled_points"] == 10 and s["filled_fraction"] == pytest.approx(10 / 4096)
@@ -188,16 +185,16 @@ def test_hole_filling_reproduces_a_smooth_field_and_records_the_count(tmp_path):
     assert m.filled == 12 and m.filled_fraction == pytest.approx(12 / 2000)
     s = measured.statistics(m)
     assert s["filled_points"] == 12 and s["filled_fraction"] == pytest.approx(0.006)
-    truth = measured.remove_plane(z * UM, (1e-4, 1e-4))[0]
+    truth = preparation.remove_plane(z * UM, (1e-4, 1e-4))[0]
     error = np.abs(m.heights - truth) / np.ptp(truth)
     assert error[10:13, 20:23].max() < 0.005  # second order inside a hole
     assert error.max() < 0.05  # first order at the edges (zero normal slope there)
-    filled, count = measured.fill_missing(holes, 0.01)
+    filled, count = preparation.fill_missing(holes, 0.01)
     assert count == 12 and np.array_equal(filled[~np.isnan(holes)], z[~np.isnan(holes)])
     # a plane is filled exactly, at the edges too
     plane = with_plane(np.zeros_like(z), (1.0, 1.0), a=1.0, b=0.2, c=-0.3)
     plane_holes = np.where(np.isnan(holes), np.nan, plane)
-    filled, count = measured.fill_missing(plane_holes, 0.01)
+    filled, count = preparation.fill_missing(plane_holes, 0.01)
     assert count == 12 and np.allclose(filled, plane, rtol=0, atol=1e-12)
 
 
@@ -323,18 +320,23 @@ def surface_entry(**surface) -> dict:
     return config["sweeps"]["s"]["surface"]
 
 
+def cell_key(entry: dict) -> str:
+    """The key of the surface cell of a measured ``surface:`` entry."""
+    return MeasuredCell.from_source(MeasurementImport.from_entry(entry)).key
+
+
 def test_measured_key_follows_content_and_options_not_the_name(tmp_path):
     copy = tmp_path / "elsewhere" / "example_plateau_honed.xyz"
     copy.parent.mkdir()
     copy.write_bytes(EXAMPLE.read_bytes())
     entry = surface_entry(file=str(EXAMPLE), format="xyz", height_unit="um", fill_holes=0.01)
-    key = cell_key(measured_cell_params(entry))
+    key = cell_key(entry)
     assert key.startswith("measured-example-plateau-honed_") and key.endswith("_n1")
-    assert cell_key(measured_cell_params({**entry, "file": str(copy)})) == key
-    assert cell_key(measured_cell_params({**entry, "fill_holes": 0.02})) != key
-    assert cell_key(measured_cell_params({**entry, "height_unit": "nm"})) != key
+    assert cell_key({**entry, "file": str(copy)}) == key
+    assert cell_key({**entry, "fill_holes": 0.02}) != key
+    assert cell_key({**entry, "height_unit": "nm"}) != key
     copy.write_text(EXAMPLE.read_text().replace("SYNTHETIC", "Synthetic", 1))
-    assert cell_key(measured_cell_params({**entry, "file": str(copy)})) != key
+    assert cell_key({**entry, "file": str(copy)}) != key
 
 
 def test_measured_study_cells_follow_the_measurement():
@@ -342,19 +344,19 @@ def test_measured_study_cells_follow_the_measurement():
     assert check_studies(config, ["plateau_honed"]) == []
     cells = contact_cells(config, "plateau_honed")
     assert len(cells) == 2
-    meas, twin = (c["surface"] for c in cells)
-    assert meas["method"] == "measured" and meas["count"] == 1
-    assert twin["method"] == config["surfaces"]["method"] and twin["count"] == 5
-    for key in ("skew", "kurt", "b_mm", "grid", "size_mm"):
-        assert twin[key] == meas[key], key
+    meas, twin = (c.surface for c in cells)
+    assert meas.method.value == "measured" and meas.count == 1
+    assert twin.method.value == config["surfaces"]["method"] and twin.count == 5
+    for key in ("skew", "kurt", "corr_length", "grid", "size"):
+        assert getattr(twin, key) == getattr(meas, key), key
     for cell in cells:
-        assert cell["geometry"]["grid"] == [64, 64]
-        assert cell["geometry"]["size_mm"] == [6.4, 6.4]
-        assert cell["sigma_um"] == pytest.approx(meas["measured"]["sigma_um"])
-    assert len(contact_jobs(config, ["plateau_honed"])) == 2
+        assert cell.geometry.grid == (64, 64)
+        assert cell.geometry.params()["size_mm"] == [6.4, 6.4]
+        assert cell.sigma == pytest.approx(meas.sigma)
+    assert len(contact_jobs(cells)) == 2
     # an explicit sigma rescales both; no twin without compare_synthetic
     config = measured_config(EXAMPLE, sigma_um=[1.0, 2.0], compare_synthetic=False)
-    assert [c["sigma_um"] for c in contact_cells(config, "plateau_honed")] == [1.0, 2.0]
+    assert [c.params()["sigma_um"] for c in contact_cells(config, "plateau_honed")] == [1.0, 2.0]
 
 
 @pytest.mark.parametrize(
@@ -375,9 +377,9 @@ def test_check_studies_reports_unusable_measured_studies(change, message):
 
 def test_measured_cell_file_has_the_generated_layout(tmp_path):
     config = measured_config(EXAMPLE)
-    params = contact_cells(config, "plateau_honed")[0]["surface"]
+    surface = contact_cells(config, "plateau_honed")[0].surface
     path = tmp_path / "cell.h5"
-    build_surface_cell(params, 7, path, config=config)
+    build_surface_cell(surface.params(), 7, path, config=config)
     cell = read_surfaces(path)
     m = measured.load_measurement(EXAMPLE, "xyz", height_unit="um", fill_holes=0.01)
     s = measured.statistics(m)
@@ -389,7 +391,7 @@ def test_measured_cell_file_has_the_generated_layout(tmp_path):
     assert attrs["measured_sigma_m"] == pytest.approx(s["sigma"])
     assert attrs["filled_points"] == 10
     assert json.loads(attrs["import_options"])["fill_holes"] == 0.01
-    assert attrs["johnson_family"] == "SB" and attrs["cell"] == cell_key(params)
+    assert attrs["johnson_family"] == "SB" and attrs["cell"] == surface.key
 
 
 # ------------------------------------------------------------------ the workflow
@@ -433,11 +435,11 @@ def test_measured_surface_runs_end_to_end_beside_its_twin(tmp_path):
     m = measured.load_measurement(data, "xyz", height_unit="um", fill_holes=0.01)
     s = measured.statistics(m)
     cells = contact_cells(config, "plateau_honed")
-    meas_key, twin_key = (c["surface_key"] for c in cells)
+    meas_key, twin_key = (c.surface.key for c in cells)
     with h5py.File(tmp_path / "results" / "surfaces" / f"{meas_key}.h5", "r") as f:
         attrs = dict(f.attrs)
         heights = f["heights"][()]
-    stored = surface.height_stats(heights[0] * attrs["measured_sigma_m"])
+    stored = statistics.height_stats(heights[0] * attrs["measured_sigma_m"])
     assert stored["sigma"] == pytest.approx(s["sigma"], rel=1e-12)
     assert (stored["skew"], stored["kurt"]) == pytest.approx((s["skew"], s["kurt"]), rel=1e-12)
     assert (attrs["measured_skew"], attrs["measured_kurt"]) == pytest.approx(

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from roughcontact.errors import MeasurementError
-from roughcontact.surfaces import measured, synthetic
+from roughcontact.surfaces import measured, spec, spectra, synthetic
+from roughcontact.surfaces.spec import SurfaceSpec
 
 MM = 1e-3
 SIZE = 9 * MM
@@ -34,17 +35,17 @@ def _quiet(caplog):
 
 
 def self_affine_spec(**kw):
-    return synthetic.SurfaceSpec(grid=GRID, size=SIZE, acf="self-affine", hurst=HURST,
+    return SurfaceSpec(grid=GRID, size=SIZE, acf="self-affine", hurst=HURST,
                                  rolloff_wavelength=ROLLOFF, cutoff_wavelength=CUTOFF, **kw)
 
 
 def sampled_table(q):
-    return tuple(zip(q, synthetic.self_affine_psd(q, HURST, ROLLOFF, CUTOFF), strict=True))
+    return tuple(zip(q, spectra.self_affine_psd(q, HURST, ROLLOFF, CUTOFF), strict=True))
 
 
 def psd_spec(table, **kw):
     base = dict(grid=GRID, size=SIZE, acf="psd", psd=table)
-    return synthetic.SurfaceSpec(**(base | kw))
+    return SurfaceSpec(**(base | kw))
 
 
 def grid_wavenumber(n=GRID, size=SIZE):
@@ -66,8 +67,8 @@ def test_table_with_the_kinks_as_rows_is_the_self_affine_kernel():
     # log-log interpolation is exact on a power law and on a plateau, so rows at
     # the roll-off and the cut-off give the self-affine transfer to rounding
     q = np.unique(np.concatenate([np.geomspace(Q_LOWEST, Q_S, 7), [Q_R]]))
-    transfer = synthetic.filter_kernel(psd_spec(sampled_table(q))).transfer
-    reference = synthetic.filter_kernel(self_affine_spec()).transfer
+    transfer = spectra.filter_kernel(psd_spec(sampled_table(q))).transfer
+    reference = spectra.filter_kernel(self_affine_spec()).transfer
     assert np.max(np.abs(transfer - reference)) < 1e-12 * reference.max()
 
 
@@ -76,8 +77,8 @@ def test_densely_sampled_self_affine_table_reproduces_its_kernel_and_surfaces():
     # across the roll-off kink is approximate (measured 0.8 % of the largest transfer)
     table = sampled_table(np.geomspace(Q_LOWEST, Q_S, 100))
     spec, reference = psd_spec(table), self_affine_spec()
-    transfer = synthetic.filter_kernel(spec).transfer
-    expected = synthetic.filter_kernel(reference).transfer
+    transfer = spectra.filter_kernel(spec).transfer
+    expected = spectra.filter_kernel(reference).transfer
     assert np.max(np.abs(transfer - expected)) < 0.015 * expected.max()
     seeds = range(4)
     power = ring_power(synthetic.generate_many(spec, seeds, method="paper"))
@@ -93,7 +94,7 @@ def test_no_power_above_the_last_row_and_a_plateau_below_the_first():
     table = ((q_first, 2.0), (q_last, 0.5))
     spec = psd_spec(table, skew=0.5, kurt=4.0)
     q = grid_wavenumber()
-    transfer = synthetic.filter_kernel(spec).transfer
+    transfer = spectra.filter_kernel(spec).transfer
     below, above = (q > 0) & (q < q_first), q > q_last * (1 + 1e-9)
     assert np.ptp(transfer[below]) < 1e-12 * transfer.max()  # flat: C = 2 below q_1
     assert np.all(transfer[above] == 0.0)
@@ -105,16 +106,16 @@ def test_no_power_above_the_last_row_and_a_plateau_below_the_first():
 
 
 def test_interpolation_is_log_log_with_linear_segments_at_zeros():
-    table = synthetic.check_psd_table(((1.0, 4.0), (4.0, 1.0), (8.0, 0.0), (16.0, 2.0)))
+    table = spec.check_psd_table(((1.0, 4.0), (4.0, 1.0), (8.0, 0.0), (16.0, 2.0)))
     q = np.array([0.5, 1.0, 2.0, 4.0, 6.0, 12.0, 16.0, 16.5])
-    c = synthetic.tabulated_psd(q, table)
+    c = spectra.tabulated_psd(q, table)
     # plateau; rows; log-log midpoint of (1, 4)-(4, 1) is (2, 2); linear in C next to
     # the zero: halfway between 4 and 8 is 0.5, between 8 and 16 is 1; cut-off above
     assert c == pytest.approx([4.0, 4.0, 2.0, 1.0, 0.5, 1.0, 2.0, 0.0], rel=1e-12)
     # a power law between rows is exact anywhere in the segment
-    law = synthetic.check_psd_table(((10.0, 10.0**-3), (1000.0, 1000.0**-3)))
+    law = spec.check_psd_table(((10.0, 10.0**-3), (1000.0, 1000.0**-3)))
     x = np.geomspace(10.0, 1000.0, 17)
-    assert synthetic.tabulated_psd(x, law) == pytest.approx(x**-3, rel=1e-10)
+    assert spectra.tabulated_psd(x, law) == pytest.approx(x**-3, rel=1e-10)
 
 
 @pytest.mark.parametrize("table, words", [
@@ -138,14 +139,14 @@ def test_psd_spec_round_trips_is_hashable_and_periodic_only():
     table = [[Q_LOWEST, 1.0], [Q_S, 1e-3]]  # lists, as as_dict writes them
     spec = psd_spec(table, skew=0.3, kurt=3.5)
     assert spec.psd == ((Q_LOWEST, 1.0), (Q_S, 1e-3))
-    assert synthetic.SurfaceSpec(**spec.as_dict()) == spec
-    assert hash(spec) == hash(synthetic.SurfaceSpec(**spec.as_dict()))
+    assert SurfaceSpec(**spec.as_dict()) == spec
+    assert hash(spec) == hash(SurfaceSpec(**spec.as_dict()))
     with pytest.raises(ValueError, match="periodic"):
         psd_spec(table, periodic=False)
     with pytest.raises(ValueError, match=r"SurfaceSpec.psd applies to acf='psd' only"):
-        synthetic.SurfaceSpec(grid=GRID, size=SIZE, corr_length=MM, psd=table)
+        SurfaceSpec(grid=GRID, size=SIZE, corr_length=MM, psd=table)
     with pytest.raises(ValueError, match="autocorrelation.*PSD"):
-        synthetic.autocorrelation(spec, 0.0, 0.0)
+        spectra.autocorrelation(spec, 0.0, 0.0)
 
 
 def test_a_table_whose_power_the_grid_cannot_carry_is_refused():
@@ -155,7 +156,7 @@ def test_a_table_whose_power_the_grid_cannot_carry_is_refused():
     # power only in a narrow band between two grid wavenumbers
     spec = psd_spec(((1.2 * Q_LOWEST, 0.0), (1.3 * Q_LOWEST, 1.0), (1.35 * Q_LOWEST, 0.0)))
     with pytest.raises(ValueError, match="no power on any wavenumber"):
-        synthetic.filter_kernel(spec)
+        spectra.filter_kernel(spec)
 
 
 def test_read_psd_table_converts_per_mm_and_refuses_bad_files(tmp_path):
@@ -179,7 +180,7 @@ def test_read_psd_table_converts_per_mm_and_refuses_bad_files(tmp_path):
 def test_measured_psd_table_follows_the_measured_surface(tmp_path):
     # a self-affine "measurement" with a roll-off at a third of its width: the table
     # from its isotropic PSD has the same band slope, and positive, increasing rows
-    spec = synthetic.SurfaceSpec(grid=96, size=9.6 * MM, acf="self-affine", hurst=0.5,
+    spec = SurfaceSpec(grid=96, size=9.6 * MM, acf="self-affine", hurst=0.5,
                                  rolloff_wavelength=3.2 * MM, cutoff_wavelength=0.4 * MM,
                                  sigma=1e-6)
     np.save(tmp_path / "map.npy", synthetic.generate(spec, 3, method="paper"))
@@ -193,5 +194,5 @@ def test_measured_psd_table_follows_the_measured_surface(tmp_path):
     assert slope == pytest.approx(-3.0, abs=0.4)  # -2 (1 + H), one windowed map
     assert hashlib.sha256((tmp_path / "map.npy").read_bytes()).hexdigest() == \
         measurement.sha256
-    assert synthetic.SurfaceSpec(grid=96, size=9.6 * MM, acf="psd", psd=tuple(table)).psd[0][0] \
+    assert SurfaceSpec(grid=96, size=9.6 * MM, acf="psd", psd=tuple(table)).psd[0][0] \
         == q[0]

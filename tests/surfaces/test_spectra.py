@@ -14,6 +14,7 @@ import pytest
 from scipy import stats
 
 from roughcontact.surfaces import synthetic
+from roughcontact.surfaces.spec import SurfaceSpec
 
 MM = 1e-3
 SIZE = 9 * MM
@@ -31,7 +32,7 @@ def self_affine(**kw):
     base = dict(grid=GRID, size=SIZE, sigma=1.0, acf="self-affine", hurst=0.8,
                 rolloff_wavelength=ROLLOFF, cutoff_wavelength=CUTOFF)
     base.update(kw)
-    return synthetic.SurfaceSpec(**base)
+    return SurfaceSpec(**base)
 
 
 @pytest.fixture(autouse=True)
@@ -88,8 +89,8 @@ def test_exact_moments_on_target(skew, kurt, grid, size):
 def test_as_dict_round_trip_and_corr_length_default():
     spec = self_affine(skew=1.0, kurt=5.0)
     assert spec.corr_length == (ROLLOFF, ROLLOFF)
-    assert synthetic.SurfaceSpec(**spec.as_dict()) == spec
-    assert synthetic.SurfaceSpec(**spec.as_dict()).as_dict() == spec.as_dict()
+    assert SurfaceSpec(**spec.as_dict()) == spec
+    assert SurfaceSpec(**spec.as_dict()).as_dict() == spec.as_dict()
 
 
 @pytest.mark.parametrize("kw, name", [
@@ -117,11 +118,53 @@ def test_cutoff_at_two_spacings_is_accepted():
 
 def test_self_affine_fields_refused_for_acf_kinds():
     with pytest.raises(ValueError, match="hurst"):
-        synthetic.SurfaceSpec(grid=32, size=SIZE, corr_length=MM, hurst=0.5)
+        SurfaceSpec(grid=32, size=SIZE, corr_length=MM, hurst=0.5)
     with pytest.raises(ValueError, match="corr_length"):
-        synthetic.SurfaceSpec(grid=32, size=SIZE)
+        SurfaceSpec(grid=32, size=SIZE)
 
 
 def test_self_affine_is_periodic_only():
     with pytest.raises(ValueError, match="periodic"):
         self_affine(periodic=False)
+
+
+# --------------------------------------------------------------------------- Gaussian or not
+
+
+def test_paper_method_is_a_linear_filter_of_gaussian_noise():
+    """skew 0, kurt 3, method="paper": the seed's Gaussian noise, filtered by sqrt(PSD).
+
+    The PSD is written out here; a linear map of Gaussian noise is a Gaussian process.
+    """
+    sigma, seed, hurst = 2e-6, 5, 0.8
+    spec = self_affine(grid=(64, 48), size=(SIZE, 0.75 * SIZE), sigma=sigma, hurst=hurst,
+                       rolloff_wavelength=SIZE, cutoff_wavelength=8 * SIZE / 64)
+    z = synthetic.generate(spec, seed, method="paper")
+    ny, nx = spec.shape
+    qx = 2 * np.pi * np.fft.fftfreq(nx, spec.spacing[0])
+    qy = 2 * np.pi * np.fft.fftfreq(ny, spec.spacing[1])
+    q = np.hypot(qx[None, :], qy[:, None])
+    q_r, q_s = 2 * np.pi / spec.rolloff_wavelength, 2 * np.pi / spec.cutoff_wavelength
+    psd = np.where(q <= q_s * (1 + 1e-12), (np.maximum(q, q_r) / q_r) ** (-2 * (1 + hurst)), 0.0)
+    noise = np.random.default_rng(seed).standard_normal((ny, nx))
+    # unit variance: sum over bins of the transfer squared / N = 1
+    expected = np.fft.ifft2(np.fft.fft2(noise) * np.sqrt(psd / psd.mean())).real
+    expected = sigma * (expected - expected.mean())
+    assert np.allclose(z, expected, rtol=0, atol=1e-12 * sigma)
+
+
+def test_default_calibration_makes_a_self_affine_surface_without_rolloff_non_gaussian():
+    # 32 x 32, cut-off at 4 spacings: the window holds one roll-off wavelength, and the
+    # Gaussian process's sample kurtosis averages well below 3 (2.6); the default method
+    # calibrates that to 3 with a process of kurtosis ~4 (heavy-tailed SU white noise);
+    # with a roll-off at L / 4 the process stays close to Gaussian
+    from roughcontact.surfaces.calibration import calibrate_filter
+
+    base = dict(grid=32, size=SIZE, cutoff_wavelength=SIZE / 8)
+    no_rolloff = calibrate_filter(self_affine(rolloff_wavelength=SIZE, **base), rse=1e-2)
+    assert no_rolloff.paper_kurt < 2.8
+    assert no_rolloff.kurt > 3.5
+    assert no_rolloff.expected_kurt == pytest.approx(3.0, abs=0.01)
+    rolloff = calibrate_filter(self_affine(rolloff_wavelength=SIZE / 4, **base), rse=1e-2)
+    assert rolloff.kurt == pytest.approx(3.0, abs=0.1)
+    assert rolloff.paper_kurt > 2.9

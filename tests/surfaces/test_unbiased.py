@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from roughcontact.surfaces import synthetic
-from roughcontact.surfaces.synthetic import SurfaceSpec, calibrate_filter, generate_many
+from roughcontact.surfaces import calibration, synthetic
+from roughcontact.surfaces.calibration import calibrate_filter
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.synthetic import generate_many
 
 MM = 1e-3
 
@@ -53,7 +55,7 @@ def test_skewed_window_skewness_and_kurtosis_both_on_target():
 
 def test_control_variates_agree_with_the_plain_mean_and_shrink_the_error():
     spec = SurfaceSpec(grid=60, size=9 * MM, corr_length=MM, skew=0.8, kurt=4.0)
-    (sk, ku), (sk_se, ku_se) = synthetic.expected_sample_moments(spec, 3000)
+    (sk, ku), (sk_se, ku_se) = calibration.expected_sample_moments(spec, 3000)
     plain_sk, plain_ku = sample_moments(spec, "paper", 3000, "plain")
     for est, est_se, values in ((sk, sk_se, plain_sk), (ku, ku_se, plain_ku)):
         mean, se = mean_and_se(values)
@@ -63,16 +65,16 @@ def test_control_variates_agree_with_the_plain_mean_and_shrink_the_error():
 
 def test_calibration_is_reproducible_and_independent_of_sigma():
     spec = SurfaceSpec(grid=30, size=4.5 * MM, corr_length=MM, skew=-0.5, kurt=4.0)
-    first = synthetic._calibrate.__wrapped__(spec, synthetic.CALIBRATION_RSE,
-                                             synthetic.CALIBRATION_MAX_POINTS,
-                                             synthetic.CALIBRATION_SEED)
+    first = calibration._calibrate.__wrapped__(spec, calibration.CALIBRATION_RSE,
+                                             calibration.CALIBRATION_MAX_POINTS,
+                                             calibration.CALIBRATION_SEED)
     again = calibrate_filter(SurfaceSpec(grid=30, size=4.5 * MM, corr_length=MM, sigma=3e-5,
                                          skew=-0.5, kurt=4.0))
     assert (first.skew, first.kurt, first.samples) == (again.skew, again.kurt, again.samples)
     assert first.converged
     assert first.expected_skew == pytest.approx(-0.5, abs=0.05 * first.skew_se + 1e-5)
     assert first.expected_kurt == pytest.approx(4.0, abs=0.05 * first.kurt_se + 4e-5)
-    assert first.kurt_se <= synthetic.CALIBRATION_RSE * 4.0
+    assert first.kurt_se <= calibration.CALIBRATION_RSE * 4.0
 
 
 def test_stored_surfaces_are_the_paper_generator_at_the_calibrated_moments():

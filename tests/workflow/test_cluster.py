@@ -12,8 +12,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from roughcontact.study.cells import cell_key, contact_cells, contact_key
 from roughcontact.study.config import load_config
+from roughcontact.study.studies import contact_cells
 
 REPO = Path(__file__).resolve().parents[2]
 PROFILES = REPO / "profiles"
@@ -121,17 +121,17 @@ def test_every_job_went_through_the_submit_script(fig14_runs):
     groups = table[table["type"] == "group"]
     # one submission per influence matrix and per contact job ...
     assert sorted(singles["name"]) == sorted(
-        ["influence"] * len({c["geometry_key"] for c in cells})
-        + ["contact"] * len({contact_key(c) for c in cells})
+        ["influence"] * len({c.geometry.key for c in cells})
+        + ["contact"] * len({c.contact_key for c in cells})
     )
     contact_outputs = set(singles.loc[singles["name"] == "contact", "output"])
-    assert contact_outputs == {f"results/contact/{contact_key(c)}.h5" for c in cells}
+    assert contact_outputs == {f"results/contact/{c.contact_key}.h5" for c in cells}
     # ... and the cheap jobs in two group submissions: the surface cells together,
     # the aggregate with its figure
     assert sorted(groups["name"]) == ["summaries", "surfaces"]
     surfaces = groups.loc[groups["name"] == "surfaces", "output"].item().split(",")
     assert sorted(surfaces) == sorted(
-        {f"results/surfaces/{cell_key(c['surface'])}.h5" for c in cells})
+        {f"results/surfaces/{c.surface.key}.h5" for c in cells})
     summary = groups.loc[groups["name"] == "summaries", "output"].item().split(",")
     assert FIG14 in summary
     # the resources of rules/common.smk reach the submission

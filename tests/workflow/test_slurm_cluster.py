@@ -31,8 +31,8 @@ import pandas as pd
 import pytest
 from test_cluster import FIG14, PROFILES, QUICK, REPO, dry_run_jobs, run_snakemake
 
-from roughcontact.study.cells import contact_cells
 from roughcontact.study.config import load_config
+from roughcontact.study.studies import contact_cells
 
 pytestmark = pytest.mark.slurm
 
@@ -325,7 +325,7 @@ def test_a_job_slurm_ends_without_success_stops_the_run(slurm, tmp_path):
     """squeue still lists a finished job (MinJobAge): the plugin reads a cancelled
     job's state and the run stops with it, instead of waiting. (An influence build,
     submitted alone: Snakemake reports a failed group without the plugin's message.)"""
-    geometry = contact_cells(load_config(QUICK), "fig14")[0]["geometry_key"]
+    geometry = contact_cells(load_config(QUICK), "fig14")[0].geometry.key
     target = f"results/influence/{geometry}.h5"
     node = f"NodeName={slurm.node}"
     slurm_command("scontrol", "update", node, "State=DRAIN", "Reason=roughcontact-test")

@@ -17,21 +17,14 @@ import pandas as pd
 import pytest
 import yaml
 
-from roughcontact.study.cells import (
-    cell_key,
-    contact_cells,
-    contact_key,
-    figure_cells,
-    geometry_key,
-    geometry_params,
-    source_name,
-    spec_from_params,
-    statistics_key,
-)
+from roughcontact.study.cells import study_plan
 from roughcontact.study.config import load_config
+from roughcontact.study.records import surface_cell_from_params
 from roughcontact.study.storage import read_contact, read_influence
+from roughcontact.study.studies import body_geometry, contact_cells, source_name
 from roughcontact.surfaces import johnson
 from roughcontact.surfaces import synthetic as surface
+from roughcontact.surfaces.statistics import height_stats
 
 REPO = Path(__file__).resolve().parents[2]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
@@ -68,22 +61,22 @@ def quick_config():
 def test_surface_files_hold_seeded_surfaces_with_their_moments(quick_run):
     workdir, _ = quick_run
     config = quick_config()
-    for params in figure_cells(config, "fig04"):
-        path = workdir / "results" / "surfaces" / f"{cell_key(params)}.h5"
+    for cell in study_plan(config).figure_surfaces["fig04"]:
+        path = workdir / "results" / "surfaces" / f"{cell.key}.h5"
         with h5py.File(path, "r") as f:
             heights = f["heights"][()]
             seeds = f["seeds"][()]
             attrs = dict(f.attrs)
             realised_kurt = f["stats/kurt"][()]
-        assert heights.shape == (params["count"], *params["grid"][::-1])
+        assert heights.shape == (cell.count, *cell.grid[::-1])
         # the stored statistics are those of the stored heights
-        assert np.allclose(realised_kurt, surface.height_stats(heights)["kurt"])
+        assert np.allclose(realised_kurt, height_stats(heights)["kurt"])
         # every surface is reproducible from its stored seed and the stored spec
-        spec = spec_from_params(json.loads(attrs["params"]))
+        spec = surface_cell_from_params(json.loads(attrs["params"])).spec()
         again = surface.generate(spec, int(seeds[1]))
         assert np.array_equal(again, heights[1])
         # the seeds derive from the study seed and the cell's statistics
-        expected = surface.derive_seeds(config["study_seed"], statistics_key(params), len(seeds))
+        expected = surface.derive_seeds(config["study_seed"], cell.statistics_key, len(seeds))
         assert np.array_equal(seeds.astype(np.uint64), expected)
         # the recorded white-noise moments transfer to the calibrated process
         # moments (Eq 12-13), whose windows have the target sample moments
@@ -92,7 +85,7 @@ def test_surface_files_hold_seeded_surfaces_with_their_moments(quick_run):
         assert s3 * attrs["input_skew"] == pytest.approx(skew_p, abs=1e-12)
         assert 3 + s4 * (attrs["input_kurt"] - 3) == pytest.approx(kurt_p, abs=1e-12)
         assert attrs["calibration_converged"]
-        assert attrs["calibration_expected_kurt"] == pytest.approx(params["kurt"], rel=1e-4)
+        assert attrs["calibration_expected_kurt"] == pytest.approx(cell.kurt, rel=1e-4)
         curve = johnson.fit(attrs["input_skew"], attrs["input_kurt"])
         assert curve.family == attrs["johnson_family"]
         for key in ("package_version", "git_commit", "config_hash", "created"):
@@ -102,15 +95,15 @@ def test_surface_files_hold_seeded_surfaces_with_their_moments(quick_run):
 def test_influence_file_holds_unit_modulus_matrix_of_the_block(quick_run):
     workdir, _ = quick_run
     config = quick_config()
-    params = geometry_params(config["body"], config["surfaces"])
-    path = workdir / "results" / "influence" / f"{geometry_key(params)}.h5"
+    geometry = body_geometry(config)
+    path = workdir / "results" / "influence" / f"{geometry.key}.h5"
     unit, attrs = read_influence(path)
-    nx, ny = params["grid"]
+    nx, ny = geometry.grid
     assert unit.shape == (nx * ny, nx * ny)
     # nu = 0, bonded base: a uniform pressure P gives u = P L / E (Eq 37-38),
     # so every row of E * C sums to the thickness L
-    assert params["nu"] == 0.0
-    assert np.allclose(unit.sum(axis=1), params["thickness_mm"] * 1e-3, rtol=1e-10)
+    assert geometry.nu == 0.0
+    assert np.allclose(unit.sum(axis=1), geometry.thickness, rtol=1e-10)
     assert np.abs(unit - unit.T).max() <= 1e-10 * np.abs(unit).max()
     assert attrs["content_sha256"] == hashlib.sha256(unit.tobytes()).hexdigest()
     for key in ("package_version", "git_commit", "config_hash", "dofs", "build_seconds"):
@@ -312,10 +305,10 @@ def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path)
     path = tmp_path / "slow.yaml"
     path.write_text(yaml.safe_dump(config))
     cell = contact_cells(config, "fig14")[0]
-    key = contact_key(cell)
+    key = cell.contact_key
     target = f"results/contact/{key}.h5"
-    first = run_snakemake(tmp_path, f"results/surfaces/{cell['surface_key']}.h5",
-                          f"results/influence/{cell['geometry_key']}.h5", config=path)
+    first = run_snakemake(tmp_path, f"results/surfaces/{cell.surface.key}.h5",
+                          f"results/influence/{cell.geometry.key}.h5", config=path)
     assert first.returncode == 0, first.stderr[-3000:]
     done = {p: p.stat().st_mtime_ns for p in (tmp_path / "results").rglob("*.h5")}
     log = tmp_path / "results" / "logs" / "contact" / f"{key}.log"

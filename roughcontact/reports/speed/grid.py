@@ -148,7 +148,7 @@ def grid_study(
     surfaces per cell (exponential ACF, Eq 1; ``sigma``, ``b`` [m]) are paired
     across the grids by ``pairing`` (:data:`PAIRINGS`; default: generated on
     the finest grid, point-sampled on the coarser ones). ``spectrum``, a
-    mapping of :class:`~roughcontact.surfaces.synthetic.SurfaceSpec` fields
+    mapping of :class:`~roughcontact.surfaces.spec.SurfaceSpec` fields
     (e.g. ``{"acf": "self-affine", "hurst": 0.8, "rolloff_wavelength": 3e-3,
     "cutoff_wavelength": 0.6e-3}``), replaces the exponential ACF (``b`` is then
     unused): with the cut-off resolved, real area and peak pressure converge

@@ -164,7 +164,7 @@ def speed_vs_error_report(
        CSV) and ``hybrid_table_path``, or :data:`FALLBACK_MESH_ERRORS`.
     3. :func:`grid_study` over ``grids`` (hybrid refined influence, nested
        surfaces, the first cell, ``grid_surfaces`` or ``surfaces`` surfaces),
-       with ``spectrum`` (:class:`~roughcontact.surfaces.synthetic.SurfaceSpec`
+       with ``spectrum`` (:class:`~roughcontact.surfaces.spec.SurfaceSpec`
        fields such as ``acf="self-affine"``; None: the exponential ACF) in
        place of the exponential ACF where given.
     4. :func:`surfaces_per_cell`: ``count_surfaces`` surfaces of the first cell

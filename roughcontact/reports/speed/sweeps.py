@@ -16,7 +16,8 @@ import numpy as np
 from roughcontact.contact.cell import sweep_cell
 from roughcontact.contact.curves import NondimSweep
 from roughcontact.elasticity.influence import BlockGeometry
-from roughcontact.surfaces.synthetic import SurfaceSpec, derive_seeds, generate_many
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.synthetic import derive_seeds, generate_many
 
 __all__ = ["cell_heights", "cell_key", "reporter", "timed_sweep"]
 

@@ -1,0 +1,281 @@
+"""Checks of a configuration the schema cannot make, run when the workflow is planned.
+
+Each check returns one message per offending entry, naming the config keys
+to change; :func:`roughcontact.study.cells.study_plan` raises
+:class:`ConfigProblems` with them before any job is planned to run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from roughcontact.elasticity.operators import HYBRID_MESHES
+from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.records import (
+    GeneratedCell,
+    Generator,
+    Geometry,
+    InfluenceModel,
+    StudyCell,
+)
+from roughcontact.study.sources import SPECTRA, spectrum_from_entry
+from roughcontact.study.studies import (
+    CAP_MODES,
+    as_list,
+    body_geometry,
+    resolve_source,
+    source_name,
+    study_section,
+    study_surfaces,
+)
+from roughcontact.surfaces import johnson
+from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.surfaces.spectra import filter_kernel
+from roughcontact.units import GB, MM, MPA, UM
+
+
+class ConfigProblems(ValueError):
+    """The configuration passed the schema but asks for something that cannot be
+    run; ``problems`` lists one message per offending entry."""
+
+    def __init__(self, title: str, problems: list[str]):
+        super().__init__(f"{title} (no job was started):\n  " + "\n  ".join(problems))
+        self.problems = problems
+
+
+# ---------------------------------------------------------------------------
+# Studies and spectra
+
+
+def _spectrum_entries(config: dict, names) -> dict:
+    """``where -> entry`` of the config's spectrum and of each named study's own."""
+    entries = {"surfaces.spectrum": config["surfaces"]["spectrum"]}
+    for name in names:
+        try:
+            own = resolve_source(config, name).get("spectrum")
+        except (KeyError, ValueError):
+            continue  # check_studies names it
+        if own is not None:
+            entries[f"{source_name(config, name)}.spectrum"] = own
+    return entries
+
+
+def check_spectra(config: dict, names) -> list[str]:
+    """Messages for spectra that cannot be used: a spectrum with padded surfaces
+    (``periodic: false``), a file that is missing or not a valid PSD table."""
+    problems = []
+    for where, entry in _spectrum_entries(config, names).items():
+        if SPECTRA[entry["kind"]] is None:  # the ACF
+            continue
+        if not config["surfaces"]["periodic"]:
+            problems.append(f"{where}: kind {entry['kind']} generates periodic surfaces only; "
+                            "set surfaces.periodic: true or remove the spectrum")
+            continue
+        try:
+            spectrum_from_entry(entry).spec_fields()
+        except (OSError, ValueError) as err:
+            problems.append(f"{where}: {err}")
+    return problems
+
+
+def check_studies(config: dict, names) -> list[str]:
+    """Messages for contact figures or sweeps the schema cannot check: a ``from:`` that
+    names no study or a cycle, a pressure range, a measured surface, the hybrid
+    operator's mesh, the hardness settings."""
+    problems = []
+    for name in names:
+        try:
+            study = study_section(config, name)
+        except (KeyError, ValueError) as err:
+            problems.append(f"{name}: {err}")
+            continue
+        low, high = study["pressure_MPa"]
+        if not low < high:
+            problems.append(f"{name}.pressure_MPa = [{low}, {high}]: expected [P_min, P_max] "
+                            f"with P_min < P_max (MPa)")
+        problems += check_measured(config, name, resolve_source(config, name))
+        problems += _check_operator(config, name, study)
+        problems += _check_hardness(name, study)
+    return problems
+
+
+def _check_hardness(name: str, study: dict) -> list[str]:
+    values, cap = study["hardness_MPa"], study["cap"]
+    elastic, capped = CAP_MODES[cap]
+    if name == "hardness" and not (values and elastic and capped):
+        return [f"{name}: the hardness figure compares elastic and capped cells; "
+                f"give it hardness_MPa (a hardness [MPa]) and cap: both"]
+    if capped and not values:
+        return [f"{name}: contact.cap = {cap!r} but no hardness is given; set "
+                f"body.hardness_MPa (or the study's hardness_MPa) to the hardness "
+                f"[MPa] to cap the pressure at, or cap: false"]
+    return []
+
+
+def check_measured(config: dict, name: str, entry: dict) -> list[str]:
+    """Messages for a study whose measured surface cannot be used as configured
+    (``entry``: the study as configured)."""
+    if entry.get("surface") is None:
+        if entry.get("compare_synthetic"):
+            return [f"{name}: compare_synthetic needs a measured surface ('surface:')"]
+        return []
+    if entry.get("spectrum") is not None and not entry["compare_synthetic"]:
+        return [f"{name}: 'spectrum' applies to the generated twin of a measured surface; "
+                "add compare_synthetic: true or remove spectrum"]
+    clashing = [k for k in ("moments", "b_mm", "size_mm") if k in entry]
+    if clashing:
+        return [f"{name}: 'surface' (a measured surface) fixes the statistics, grid and "
+                f"size; remove {', '.join(clashing)}"]
+    try:
+        surfaces = study_surfaces(config, study_section(config, name))
+    except (OSError, ValueError) as err:
+        return [f"{name}.surface: {err}"]
+    bx, by = (in_unit(b, MM) for b in surfaces[0].corr_length)
+    if len(surfaces) > 1 and not (math.isfinite(bx) and math.isfinite(by)):
+        return [f"{name}: the measured autocorrelation does not decay to 10 % within half "
+                f"the measured length (b = {bx:g} x {by:g} mm), so no synthetic "
+                "twin can be made; remove the form (surface.form_degree: 2 or more), measure "
+                "or crop a larger area, or drop compare_synthetic"]
+    return []
+
+
+def _check_operator(config: dict, name: str, study: dict) -> list[str]:
+    """The hybrid operator needs a coarse model with an accurate near field."""
+    if body_geometry(config).operator is not InfluenceModel.HYBRID:
+        return []
+    bad = [m for m in as_list(study["meshes"]) if m not in HYBRID_MESHES]
+    if not bad:
+        return []
+    return [f"{name}: body.operator = hybrid with mesh {bad[0]!r}: the hybrid operator takes "
+            f"its finite-body correction from a coarse model whose near field must be "
+            f"accurate, so the mesh must be one of {list(HYBRID_MESHES)}; use operator: "
+            f"dense (the paper's model) or auto (dense up to 64 x 64, hybrid with a "
+            f"'refined' coarse model above)"]
+
+
+#: Accepted ranges of the plausibility check: sigma [um], E [MPa], and the largest
+#: nominal pressure over E of a sweep (beyond it linear elasticity has no meaning).
+PLAUSIBLE = {"sigma_um": (1e-3, 1e3), "E_MPa": (1e-3, 1e7), "pressure_over_E": 0.1}
+#: Units a value is likely typed in by mistake: name, factor to the key's unit.
+_SLIPS = {"sigma_um": (("m", 1e6), ("mm", 1e3), ("nm", 1e-3)),
+          "E_MPa": (("Pa", 1e-6), ("kPa", 1e-3), ("GPa", 1e3))}
+
+
+def _slip(key: str, value: float) -> str:
+    """A sentence naming the unit ``value`` was likely typed in, if one puts it in range."""
+    low, high = PLAUSIBLE[key]
+    for unit, factor in _SLIPS[key]:
+        if low <= value * factor <= high:
+            return (f"; typed in {unit}? then write {value * factor:.6g} "
+                    f"({key.split('_')[-1]})")
+    return ""
+
+
+def check_plausible(cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
+    """Messages for study values that are almost surely a unit slip (:data:`PLAUSIBLE`),
+    in the units they were written in; ``cells`` by study name."""
+    problems = set()
+    for name, study_cells in cells.items():
+        for cell in study_cells:
+            values = {"sigma_um": in_unit(cell.sigma, UM), "E_MPa": in_unit(cell.E, MPA)}
+            for key, value in values.items():
+                low, high = PLAUSIBLE[key]
+                if not low <= value <= high:
+                    problems.add(f"{name}: {key} = {value:g} lies outside {low:g}-{high:g}"
+                                 f"{_slip(key, value)}")
+            p_max = in_unit(cell.pressure_range[1], MPA)
+            ratio = p_max / values["E_MPa"]
+            if ratio > PLAUSIBLE["pressure_over_E"]:
+                problems.add(
+                    f"{name}: pressure_MPa up to {p_max:g} on E_MPa = {values['E_MPa']:g} is "
+                    f"P / E = {ratio:.3g}, beyond {PLAUSIBLE['pressure_over_E']:g}, where the "
+                    "linear elastic model has no meaning; check the units of pressure_MPa and "
+                    "E_MPa")
+    return sorted(problems)
+
+
+# ---------------------------------------------------------------------------
+# Surface cells the generator cannot make
+
+#: A calibrated cell whose target kurtosis lies within this fraction of
+#: (Ku - 1) above the filter's bound (Eq 15) is calibrated at plan time: the
+#: window's sample bias (a few per cent) may carry it across the bound.
+NEAR_BOUND = 0.1
+
+
+def _check_calibrated(spec: SurfaceSpec) -> None:
+    """Raise if the calibrated filter cannot reach ``spec``'s expected sample moments.
+
+    Far inside the reachable region the process check (Eq 15) suffices; near
+    its edge the calibration itself runs (about a second for 60 x 60).
+    """
+    try:
+        bound = float(kurt_min(spec))
+    except ValueError:
+        bound = math.inf
+    if spec.kurt >= bound + NEAR_BOUND * (spec.kurt - 1.0):
+        johnson.fit(*input_moments(spec))
+        return
+    calibrate_filter(spec)
+
+
+#: The Johnson law each generator fits (raises where it cannot): the white noise's of
+#: the filter (calibrated or the paper's), the target's of exact.
+_FITS = {
+    Generator.FILTER: lambda cell: _check_calibrated(cell.spec()),
+    Generator.PAPER: lambda cell: johnson.fit(*input_moments(cell.spec())),
+    Generator.EXACT: lambda cell: johnson.fit(cell.skew, cell.kurt),
+}
+
+
+def check_feasible(surfaces: dict) -> list[str]:
+    """Messages for generated cells whose (skew, kurt) the generator cannot reach, and
+    for any Johnson law the generator would fit that cannot be fitted (each is
+    fitted here, before any job); a spectrum's table must agree with the grid."""
+    problems = []
+    for key, cell in surfaces.items():
+        if not isinstance(cell, GeneratedCell):
+            continue  # a measurement: nothing to generate
+        try:
+            if cell.spectrum is not None:  # the table and the grid agree (power on the grid)
+                filter_kernel(cell.spec())
+            _FITS[cell.method](cell)
+        except (ValueError, RuntimeError, FloatingPointError) as err:
+            problems.append(f"{key}: {err}")
+    return problems
+
+
+# ---------------------------------------------------------------------------
+# Influence builds beyond the memory limit
+
+
+def memory_message(geometry: Geometry, build: BuildSettings, peak_bytes: float) -> str:
+    """Why a geometry's influence build does not fit, and the config keys that change it."""
+    nx, ny = geometry.grid
+    limit_gb = in_unit(build.max_bytes, GB)
+    model = geometry.planned_model(build.max_bytes)
+    options = []
+    if model is InfluenceModel.DENSE:
+        auto = dataclasses.replace(geometry, operator=InfluenceModel.AUTO)
+        options.append(f"body.operator: auto (matrix-free above 64 x 64 elements: about "
+                       f"{auto.influence_cost(build).peak_bytes / GB:.3g} GB here)")
+    options += [f"raise body.max_memory_gb (now {limit_gb:g})",
+                "a coarser body.mesh or a smaller grid (surfaces.grid; for a measured surface "
+                "surface.crop_mm, surface.decimate or surface.resample_grid)"]
+    return (f"influence geometry {geometry.key}: {nx} x {ny} elements, operator "
+            f"{model.value}, mesh {geometry.mesh}: estimated peak memory "
+            f"{peak_bytes / GB:.3g} GB, more than body.max_memory_gb = {limit_gb:g} GB. "
+            "Options: " + "; ".join(options))
+
+
+def check_memory(geometries: dict[str, Geometry], build: BuildSettings) -> list[str]:
+    """Messages for the influence builds whose estimated peak memory exceeds the
+    body's ``max_memory_gb`` (checked when the plan is made)."""
+    problems = []
+    for geometry in geometries.values():
+        peak = geometry.influence_cost(build).peak_bytes
+        if peak > build.max_bytes:
+            problems.append(memory_message(geometry, build, peak))
+    return problems

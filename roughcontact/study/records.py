@@ -1,0 +1,517 @@
+"""Typed records of a study: surface cells, geometries, study cells and contact jobs.
+
+Frozen dataclasses in SI units, built once from the validated configuration
+(:mod:`roughcontact.study.studies`, :func:`roughcontact.study.cells.study_plan`).
+Each has its file key and its ``params()``: the plain, JSON-able form the
+workflow passes to a job (Snakemake compares it to decide reruns) and stores
+with the result, with the configuration's units (lengths in mm, sigma in um,
+pressures and moduli in MPa); ``from_params`` builds the record again in the
+job. The choices the configuration writes as strings are resolved here once:
+:class:`Generator` (``surfaces.method``), :class:`InfluenceModel`
+(``body.operator``), a type per spectrum kind
+(:data:`roughcontact.study.sources.SPECTRA`) and per surface source
+(:class:`GeneratedCell`, :class:`MeasuredCell`).
+
+A *surface cell* is one set of surface statistics and sampling (skewness,
+kurtosis, correlation lengths, grid, size, ACF or spectrum, periodicity,
+generator) with a number of seeded realisations, or one measured surface.
+Sigma is not part of a cell: surfaces are stored in units of sigma and
+scaled at use (Eq 28-32 of Kumar et al. 2006), and Young's modulus is not
+part of a geometry (influence files hold E * C). A *study cell* is a surface
+cell on a geometry at one sigma and E over a nominal-pressure range; the
+*contact job* that solves it is shared by every study cell with the same
+surfaces, geometry, sweep end and cap.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from dataclasses import dataclass
+from enum import Enum
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from roughcontact.contact.cell import nondim_pressure
+from roughcontact.elasticity.influence import BlockGeometry, estimate_cost
+from roughcontact.elasticity.operators import HYBRID_MESHES, choose_operator, default_coarse_grid
+from roughcontact.study import sources
+from roughcontact.study.config import (
+    BuildSettings,
+    as_pair,
+    from_unit,
+    grid_pair,
+    in_unit,
+    in_units,
+)
+from roughcontact.study.provenance import short_hash
+from roughcontact.study.sources import MeasurementImport, Spectrum, spectrum_from_params
+from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.units import MM, MPA, UM
+
+
+class Generator(Enum):
+    """How a surface cell's surfaces come to be (``surfaces.method``, or a measurement).
+
+    ``FILTER``: the paper's filter with the white noise calibrated to the
+    window's expected sample moments; ``PAPER``: the paper's Eq 12-13
+    uncorrected; ``EXACT``: iterative amplitude adjustment; ``MEASURED``: an
+    imported height map.
+    """
+
+    FILTER = "filter"
+    PAPER = "paper"
+    EXACT = "exact"
+    MEASURED = "measured"
+
+
+class InfluenceModel(Enum):
+    """The influence model of a geometry (``body.operator``): the finite-element matrix
+    (``DENSE``, the paper's), the matrix-free ``HYBRID`` or ``HALFSPACE`` operators, or
+    ``AUTO`` (decided per geometry, :meth:`Geometry.planned_model`)."""
+
+    DENSE = "dense"
+    HYBRID = "hybrid"
+    HALFSPACE = "halfspace"
+    AUTO = "auto"
+
+
+# ---------------------------------------------------------------------------
+# Surface cells
+
+
+@dataclass(frozen=True)
+class _SurfaceStatistics:
+    """What every surface cell has: skewness ``skew`` and kurtosis ``kurt`` (Pearson),
+    correlation lengths ``corr_length`` (bx, by) [m], contact ``grid`` (nx, ny) over the
+    plan ``size`` (Lx, Ly) [m]."""
+
+    skew: float
+    kurt: float
+    corr_length: tuple[float, float]
+    grid: tuple[int, int]
+    size: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class GeneratedCell(_SurfaceStatistics):
+    """A surface cell of ``count`` seeded realisations of one set of statistics.
+
+    ``skew``, ``kurt`` (Pearson); correlation lengths ``corr_length`` (bx, by)
+    [m] of the ACF ``acf`` (Eq 1), or, with a ``spectrum``, the spectrum's
+    :class:`SurfaceSpec` kind (``corr_length`` then only labels the cell);
+    contact ``grid`` (nx, ny) over the plan ``size`` (Lx, Ly) [m]; periodic
+    or padded filter; the ``method`` that generates them.
+    """
+
+    acf: str
+    periodic: bool
+    method: Generator
+    count: int
+    spectrum: Spectrum | None = None
+
+    @classmethod
+    def from_params(cls, params: dict) -> GeneratedCell:
+        return cls(skew=float(params["skew"]), kurt=float(params["kurt"]),
+                   corr_length=from_unit(as_pair(params["b_mm"])), grid=grid_pair(params["grid"]),
+                   size=from_unit(as_pair(params["size_mm"])), acf=str(params["acf"]),
+                   periodic=bool(params["periodic"]), method=Generator(params["method"]),
+                   count=int(params["count"]),
+                   spectrum=spectrum_from_params(params.get("spectrum")))
+
+    def params(self) -> dict:
+        """The cell as stored and passed to its job (lengths in mm); ``spectrum`` only
+        with a spectrum, so a cell without one keeps the keys of before spectra."""
+        params = {"skew": self.skew, "kurt": self.kurt, "b_mm": in_units(self.corr_length),
+                  "grid": list(self.grid), "size_mm": in_units(self.size), "acf": self.acf,
+                  "periodic": self.periodic, "method": self.method.value, "count": self.count}
+        if self.spectrum is not None:
+            params["spectrum"] = self.spectrum.params()
+        return params
+
+    @property
+    def statistics_key(self) -> str:
+        """Key of the statistics and sampling, without the surface count.
+
+        Seeds derive from it, so the first k surfaces of a cell are the same
+        whatever the count. With a spectrum it ends in the spectrum's tag.
+        """
+        (bx, by), (lx, ly) = in_units(self.corr_length), in_units(self.size)
+        nx, ny = self.grid
+        key = (f"sk{self.skew:g}_ku{self.kurt:g}_b{bx:g}x{by:g}mm_L{lx:g}x{ly:g}mm"
+               f"_g{nx}x{ny}_{self.acf[:3]}_{'per' if self.periodic else 'pad'}"
+               f"_{self.method.value}")
+        return key if self.spectrum is None else f"{key}_{self.spectrum.tag()}"
+
+    @property
+    def key(self) -> str:
+        """File key: the statistics key and the surface count."""
+        return f"{self.statistics_key}_n{self.count}"
+
+    @property
+    def input_files(self) -> tuple[str, ...]:
+        """The file the spectrum is read from (an input of the surfaces job), if any."""
+        file = None if self.spectrum is None else self.spectrum.file
+        return () if file is None else (file,)
+
+    @property
+    def source_label(self) -> str:
+        """The start of a study cell's legend text: none for generated surfaces."""
+        return ""
+
+    def spec(self, sigma: float = 1.0) -> SurfaceSpec:
+        """The :class:`SurfaceSpec` of the cell's surfaces (heights in units of ``sigma``).
+
+        A spectrum gives its own fields (a table is read from its file, which
+        must be the planned one) in place of the ACF and correlation lengths.
+        """
+        if self.spectrum is None:
+            shape = {"corr_length": self.corr_length, "acf": self.acf}
+        else:
+            shape = {"corr_length": None, **self.spectrum.spec_fields()}
+        return SurfaceSpec(grid=self.grid, size=self.size, sigma=sigma, skew=self.skew,
+                           kurt=self.kurt, periodic=self.periodic, **shape)
+
+
+@dataclass(frozen=True)
+class MeasuredCell(_SurfaceStatistics):
+    """A surface cell of one measured surface, imported as ``source`` describes.
+
+    ``skew``, ``kurt``, ``corr_length`` [m] are the measured values (the labels
+    of its results and the targets of a synthetic twin), rounded to 12
+    significant digits in the configuration's units; ``grid`` and ``size``
+    [m] the prepared measurement's; ``sigma`` [m] its height standard
+    deviation; ``file_sha256`` the file's content the workflow was planned with.
+    """
+
+    source: MeasurementImport
+    file_sha256: str
+    sigma: float
+    count: ClassVar[int] = 1
+    method: ClassVar[Generator] = Generator.MEASURED
+    acf: ClassVar[str] = "measured"
+    periodic: ClassVar[bool] = False
+    spectrum: ClassVar[None] = None
+
+    @classmethod
+    def from_source(cls, source: MeasurementImport) -> MeasuredCell:
+        """The cell of a measurement, read from its file (milliseconds for the grids a
+        dense influence matrix allows)."""
+        stats = sources.measurement_statistics(source)
+        return cls(skew=in_unit(stats["skew"], 1.0), kurt=in_unit(stats["kurt"], 1.0),
+                   corr_length=from_unit(in_units((stats["corr_length_x"],
+                                                   stats["corr_length_y"]))),
+                   grid=grid_pair(stats["grid"]), size=from_unit(in_units(stats["size"])),
+                   source=source,
+                   file_sha256=sources.load_measurement(source).sha256,
+                   sigma=in_unit(stats["sigma"], UM) * UM)
+
+    @classmethod
+    def from_params(cls, params: dict) -> MeasuredCell:
+        info = params["measured"]
+        return cls(skew=float(params["skew"]), kurt=float(params["kurt"]),
+                   corr_length=from_unit(params["b_mm"]), grid=grid_pair(params["grid"]),
+                   size=from_unit(params["size_mm"]), source=MeasurementImport.from_entry(info),
+                   file_sha256=info["file_sha256"], sigma=float(info["sigma_um"]) * UM)
+
+    def params(self) -> dict:
+        """The cell as stored (lengths in mm); ``measured`` holds the import options, the
+        file's SHA-256 and the measured sigma [um]."""
+        return {"skew": self.skew, "kurt": self.kurt, "b_mm": in_units(self.corr_length),
+                "grid": list(self.grid), "size_mm": in_units(self.size), "acf": self.acf,
+                "periodic": self.periodic, "method": self.method.value, "count": self.count,
+                "measured": {**self.source.params(), "file_sha256": self.file_sha256,
+                             "sigma_um": in_unit(self.sigma, UM)}}
+
+    @property
+    def statistics_key(self) -> str:
+        """``measured-<stem>_<sha256[:12]>_<options[:8]>``: the file's name, a short hash of
+        its content and of the import options. A changed file or option is a new key;
+        the same content under another name or folder keeps the hashes."""
+        stem = re.sub(r"[^A-Za-z0-9-]+", "-", Path(self.source.file).stem).strip("-")[:40]
+        return (f"measured-{stem or 'surface'}_{self.file_sha256[:12]}_"
+                f"{short_hash(self.source.options(), 8)}")
+
+    @property
+    def key(self) -> str:
+        return f"{self.statistics_key}_n{self.count}"
+
+    @property
+    def input_files(self) -> tuple[str, ...]:
+        return (self.source.file,)
+
+    @property
+    def source_label(self) -> str:
+        return f"measured {Path(self.source.file).name}: "
+
+
+SurfaceCell = GeneratedCell | MeasuredCell
+
+#: The record type of a surface cell's ``params()`` by its ``method`` (generated otherwise).
+_SURFACE_CELLS = {Generator.MEASURED.value: MeasuredCell}
+
+
+def surface_cell_from_params(params: dict) -> SurfaceCell:
+    """The surface cell of its ``params()``."""
+    return _SURFACE_CELLS.get(params["method"], GeneratedCell).from_params(params)
+
+
+# ---------------------------------------------------------------------------
+# Geometries: the elastic body a cell is solved on
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """An influence geometry: the block (``nu``, plan ``size`` (Lx, Ly) [m], ``thickness``
+    L [m], contact ``grid`` (nx, ny), ``base``, ``mesh`` preset) and its influence model.
+
+    ``halfspace_tolerance`` ((quantity, relative error or None), ...) sorted by
+    quantity: the half-space criterion of ``operator: auto`` (empty otherwise).
+    """
+
+    nu: float
+    size: tuple[float, float]
+    thickness: float
+    grid: tuple[int, int]
+    base: str
+    mesh: str
+    operator: InfluenceModel = InfluenceModel.DENSE
+    halfspace_tolerance: tuple[tuple[str, float | None], ...] = ()
+
+    @classmethod
+    def from_params(cls, params: dict) -> Geometry:
+        """The geometry of its ``params()``, or of a validated ``body`` section completed
+        by ``grid`` and ``size_mm``."""
+        # a dense geometry's params name no operator (its files keep their names)
+        operator = InfluenceModel(params.get("operator", InfluenceModel.DENSE.value))
+        tolerance = params["halfspace_tolerance"] if operator is InfluenceModel.AUTO else {}
+        return cls(nu=float(params["nu"]), size=from_unit(as_pair(params["size_mm"])),
+                   thickness=float(params["thickness_mm"]) * MM, grid=grid_pair(params["grid"]),
+                   base=str(params["base"]), mesh=str(params["mesh"]), operator=operator,
+                   halfspace_tolerance=tuple(sorted(
+                       (k, None if v is None else float(v)) for k, v in tolerance.items())))
+
+    def params(self) -> dict:
+        """The geometry as stored (lengths in mm): every parameter that changes E * C."""
+        params = {"nu": self.nu, "size_mm": in_units(self.size),
+                  "thickness_mm": in_unit(self.thickness, MM), "grid": list(self.grid),
+                  "base": self.base, "mesh": self.mesh}
+        if self.operator is not InfluenceModel.DENSE:  # the paper's model adds no key
+            params["operator"] = self.operator.value
+        if self.operator is InfluenceModel.AUTO:
+            params["halfspace_tolerance"] = dict(self.halfspace_tolerance)
+        return params
+
+    @property
+    def key(self) -> str:
+        """File key of the geometry (every parameter that changes E * C)."""
+        (lx, ly), (nx, ny) = in_units(self.size), self.grid
+        key = (f"nu{self.nu:g}_L{lx:g}x{ly:g}mm_t{in_unit(self.thickness, MM):g}mm"
+               f"_g{nx}x{ny}_{self.base}_{self.mesh}")
+        if self.operator is InfluenceModel.DENSE:
+            return key
+        if self.operator is InfluenceModel.AUTO:
+            return key + "_auto" + "-".join("x" if v is None else f"{v:g}"
+                                            for _, v in self.halfspace_tolerance)
+        return f"{key}_{self.operator.value}"
+
+    def block(self, E: float = 1.0) -> BlockGeometry:
+        """The :class:`~roughcontact.elasticity.influence.BlockGeometry` of Young's modulus
+        ``E`` [Pa] (1: the unit-modulus model of an influence file)."""
+        return BlockGeometry(size=self.size, thickness=self.thickness, grid=self.grid, E=E,
+                             nu=self.nu, base=self.base, mesh=self.mesh)
+
+    def planned_model(self, max_bytes: float) -> InfluenceModel:
+        """The influence model a build starts with: dense, hybrid or half-space.
+
+        ``operator: auto`` picks dense or hybrid here (by size and the memory
+        limit ``max_bytes``, :func:`roughcontact.elasticity.operators.choose_operator`);
+        the build may then replace either by the half-space when the measured
+        criterion allows.
+        """
+        if self.operator is not InfluenceModel.AUTO:
+            return self.operator
+        return InfluenceModel(choose_operator(self.block(), max_dense_bytes=max_bytes))
+
+    def finite_element_model(self, max_bytes: float) -> BlockGeometry:
+        """The finite-element model a build solves: the block, or the coarse model of a
+        matrix-free operator (:func:`coarse_geometry`)."""
+        block = self.block()
+        if self.planned_model(max_bytes) is InfluenceModel.DENSE:
+            return block
+        return coarse_geometry(block)
+
+    def influence_cost(self, build: BuildSettings):
+        """:class:`~roughcontact.elasticity.influence.CostEstimate` of the finite-element
+        model a build solves with ``build``'s solver within its memory limit."""
+        return estimate_cost(self.finite_element_model(build.max_bytes), build.solver)
+
+
+def coarse_geometry(geom: BlockGeometry) -> BlockGeometry:
+    """The coarse finite-element model of a hybrid operator (``refined`` for inaccurate meshes)."""
+    mesh = geom.mesh if geom.mesh in HYBRID_MESHES else "refined"
+    return dataclasses.replace(geom, grid=default_coarse_grid(geom.grid), mesh=mesh)
+
+
+# ---------------------------------------------------------------------------
+# Study cells and contact jobs
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """The accuracy preset a cell is solved with (``accuracy:``; ``"as configured"``
+    without one) and the preset's measured ``expected_error`` ((name, relative error)
+    pairs, in the presets file's order; None without a preset)."""
+
+    name: str = "as configured"
+    expected_error: tuple[tuple[str, float], ...] | None = None
+
+    def errors(self) -> dict:
+        """``expected_error`` as a dict ({} without a preset)."""
+        return dict(self.expected_error or ())
+
+
+@dataclass(frozen=True)
+class ContactJob:
+    """One contact job: every surface of a surface cell on one geometry, swept in
+    non-dimensional form to ``pressure_end`` = P L / (E sigma) (a power of 2).
+
+    ``nondim_hardness``: the cap H L / (E sigma) of a capped job (None: elastic),
+    with which sigma and E no longer only rescale the solution.
+    """
+
+    surface: SurfaceCell
+    geometry: Geometry
+    pressure_end: float
+    accuracy: Accuracy = Accuracy()
+    nondim_hardness: float | None = None
+
+    @classmethod
+    def from_params(cls, params: dict) -> ContactJob:
+        return cls(surface=surface_cell_from_params(params["surface"]),
+                   geometry=Geometry.from_params(params["geometry"]),
+                   pressure_end=float(params["pressure_end"]),
+                   accuracy=Accuracy(params["accuracy"],
+                                     tuple(params["expected_error"].items()) or None),
+                   nondim_hardness=params.get("hardness"))
+
+    def params(self) -> dict:
+        """The job as passed to it and stored with its result (``hardness``: the cap)."""
+        params = {"surface": self.surface.params(), "geometry": self.geometry.params(),
+                  "surface_key": self.surface.key, "geometry_key": self.geometry.key,
+                  "pressure_end": self.pressure_end, "accuracy": self.accuracy.name,
+                  "expected_error": self.accuracy.errors()}
+        if self.nondim_hardness is not None:
+            params["hardness"] = self.nondim_hardness
+        return params
+
+    @property
+    def key(self) -> str:
+        """File key: surface cell, geometry and sweep end, and a capped job's cap.
+
+        The end is part of the key: a file's content depends on its key alone,
+        so a study that needs a longer sweep gets its own file, and no result
+        is re-solved or rewritten because another study was added, changed or
+        removed. The cap has 7 digits: cells whose caps agree to 1e-6 share a
+        job (:func:`~roughcontact.contact.nondim.to_physical` allows 1e-5).
+        """
+        key = f"{self.surface.key}__{self.geometry.key}__end{self.pressure_end:g}"
+        return key if self.nondim_hardness is None else f"{key}__cap{self.nondim_hardness:.7g}"
+
+
+@dataclass(frozen=True)
+class StudyCell:
+    """One cell of a contact study: a surface cell on a geometry, scaled by ``sigma``
+    [m] and ``E`` [Pa] (Eq 28-32) over the nominal ``pressure_range`` (P_min, P_max) [Pa].
+
+    ``hardness`` H [Pa]: the cap 0 <= p <= H a capped cell is solved with (None:
+    elastic). ``checked_hardness`` [Pa]: the values an elastic cell's results
+    are checked against (the share of real area and load above each, no extra
+    solve), flagged beyond ``hardness_threshold``.
+    """
+
+    surface: SurfaceCell
+    geometry: Geometry
+    sigma: float
+    E: float
+    pressure_range: tuple[float, float]
+    accuracy: Accuracy = Accuracy()
+    hardness: float | None = None
+    checked_hardness: tuple[float, ...] = ()
+    hardness_threshold: float | None = None
+
+    @classmethod
+    def from_params(cls, params: dict) -> StudyCell:
+        cap, expected = params.get("cap_MPa"), params.get("expected_error")
+        threshold = params.get("hardness_threshold")
+        return cls(surface=surface_cell_from_params(params["surface"]),
+                   geometry=Geometry.from_params(params["geometry"]),
+                   sigma=float(params["sigma_um"]) * UM, E=float(params["E_MPa"]) * MPA,
+                   pressure_range=from_unit(params["pressure_MPa"], MPA),
+                   accuracy=Accuracy(params["accuracy"],
+                                     None if expected is None else tuple(expected.items())),
+                   hardness=None if cap is None else float(cap) * MPA,
+                   checked_hardness=from_unit(params.get("hardness_MPa") or (), MPA),
+                   hardness_threshold=None if threshold is None else float(threshold))
+
+    def params(self) -> dict:
+        """The cell as the configuration writes it (sigma in um, E and pressures in MPa),
+        with its surface and geometry keys; passed to the aggregation and the audit."""
+        params = {"surface": self.surface.params(), "geometry": self.geometry.params(),
+                  "sigma_um": in_unit(self.sigma, UM), "E_MPa": in_unit(self.E, MPA),
+                  "pressure_MPa": in_units(self.pressure_range, MPA),
+                  "surface_key": self.surface.key, "geometry_key": self.geometry.key,
+                  "accuracy": self.accuracy.name}
+        if self.accuracy.expected_error is not None:
+            params["expected_error"] = self.accuracy.errors()
+        if self.checked_hardness:
+            params["hardness_MPa"] = in_units(self.checked_hardness, MPA)
+            params["hardness_threshold"] = self.hardness_threshold
+        if self.hardness is not None:
+            params["cap_MPa"] = in_unit(self.hardness, MPA)
+        return params
+
+    def _nondim(self, pressure: float) -> float:
+        return nondim_pressure(pressure, thickness=self.geometry.thickness, E=self.E,
+                               sigma=self.sigma)
+
+    @property
+    def sweep_end(self) -> float:
+        """P_max L / (E sigma) rounded up to 2^k: a small change of sigma, E or the
+        pressure range does not re-solve a job that already reaches far enough."""
+        return float(2.0 ** np.ceil(np.log2(self._nondim(self.pressure_range[1]))))
+
+    @property
+    def nondim_hardness(self) -> float | None:
+        """The cap H L / (E sigma) of a capped cell (None: elastic)."""
+        return None if self.hardness is None else self._nondim(self.hardness)
+
+    @property
+    def job(self) -> ContactJob:
+        """The contact job that solves this cell."""
+        return ContactJob(surface=self.surface, geometry=self.geometry,
+                          pressure_end=self.sweep_end, accuracy=self.accuracy,
+                          nondim_hardness=self.nondim_hardness)
+
+    @property
+    def contact_key(self) -> str:
+        return self.job.key
+
+    @property
+    def label(self) -> str:
+        """Short legend text of the cell."""
+        cap = "" if self.hardness is None else f", capped at {in_unit(self.hardness, MPA):g} MPa"
+        columns = self.columns()
+        return (f"{self.surface.source_label}Sk {columns['skew']:g}, Ku {columns['kurt']:g}, "
+                f"b {columns['b_mm']:g} mm, {columns['size_mm']:g} mm, nu {columns['nu']:g}, "
+                f"{columns['mesh']} mesh, sigma {columns['sigma_um']:g} um{cap}")
+
+    def columns(self) -> dict:
+        """The cell's parameters as table columns for people (mm, um, MPa)."""
+        s, g = self.surface, self.geometry
+        return {"skew": s.skew, "kurt": s.kurt, "b_mm": in_unit(s.corr_length[0], MM),
+                "size_mm": in_unit(g.size[0], MM), "nu": g.nu, "mesh": g.mesh,
+                "thickness_mm": in_unit(g.thickness, MM), "sigma_um": in_unit(self.sigma, UM),
+                "E_MPa": in_unit(self.E, MPA)}

@@ -1,0 +1,314 @@
+"""Preparing a measured height map for the contact study.
+
+The steps, in the order :func:`prepare` applies them (each recorded in
+:attr:`roughcontact.surfaces.measured.Measurement.preparation`):
+
+0. ``crop``: a window ``(x0, y0, Lx, Ly)`` [m] from the first point
+   (:func:`crop_window`).
+1. Holes (missing points, or points the instrument masked as undefined) are
+   refused, or, if their fraction is at most ``fill_holes``, filled by a
+   discrete Laplace (harmonic) interpolation of the heights less the
+   least-squares plane of the known points (:func:`fill_missing`): every
+   missing point equals the mean of its 4 neighbours (fewer at the edges,
+   which gives a zero normal slope there), solved jointly for all missing
+   points with a sparse direct solver. It reproduces any plane exactly, is
+   second-order accurate inside a hole and first-order at the edges; it
+   does not invent roughness, so a filled hole is smoother than the
+   measured surface around it. Known points are not changed.
+2. The least-squares plane ``a + b x + c y`` is removed (form and tilt of the
+   mounting, :func:`remove_plane`), which also leaves heights of zero mean;
+   with ``form_degree`` k >= 2, then the least-squares polynomial of total
+   degree k in x and y (:func:`remove_polynomial`; k = 2 takes out a
+   sphere's or a cylinder's form to second order).
+3. ``outliers_sigma``: points farther than k sigma from the mean plane are
+   counted, filled as holes and the form removed again.
+4. ``decimate`` (an integer: means of k x k blocks, :func:`decimate`) or
+   ``resample_grid`` ([nx, ny]: linear interpolation over the same plan
+   size, :func:`resample`) gives the contact grid, and the mean is removed.
+
+Heights in any unit (metres when called by
+:func:`roughcontact.surfaces.measured.load_measurement`), spacings in metres;
+arrays ``(ny, nx)``.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+from scipy import sparse
+from scipy.interpolate import RegularGridInterpolator
+from scipy.sparse import linalg as sparse_linalg
+
+from roughcontact.errors import MeasurementError
+from roughcontact.surfaces.readers import MIN_POINTS
+
+log = logging.getLogger(__name__)
+
+
+def missing_message(source, missing: int, total: int, absent: int = 0) -> str:
+    """How many points are missing, as a sentence naming the source."""
+    detail = (f" ({absent} grid points absent from the point list, {missing - absent} nan)"
+              if absent else " (nan values)")
+    return (f"{source}: {missing} of {total} points ({100.0 * missing / total:.3g} %) are "
+            f"missing{detail}")
+
+
+def fill_missing(heights: np.ndarray, max_fraction: float = 0.0, *, source="heights",
+               absent: int = 0) -> tuple[np.ndarray, int]:
+    """Fill missing (NaN) points by discrete Laplace interpolation.
+
+    The least-squares plane of the known points is removed first and added
+    back at the end. For the residual ``r``, ``sum_(j in N(i)) (r_j - r_i) = 0``
+    is solved for every missing point ``i`` jointly, ``N(i)`` its 4 neighbours
+    inside the grid (a zero normal slope of ``r`` at the edges), with the known
+    points as boundary values. The matrix is a graph Laplacian with Dirichlet
+    rows, symmetric positive definite whenever one point is known; it is solved
+    by ``scipy.sparse.linalg.spsolve``. Planes are reproduced exactly, at the
+    edges too; inside a hole the fill is smooth (it adds no roughness).
+
+    Parameters
+    ----------
+    heights : ndarray (ny, nx)
+        Heights [any unit] with NaN at missing points.
+    max_fraction : float
+        Largest fraction of missing points that may be filled (0: none).
+    source : str
+        Name of the data (the file) for messages.
+    absent : int
+        How many of the missing points were absent from a point list (for
+        the message only).
+
+    Returns
+    -------
+    (filled heights, number of points filled)
+
+    Raises
+    ------
+    MeasurementError
+        If more than ``max_fraction`` of the points are missing, with the
+        count and fraction in the message.
+    """
+    z = np.array(heights, dtype=float)
+    missing = np.isnan(z)
+    count = int(missing.sum())
+    if count == 0:
+        return z, 0
+    fraction = count / z.size
+    if fraction > max_fraction or count == z.size:
+        _refuse_missing(z.size, count, max_fraction, source, absent)
+    ny, nx = z.shape
+    y, x = np.nonzero(~missing)
+    design = np.column_stack([np.ones(x.size), x, y]).astype(float)
+    coefficients, *_ = np.linalg.lstsq(design, z[~missing], rcond=None)
+    iy, ix = np.mgrid[0:ny, 0:nx]
+    plane = coefficients[0] + coefficients[1] * ix + coefficients[2] * iy
+    z[missing] = _harmonic_fill(z - plane, missing) + plane[missing]
+    log.info("%s: filled %d missing points (%.3g %%) by Laplace interpolation",
+             source, count, 100 * fraction)
+    return z, count
+
+
+def _refuse_missing(total: int, count: int, max_fraction: float, source, absent: int):
+    """Raise the MeasurementError of :func:`fill_missing` for too many missing points."""
+    fraction = count / total
+    most = 0.5  # the largest fill_holes the config allows (config/schema.yaml)
+    if count == total or fraction > most:
+        reason = ("no point is known, so there is nothing to interpolate from"
+                  if count == total else
+                  f"more than {100 * most:g} % of the map would be interpolated, beyond "
+                  f"the largest fill_holes the study accepts ({most:g}, config/schema.yaml)")
+        raise MeasurementError(
+            f"{missing_message(source, count, total, absent)}: {reason}. The data "
+            f"cannot be filled; repair {source} or re-export it from the instrument "
+            "software (with the missing points measured or cropped away).",
+            source,
+        )
+    allowed = (f"fill_holes = {max_fraction:g} allows at most {100 * max_fraction:.3g} %"
+               if max_fraction > 0 else "fill_holes is 0, so none may be missing")
+    raise MeasurementError(
+        f"{missing_message(source, count, total, absent)}; {allowed}. Raise fill_holes "
+        f"to at least {fraction:.3g} to fill them by interpolation, or repair the data.",
+        source,
+    )
+
+
+def _harmonic_fill(residual: np.ndarray, missing: np.ndarray) -> np.ndarray:
+    """Values at the ``missing`` points that equal the mean of their neighbours in the grid.
+
+    Assembles the graph Laplacian of the missing points (4 neighbours inside
+    the grid) with the known points of ``residual`` as boundary values, and
+    solves it by ``scipy.sparse.linalg.spsolve``.
+    """
+    count = int(missing.sum())
+    number = np.full(missing.shape, -1, dtype=np.int64)
+    number[missing] = np.arange(count)
+    diagonal = np.zeros(count)
+    rhs = np.zeros(count)
+    rows, cols = [], []
+    for axis in (0, 1):
+        for shift in (1, -1):
+            # pairs (point, neighbour) along this axis and direction, inside the grid
+            n = missing.shape[axis]
+            here = [slice(None), slice(None)]
+            there = [slice(None), slice(None)]
+            here[axis] = slice(0, n - 1) if shift == 1 else slice(1, n)
+            there[axis] = slice(1, n) if shift == 1 else slice(0, n - 1)
+            hole = missing[tuple(here)]
+            point = number[tuple(here)][hole]
+            neighbour_missing = missing[tuple(there)][hole]
+            neighbour = number[tuple(there)][hole]
+            values = residual[tuple(there)][hole]
+            np.add.at(diagonal, point, 1.0)
+            np.add.at(rhs, point[~neighbour_missing], values[~neighbour_missing])
+            rows.append(point[neighbour_missing])
+            cols.append(neighbour[neighbour_missing])
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    matrix = sparse.csr_matrix(
+        (np.r_[diagonal, -np.ones(rows.size)],
+         (np.r_[np.arange(count), rows], np.r_[np.arange(count), cols])),
+        shape=(count, count),
+    )
+    return np.atleast_1d(sparse_linalg.spsolve(matrix.tocsc(), rhs))
+
+
+def remove_plane(heights: np.ndarray, spacing) -> tuple[np.ndarray, tuple[float, float, float]]:
+    """Subtract the least-squares plane ``a + b x + c y`` from heights ``(ny, nx)``.
+
+    ``x = ix dx``, ``y = iy dy`` with ``spacing = (dx, dy)`` [m]. Returns the
+    residual heights (zero mean, no tilt) and ``(a, b, c)``: the offset in
+    the heights' unit and the slopes in height unit per metre.
+    """
+    z = np.asarray(heights, dtype=float)
+    ny, nx = z.shape
+    dx, dy = spacing
+    y, x = np.meshgrid(np.arange(ny) * dy, np.arange(nx) * dx, indexing="ij")
+    design = np.column_stack([np.ones(z.size), x.ravel() - x.mean(), y.ravel() - y.mean()])
+    (a, b, c), *_ = np.linalg.lstsq(design, z.ravel(), rcond=None)
+    residual = z - (a + b * (x - x.mean()) + c * (y - y.mean()))
+    residual -= residual.mean()  # exact zero mean (the fit leaves a rounding-level one)
+    return residual, (float(a - b * x.mean() - c * y.mean()), float(b), float(c))
+
+
+def remove_polynomial(heights: np.ndarray, spacing, degree: int) -> tuple[np.ndarray, list]:
+    """Subtract the least-squares polynomial of total degree ``degree`` in x and y.
+
+    Coordinates are centred and scaled to [-1, 1] for conditioning; returns the
+    residual (zero mean) and the coefficients of the monomials
+    ``xs^i ys^j`` (i + j <= degree, in the order i, then j) in the heights' unit.
+    """
+    z = np.asarray(heights, dtype=float)
+    ny, nx = z.shape
+    xs = np.linspace(-1.0, 1.0, nx) if nx > 1 else np.zeros(1)
+    ys = np.linspace(-1.0, 1.0, ny) if ny > 1 else np.zeros(1)
+    y, x = np.meshgrid(ys, xs, indexing="ij")
+    powers = [(i, j) for i in range(degree + 1) for j in range(degree + 1 - i)]
+    design = np.column_stack([(x**i * y**j).ravel() for i, j in powers])
+    coefficients, *_ = np.linalg.lstsq(design, z.ravel(), rcond=None)
+    residual = z - (design @ coefficients).reshape(z.shape)
+    residual -= residual.mean()
+    return residual, [float(c) for c in coefficients]
+
+
+def crop_window(heights: np.ndarray, spacing, window, source="heights"):
+    """The points of ``window = (x0, y0, Lx, Ly)`` [m] (from the first point, lengths
+    rounded to whole points) and ``(ix0, iy0, nx, ny)``; refused outside the grid."""
+    ny, nx = heights.shape
+    x0, y0, lx, ly = (float(v) for v in window)
+    ix0, iy0 = round(x0 / spacing[0]), round(y0 / spacing[1])
+    cx, cy = round(lx / spacing[0]), round(ly / spacing[1])
+    if min(x0, y0) < 0 or cx < MIN_POINTS or cy < MIN_POINTS or ix0 + cx > nx or iy0 + cy > ny:
+        raise MeasurementError(
+            f"{source}: crop window x {x0:g}..{x0 + lx:g} m, y {y0:g}..{y0 + ly:g} m "
+            f"({cx} x {cy} points from ({ix0}, {iy0})) does not lie within the "
+            f"measurement ({nx * spacing[0]:g} x {ny * spacing[1]:g} m, {nx} x {ny} points) "
+            f"or has fewer than {MIN_POINTS} points along a side", source,
+        )
+    return heights[iy0:iy0 + cy, ix0:ix0 + cx], (ix0, iy0, cx, cy)
+
+
+def decimate(heights: np.ndarray, factor: int) -> np.ndarray:
+    """Means of ``factor`` x ``factor`` blocks (a trailing partial block is dropped)."""
+    ny, nx = heights.shape
+    my, mx = ny // factor, nx // factor
+    blocks = heights[:my * factor, :mx * factor].reshape(my, factor, mx, factor)
+    return blocks.mean(axis=(1, 3))
+
+
+def resample(heights: np.ndarray, spacing, grid) -> tuple[np.ndarray, tuple[float, float]]:
+    """Linear interpolation onto ``grid = (nx, ny)`` points over the same plan size.
+
+    Points are cell centres of both grids (point k at ``(k + 1/2) L / n``);
+    returns the heights and the new spacing [m].
+    """
+    ny, nx = heights.shape
+    gx, gy = (int(v) for v in grid)
+    lx, ly = nx * spacing[0], ny * spacing[1]
+    old_x = (np.arange(nx) + 0.5) * spacing[0]
+    old_y = (np.arange(ny) + 0.5) * spacing[1]
+    new_x = np.clip((np.arange(gx) + 0.5) * lx / gx, old_x[0], old_x[-1])
+    new_y = np.clip((np.arange(gy) + 0.5) * ly / gy, old_y[0], old_y[-1])
+    interpolate = RegularGridInterpolator((old_y, old_x), heights)
+    yy, xx = np.meshgrid(new_y, new_x, indexing="ij")
+    values = interpolate(np.column_stack([yy.ravel(), xx.ravel()])).reshape(gy, gx)
+    return values, (lx / gx, ly / gy)
+
+
+def prepare(raw: np.ndarray, spacing, *, source, absent: int = 0, crop=None,
+            fill_holes: float = 0.0, form_degree: int = 1, outliers_sigma: float | None = None,
+            decimate_by: int | None = None, resample_grid=None):
+    """Steps 0-4 of the module documentation on raw heights ``(ny, nx)`` [m] with NaN holes.
+
+    ``spacing`` (dx, dy) [m]; ``source`` names the data (the file) in messages;
+    ``absent`` counts the holes that were absent from a point list; the other
+    options as :func:`roughcontact.surfaces.measured.load_measurement` takes
+    them. Returns ``(heights [m] of zero mean, spacing [m], points filled,
+    removed plane (a, b, c), steps)``, ``steps`` a dict for the provenance
+    (``file_grid``, ``crop_points``, ``form_coefficients``, ``outliers``,
+    ``decimated_by``, ``resampled_to``).
+
+    Raises
+    ------
+    MeasurementError
+        For a grid of fewer than :data:`~roughcontact.surfaces.readers.MIN_POINTS`
+        points along an axis, a crop window outside it, too many holes, or
+        heights that are a plane.
+    """
+    ny, nx = raw.shape
+    if min(nx, ny) < MIN_POINTS:
+        raise MeasurementError(
+            f"{source}: a {nx} x {ny} grid (nx x ny); a surface needs at least {MIN_POINTS} "
+            "points along each axis", source,
+        )
+    steps = {"file_grid": [nx, ny]}
+    if crop is not None:
+        raw, window = crop_window(raw, spacing, crop, str(source))
+        steps["crop_points"] = list(window)
+    filled_raw, filled = fill_missing(raw, float(fill_holes), source=str(source), absent=absent)
+    heights, plane = remove_plane(filled_raw, spacing)
+    if not np.ptp(heights) > 1e-12 * max(np.ptp(filled_raw), np.finfo(float).tiny):
+        raise MeasurementError(f"{source}: the heights are a plane (no roughness left)", source)
+    if form_degree > 1:
+        heights, coefficients = remove_polynomial(heights, spacing, int(form_degree))
+        steps["form_coefficients"] = coefficients
+    if outliers_sigma is not None:
+        far = np.abs(heights) > float(outliers_sigma) * heights.std()
+        steps["outliers"] = int(far.sum())
+        if far.any():
+            log.info("%s: %d points beyond %g sigma filled as holes", source, int(far.sum()),
+                     outliers_sigma)
+            heights, _ = fill_missing(np.where(far, np.nan, heights), 1.0 - 1e-12,
+                                      source=f"{source} (outliers)")
+            heights, _ = remove_plane(heights, spacing)
+            if form_degree > 1:
+                heights, _ = remove_polynomial(heights, spacing, int(form_degree))
+    if decimate_by is not None:
+        heights = decimate(heights, int(decimate_by))
+        spacing = (spacing[0] * decimate_by, spacing[1] * decimate_by)
+        heights = heights - heights.mean()
+        steps["decimated_by"] = int(decimate_by)
+    elif resample_grid is not None:
+        heights, spacing = resample(heights, spacing, resample_grid)
+        heights = heights - heights.mean()
+        steps["resampled_to"] = [int(v) for v in resample_grid]
+    return heights, spacing, filled, plane, steps
