@@ -71,12 +71,10 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import numpy as np
-import scipy.sparse as sp
 
 from roughcontact.elasticity.assembly import assemble_stiffness, top_face_operators
 from roughcontact.elasticity.dofs import SUPPORTS
 from roughcontact.elasticity.elements import ELEMENTS
-from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.mesh import HexMesh, node_count, slabs, structured_mesh
 from roughcontact.elasticity.sparse_solve import resolve_solver
 from roughcontact.elasticity.symmetry import block_mirrors, mirror_condensed_flexibility
@@ -88,11 +86,8 @@ __all__ = [
     "MeshSpec",
     "ModelTooLarge",
     "build_mesh",
-    "centre_interpolation",
     "check_memory",
     "estimate_cost",
-    "halfspace_influence",
-    "hybrid_unit_modulus_influence",
     "influence_matrix",
     "layer_coarsening",
     "layer_thicknesses",
@@ -536,11 +531,9 @@ def unit_modulus_influence(
 ) -> np.ndarray:
     """Influence matrix of the block times Young's modulus, ``E * C`` [m].
 
-    ``E * C[i, j]`` [m = (m/Pa) * Pa] depends on the geometry, the mesh and nu
-    only (it is C for E = 1 Pa), so it is the quantity worth storing.
-
-    C is proportional to 1/E (linear elasticity with fixed nu), so
-    ``C(E) = unit_modulus_influence(geom) / E``; ``geom.E`` is not used.
+    ``E * C[i, j]`` [m] depends on the geometry, the mesh and nu only (C is
+    proportional to 1/E), so it is the quantity worth storing; ``geom.E`` is
+    not used and ``C(E) = unit_modulus_influence(geom) / E``.
 
     Method: the stiffness K of the supported block (``roughcontact.elasticity.assembly``) is
     condensed onto the contact grid. With R (n x N) the interpolation of the
@@ -556,10 +549,9 @@ def unit_modulus_influence(
 
     The block is symmetric about its two mid-planes (unless the base pins
     corners), so C is condensed one symmetry class at a time
-    (``roughcontact.elasticity.symmetry``): four sparse factorizations of a
-    quarter of the dofs each instead of one of all of them, the same matrix
-    to round-off (3e-14 of its largest entry) at a third of the work and,
-    for the "converged" preset at 60 x 60, 2.3 GB instead of 7.4 GB.
+    (``roughcontact.elasticity.symmetry``): four factorizations of a quarter
+    of the dofs, the same matrix to round-off (3e-14 of its largest entry);
+    "converged" at 60 x 60: 2.3 GB instead of 7.4 GB.
 
     On finer meshes C converges to the centre-point displacement of the
     continuum (Love's value for a half-space). For a finite block with free
@@ -595,6 +587,24 @@ def unit_modulus_influence(
     """
     solver = resolve_solver(solver)
     check_memory(geom, max_bytes, solver, split_by_mirrors)
+    _warn_thin_layer(geom)
+    mesh = build_mesh(geom)
+    stiffness = assemble_stiffness(mesh, geom.nu, geom.base, E=1.0, upper=True)
+    load, centre = top_face_operators(mesh, geom.grid, geom.base)
+    mirrors = block_mirrors(mesh, geom.base, geom.grid) if split_by_mirrors else ()
+    if _loads_match_observations(geom):  # F = A R: condense R alone, scale by A
+        load = None
+    flexibility = mirror_condensed_flexibility(stiffness, centre, load, mirrors, solver)
+    if load is None:
+        flexibility *= geom.spacing[0] * geom.spacing[1]
+    del stiffness
+    if symmetric:
+        _symmetrize(flexibility)
+    return flexibility
+
+
+def _warn_thin_layer(geom: BlockGeometry) -> None:
+    """Warn when the finite elements are wider than the block is thick."""
     element_width = max(geom.spacing) / geom.mesh_spec.refinement
     if element_width > geom.thickness:
         logger.warning(
@@ -602,21 +612,6 @@ def unit_modulus_influence(
             "near field of a thin layer (C is inaccurate and may be indefinite); use a "
             "refinement of at least %d", geom.mesh, element_width, geom.thickness,
             math.ceil(max(geom.spacing) / geom.thickness * (1.0 - 1e-9)))
-    mesh = build_mesh(geom)
-    stiffness = assemble_stiffness(mesh, geom.nu, geom.base, E=1.0, upper=True)
-    load, centre = top_face_operators(mesh, geom.grid, geom.base)
-    mirrors = block_mirrors(mesh, geom.base, geom.grid) if split_by_mirrors else ()
-    if _loads_match_observations(geom):
-        hx, hy = geom.spacing
-        del load
-        flexibility = hx * hy * mirror_condensed_flexibility(stiffness, centre, None, mirrors,
-                                                             solver)
-    else:
-        flexibility = mirror_condensed_flexibility(stiffness, centre, load, mirrors, solver)
-    del stiffness
-    if symmetric:
-        _symmetrize(flexibility)
-    return flexibility
 
 
 def _symmetrize(matrix: np.ndarray, block: int = 512) -> None:
@@ -652,109 +647,3 @@ def influence_matrix(
     """
     return unit_modulus_influence(geom, symmetric=symmetric, solver=solver,
                                   max_bytes=max_bytes) / geom.E
-
-
-def centre_interpolation(fine: int, coarse: int) -> np.ndarray:
-    """Linear interpolation (extrapolation at the ends) from coarse to fine element centres.
-
-    Both grids cover the same length with ``coarse`` and ``fine`` equal
-    elements; returns the (fine, coarse) matrix acting on centre values.
-    """
-    x = (np.arange(fine) + 0.5) / fine * coarse - 0.5  # fine centres in coarse index units
-    if coarse == 1:
-        return np.ones((fine, 1))
-    left = np.clip(np.floor(x).astype(int), 0, coarse - 2)
-    weight = x - left
-    matrix = np.zeros((fine, coarse))
-    rows = np.arange(fine)
-    matrix[rows, left] = 1.0 - weight
-    matrix[rows, left + 1] = weight
-    return matrix
-
-
-def finite_body_correction(coarse_unit: np.ndarray, coarse: BlockGeometry) -> np.ndarray:
-    """The finite body's correction to Love's half-space per unit loaded area [1/m].
-
-    ``K = (E C_fe - E C_love) / A_c`` on the coarse contact grid of ``coarse``,
-    from its finite-element ``E C_fe`` (``coarse_unit``, [m]; overwritten):
-    the one recipe of the hybrid models, dense
-    (:func:`hybrid_unit_modulus_influence`) and matrix-free
-    (:func:`roughcontact.elasticity.operators.hybrid_operator`).
-    """
-    coarse_unit -= halfspace_influence(coarse.grid, coarse.size, 1.0, coarse.nu)
-    coarse_unit /= coarse.spacing[0] * coarse.spacing[1]
-    return coarse_unit
-
-
-def hybrid_unit_modulus_influence(
-    geom: BlockGeometry,
-    *,
-    coarsening: int = 2,
-    solver: str = "auto",
-    max_bytes: float = 16 * GB,
-) -> np.ndarray:
-    """``E * C`` [m] from Love's half-space plus a finite-body correction from a coarser grid.
-
-    The near field of C (self compliance, nearest neighbours) is what a
-    finite-element mesh gets wrong and what Love's closed form gets right; the
-    finite body (rigid base at depth L, free lateral faces) only adds a
-    correction that varies on the scale of L. So
-
-        E C = E C_love(grid) + A * interp(K),   K = (E C_fe(coarse) - E C_love(coarse)) / A_c,
-
-    where ``C_fe(coarse)`` is ``unit_modulus_influence`` for the same block and
-    mesh (``geom.mesh``, e.g. "converged") on a contact grid ``coarsening``
-    times coarser, ``C_love`` is ``halfspace_influence`` on each grid, K the
-    correction per unit loaded area [1/m] at the coarse element
-    centres, A and A_c the fine and coarse element areas, and ``interp`` the
-    separable linear interpolation of K in both the observation and the load
-    position (``(Py kron Px) K (Py kron Px)^T``, linear extrapolation at the
-    edges). The cost is that of the coarse model (about ``coarsening^2``
-    fewer dofs).
-
-    ``coarsening=1`` returns the finite-element matrix itself.
-
-    Accuracy, measured at the paper's 60 x 60 block (nu = 0, 3 Gaussian
-    surfaces, sigma 24.5 um, b 1 mm) against the "converged" preset (102 s,
-    7.6 GB on 2 loaded cores): with ``mesh="converged"``, ``coarsening=2``
-    (15 s, 1.6 GB) the centre diagonal is within 0.2 %, the neighbours
-    within 1.2 %, every diagonal entry at least 3 elements from the free
-    lateral faces within 0.3 %, and k_P, real area, peak pressure and
-    asperity deflection at P = 0.3, 1, 2 MPa within 0.5 %. With
-    ``mesh="refined"`` (2.8 s, 0.5 GB): neighbours within 3.6 %, contact
-    quantities within 1.2 %. Limitation: the correction is not smooth next
-    to the free lateral faces (the block lacks the material the half-space
-    has there), so the diagonal of the outermost elements is off by up to
-    14 % (corners, "converged") or 18 % ("refined"); rows sum to L within
-    1 % for nu = 0 (the finite-element matrix: 0.1 %).
-
-    Parameters
-    ----------
-    geom : BlockGeometry
-        Block and fine contact grid; ``geom.mesh`` is used for the coarse model.
-    coarsening : int
-        Ratio of fine to coarse contact elements per direction; must divide the grid.
-    solver, max_bytes
-        As in ``unit_modulus_influence`` (for the coarse model).
-
-    Returns
-    -------
-    ndarray, shape (n, n)
-        Symmetric ``E * C`` [m], row-major over y then x.
-    """
-    nx, ny = geom.grid
-    k = int(coarsening)
-    if k != coarsening or k < 1 or nx % k or ny % k:
-        raise ValueError(f"coarsening must be a positive integer dividing the grid {geom.grid}, "
-                         f"got {coarsening!r}")
-    coarse = dataclasses.replace(geom, grid=(nx // k, ny // k))
-    fe = finite_body_correction(unit_modulus_influence(coarse, solver=solver,
-                                                       max_bytes=max_bytes), coarse)
-    interp = sp.csr_array(sp.kron(sp.csr_array(centre_interpolation(ny, ny // k)),
-                                  sp.csr_array(centre_interpolation(nx, nx // k))))
-    correction = interp @ np.ascontiguousarray((interp @ fe).T)  # fe is symmetric
-    del fe
-    correction *= geom.spacing[0] * geom.spacing[1]
-    result = halfspace_influence(geom.grid, geom.size, 1.0, geom.nu)
-    result += correction
-    return 0.5 * (result + result.T)
