@@ -267,7 +267,7 @@ def run_hybrid(which: str) -> dict:
     import dataclasses
 
     from roughcontact.contact.cell import sweep_and_aggregate
-    from roughcontact.elasticity.influence import hybrid_unit_modulus_influence
+    from roughcontact.elasticity.hybrid import hybrid_unit_modulus_influence
     from roughcontact.reports.convergence import CONTACT_COLUMNS
     from roughcontact.surfaces.spec import SurfaceSpec
     from roughcontact.surfaces.synthetic import derive_seeds, generate_many

@@ -71,14 +71,13 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import numpy as np
-import scipy.sparse as sp
 
 from roughcontact.elasticity.assembly import assemble_stiffness, top_face_operators
 from roughcontact.elasticity.dofs import SUPPORTS
 from roughcontact.elasticity.elements import ELEMENTS
-from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.mesh import HexMesh, node_count, slabs, structured_mesh
-from roughcontact.elasticity.sparse_solve import condensed_flexibility, resolve_solver
+from roughcontact.elasticity.sparse_solve import resolve_solver
+from roughcontact.elasticity.symmetry import block_mirrors, mirror_condensed_flexibility
 
 __all__ = [
     "MESH_PRESETS",
@@ -87,14 +86,12 @@ __all__ = [
     "MeshSpec",
     "ModelTooLarge",
     "build_mesh",
-    "centre_interpolation",
     "check_memory",
     "estimate_cost",
-    "halfspace_influence",
-    "hybrid_unit_modulus_influence",
     "influence_matrix",
     "layer_coarsening",
     "layer_thicknesses",
+    "mirror_classes",
     "unit_modulus_influence",
 ]
 
@@ -403,13 +400,26 @@ def _loads_match_observations(geom: BlockGeometry) -> bool:
     return ELEMENTS[spec.element].order == 1 and spec.refinement == 1
 
 
-#: Peak-memory model, fitted to measured peaks (resident set) of
-#: ``unit_modulus_influence`` with MKL PARDISO on these meshes (grids 20-60,
-#: 14k-480k dofs): bytes per dof at 1e5 dofs, growing like dofs^0.2 (nested
-#: dissection fill of slab-like meshes). Fit within 25 %; ``estimate_cost``
-#: adds that margin. The SuperLU path stores L and U and solves in blocks.
+#: Peak-memory model of one factorization of the whole bordered matrix (a
+#: support without mirror symmetry, or ``split_by_mirrors=False``), fitted to
+#: measured peaks (resident set) of ``unit_modulus_influence`` with MKL PARDISO
+#: on these meshes (grids 20-60, 14k-480k dofs): bytes per dof at 1e5 dofs,
+#: growing like dofs^0.2 (nested dissection fill of slab-like meshes). Fit
+#: within 25 %; ``estimate_cost`` adds that margin. The SuperLU path stores L
+#: and U. Condensed one mirror class at a time, each class's factorization
+#: follows the same fit for its share of the dofs.
 _BYTES_PER_DOF = {"hex8": 8.2e3, "hex20": 10.9e3, "hex27": 12.1e3}
 _SUPERLU_FACTOR = 6.0
+
+#: Peak of the stiffness assembly per dof [bytes], the largest measured on the
+#: presets at grids 20-120 (hex27: 20 and 40 at refinement 2): triplets summed
+#: 2e7 at a time plus the sparse matrices. With the split into mirror classes
+#: the assembly, not a factorization, sets the peak of the smaller builds.
+_ASSEMBLY_BYTES_PER_DOF = {"hex8": 4.4e3, "hex20": 5.5e3, "hex27": 4.7e3}
+
+#: Bytes per stored entry of the stiffness's upper triangle (float64 value,
+#: int64 column index), held while the classes are factorized.
+_STORED_ENTRY_BYTES = 16
 
 #: Nodes coupled to one node through the elements around it, per element.
 _COUPLED_NODES = {"hex8": 27, "hex20": 65, "hex27": 125}
@@ -433,13 +443,30 @@ def _superlu_memory(factor: float, nb: int) -> float:
 _SOLVER_MEMORY = {"pardiso": _pardiso_memory, "superlu": _superlu_memory}
 
 
-def estimate_cost(geom: BlockGeometry, solver: str = "auto") -> CostEstimate:
+def mirror_classes(geom: BlockGeometry) -> int:
+    """Symmetry classes ``unit_modulus_influence`` condenses one at a time.
+
+    4 (symmetric or antisymmetric about each mid-plane) when the support is
+    mirror-symmetric, 1 when it pins corners (the sliding base); the count of
+    ``roughcontact.elasticity.symmetry.block_mirrors``' classes, 2^mirrors,
+    without building the mesh.
+    """
+    return 1 if SUPPORTS[geom.base].pins_rigid_body else 4
+
+
+def estimate_cost(geom: BlockGeometry, solver: str = "auto",
+                  split_by_mirrors: bool = True) -> CostEstimate:
     """Predict the problem size and peak memory without building anything.
 
     The dof count is exact (from the mesh layout); the stiffness nonzeros are
-    an upper bound; the peak memory follows the fit ``_BYTES_PER_DOF`` with a
-    25 % margin, plus the dense condensed matrices (8 bytes per entry, about
-    1.5 copies) and 0.15 GB for the interpreter and libraries.
+    an upper bound. The peak memory is the larger of the assembly
+    (``_ASSEMBLY_BYTES_PER_DOF``) and the factorization of one symmetry class
+    (``mirror_classes``: the fit ``_BYTES_PER_DOF`` with a 25 % margin for its
+    share of the dofs, plus the whole stiffness held meanwhile), plus the
+    dense matrices (the condensed class matrix, about 1.5 copies, and the
+    result, 8 bytes per entry) and 0.15 GB for the interpreter and libraries.
+    Measured against this estimate at grids 20-120 with the presets: 1.0-1.4
+    times lower (60 x 60 "converged": 2.3 GB, estimated 2.9 GB).
 
     Parameters
     ----------
@@ -448,6 +475,9 @@ def estimate_cost(geom: BlockGeometry, solver: str = "auto") -> CostEstimate:
     solver : {"auto", "pardiso", "superlu"}
         The SuperLU fallback needs about six times the factor memory plus
         the dense trailing blocks of its factors.
+    split_by_mirrors : bool
+        As in ``unit_modulus_influence``; False: one factorization of the
+        whole bordered matrix.
     """
     spec = geom.mesh_spec
     parts = slabs(build_mesh(geom))  # edge tuples only, nothing large
@@ -462,9 +492,14 @@ def estimate_cost(geom: BlockGeometry, solver: str = "auto") -> CostEstimate:
     coupling = _COUPLED_NODES[spec.element] * 3 / 2
     nnz = int(dofs * coupling)
     nb = geom.n_elements * (1 if _loads_match_observations(geom) else 2)
-    factor = 1.25 * _BYTES_PER_DOF[spec.element] * dofs * (dofs / 1e5) ** 0.2
-    factor = _SOLVER_MEMORY[resolve_solver(solver)](factor, nb)
-    peak = factor + 1.5 * 8.0 * nb * nb + 8.0 * geom.n_elements**2 + 0.15 * GB
+    classes = mirror_classes(geom) if split_by_mirrors else 1
+    share = dofs / classes
+    factor = 1.25 * _BYTES_PER_DOF[spec.element] * share * (share / 1e5) ** 0.2
+    work = _SOLVER_MEMORY[resolve_solver(solver)](factor, nb / classes)
+    if classes > 1:  # the fit above includes the stiffness and the assembly of the whole
+        work = max(_ASSEMBLY_BYTES_PER_DOF[spec.element] * dofs,
+                   _STORED_ENTRY_BYTES * nnz + work)
+    peak = work + 1.5 * 8.0 * (nb / classes) ** 2 + 8.0 * geom.n_elements**2 + 0.15 * GB
     return CostEstimate(dofs, nnz, nb, peak)
 
 
@@ -472,9 +507,10 @@ class ModelTooLarge(MemoryError):
     """The finite-element model would not fit in the allowed memory."""
 
 
-def check_memory(geom: BlockGeometry, max_bytes: float, solver: str = "auto") -> CostEstimate:
+def check_memory(geom: BlockGeometry, max_bytes: float, solver: str = "auto",
+                 split_by_mirrors: bool = True) -> CostEstimate:
     """Raise ``ModelTooLarge`` before building when the estimate exceeds ``max_bytes``."""
-    cost = estimate_cost(geom, solver)
+    cost = estimate_cost(geom, solver, split_by_mirrors)
     if cost.peak_bytes > max_bytes:
         raise ModelTooLarge(
             f"influence matrix for grid {geom.grid} with mesh {geom.mesh!r} needs about "
@@ -491,14 +527,13 @@ def unit_modulus_influence(
     symmetric: bool = True,
     solver: str = "auto",
     max_bytes: float = 16 * GB,
+    split_by_mirrors: bool = True,
 ) -> np.ndarray:
     """Influence matrix of the block times Young's modulus, ``E * C`` [m].
 
-    ``E * C[i, j]`` [m = (m/Pa) * Pa] depends on the geometry, the mesh and nu
-    only (it is C for E = 1 Pa), so it is the quantity worth storing.
-
-    C is proportional to 1/E (linear elasticity with fixed nu), so
-    ``C(E) = unit_modulus_influence(geom) / E``; ``geom.E`` is not used.
+    ``E * C[i, j]`` [m] depends on the geometry, the mesh and nu only (C is
+    proportional to 1/E), so it is the quantity worth storing; ``geom.E`` is
+    not used and ``C(E) = unit_modulus_influence(geom) / E``.
 
     Method: the stiffness K of the supported block (``roughcontact.elasticity.assembly``) is
     condensed onto the contact grid. With R (n x N) the interpolation of the
@@ -511,6 +546,12 @@ def unit_modulus_influence(
     (A = hx hy): the centre value is the mean of the face's four corner nodes
     and C = A R K^-1 R^T is symmetric (Eq 39 of Kumar et al. 2006) and, for
     nu = 0 and a clamped base, its rows sum to L/E exactly (Eq 37-38).
+
+    The block is symmetric about its two mid-planes (unless the base pins
+    corners), so C is condensed one symmetry class at a time
+    (``roughcontact.elasticity.symmetry``): four factorizations of a quarter
+    of the dofs, the same matrix to round-off (3e-14 of its largest entry);
+    "converged" at 60 x 60: 2.3 GB instead of 7.4 GB.
 
     On finer meshes C converges to the centre-point displacement of the
     continuum (Love's value for a half-space). For a finite block with free
@@ -535,6 +576,9 @@ def unit_modulus_influence(
     max_bytes : float, optional
         Memory allowed [bytes]; a larger estimate raises ``ModelTooLarge``
         before anything is built.
+    split_by_mirrors : bool, optional
+        Condense by mirror-symmetry class (default; a no-op for a support
+        without mirror symmetry) or the whole bordered matrix at once.
 
     Returns
     -------
@@ -542,7 +586,25 @@ def unit_modulus_influence(
         ``E * C`` [m], rows and columns row-major over y then x.
     """
     solver = resolve_solver(solver)
-    check_memory(geom, max_bytes, solver)
+    check_memory(geom, max_bytes, solver, split_by_mirrors)
+    _warn_thin_layer(geom)
+    mesh = build_mesh(geom)
+    stiffness = assemble_stiffness(mesh, geom.nu, geom.base, E=1.0, upper=True)
+    load, centre = top_face_operators(mesh, geom.grid, geom.base)
+    mirrors = block_mirrors(mesh, geom.base, geom.grid) if split_by_mirrors else ()
+    if _loads_match_observations(geom):  # F = A R: condense R alone, scale by A
+        load = None
+    flexibility = mirror_condensed_flexibility(stiffness, centre, load, mirrors, solver)
+    if load is None:
+        flexibility *= geom.spacing[0] * geom.spacing[1]
+    del stiffness
+    if symmetric:
+        _symmetrize(flexibility)
+    return flexibility
+
+
+def _warn_thin_layer(geom: BlockGeometry) -> None:
+    """Warn when the finite elements are wider than the block is thick."""
     element_width = max(geom.spacing) / geom.mesh_spec.refinement
     if element_width > geom.thickness:
         logger.warning(
@@ -550,19 +612,22 @@ def unit_modulus_influence(
             "near field of a thin layer (C is inaccurate and may be indefinite); use a "
             "refinement of at least %d", geom.mesh, element_width, geom.thickness,
             math.ceil(max(geom.spacing) / geom.thickness * (1.0 - 1e-9)))
-    mesh = build_mesh(geom)
-    stiffness = assemble_stiffness(mesh, geom.nu, geom.base, E=1.0, upper=True)
-    load, centre = top_face_operators(mesh, geom.grid, geom.base)
-    if _loads_match_observations(geom):
-        hx, hy = geom.spacing
-        del load
-        flexibility = hx * hy * condensed_flexibility(stiffness, centre, solver=solver)
-    else:
-        flexibility = condensed_flexibility(stiffness, centre, load, solver=solver)
-    del stiffness
-    if symmetric:
-        flexibility = 0.5 * (flexibility + flexibility.T)
-    return flexibility
+
+
+def _symmetrize(matrix: np.ndarray, block: int = 512) -> None:
+    """Replace a square matrix by its symmetric part ``(A + A^T) / 2`` in place.
+
+    Square blocks at a time, so no second n x n array is held; every entry is
+    ``0.5 * (a_ij + a_ji)``, bit for bit the value of the whole-matrix expression.
+    """
+    size = matrix.shape[0]
+    for start in range(0, size, block):
+        rows = slice(start, start + block)
+        for other in range(start, size, block):
+            cols = slice(other, other + block)
+            part = 0.5 * (matrix[rows, cols] + matrix[cols, rows].T)
+            matrix[rows, cols] = part
+            matrix[cols, rows] = part.T
 
 
 def influence_matrix(
@@ -582,109 +647,3 @@ def influence_matrix(
     """
     return unit_modulus_influence(geom, symmetric=symmetric, solver=solver,
                                   max_bytes=max_bytes) / geom.E
-
-
-def centre_interpolation(fine: int, coarse: int) -> np.ndarray:
-    """Linear interpolation (extrapolation at the ends) from coarse to fine element centres.
-
-    Both grids cover the same length with ``coarse`` and ``fine`` equal
-    elements; returns the (fine, coarse) matrix acting on centre values.
-    """
-    x = (np.arange(fine) + 0.5) / fine * coarse - 0.5  # fine centres in coarse index units
-    if coarse == 1:
-        return np.ones((fine, 1))
-    left = np.clip(np.floor(x).astype(int), 0, coarse - 2)
-    weight = x - left
-    matrix = np.zeros((fine, coarse))
-    rows = np.arange(fine)
-    matrix[rows, left] = 1.0 - weight
-    matrix[rows, left + 1] = weight
-    return matrix
-
-
-def finite_body_correction(coarse_unit: np.ndarray, coarse: BlockGeometry) -> np.ndarray:
-    """The finite body's correction to Love's half-space per unit loaded area [1/m].
-
-    ``K = (E C_fe - E C_love) / A_c`` on the coarse contact grid of ``coarse``,
-    from its finite-element ``E C_fe`` (``coarse_unit``, [m]; overwritten):
-    the one recipe of the hybrid models, dense
-    (:func:`hybrid_unit_modulus_influence`) and matrix-free
-    (:func:`roughcontact.elasticity.operators.hybrid_operator`).
-    """
-    coarse_unit -= halfspace_influence(coarse.grid, coarse.size, 1.0, coarse.nu)
-    coarse_unit /= coarse.spacing[0] * coarse.spacing[1]
-    return coarse_unit
-
-
-def hybrid_unit_modulus_influence(
-    geom: BlockGeometry,
-    *,
-    coarsening: int = 2,
-    solver: str = "auto",
-    max_bytes: float = 16 * GB,
-) -> np.ndarray:
-    """``E * C`` [m] from Love's half-space plus a finite-body correction from a coarser grid.
-
-    The near field of C (self compliance, nearest neighbours) is what a
-    finite-element mesh gets wrong and what Love's closed form gets right; the
-    finite body (rigid base at depth L, free lateral faces) only adds a
-    correction that varies on the scale of L. So
-
-        E C = E C_love(grid) + A * interp(K),   K = (E C_fe(coarse) - E C_love(coarse)) / A_c,
-
-    where ``C_fe(coarse)`` is ``unit_modulus_influence`` for the same block and
-    mesh (``geom.mesh``, e.g. "converged") on a contact grid ``coarsening``
-    times coarser, ``C_love`` is ``halfspace_influence`` on each grid, K the
-    correction per unit loaded area [1/m] at the coarse element
-    centres, A and A_c the fine and coarse element areas, and ``interp`` the
-    separable linear interpolation of K in both the observation and the load
-    position (``(Py kron Px) K (Py kron Px)^T``, linear extrapolation at the
-    edges). The cost is that of the coarse model (about ``coarsening^2``
-    fewer dofs).
-
-    ``coarsening=1`` returns the finite-element matrix itself.
-
-    Accuracy, measured at the paper's 60 x 60 block (nu = 0, 3 Gaussian
-    surfaces, sigma 24.5 um, b 1 mm) against the "converged" preset (102 s,
-    7.6 GB on 2 loaded cores): with ``mesh="converged"``, ``coarsening=2``
-    (15 s, 1.6 GB) the centre diagonal is within 0.2 %, the neighbours
-    within 1.2 %, every diagonal entry at least 3 elements from the free
-    lateral faces within 0.3 %, and k_P, real area, peak pressure and
-    asperity deflection at P = 0.3, 1, 2 MPa within 0.5 %. With
-    ``mesh="refined"`` (2.8 s, 0.5 GB): neighbours within 3.6 %, contact
-    quantities within 1.2 %. Limitation: the correction is not smooth next
-    to the free lateral faces (the block lacks the material the half-space
-    has there), so the diagonal of the outermost elements is off by up to
-    14 % (corners, "converged") or 18 % ("refined"); rows sum to L within
-    1 % for nu = 0 (the finite-element matrix: 0.1 %).
-
-    Parameters
-    ----------
-    geom : BlockGeometry
-        Block and fine contact grid; ``geom.mesh`` is used for the coarse model.
-    coarsening : int
-        Ratio of fine to coarse contact elements per direction; must divide the grid.
-    solver, max_bytes
-        As in ``unit_modulus_influence`` (for the coarse model).
-
-    Returns
-    -------
-    ndarray, shape (n, n)
-        Symmetric ``E * C`` [m], row-major over y then x.
-    """
-    nx, ny = geom.grid
-    k = int(coarsening)
-    if k != coarsening or k < 1 or nx % k or ny % k:
-        raise ValueError(f"coarsening must be a positive integer dividing the grid {geom.grid}, "
-                         f"got {coarsening!r}")
-    coarse = dataclasses.replace(geom, grid=(nx // k, ny // k))
-    fe = finite_body_correction(unit_modulus_influence(coarse, solver=solver,
-                                                       max_bytes=max_bytes), coarse)
-    interp = sp.csr_array(sp.kron(sp.csr_array(centre_interpolation(ny, ny // k)),
-                                  sp.csr_array(centre_interpolation(nx, nx // k))))
-    correction = interp @ np.ascontiguousarray((interp @ fe).T)  # fe is symmetric
-    del fe
-    correction *= geom.spacing[0] * geom.spacing[1]
-    result = halfspace_influence(geom.grid, geom.size, 1.0, geom.nu)
-    result += correction
-    return 0.5 * (result + result.T)

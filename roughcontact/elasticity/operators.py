@@ -7,7 +7,7 @@ paper stopped at 60 x 60 for that reason.
 
 :class:`BlockOperator` applies the unit-modulus compliance ``E C`` [m] of the
 block without forming it, by the decomposition of
-:func:`roughcontact.elasticity.influence.hybrid_unit_modulus_influence`:
+:func:`roughcontact.elasticity.hybrid.hybrid_unit_modulus_influence`:
 
     E C = E C_love + A_f W K W^T,
 
@@ -53,12 +53,8 @@ import numpy as np
 import scipy.fft
 
 from roughcontact.elasticity.halfspace import _check_grid, _element_kernel
-from roughcontact.elasticity.influence import (
-    centre_interpolation,
-    estimate_cost,
-    finite_body_correction,
-    unit_modulus_influence,
-)
+from roughcontact.elasticity.hybrid import centre_interpolation, finite_body_correction
+from roughcontact.elasticity.influence import estimate_cost, unit_modulus_influence
 from roughcontact.elasticity.protocol import GridOperator
 
 __all__ = [
@@ -302,7 +298,7 @@ def hybrid_operator(geom, coarse_unit: np.ndarray, coarse) -> BlockOperator:
 
     ``coarse_unit`` is the finite-element matrix of ``coarse`` (the same block
     on a coarser contact grid); it is turned into the correction in place
-    (:func:`roughcontact.elasticity.influence.finite_body_correction`).
+    (:func:`roughcontact.elasticity.hybrid.finite_body_correction`).
     """
     return BlockOperator(grid=geom.grid, size=geom.size, nu=geom.nu,
                          correction=finite_body_correction(coarse_unit, coarse),

@@ -93,6 +93,8 @@ def _pardiso_schur(
     iparm[0] = 1  # use the values below, defaults elsewhere
     iparm[1] = 2  # METIS nested dissection
     iparm[9] = 8  # pivot perturbation 1e-8 (never triggered for an SPD block)
+    iparm[17] = -1  # report the factor's nonzeros (MKL fills iparm[17] only when negative)
+    iparm[18] = -1  # report the factorization's MFLOP (likewise)
     iparm[34] = 1  # zero-based indices
     iparm[35] = 1  # Schur complement of the rows flagged in perm
     perm = np.zeros(n, dtype=np.int32)

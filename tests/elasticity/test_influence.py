@@ -12,6 +12,8 @@ from roughcontact.elasticity.assembly import (
     top_face_operators,
 )
 from roughcontact.elasticity.dofs import dof_map
+from roughcontact.elasticity.halfspace import halfspace_influence
+from roughcontact.elasticity.hybrid import hybrid_unit_modulus_influence
 from roughcontact.elasticity.influence import (
     MESH_PRESETS,
     BlockGeometry,
@@ -19,8 +21,6 @@ from roughcontact.elasticity.influence import (
     ModelTooLarge,
     build_mesh,
     estimate_cost,
-    halfspace_influence,
-    hybrid_unit_modulus_influence,
     influence_matrix,
     layer_coarsening,
     layer_thicknesses,

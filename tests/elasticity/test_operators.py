@@ -10,7 +10,8 @@ import pytest
 from roughcontact import contact
 from roughcontact.elasticity import operators
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
-from roughcontact.elasticity.influence import BlockGeometry, hybrid_unit_modulus_influence
+from roughcontact.elasticity.hybrid import hybrid_unit_modulus_influence
+from roughcontact.elasticity.influence import BlockGeometry
 from roughcontact.elasticity.protocol import DenseInfluence, InfluenceOperator
 from roughcontact.study import jobs as pipeline
 from roughcontact.study.config import BuildSettings, validated

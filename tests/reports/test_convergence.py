@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from roughcontact.elasticity.influence import BlockGeometry, MeshSpec, halfspace_influence
+from roughcontact.elasticity.halfspace import halfspace_influence
+from roughcontact.elasticity.influence import BlockGeometry, MeshSpec
 from roughcontact.elasticity.influence import unit_modulus_influence as build
 from roughcontact.reports.convergence import (
     COLUMNS,

@@ -340,7 +340,7 @@ def test_derive_presets_takes_what_the_tables_measure():
 
 def test_report_builds_each_named_influence():
     """A solver mesh of the report is a preset, "hybrid:<preset>" or Love's "halfspace"."""
-    from roughcontact.elasticity.influence import halfspace_influence
+    from roughcontact.elasticity.halfspace import halfspace_influence
     from roughcontact.reports.speed.report import _build_influence
 
     geometry = small_block(6)

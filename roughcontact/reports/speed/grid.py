@@ -50,7 +50,7 @@ def _fe_matrix(geometry: BlockGeometry, coarsening: int):
 #: Influence models of :func:`grid_study`: name -> (builder of ``E C`` [m] from a
 #: geometry and a coarsening, the model's name in the table). ``"hybrid"``: the
 #: matrix-free :class:`roughcontact.elasticity.operators.BlockOperator` (equal to
-#: :func:`roughcontact.elasticity.influence.hybrid_unit_modulus_influence`), Love's
+#: :func:`roughcontact.elasticity.hybrid.hybrid_unit_modulus_influence`), Love's
 #: near field plus the finite-body correction of ``mesh`` on a grid ``coarsening``
 #: times coarser (at most ``operators.COARSE_MAX`` per side): within 1.2 % of the
 #: converged preset in k_P, area and peak pressure at 60 x 60 for about 3 s, and no

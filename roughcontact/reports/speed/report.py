@@ -20,11 +20,8 @@ import pandas as pd
 import yaml
 
 from roughcontact.elasticity.halfspace import halfspace_influence
-from roughcontact.elasticity.influence import (
-    BlockGeometry,
-    hybrid_unit_modulus_influence,
-    unit_modulus_influence,
-)
+from roughcontact.elasticity.hybrid import hybrid_unit_modulus_influence
+from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.reports.speed.experiments import (
     DEFAULT_CELLS,
     DEFAULT_COUNTS,
