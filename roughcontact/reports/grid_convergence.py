@@ -47,7 +47,7 @@ from roughcontact.reports.plotting import save_figure
 from roughcontact.study.grid_convergence import GridConvergenceSettings, read_grid_contact
 from roughcontact.study.provenance import atomic_path
 
-__all__ = ["KAPPA_REFERENCES", "QUANTITIES", "converged_grid", "fit_kappa",
+__all__ = ["KAPPA_REFERENCES", "QUANTITIES", "converged_grid", "extrapolate", "fit_kappa",
            "grid_convergence_report", "grid_convergence_table", "plot_grid_convergence"]
 
 #: kappa of the theories and simulations the study is compared with.
@@ -88,9 +88,10 @@ def converged_grid(grids: Sequence[int], values: Sequence[float], reference: flo
     return found
 
 
-def _extrapolate(grids: Sequence[int], means: Sequence[float]) -> tuple[float, float]:
-    """Richardson from the three finest grids ``(value, order)``; NaN unless refined by a
-    constant ratio."""
+def extrapolate(grids: Sequence[int], means: Sequence[float]) -> tuple[float, float]:
+    """Richardson's ``(value, observed order)`` from the three finest of ``grids``
+    (ascending, elements per side) and their ``means``; NaN unless those three are
+    refined by a constant ratio (:func:`~roughcontact.reports.convergence.richardson`)."""
     if len(grids) < 3:
         return math.nan, math.nan
     (g1, g2, g3), (f1, f2, f3) = grids[-3:], means[-3:]
@@ -106,7 +107,7 @@ def _aggregate_rows(quantity: str, levels, per_grid: Mapping, settings) -> list[
     for i, level in enumerate(levels):
         stats = {g: aggregate.statistics(per_grid[g][:, i:i + 1]) for g in grids}
         means = [float(stats[g][0][0]) for g in grids]
-        value, order = _extrapolate(grids, means)
+        value, order = extrapolate(grids, means)
         done = converged_grid(grids, means, value, settings.converged_within)
         for g, mean in zip(grids, means, strict=True):
             rows.append({"quantity": quantity, "unit": QUANTITIES.get(quantity, "1"),
