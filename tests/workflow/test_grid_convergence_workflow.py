@@ -24,12 +24,16 @@ pytestmark = pytest.mark.workflow
 
 
 def run(workdir, config, *args):
-    path = workdir / "config.yaml"
-    path.write_text(yaml.safe_dump(config))
-    cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(REPO / "Snakefile"),
-           "--directory", str(workdir), "--configfile", str(path), "--cores", "2", *args]
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=600,
-                          env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
+    """``snakemake --cores 2 *args`` in ``workdir`` with ``config`` written beside it."""
+    (workdir / "config.yaml").write_text(yaml.safe_dump(config))
+    options = {"--snakefile": REPO / "Snakefile", "--directory": workdir,
+               "--configfile": workdir / "config.yaml", "--cores": 2}
+    command = [sys.executable, "-m", "snakemake"]
+    for option, value in options.items():
+        command += [option, str(value)]
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    return subprocess.run([*command, *args], capture_output=True, text=True, timeout=600,
+                          env=env)
 
 
 def test_the_config_file_validates():
