@@ -10,8 +10,11 @@ fixed reduced nominal pressures ``p* = p0 / (E* h'_rms)``:
   study's aggregates are: :func:`roughcontact.contact.aggregate.surface_curves`),
   averaged over the surfaces with a Student-t 95 % band;
 - the area-load slope ``kappa = (A / A0) / p*``, fitted per surface through
-  the origin over its solved steps with ``A / A0`` in ``kappa_area``
-  (0.5-10 %): ``kappa = sum(A p*) / sum(p*^2)`` (:func:`fit_kappa`);
+  the origin, ``kappa = sum(A p*) / sum(p*^2)`` (:func:`fit_kappa`), over
+  the reduced pressures whose mean area on the finest grid lies in
+  ``kappa_area`` (0.5-10 %): the same levels on every grid, so that kappa
+  changes with the grid as smoothly as the areas do (a selection of steps
+  by each grid's own area would move levels in and out of the fit);
 - for each aggregate, Richardson's extrapolation from the three finest grids
   (refined by a constant ratio r, 2 here): the observed order
   ``p = log_r((f_4h - f_2h) / (f_2h - f_h))`` and ``f_h + (f_h - f_2h) /
@@ -48,7 +51,8 @@ from roughcontact.study.grid_convergence import GridConvergenceSettings, read_gr
 from roughcontact.study.provenance import atomic_path
 
 __all__ = ["KAPPA_REFERENCES", "QUANTITIES", "converged_grid", "extrapolate", "fit_kappa",
-           "grid_convergence_report", "grid_convergence_table", "plot_grid_convergence"]
+           "grid_convergence_report", "grid_convergence_table", "kappa_levels",
+           "plot_grid_convergence"]
 
 #: kappa of the theories and simulations the study is compared with.
 KAPPA_REFERENCES = {"Persson sqrt(8/pi)": math.sqrt(8.0 / math.pi),
@@ -58,20 +62,26 @@ KAPPA_REFERENCES = {"Persson sqrt(8/pi)": math.sqrt(8.0 / math.pi),
 QUANTITIES = {"real_area_fraction": "1", "max_pressure": "Pa"}
 
 
-def fit_kappa(sweep: PhysicalSweep, rms_gradient, contact_modulus: float,
-              area_range: tuple[float, float]) -> np.ndarray:
-    """kappa of each surface, ``sum(A p*) / sum(p*^2)`` over its converged steps with
-    ``A / A0`` in ``area_range``, ``p* = P / (E* h'_rms)``; NaN with fewer than two steps.
+def fit_kappa(reduced_pressures, area: np.ndarray) -> np.ndarray:
+    """kappa of each surface: ``sum(A p*) / sum(p*^2)`` over the levels where its area is
+    known (not NaN), NaN with fewer than two.
 
-    ``rms_gradient`` (m,) [-] per surface, ``contact_modulus`` E* [Pa].
+    ``reduced_pressures`` (levels,) ``p* = p0 / (E* h'_rms)`` [-]; ``area`` (m, levels)
+    the real area fraction of each surface there [-].
     """
-    reduced = sweep.nominal_pressure / (contact_modulus * np.asarray(rms_gradient)[:, None])
-    area = sweep.real_area_fraction
-    used = sweep.converged & (area >= area_range[0]) & (area <= area_range[1])
+    reduced = np.broadcast_to(np.asarray(reduced_pressures, dtype=float), np.shape(area))
+    known = np.isfinite(area)
     with np.errstate(invalid="ignore", divide="ignore"):
-        kappa = (np.where(used, area * reduced, 0.0).sum(axis=1)
-                 / np.where(used, reduced**2, 0.0).sum(axis=1))
-    return np.where(used.sum(axis=1) >= 2, kappa, np.nan)
+        kappa = (np.where(known, area * reduced, 0.0).sum(axis=1)
+                 / np.where(known, reduced**2, 0.0).sum(axis=1))
+    return np.where(known.sum(axis=1) >= 2, kappa, np.nan)
+
+
+def kappa_levels(levels, finest_area: np.ndarray, area_range: tuple[float, float]) -> np.ndarray:
+    """Mask of the ``levels`` whose mean area over the surfaces (``finest_area`` (m, levels),
+    the finest grid's) lies in ``area_range``."""
+    mean = aggregate.statistics(finest_area)[0]
+    return (mean >= area_range[0]) & (mean <= area_range[1])
 
 
 def converged_grid(grids: Sequence[int], values: Sequence[float], reference: float,
@@ -130,12 +140,13 @@ def grid_convergence_table(sweeps: Mapping[int, tuple[PhysicalSweep, dict]],
     ``reduced_pressure`` ``p0 / (E* h'_rms)`` [-] and ``nominal_pressure_Pa``
     (NaN for kappa), ``grid``, ``mean``, ``half_width`` (95 %), ``surfaces``,
     ``extrapolated`` and ``observed_order`` (three finest grids),
-    ``relative_to_extrapolated``, ``converged_grid``; then per grid
+    ``relative_to_extrapolated``, ``converged_grid``, ``kappa_fit`` (the levels
+    of the fit of kappa, on its rows); then per grid
     ``element_size_m``, ``points_per_cutoff`` (``lambda_s / dx``),
     ``wall_s``, ``cpu_s``, ``method`` and ``unconverged_solves``.
     """
     levels = np.asarray(settings.reduced_pressures)
-    area, peak, kappa = {}, {}, {}
+    area, peak = {}, {}
     pressures = levels * settings.pressure_scale
     for grid, (sweep, attrs) in sweeps.items():
         if not np.allclose(attrs["rms_gradient"], settings.rms_gradient, rtol=1e-9, atol=0):
@@ -144,14 +155,17 @@ def grid_convergence_table(sweeps: Mapping[int, tuple[PhysicalSweep, dict]],
                              "one nominal pressure per reduced pressure serves them all")
         area[grid] = aggregate.surface_curves(sweep, pressures, "real_area_fraction")
         peak[grid] = aggregate.surface_curves(sweep, pressures, "max_pressure")
-        kappa[grid] = fit_kappa(sweep, attrs["rms_gradient"], settings.contact_modulus,
-                                settings.kappa_area)[:, None]
+    chosen = kappa_levels(levels, area[max(area)], settings.kappa_area)
+    kappa = {grid: fit_kappa(levels[chosen], values[:, chosen])[:, None]
+             for grid, values in area.items()}
     rows = (_aggregate_rows("real_area_fraction", levels, area, settings)
             + _aggregate_rows("max_pressure", levels, peak, settings)
             + _aggregate_rows("kappa", [math.nan], kappa, settings))
     table = pd.DataFrame(rows)
     kappa_rows = table["quantity"] == "kappa"
     table.loc[kappa_rows, ["nominal_pressure_Pa"]] = math.nan
+    table["kappa_fit"] = ""
+    table.loc[kappa_rows, "kappa_fit"] = "p* = " + " ".join(f"{p:g}" for p in levels[chosen])
     per_grid = pd.DataFrame([{
         "grid": grid, "element_size_m": settings.size / grid,
         "points_per_cutoff": settings.cutoff_wavelength * grid / settings.size,

@@ -18,7 +18,6 @@ import pytest
 from matplotlib.image import imread
 
 from roughcontact import contact
-from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 from roughcontact.errors import StoredFileError
 from roughcontact.reports.grid_convergence import (
@@ -27,6 +26,7 @@ from roughcontact.reports.grid_convergence import (
     extrapolate,
     fit_kappa,
     grid_convergence_report,
+    kappa_levels,
 )
 from roughcontact.study.config import validated
 from roughcontact.study.grid_convergence import (
@@ -66,29 +66,21 @@ def test_converged_grid_is_the_coarsest_from_which_every_finer_grid_is_within():
     assert math.isnan(converged_grid(GRIDS, [1.1, 1.1, 1.1, 1.1], reference, 0.01))
 
 
-def _sweep(reduced: np.ndarray, area: np.ndarray, scale: float) -> PhysicalSweep:
-    shape = reduced.shape
-    nan = np.full(shape, np.nan)
-    return PhysicalSweep(approach=np.ones(shape), nominal_pressure=reduced * scale,
-                         mean_plane_deflection=np.zeros(shape), real_area_fraction=area,
-                         max_pressure=nan, normalized_stiffness=nan,
-                         iterations=np.ones(shape, int), matvecs=np.ones(shape, int),
-                         residual=np.zeros(shape), converged=np.ones(shape, bool),
-                         stiffness_converged=np.zeros(shape, bool), thickness=1.0,
-                         load=reduced * scale, contact_stiffness=nan, sigma=nan, E=1.0,
-                         nominal_area=1.0)
-
-
-def test_kappa_is_the_slope_through_the_origin_inside_the_area_range():
-    reduced = np.array([[0.001, 0.003, 0.01, 0.03, 0.2], [0.001, 0.002, 0.2, 0.3, 0.4]])
-    area = np.where(reduced < 0.1, 2.2 * reduced, 0.3)  # saturates beyond the range
-    area[0, 2] *= 1.1  # one point 10 % above the line
-    gradients, modulus = np.array([0.1, 0.1]), 5e8
-    kappa = fit_kappa(_sweep(reduced, area, modulus * 0.1), gradients, modulus, (0.005, 0.1))
-    used = reduced[0, 1:4]
-    expected = np.sum(area[0, 1:4] * used) / np.sum(used**2)  # least squares written out
+def test_kappa_is_the_slope_through_the_origin_over_the_known_levels():
+    levels = np.array([0.0025, 0.005, 0.01, 0.02])
+    area = np.array([[2.2 * 0.0025, 2.0 * 0.005, 2.1 * 0.01, 1.9 * 0.02],
+                     [np.nan, 0.01, np.nan, np.nan]])
+    kappa = fit_kappa(levels, area)
+    expected = np.sum(area[0] * levels) / np.sum(levels**2)  # least squares written out
     assert kappa[0] == pytest.approx(expected, rel=1e-12)
-    assert math.isnan(kappa[1])  # only one step inside 0.5-10 %
+    assert 1.9 < kappa[0] < 2.2
+    assert math.isnan(kappa[1])  # one known level only
+
+
+def test_kappa_levels_are_those_whose_mean_area_is_in_range():
+    finest = np.array([[0.003, 0.008, 0.05, 0.2], [0.005, 0.012, 0.07, 0.18]])
+    chosen = kappa_levels(np.arange(4), finest, (0.005, 0.1))
+    assert chosen.tolist() == [False, True, True, False]  # means 0.4 %, 1 %, 6 %, 19 %
 
 
 def test_literature_values():
