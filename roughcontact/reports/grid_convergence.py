@@ -119,7 +119,8 @@ def _aggregate_rows(quantity: str, levels, per_grid: Mapping, settings) -> list[
         means = [float(stats[g][0][0]) for g in grids]
         value, order = extrapolate(grids, means)
         done = converged_grid(grids, means, value, settings.converged_within)
-        for g, mean in zip(grids, means, strict=True):
+        previous = [math.nan, *means[:-1]]
+        for g, mean, before in zip(grids, means, previous, strict=True):
             rows.append({"quantity": quantity, "unit": QUANTITIES.get(quantity, "1"),
                          "reduced_pressure": level,
                          "nominal_pressure_Pa": level * settings.pressure_scale, "grid": g,
@@ -127,6 +128,7 @@ def _aggregate_rows(quantity: str, levels, per_grid: Mapping, settings) -> list[
                          "surfaces": int(stats[g][2][0]), "extrapolated": value,
                          "observed_order": order,
                          "relative_to_extrapolated": mean / value - 1.0,
+                         "change_from_coarser": mean / before - 1.0,
                          "converged_grid": done})
     return rows
 
@@ -140,7 +142,8 @@ def grid_convergence_table(sweeps: Mapping[int, tuple[PhysicalSweep, dict]],
     ``reduced_pressure`` ``p0 / (E* h'_rms)`` [-] and ``nominal_pressure_Pa``
     (NaN for kappa), ``grid``, ``mean``, ``half_width`` (95 %), ``surfaces``,
     ``extrapolated`` and ``observed_order`` (three finest grids),
-    ``relative_to_extrapolated``, ``converged_grid``, ``kappa_fit`` (the levels
+    ``relative_to_extrapolated``, ``change_from_coarser`` (against the next
+    coarser grid), ``converged_grid``, ``kappa_fit`` (the levels
     of the fit of kappa, on its rows); then per grid
     ``element_size_m``, ``points_per_cutoff`` (``lambda_s / dx``),
     ``wall_s``, ``cpu_s``, ``method`` and ``unconverged_solves``.
