@@ -21,7 +21,12 @@ fixed reduced nominal pressures ``p* = p0 / (E* h'_rms)``:
   (r^p - 1)`` (:func:`roughcontact.reports.convergence.richardson`: NaN when
   the differences change sign or p lies outside [0.5, 6]), and the coarsest
   grid from which every finer grid lies within ``converged_within`` (1 %)
-  of the extrapolated value (:func:`converged_grid`).
+  of the extrapolated value (:func:`converged_grid`; of the finest grid's
+  value where Richardson does not apply, which says less).
+
+The 95 % bands are the spread of the surfaces (seeds) about their mean; the
+changes from grid to grid are those of the same surfaces (paired), so they
+are measured far more precisely than the bands suggest.
 
 kappa compared with the literature: Persson's theory ``sqrt(8 / pi)`` = 1.60
 (Persson 2001, J. Chem. Phys. 115, 3840), the asperity theory of Bush,
@@ -118,7 +123,10 @@ def _aggregate_rows(quantity: str, levels, per_grid: Mapping, settings) -> list[
         stats = {g: aggregate.statistics(per_grid[g][:, i:i + 1]) for g in grids}
         means = [float(stats[g][0][0]) for g in grids]
         value, order = extrapolate(grids, means)
-        done = converged_grid(grids, means, value, settings.converged_within)
+        # where Richardson does not apply, the finest grid is the (weaker) reference
+        reference = "extrapolated" if math.isfinite(value) else "finest grid"
+        done = converged_grid(grids, means, value if math.isfinite(value) else means[-1],
+                              settings.converged_within)
         previous = [math.nan, *means[:-1]]
         for g, mean, before in zip(grids, means, previous, strict=True):
             rows.append({"quantity": quantity, "unit": QUANTITIES.get(quantity, "1"),
@@ -129,7 +137,7 @@ def _aggregate_rows(quantity: str, levels, per_grid: Mapping, settings) -> list[
                          "observed_order": order,
                          "relative_to_extrapolated": mean / value - 1.0,
                          "change_from_coarser": mean / before - 1.0,
-                         "converged_grid": done})
+                         "converged_grid": done, "converged_against": reference})
     return rows
 
 
@@ -143,7 +151,9 @@ def grid_convergence_table(sweeps: Mapping[int, tuple[PhysicalSweep, dict]],
     (NaN for kappa), ``grid``, ``mean``, ``half_width`` (95 %), ``surfaces``,
     ``extrapolated`` and ``observed_order`` (three finest grids),
     ``relative_to_extrapolated``, ``change_from_coarser`` (against the next
-    coarser grid), ``converged_grid``, ``kappa_fit`` (the levels
+    coarser grid), ``converged_grid`` and ``converged_against`` (the
+    extrapolated value, or the finest grid's where Richardson does not apply:
+    then the finest grid is never shown to be converged), ``kappa_fit`` (the levels
     of the fit of kappa, on its rows); then per grid
     ``element_size_m``, ``points_per_cutoff`` (``lambda_s / dx``),
     ``wall_s``, ``cpu_s``, ``method`` and ``unconverged_solves``.
