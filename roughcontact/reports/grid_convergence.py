@@ -32,7 +32,7 @@ kappa compared with the literature: Persson's theory ``sqrt(8 / pi)`` = 1.60
 (Persson 2001, J. Chem. Phys. 115, 3840), the asperity theory of Bush,
 Gibson & Thomas (1975, Wear 35, 87) ``sqrt(2 pi)`` = 2.51, and numerical
 studies about 2 (Hyun, Pei, Molinari & Robbins 2004, Phys. Rev. E 70,
-026117; Yastrebov, Anciaux & Molinari 2015, Tribol. Lett. 56, 171).
+026117; Yastrebov, Anciaux & Molinari 2015, Int. J. Solids Struct. 52, 83).
 """
 
 from __future__ import annotations
