@@ -9,7 +9,7 @@ import re
 from snakemake.exceptions import WorkflowError
 from snakemake.logging import logger
 
-from roughcontact.study import resources
+from roughcontact.study import grid_convergence, resources
 from roughcontact.study.cells import CONTACT_FIGURES, convergence_presets, study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import (
@@ -17,6 +17,7 @@ from roughcontact.study.config import (
     SpeedReportSettings,
     report_section,
 )
+from roughcontact.study.grid_convergence import GridConvergenceSettings
 from roughcontact.study.provenance import canonical_json, config_hash
 from roughcontact.study.sources import spectrum_from_entry
 from roughcontact.study.studies import resolve_source, source_name
@@ -288,3 +289,25 @@ def get_speed_vs_error_runtime(wildcards, attempt):
 def get_speed_vs_error_mem_mb(wildcards):
     section = SpeedReportSettings.from_section(_report_settings("speed_vs_error"))
     return resources.speed_vs_error_mem_mb(PLAN.body, section, PLAN.build)
+
+
+def _grid_convergence():
+    return GridConvergenceSettings.from_section(_report_settings("grid_convergence"))
+
+
+def get_grid_convergence_contacts(wildcards):
+    """The contact file of every grid of the grid-convergence study."""
+    return [
+        f"results/grid_convergence/contact_{grid}.h5"
+        for grid in _grid_convergence().grids
+    ]
+
+
+def get_grid_convergence_runtime(wildcards, attempt):
+    return grid_convergence.sweep_runtime(
+        _grid_convergence(), int(wildcards.gcgrid), attempt
+    )
+
+
+def get_grid_convergence_mem_mb(wildcards):
+    return grid_convergence.grid_mem_mb(_grid_convergence(), int(wildcards.gcgrid))

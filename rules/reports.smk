@@ -57,3 +57,70 @@ rule speed_vs_error:
         study_seed=config["study_seed"],
     script:
         "../scripts/speed_vs_error.py"
+
+
+# The grid-convergence study (on demand: `snakemake grid_convergence --configfile
+# config/gridconv.yaml`): the same surfaces on each grid, one contact job per grid.
+
+
+rule grid_convergence_surfaces:
+    output:
+        "results/grid_convergence/surfaces_{gcgrid}.h5",
+    log:
+        "results/logs/grid_convergence/surfaces_{gcgrid}.log",
+    benchmark:
+        "results/benchmarks/rules/grid_convergence/surfaces_{gcgrid}.tsv"
+    wildcard_constraints:
+        gcgrid=r"\d+",
+    threads: 1
+    resources:
+        mem_mb=get_grid_convergence_mem_mb,
+        runtime=get_summary_runtime,
+    params:
+        settings=canonical(report_section(config, "grid_convergence")),
+        study_seed=config["study_seed"],
+    script:
+        "../scripts/grid_convergence_surfaces.py"
+
+
+rule grid_convergence_contact:
+    input:
+        "results/grid_convergence/surfaces_{gcgrid}.h5",
+    output:
+        "results/grid_convergence/contact_{gcgrid}.h5",
+    log:
+        "results/logs/grid_convergence/contact_{gcgrid}.log",
+    benchmark:
+        "results/benchmarks/rules/grid_convergence/contact_{gcgrid}.tsv"
+    wildcard_constraints:
+        gcgrid=r"\d+",
+    threads: 1
+    resources:
+        mem_mb=get_grid_convergence_mem_mb,
+        runtime=get_grid_convergence_runtime,
+    params:
+        settings=canonical(report_section(config, "grid_convergence")),
+    script:
+        "../scripts/grid_convergence_contact.py"
+
+
+rule grid_convergence:
+    input:
+        get_grid_convergence_contacts,
+    output:
+        csv="results/reports/grid_convergence.csv",
+        png=report(
+            "results/reports/grid_convergence.png",
+            caption="../report/grid_convergence.rst",
+            category="Reports",
+        ),
+    log:
+        "results/logs/reports/grid_convergence.log",
+    benchmark:
+        "results/benchmarks/rules/reports/grid_convergence.tsv"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=get_summary_runtime,
+    script:
+        "../scripts/grid_convergence.py"

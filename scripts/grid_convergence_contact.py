@@ -1,0 +1,13 @@
+"""Snakemake entry point of rule `grid_convergence_contact`: the sweeps on one grid."""
+
+from roughcontact.study.grid_convergence import solve_grid
+from roughcontact.study.logs import route_logging
+
+route_logging(snakemake.log[0])
+solve_grid(
+    snakemake.params.settings,
+    snakemake.input[0],
+    int(snakemake.wildcards.gcgrid),
+    snakemake.output[0],
+    config=snakemake.config,
+)

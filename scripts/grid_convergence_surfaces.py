@@ -1,0 +1,13 @@
+"""Snakemake entry point of rule `grid_convergence_surfaces`: the study's surfaces on one grid."""
+
+from roughcontact.study.grid_convergence import build_grid_surfaces
+from roughcontact.study.logs import route_logging
+
+route_logging(snakemake.log[0])
+build_grid_surfaces(
+    snakemake.params.settings,
+    snakemake.params.study_seed,
+    int(snakemake.wildcards.gcgrid),
+    snakemake.output[0],
+    config=snakemake.config,
+)
