@@ -21,6 +21,7 @@ from roughcontact.elasticity.protocol import (
     DenseInfluence,
     InfluenceOperator,
     MatrixFreeInfluence,
+    PreconditionedOperator,
 )
 
 __all__ = [
@@ -39,6 +40,7 @@ __all__ = [
     "check_pressure",
     "check_surfaces",
     "given_matrix",
+    "preconditioned_operator",
 ]
 
 #: Relative asymmetry max|C - C^T| / max|C| accepted for a dense matrix.
@@ -118,6 +120,20 @@ def given_matrix(operator):
     if not hasattr(operator, "matvec"):
         return operator
     return operator.matrix if isinstance(operator, InfluenceOperator) else None
+
+
+def preconditioned_operator(operator) -> PreconditionedOperator | None:
+    """The grid FFT operator an operator argument is (or wraps), or None.
+
+    A :class:`~roughcontact.elasticity.protocol.PreconditionedOperator`
+    (half-space, periodic, spectral, hybrid block), possibly wrapped by
+    :func:`as_operator` (its ``base``); None for a dense matrix or any other
+    matrix-free operator.
+    """
+    base = getattr(operator, "base", operator)
+    if isinstance(base, PreconditionedOperator) and getattr(base, "grid", None) is not None:
+        return base
+    return None
 
 
 def _grid(operator, n: int) -> tuple[int, int] | None:

@@ -32,6 +32,14 @@ Methods (:data:`REGISTRY`; :data:`METHODS` also holds ``"auto"``):
 ``"cg"``
     Constrained conjugate gradients of Polonsky & Keer (1999)
     (:mod:`roughcontact.contact.cg`).
+``"pcg"``
+    Preconditioned constrained CG for grid FFT operators (half-space,
+    periodic, spectral, hybrid block: a
+    :class:`~roughcontact.elasticity.protocol.PreconditionedOperator`):
+    the |q| stencil preconditioner on the free set, Polak-Ribiere
+    conjugacy kept across changes of the contact set, float32 direction
+    products with ``precision="mixed"``, load control inside the iteration
+    (:mod:`roughcontact.contact.pcg`). No hardness cap.
 ``"pivot"``
     Block principal pivoting (:mod:`roughcontact.contact.pivot`), finite,
     for dense matrices (or up to a few thousand unknowns): the reference.
@@ -40,8 +48,9 @@ Methods (:data:`REGISTRY`; :data:`METHODS` also holds ``"auto"``):
     The same pivoting, whose sweep solves one approach at a time with the
     shared approach loop (:mod:`roughcontact.contact.sweeps`).
 ``"auto"``
-    ``"pivot"`` for a dense matrix, ``"cg"`` for a matrix-free operator
-    (:func:`resolve_method`); the default.
+    ``"pivot"`` for a dense matrix, ``"pcg"`` for a grid FFT operator
+    without a hardness cap, ``"cg"`` for any other matrix-free operator or a
+    capped problem on one (:func:`resolve_method`); the default.
 
 Operators: ``operator`` is a dense symmetric influence matrix (ndarray, n x
 n, m/Pa; then ``element_area`` [m^2] must be given), an
@@ -55,7 +64,8 @@ Performance: the products ``C p`` dominate the iterative methods.
 :func:`solve_many` and :func:`roughcontact.contact.sweep` apply ``C`` to all
 unfinished surfaces at once (BLAS 3), and ``precision="mixed"`` takes the
 search-direction products in single precision (about half the time; the
-result still meets ``tol`` in double precision). On a 2-core machine
+result still meets ``tol`` in double precision): from a float32 copy of a
+dense matrix, or float32 FFTs of a grid operator (``"pcg"``). On a 2-core machine
 shared with other jobs one BLAS thread (``OPENBLAS_NUM_THREADS=1``) was
 faster than two.
 """
@@ -68,7 +78,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughcontact.contact import cg, checks, pivot, steepest
+from roughcontact.contact import cg, checks, pcg, pivot, steepest
 from roughcontact.contact.products import PRECISIONS, Products
 from roughcontact.contact.result import Batch, ContactResult
 from roughcontact.elasticity.protocol import InfluenceOperator
@@ -96,6 +106,11 @@ class Method:
     sweep : callable or None
         ``sweep(method, products, gaps, steps, options, table)``, its own
         approach loop; None: the shared loop of :mod:`roughcontact.contact.sweeps`.
+    load : callable or None
+        ``load(products, gaps, P, pressure, tol, max_iter, hardness) -> (Batch,
+        approaches)``, load control at mean pressures ``P`` [Pa] inside the
+        method; None: an outer solve on the approach
+        (:mod:`roughcontact.contact.loads`).
     """
 
     name: str
@@ -103,6 +118,7 @@ class Method:
     default_max_iter: Callable[[int], int]
     single_precision: bool
     sweep: Callable[..., None] | None = None
+    load: Callable[..., tuple] | None = None
 
     def max_iter(self, max_iter, n: int) -> int:
         """``max_iter`` as an int, or the method's default for ``n`` unknowns."""
@@ -119,13 +135,19 @@ REGISTRY = {
     "cg": Method("cg", cg.solve, cg.default_max_iter, True),
     "exact": Method("exact", pivot.solve, pivot.default_max_iter, False),
     "pivot": Method("pivot", pivot.solve, pivot.default_max_iter, False, pivot.sweep),
+    "pcg": Method("pcg", pcg.solve, pcg.default_max_iter, True, load=pcg.solve_load),
 }
 
 
-def _auto(operator) -> str:
+def _auto(operator, hardness) -> str:
     """Block principal pivoting needs the dense ``C`` (it factors its blocks
-    ``C_AA``); a matrix-free operator (hybrid, half-space) is solved by CG."""
-    return "cg" if checks.given_matrix(operator) is None else "pivot"
+    ``C_AA``); a grid FFT operator (half-space, periodic, spectral, hybrid)
+    is solved by preconditioned CG unless capped, any other matrix-free
+    operator or a capped problem by CG."""
+    if checks.given_matrix(operator) is not None:
+        return "pivot"
+    uncapped = hardness is None or np.isinf(float(hardness))
+    return "pcg" if uncapped and checks.preconditioned_operator(operator) is not None else "cg"
 
 
 #: Names that stand for a method chosen from the operator.
@@ -139,20 +161,22 @@ def check_method(method) -> None:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
 
 
-def resolve_method(method: str, operator) -> str:
-    """The method ``"auto"`` stands for: ``"pivot"`` for a dense matrix, else ``"cg"``.
+def resolve_method(method: str, operator, hardness=None) -> str:
+    """The method ``"auto"`` stands for: ``"pivot"`` for a dense matrix, ``"pcg"`` for
+    a grid FFT operator without a cap (``hardness`` [Pa] None), else ``"cg"``.
 
     Other methods are returned unchanged. Block principal pivoting needs the
-    dense ``C`` (its blocks ``C_AA`` are factored); a matrix-free operator
-    (hybrid, half-space) is solved by CG.
+    dense ``C`` (its blocks ``C_AA`` are factored); the preconditioned CG
+    needs a :class:`~roughcontact.elasticity.protocol.PreconditionedOperator`
+    and solves only the uncapped problem; CG takes any operator and a cap.
     """
     choose = _CHOSEN.get(method)
-    return method if choose is None else choose(operator)
+    return method if choose is None else choose(operator, hardness)
 
 
-def method_for(method: str, operator) -> Method:
+def method_for(method: str, operator, hardness=None) -> Method:
     """The :class:`Method` ``method`` names for ``operator`` (``"auto"`` resolved)."""
-    return REGISTRY[resolve_method(method, operator)]
+    return REGISTRY[resolve_method(method, operator, hardness)]
 
 
 def run(method: Method, products: Products, gaps, d, pressure, tol: float, max_iter: int,
@@ -201,7 +225,7 @@ def check_problem(operator, gaps0, name: str, *, method, tol, max_iter, precisio
     checks.check_precision(precision)
     hardness = checks.check_hardness(hardness)
     op = checks.as_operator(operator, element_area)
-    chosen = method_for(method, op)
+    chosen = method_for(method, op, hardness)
     gaps, shape = checks.check_surfaces(gaps0, op, name, batched=batched)
     return Problem(op, chosen, gaps, shape, tol, chosen.max_iter(max_iter, gaps.shape[1]),
                    chosen.products(op, precision), hardness)
@@ -240,14 +264,16 @@ def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, 
         ``k = iy * nx + ix``. Results come back in the same shape.
     approach : float
         Rigid-body approach ``d >= 0`` [m] (displacement control).
-    method : {"auto", "cg", "steepest", "exact", "pivot"}
+    method : {"auto", "cg", "pcg", "steepest", "exact", "pivot"}
         See the module docstring; ``"pivot"`` and ``"exact"`` are the same
         for a single solve; ``"auto"`` (default) is ``"pivot"`` for a dense
-        matrix and ``"cg"`` for a matrix-free operator (:func:`resolve_method`).
+        matrix, ``"pcg"`` for a grid FFT operator (uncapped) and ``"cg"``
+        otherwise (:func:`resolve_method`).
     tol : float
         Tolerance on the dimensionless KKT residual (:mod:`roughcontact.contact.kkt`).
     max_iter : int, optional
         Iteration limit; default ``max(1000, 2n)`` for ``"cg"``,
+        ``max(1000, 4 sqrt(n))`` for ``"pcg"``,
         ``max(20000, 20n)`` for ``"steepest"``, ``10n + 100`` pivots for
         ``"exact"`` and ``"pivot"``.
     p0 : ndarray, optional
@@ -258,9 +284,10 @@ def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, 
     precision : {"double", "mixed"}
         ``"mixed"`` takes the search-direction products of ``"cg"`` and
         ``"steepest"`` with a single-precision copy of a dense ``C`` (about
-        twice as fast); convergence is still decided on double-precision
-        residuals, so the result meets ``tol`` either way. Ignored for
-        matrix-free operators and pivoting.
+        twice as fast) and ``"pcg"`` takes its direction products as float32
+        FFTs; convergence is still decided on double-precision residuals, so
+        the result meets ``tol`` either way. Ignored by pivoting and by
+        ``"cg"`` and ``"steepest"`` on matrix-free operators.
     hardness : float, optional
         Pressure cap ``H`` [Pa] (elastic-perfectly-plastic elements): solves
         Eq 27 over ``0 <= p <= H`` instead of ``p >= 0``; default None (no

@@ -41,10 +41,15 @@ class Products:
     single : ndarray (n, n) of float32 or None
         Single-precision copy of a dense ``C`` for the search-direction
         products (``precision="mixed"``); None: every product is exact.
+    precision : str
+        The precision asked for (:data:`PRECISIONS`); a method that takes
+        its own single-precision products from a grid operator
+        (:mod:`roughcontact.contact.pcg`) reads it here.
     """
 
     operator: InfluenceOperator
     single: np.ndarray | None = None
+    precision: str = "double"
 
     @classmethod
     def of(cls, operator: InfluenceOperator, precision: str = "double",
@@ -54,7 +59,7 @@ class Products:
         single = None
         if SINGLE_PRECISION[precision] and single_ok and operator.matrix is not None:
             single = operator.matrix.astype(np.float32)
-        return cls(operator, single)
+        return cls(operator, single, precision if single_ok else "double")
 
     @property
     def mixed(self) -> bool:

@@ -233,8 +233,44 @@ def _periodic_kernel(
     return np.roll(folded, (jy0, jx0), axis=(0, 1))
 
 
+class _Circulant(GridOperator):
+    """Members of the periodic (circulant) operators: ``grid``, ``size``, ``E``, ``nu``,
+    ``workers``, and ``_product``, ``_columns`` from :meth:`_set_spectrum`."""
+
+    #: A kernel column costs about 1/8 of a single-precision periodic product.
+    column_budget = 8
+
+    def _set_spectrum(self, spectrum: np.ndarray) -> None:
+        """The product of ``spectrum`` [m/Pa] (both dtypes) and the kernel columns."""
+        product = CirculantConvolution(spectrum, int(self.workers))
+        object.__setattr__(self, "_product", product)
+        object.__setattr__(self, "_columns", ColumnTable.periodic(product.kernel()))
+
+    def _apply(self, fields: np.ndarray) -> np.ndarray:
+        """Displacements [m] of pressure fields [Pa] of shape (m, ny, nx) (circulant ``C``),
+        in their dtype (float32 or float64)."""
+        return self._product(fields)
+
+    def preconditioner(self):
+        """The 13-tap stencil of ``E* |q| / 2`` (:func:`.transforms.q_stencil`), periodic."""
+        nx, ny = self.grid
+        spacing = (self.size[0] / nx, self.size[1] / ny)
+        return q_stencil(spacing, self.E / (1.0 - self.nu**2), periodic=True)
+
+    def coarsened(self):
+        """The same periodic body on the grid coarser by 2 per side."""
+        nx, ny = self.grid
+        if nx % 2 or ny % 2:
+            raise ValueError(f"grid {self.grid} cannot be halved")
+        return dataclasses.replace(self, grid=(nx // 2, ny // 2))
+
+    def nbytes(self) -> int:
+        """Memory held by the operator [bytes]."""
+        return int(self.spectrum.nbytes + self._product.nbytes() + self._columns.nbytes())
+
+
 @dataclass(frozen=True)
-class PeriodicHalfSpace(GridOperator):
+class PeriodicHalfSpace(_Circulant):
     """Influence operator of the periodic elastic half-space, applied by FFT.
 
     Discretization as :func:`halfspace_influence` (uniform pressure on each
@@ -310,8 +346,6 @@ class PeriodicHalfSpace(GridOperator):
     spectrum: np.ndarray = field(init=False, repr=False, compare=False)
     _product: CirculantConvolution = field(init=False, repr=False, compare=False)
     _columns: ColumnTable = field(init=False, repr=False, compare=False)
-    #: A kernel column costs about 1/8 of a single-precision periodic product.
-    column_budget = 8
 
     def __post_init__(self):
         E, nu = _check_material(self.E, self.nu)
@@ -334,7 +368,7 @@ class PeriodicHalfSpace(GridOperator):
         spectrum = scipy.fft.rfft2(kernel).real
         spectrum.setflags(write=False)
         object.__setattr__(self, "spectrum", spectrum)
-        _set_circulant(self, spectrum)
+        self._set_spectrum(spectrum)
 
     def diagonal(self) -> np.ndarray:
         """Self-compliances ``C[i, i]`` [m/Pa], shape (n,), all equal."""
@@ -342,48 +376,10 @@ class PeriodicHalfSpace(GridOperator):
         c_ii = self.spectrum.sum() + self.spectrum[:, 1 : (nx + 1) // 2].sum()
         return np.full(nx * ny, c_ii / (nx * ny))
 
-    def _apply(self, fields: np.ndarray) -> np.ndarray:
-        """Displacements [m] of pressure fields [Pa] of shape (m, ny, nx) (circulant ``C``),
-        in their dtype (float32 or float64)."""
-        return self._product(fields)
-
-    def preconditioner(self):
-        """The 13-tap stencil of ``E* |q| / 2`` (:func:`.transforms.q_stencil`)."""
-        return _periodic_stencil(self)
-
-    def coarsened(self) -> PeriodicHalfSpace:
-        """The same periodic body on the grid coarser by 2 per side."""
-        return dataclasses.replace(self, grid=_halved(self.grid))
-
-    def nbytes(self) -> int:
-        """Memory held by the operator [bytes]."""
-        return int(self.spectrum.nbytes + self._product.nbytes() + self._columns.nbytes())
-
-
-def _halved(grid) -> tuple[int, int]:
-    """``grid`` halved per side; refused for an odd side."""
-    nx, ny = grid
-    if nx % 2 or ny % 2:
-        raise ValueError(f"grid {grid} cannot be halved")
-    return (nx // 2, ny // 2)
-
-
-def _set_circulant(operator, spectrum: np.ndarray) -> None:
-    """Give a periodic operator its product (both dtypes) and its kernel columns."""
-    product = CirculantConvolution(spectrum, int(operator.workers))
-    object.__setattr__(operator, "_product", product)
-    object.__setattr__(operator, "_columns", ColumnTable.periodic(product.kernel()))
-
-
-def _periodic_stencil(operator):
-    """The |q| stencil of a periodic operator with ``E``, ``nu``, ``grid``, ``size``."""
-    nx, ny = operator.grid
-    spacing = (operator.size[0] / nx, operator.size[1] / ny)
-    return q_stencil(spacing, operator.E / (1.0 - operator.nu**2), periodic=True)
 
 
 @dataclass(frozen=True)
-class SpectralHalfSpace(GridOperator):
+class SpectralHalfSpace(_Circulant):
     """Periodic half-space with the spectral compliance ``2 / (E* |q|)`` [m/Pa], by FFT.
 
     Pressures and displacements are samples at the grid points of a periodic
@@ -401,16 +397,10 @@ class SpectralHalfSpace(GridOperator):
 
     Parameters
     ----------
-    grid : (int, int)
-        Number of grid points ``(nx, ny)``.
-    size : (float, float)
-        Periods ``(Lx, Ly)`` [m].
-    E : float
-        Young's modulus [Pa].
-    nu : float
-        Poisson's ratio [-].
-    workers : int, optional
-        Threads of the FFTs, default 1.
+    grid, size, E, nu, workers
+        As :class:`PeriodicHalfSpace`: grid points ``(nx, ny)``, periods
+        ``(Lx, Ly)`` [m], Young's modulus [Pa], Poisson's ratio [-], threads
+        of the FFTs (default 1).
 
     Attributes
     ----------
@@ -436,8 +426,6 @@ class SpectralHalfSpace(GridOperator):
     _product: CirculantConvolution = field(init=False, repr=False, compare=False)
     _columns: ColumnTable = field(init=False, repr=False, compare=False)
     mean_compliance = 0.0
-    #: A kernel column costs about 1/8 of a single-precision periodic product.
-    column_budget = 8
 
     def __post_init__(self):
         E, nu = _check_material(self.E, self.nu)
@@ -453,25 +441,9 @@ class SpectralHalfSpace(GridOperator):
         spectrum = 2.0 * (1.0 - nu**2) / (E * q)
         spectrum.setflags(write=False)
         object.__setattr__(self, "spectrum", spectrum)
-        _set_circulant(self, spectrum)
+        self._set_spectrum(spectrum)
 
     def diagonal(self) -> np.ndarray:
         """Self-compliances ``C[i, i]`` [m/Pa] (the mean eigenvalue), shape (n,), all equal."""
         nx, ny = self.grid
         return np.full(nx * ny, float(self._product.kernel()[0, 0]))
-
-    def _apply(self, fields: np.ndarray) -> np.ndarray:
-        """Displacements [m] of pressure fields [Pa] of shape (m, ny, nx), in their dtype."""
-        return self._product(fields)
-
-    def preconditioner(self):
-        """The 13-tap stencil of ``E* |q| / 2`` (:func:`.transforms.q_stencil`)."""
-        return _periodic_stencil(self)
-
-    def coarsened(self) -> SpectralHalfSpace:
-        """The same periodic body sampled on the grid coarser by 2 per side."""
-        return dataclasses.replace(self, grid=_halved(self.grid))
-
-    def nbytes(self) -> int:
-        """Memory held by the operator [bytes]."""
-        return int(self.spectrum.nbytes + self._product.nbytes() + self._columns.nbytes())

@@ -73,8 +73,19 @@ def product_dtype(pressure: np.ndarray) -> np.ndarray:
     return p if p.dtype in DTYPES else p.astype(np.float64)
 
 
+class _Spectra:
+    """A real spectrum kept in both dtypes (``spectra``), with ``workers`` threads."""
+
+    def _keep(self, spectrum: np.ndarray) -> None:
+        object.__setattr__(self, "spectra", {t: spectrum.astype(t) for t in DTYPES})
+
+    def nbytes(self) -> int:
+        """Memory of the spectra [bytes]."""
+        return int(sum(s.nbytes for s in self.spectra.values()))
+
+
 @dataclass(frozen=True)
-class PaddedConvolution:
+class PaddedConvolution(_Spectra):
     """Linear convolution of ``(..., ny, nx)`` fields with an even kernel, pruned.
 
     Parameters
@@ -97,8 +108,7 @@ class PaddedConvolution:
         full[:ny, :nx] = kernel
         full[:ny, nx + 1:] = kernel[:, 1:][:, ::-1]  # offsets -(nx-1) .. -1
         full[ny + 1:, :] = full[1:ny, :][::-1]  # offsets -(ny-1) .. -1
-        transposed = np.ascontiguousarray(scipy.fft.rfft2(full).real.T)  # (nx+1, 2ny)
-        object.__setattr__(self, "spectra", {t: transposed.astype(t) for t in DTYPES})
+        self._keep(np.ascontiguousarray(scipy.fft.rfft2(full).real.T))  # (nx+1, 2ny)
 
     def __call__(self, fields: np.ndarray) -> np.ndarray:
         """``K * p`` [m] of fields ``(..., ny, nx)`` [Pa], in their dtype (a view)."""
@@ -114,21 +124,16 @@ class PaddedConvolution:
                               workers=w)
         return out[..., :nx]
 
-    def nbytes(self) -> int:
-        """Memory of the spectra [bytes]."""
-        return int(sum(s.nbytes for s in self.spectra.values()))
-
 
 @dataclass(frozen=True)
-class CirculantConvolution:
+class CirculantConvolution(_Spectra):
     """Periodic convolution of ``(..., ny, nx)`` fields given the kernel's real spectrum.
 
     Parameters
     ----------
     spectrum : ndarray (ny, nx // 2 + 1)
-        Eigenvalues [m/Pa] on the ``rfft2`` grid (real: the kernel is even).
-    workers : int
-        Threads of every ``scipy.fft`` call.
+        Eigenvalues [m/Pa] on the ``rfft2`` grid (real: the kernel is even);
+        ``workers`` as :class:`PaddedConvolution`.
     """
 
     spectrum: np.ndarray = field(repr=False)
@@ -136,8 +141,7 @@ class CirculantConvolution:
     spectra: dict = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        spectrum = np.asarray(self.spectrum, dtype=float)
-        object.__setattr__(self, "spectra", {t: spectrum.astype(t) for t in DTYPES})
+        self._keep(np.asarray(self.spectrum, dtype=float))
 
     def __call__(self, fields: np.ndarray) -> np.ndarray:
         """``K * p`` [m] of fields ``(..., ny, nx)`` [Pa], in their dtype."""
@@ -152,10 +156,6 @@ class CirculantConvolution:
         ny = self.spectrum.shape[0]
         nx = 2 * (self.spectrum.shape[1] - 1)
         return scipy.fft.irfft2(self.spectra[DTYPES[1]], s=(ny, nx))
-
-    def nbytes(self) -> int:
-        """Memory of the spectra [bytes]."""
-        return int(sum(s.nbytes for s in self.spectra.values()))
 
 
 @dataclass(frozen=True)
