@@ -79,12 +79,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from roughcontact.contact import cg, checks, pcg, pivot, steepest
+from roughcontact.contact.loads import solve_at_loads
 from roughcontact.contact.products import PRECISIONS, Products
 from roughcontact.contact.result import Batch, ContactResult
 from roughcontact.elasticity.protocol import InfluenceOperator
 
 __all__ = ["METHODS", "PRECISIONS", "REGISTRY", "Method", "Problem", "check_method",
-           "check_problem", "method_for", "resolve_method", "run", "solve", "solve_many"]
+           "check_problem", "method_for", "resolve_method", "run", "run_loads", "solve",
+           "solve_many", "warn_unconverged"]
 
 logger = logging.getLogger("roughcontact.contact")
 
@@ -179,20 +181,35 @@ def method_for(method: str, operator, hardness=None) -> Method:
     return REGISTRY[resolve_method(method, operator, hardness)]
 
 
-def run(method: Method, products: Products, gaps, d, pressure, tol: float, max_iter: int,
-        hardness=None) -> Batch:
-    """Solve the rows of ``gaps`` at approaches ``d`` with ``method``; warn if some
-    surfaces did not converge (on the ``roughcontact.contact`` logger)."""
-    batch = method.solve(products, gaps, d, pressure, tol, max_iter, hardness)
+def warn_unconverged(method: Method, batch: Batch, max_iter: int, tol: float) -> None:
+    """Warn (on the ``roughcontact.contact`` logger) if some surfaces did not converge."""
     failed = np.flatnonzero(~batch.converged)
     if failed.size:
         logger.warning(
             "contact solve (%s) did not converge in %d iterations for %d of %d surfaces; "
             "largest KKT residual %.3g > tol %.3g",
-            method.name, max_iter, failed.size, gaps.shape[0],
+            method.name, max_iter, failed.size, batch.converged.size,
             float(batch.residual[failed].max()), tol,
         )
+
+
+def run(method: Method, products: Products, gaps, d, pressure, tol: float, max_iter: int,
+        hardness=None) -> Batch:
+    """Solve the rows of ``gaps`` at approaches ``d`` with ``method``; warn if some
+    surfaces did not converge (on the ``roughcontact.contact`` logger)."""
+    batch = method.solve(products, gaps, d, pressure, tol, max_iter, hardness)
+    warn_unconverged(method, batch, max_iter, tol)
     return batch
+
+
+def run_loads(method: Method, products: Products, gaps, mean_pressures, pressure, tol: float,
+              max_iter: int, hardness=None):
+    """Solve the rows of ``gaps`` at mean pressures [Pa] (load control,
+    :func:`roughcontact.contact.loads.solve_at_loads`); the batch and the approaches [m]."""
+    batch, approaches = solve_at_loads(method, products, gaps, mean_pressures, pressure, tol,
+                                       max_iter, hardness)
+    warn_unconverged(method, batch, max_iter, tol)
+    return batch, approaches
 
 
 @dataclass(frozen=True)
@@ -231,23 +248,33 @@ def check_problem(operator, gaps0, name: str, *, method, tol, max_iter, precisio
                    chosen.products(op, precision), hardness)
 
 
-def _solve_rows(problem: Problem, approach, p0) -> list[ContactResult]:
-    """Solve every surface of ``problem`` at ``approach``; one :class:`ContactResult` each."""
+def _solve_rows(problem: Problem, approach, p0, mean_pressure=None) -> list[ContactResult]:
+    """Solve every surface of ``problem`` at ``approach`` or ``mean_pressure``; one
+    :class:`ContactResult` each."""
     gaps, hardness = problem.gaps, problem.hardness
     m, n = gaps.shape
-    d = checks.check_approach(approach, m)
-    checks.check_bounded(problem.operator, gaps, d, "approach")
+    checks.check_control(approach, mean_pressure)
+    if mean_pressure is None:
+        d = checks.check_approach(approach, m)
+        checks.check_bounded(problem.operator, gaps, d, "approach")
+    else:
+        loads = checks.check_mean_pressure(mean_pressure, m)
     pressure = checks.check_initial_pressure(p0, m, n, hardness=hardness)
-    batch = run(problem.method, problem.products, gaps, d, pressure, problem.tol,
-                problem.max_iter, hardness)
+    if mean_pressure is None:
+        batch = run(problem.method, problem.products, gaps, d, pressure, problem.tol,
+                    problem.max_iter, hardness)
+    else:
+        batch, d = run_loads(problem.method, problem.products, gaps, loads, pressure,
+                             problem.tol, problem.max_iter, hardness)
     return [batch.contact_result(j, gaps[j] - d[j], problem.operator.element_area,
                                  problem.shape, problem.method.name, problem.tol, d[j], hardness)
             for j in range(m)]
 
 
-def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, p0=None,
-          element_area=None, precision="double", hardness=None) -> ContactResult:
-    """Contact pressure under a rigid flat at prescribed approach (Eq 27).
+def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", tol=1e-10,
+          max_iter=None, p0=None, element_area=None, precision="double",
+          hardness=None) -> ContactResult:
+    """Contact pressure under a rigid flat at prescribed approach or mean pressure (Eq 27).
 
     Minimizes ``V = 1/2 p.C p - p.(d - f)`` over ``p >= 0`` (Eq 17, 18, 27 of
     Kumar et al. 2006): at the solution the gap ``u + f - d`` vanishes where
@@ -262,8 +289,15 @@ def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, 
     gap0 : ndarray, (ny, nx) or (n,)
         Initial separation ``f = z_max - z`` [m] (Eq 21), element order
         ``k = iy * nx + ix``. Results come back in the same shape.
-    approach : float
+    approach : float, optional
         Rigid-body approach ``d >= 0`` [m] (displacement control).
+    mean_pressure : float, optional
+        Nominal (mean) pressure ``P = sum p / n >= 0`` [Pa] (load control);
+        exactly one of ``approach`` and ``mean_pressure``. The approach is
+        then found with the solution (``approach`` of the result): inside
+        the iteration for ``"pcg"`` (Polonsky & Keer's mean-gap shift), by
+        an outer solve on the approach for the other methods, to
+        ``|P(d) - P| <= tol P`` (:mod:`roughcontact.contact.loads`).
     method : {"auto", "cg", "pcg", "steepest", "exact", "pivot"}
         See the module docstring; ``"pivot"`` and ``"exact"`` are the same
         for a single solve; ``"auto"`` (default) is ``"pivot"`` for a dense
@@ -309,11 +343,11 @@ def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, 
     problem = check_problem(operator, gap0, "gap0", method=method, tol=tol, max_iter=max_iter,
                             precision=precision, element_area=element_area, hardness=hardness,
                             batched=False)
-    return _solve_rows(problem, approach, p0)[0]
+    return _solve_rows(problem, approach, p0, mean_pressure)[0]
 
 
-def solve_many(operator, gaps0, approach, *, method="auto", tol=1e-10, max_iter=None, p0=None,
-               element_area=None, precision="double",
+def solve_many(operator, gaps0, approach=None, *, mean_pressure=None, method="auto", tol=1e-10,
+               max_iter=None, p0=None, element_area=None, precision="double",
                hardness=None) -> tuple[ContactResult, ...]:
     """Solve m contact problems with one operator in one batched call (Eq 27).
 
@@ -329,8 +363,10 @@ def solve_many(operator, gaps0, approach, *, method="auto", tol=1e-10, max_iter=
         Influence coefficients ``C`` [m/Pa], see :func:`solve`.
     gaps0 : ndarray, (m, ny, nx) or (m, n)
         Initial separations ``f`` [m] (Eq 21), one per surface.
-    approach : float or ndarray (m,)
+    approach : float or ndarray (m,), optional
         Rigid-body approach ``d >= 0`` [m], shared or per surface.
+    mean_pressure : float or ndarray (m,), optional
+        Mean pressure ``P >= 0`` [Pa] instead (load control, see :func:`solve`).
     method, tol, max_iter, element_area, precision, hardness
         As in :func:`solve`.
     p0 : ndarray, optional
@@ -344,4 +380,4 @@ def solve_many(operator, gaps0, approach, *, method="auto", tol=1e-10, max_iter=
     problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
                             precision=precision, element_area=element_area, hardness=hardness,
                             batched=True)
-    return tuple(_solve_rows(problem, approach, p0))
+    return tuple(_solve_rows(problem, approach, p0, mean_pressure))
