@@ -5,7 +5,9 @@ et al. 2006) for one or many surfaces and through approach sweeps, one
 module per part: ``methods`` (the methods by name, ``solve``,
 ``solve_many``), ``cg``, ``steepest``, ``pivot`` and ``pcg`` (one
 algorithm each, ``iteration`` the projected iteration the first two share;
-``pcg`` the preconditioned CG of the grid FFT operators), ``sweeps`` (the
+``pcg`` the preconditioned CG of the grid FFT operators, ``nested`` its
+coarse-grid starts), ``loads`` (load control by an outer solve on the
+approach), ``sweeps`` (the
 approach loop and its warm starts), ``stiffness`` (the tangent dF/dd),
 ``kkt`` (the residual every method stops on), ``result`` (the results all
 methods return), ``checks`` (input checks) and ``products`` (the products

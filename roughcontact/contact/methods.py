@@ -38,8 +38,10 @@ Methods (:data:`REGISTRY`; :data:`METHODS` also holds ``"auto"``):
     :class:`~roughcontact.elasticity.protocol.PreconditionedOperator`):
     the |q| stencil preconditioner on the free set, Polak-Ribiere
     conjugacy kept across changes of the contact set, float32 direction
-    products with ``precision="mixed"``, load control inside the iteration
-    (:mod:`roughcontact.contact.pcg`). No hardness cap.
+    products with ``precision="mixed"``, load control inside the iteration,
+    cold solves above 128 x 128 started from coarser grids
+    (:mod:`roughcontact.contact.pcg`, :mod:`roughcontact.contact.nested`).
+    Any other operator is solved unpreconditioned. No hardness cap.
 ``"pivot"``
     Block principal pivoting (:mod:`roughcontact.contact.pivot`), finite,
     for dense matrices (or up to a few thousand unknowns): the reference.
