@@ -320,10 +320,10 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
     precision : {"double", "mixed"}
         ``"mixed"`` takes the search-direction products of ``"cg"`` and
         ``"steepest"`` with a single-precision copy of a dense ``C`` (about
-        twice as fast) and ``"pcg"`` takes its direction products as float32
-        FFTs; convergence is still decided on double-precision residuals, so
-        the result meets ``tol`` either way. Ignored by pivoting and by
-        ``"cg"`` and ``"steepest"`` on matrix-free operators.
+        twice as fast), and as float32 FFTs of a grid FFT operator (also
+        the direction products of ``"pcg"``); convergence is still decided on
+        double-precision residuals, so the result meets ``tol`` either way.
+        Ignored by pivoting and by other matrix-free operators.
     hardness : float, optional
         Pressure cap ``H`` [Pa] (elastic-perfectly-plastic elements): solves
         Eq 27 over ``0 <= p <= H`` instead of ``p >= 0``; default None (no

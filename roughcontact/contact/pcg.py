@@ -429,7 +429,7 @@ class _Unpreconditioned:
 
     def apply(self, pressure):
         flat = pressure.reshape(1, -1)
-        if pressure.dtype == np.float32 and self.products.single is not None:
+        if pressure.dtype == np.float32 and isinstance(self.products.single, np.ndarray):
             return flat @ self.products.single
         return self.products.exact(flat.astype(np.float64))
 
