@@ -24,7 +24,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["COARSE_TOL", "COARSEST", "coarse_levels", "nested_solve", "prolong", "restrict"]
+__all__ = ["COARSE_TOL", "COARSEST", "coarse_levels", "level_operators", "nested_solve",
+           "prolong", "restrict"]
 
 #: Shortest side (elements) of the coarsest level.
 COARSEST = 64
@@ -55,9 +56,18 @@ def coarse_levels(operator, coarsest: int = COARSEST) -> int:
     return levels
 
 
-def nested_solve(solve_level: Callable, operator, gap0: np.ndarray, *, tol: float,
-                 coarsest: int = COARSEST, coarse_tol: float = COARSE_TOL):
-    """Solve on ``operator``'s grid, started from the coarser grids' solutions.
+def level_operators(operator, coarsest: int = COARSEST) -> list:
+    """``operator`` and its coarser copies, finest first (:func:`coarse_levels` of them);
+    built once for all the surfaces of a batch."""
+    operators = [operator]
+    for _ in range(coarse_levels(operator, coarsest)):
+        operators.append(operators[-1].coarsened())
+    return operators
+
+
+def nested_solve(solve_level: Callable, operators, gap0: np.ndarray, *, tol: float,
+                 coarse_tol: float = COARSE_TOL):
+    """Solve on the finest grid, started from the coarser grids' solutions.
 
     Parameters
     ----------
@@ -65,14 +75,14 @@ def nested_solve(solve_level: Callable, operator, gap0: np.ndarray, *, tol: floa
         ``solve_level(operator, gap0, tol, pressure0) -> solution`` with the
         control (approach or mean pressure) bound; ``solution.pressure`` is
         the ``(ny, nx)`` pressure [Pa] and ``solution.products`` its work.
-    operator : PreconditionedOperator
-        The fine operator.
+    operators : list of PreconditionedOperator
+        The fine operator and its coarser copies (:func:`level_operators`).
     gap0 : ndarray (ny, nx)
-        Initial separation ``f`` [m].
+        Initial separation ``f`` [m] on the finest grid.
     tol : float
         KKT tolerance of the finest level.
-    coarsest, coarse_tol
-        Shortest side of the coarsest level, tolerance of the coarse levels.
+    coarse_tol : float
+        Tolerance of the coarse levels.
 
     Returns
     -------
@@ -80,13 +90,12 @@ def nested_solve(solve_level: Callable, operator, gap0: np.ndarray, *, tol: floa
         The fine solution and the products of the coarse levels, each
         weighted by its grid's size relative to the fine grid.
     """
-    operators, gaps = [operator], [np.asarray(gap0, dtype=float)]
-    for _ in range(coarse_levels(operator, coarsest)):
-        operators.append(operators[-1].coarsened())
+    gaps = [np.asarray(gap0, dtype=float)]
+    for _ in operators[1:]:
         gaps.append(restrict(gaps[-1]))
     start, coarse_work = None, 0.0
     for depth in range(len(operators) - 1, 0, -1):
         level = solve_level(operators[depth], gaps[depth], coarse_tol, start)
         coarse_work += level.products / 4.0**depth
         start = prolong(level.pressure)
-    return solve_level(operator, gaps[0], tol, start), coarse_work
+    return solve_level(operators[0], gaps[0], tol, start), coarse_work

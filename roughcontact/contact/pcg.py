@@ -74,7 +74,7 @@ import numpy as np
 
 from roughcontact.contact.checks import preconditioned_operator
 from roughcontact.contact.kkt import gap_scale, kkt_residuals
-from roughcontact.contact.nested import nested_solve
+from roughcontact.contact.nested import level_operators, nested_solve
 from roughcontact.contact.products import SINGLE_PRECISION, Products
 from roughcontact.contact.result import Batch
 from roughcontact.elasticity.transforms import Stencil
@@ -466,7 +466,7 @@ def _solve_rows(products: Products, gaps, key: str, controls, pressure, tol: flo
     m, n = gaps.shape
     out = Batch.empty(m, n)
     approaches = np.zeros(m)
-    nested = nx * ny > NESTED_MIN_ELEMENTS
+    levels = None
     for j in range(m):
         def solve_level(level, gap, level_tol, start, j=j):
             return constrained_pcg(level, gap, tol=level_tol, pressure0=start,
@@ -477,8 +477,9 @@ def _solve_rows(products: Products, gaps, key: str, controls, pressure, tol: flo
         coarse_work = 0.0
         if pressure[j].any():  # a warm start (a sweep's previous step)
             solution = solve_level(operator, gap, tol, pressure[j].reshape(ny, nx))
-        elif nested:
-            solution, coarse_work = nested_solve(solve_level, operator, gap, tol=tol)
+        elif nx * ny > NESTED_MIN_ELEMENTS:
+            levels = level_operators(operator) if levels is None else levels
+            solution, coarse_work = nested_solve(solve_level, levels, gap, tol=tol)
         else:
             solution = solve_level(operator, gap, tol, None)
         out.store(j, solution.pressure.reshape(-1), solution.displacement.reshape(-1),

@@ -84,9 +84,8 @@ class Products:
         if isinstance(self.single, np.ndarray):
             return (rows.astype(np.float32) @ self.single).astype(float)
         nx, ny = self.single.grid
-        single = rows.astype(np.float32).reshape(-1, ny, nx)
-        return np.array([self.single.apply(field) for field in single],
-                        dtype=float).reshape(rows.shape)
+        fields = self.single.apply(rows.astype(np.float32).reshape(-1, ny, nx))
+        return np.asarray(fields, dtype=float).reshape(rows.shape)
 
     def correction(self, rows, cols, values, m: int, cost: np.ndarray) -> np.ndarray:
         """``delta C`` for the sparse change ``delta[rows, cols] = values``, shape (m, n).

@@ -118,7 +118,8 @@ class PreconditionedOperator(Protocol):
     def column_budget(self) -> int: ...
 
     def apply(self, pressure: np.ndarray) -> np.ndarray:
-        """``C p`` [m] of a ``(ny, nx)`` pressure [Pa], in its dtype (float32 or float64)."""
+        """``C p`` [m] of a ``(ny, nx)`` pressure [Pa] (or ``(m, ny, nx)`` fields), in
+        its dtype (float32 or float64)."""
 
     def diagonal(self) -> np.ndarray:
         """Self-compliances ``C_ii`` [m/Pa], shape (n,)."""
@@ -301,7 +302,8 @@ class GridOperator:
     column_budget = 0
 
     def apply(self, pressure: np.ndarray) -> np.ndarray:
-        """``u = C p`` [m] of one ``(ny, nx)`` pressure field [Pa], in its dtype.
+        """``u = C p`` [m] of a ``(ny, nx)`` pressure field [Pa] (or ``(m, ny, nx)``
+        fields), in its dtype.
 
         float32 pressures give a single-precision product (about half the
         cost, rounding about 1e-7 of ``u``), anything else float64. The
@@ -310,7 +312,7 @@ class GridOperator:
         p = np.asarray(pressure)
         if p.dtype not in (np.float32, np.float64):
             p = p.astype(np.float64)
-        return self._apply(p[None])[0]
+        return self._apply(p) if p.ndim == 3 else self._apply(p[None])[0]
 
     def add_columns(self, target: np.ndarray, rows, cols, values) -> None:
         """``target += C e`` [m], ``e[rows, cols] = values`` [Pa], by kernel columns (float32)."""

@@ -53,7 +53,9 @@ def test_nested_and_cold_solves_agree(build, control):
                                    **{control: value})
 
     cold = solve_level(op, gap, 1e-10, None)
-    warm, coarse_work = nested.nested_solve(solve_level, op, gap, tol=1e-10, coarsest=24)
+    levels = nested.level_operators(op, coarsest=24)
+    assert [level.grid for level in levels] == [(128, 96), (64, 48), (32, 24)]
+    warm, coarse_work = nested.nested_solve(solve_level, levels, gap, tol=1e-10)
     assert coarse_work > 0.0 and cold.residual <= 1e-10 and warm.residual <= 1e-10
     assert 0.01 < np.mean(cold.pressure > 0) < 0.5
     np.testing.assert_array_equal(warm.pressure > 0, cold.pressure > 0)

@@ -173,3 +173,12 @@ def test_stencil_approximates_the_inverse_symbol_on_a_smooth_mode():
 def test_scipy_fft_is_what_the_products_use():
     """float32 transforms stay float32 (no silent promotion to double)."""
     assert scipy.fft.rfft(np.zeros(8, dtype=np.float32)).dtype == np.complex64
+
+
+def test_apply_takes_a_batch_of_fields():
+    op = _hybrid()
+    fields = np.random.default_rng(6).random((3, 20, 24)).astype(np.float32)
+    batch = op.apply(fields)
+    assert batch.shape == fields.shape and batch.dtype == np.float32
+    for field, u in zip(fields, batch, strict=True):
+        np.testing.assert_allclose(u, op.apply(field), rtol=1e-6, atol=1e-6 * np.abs(u).max())
