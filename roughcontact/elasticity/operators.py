@@ -50,6 +50,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse
 
 from roughcontact.elasticity.halfspace import _check_grid, _element_kernel
 from roughcontact.elasticity.influence import (
@@ -89,6 +90,9 @@ COARSE_MAX = 64
 #: up to 64 x 64 its product (BLAS) is as fast as the FFT operator and its
 #: entries are the finite-element model's own (benchmarks/bench_operators.py).
 DENSE_MAX_ELEMENTS = 64 * 64
+#: Share of loaded coarse elements below which the correction's product uses only
+#: the rows of K they load.
+SPARSE_COARSE = 0.5
 
 
 def default_coarse_grid(grid, coarse_max: int | None = None) -> tuple[int, int]:
@@ -210,8 +214,10 @@ class BlockOperator(GridOperator):
             set_(self, "_px", px)
             set_(self, "_py", py)
             set_(self, "_columns", None)
-            # the correction's product in the dtype of the pressure
-            self._coarse.update({t: (px.astype(t, copy=False), py.astype(t, copy=False),
+            # the correction's product in the dtype of the pressure; the
+            # interpolations have two taps per row: sparse
+            self._coarse.update({t: (scipy.sparse.csr_array(px.astype(t)),
+                                     scipy.sparse.csr_array(py.astype(t)),
                                      correction.astype(t, copy=False))
                                  for t in DTYPES})
             diagonal = diagonal + dx * dy * _interpolated_diagonal(correction, px, py)
@@ -240,13 +246,28 @@ class BlockOperator(GridOperator):
         dtype (float32 or float64)."""
         u = self._love(fields)
         if self.correction is not None:
-            ncx, ncy = self.coarse_grid
-            px, py, correction = self._coarse[u.dtype]
-            m = fields.shape[0]
-            coarse = (py.T @ fields @ px).reshape(m, ncx * ncy)
-            coarse = (coarse @ correction).reshape(m, ncy, ncx)  # K symmetric
-            u = u + u.dtype.type(self.element_area) * (py @ coarse @ px.T)
+            u = u + u.dtype.type(self.element_area) * self._correct(fields.astype(u.dtype))
         return u
+
+    def _correct(self, fields: np.ndarray) -> np.ndarray:
+        """``W K W^T p`` [m/m^2 * ...] of fields (m, ny, nx): the interpolations by their
+        two taps per row (sparse), ``K`` only on the coarse elements the fields load
+        (a contact set loads few of them)."""
+        nx, ny = self.grid
+        ncx, ncy = self.coarse_grid
+        px, py, correction = self._coarse[fields.dtype]
+        m = fields.shape[0]
+        rows = (fields.reshape(m * ny, nx) @ px).reshape(m, ny, ncx)  # p W_x
+        coarse = (py.T @ rows.transpose(1, 0, 2).reshape(ny, m * ncx))  # W_y^T p W_x
+        coarse = coarse.reshape(ncy, m, ncx).transpose(1, 0, 2).reshape(m, ncx * ncy)
+        loaded = np.flatnonzero(coarse.any(axis=0))
+        if loaded.size < SPARSE_COARSE * coarse.shape[1]:
+            coarse = coarse[:, loaded] @ correction[loaded]  # K symmetric: rows = columns
+        else:
+            coarse = coarse @ correction
+        back = py @ coarse.reshape(m, ncy, ncx).transpose(1, 0, 2).reshape(ncy, m * ncx)
+        back = back.reshape(ny, m, ncx).transpose(1, 0, 2).reshape(m * ny, ncx)
+        return (back @ px.T).reshape(m, ny, nx)
 
     def preconditioner(self):
         """The 13-tap stencil of Love's part, ``E* |q| / 2`` with ``E* = 1 / (1 - nu^2)``
@@ -276,7 +297,7 @@ class BlockOperator(GridOperator):
             held += self._columns.nbytes()
         if self.correction is not None:
             held += self.correction.nbytes + self._px.nbytes + self._py.nbytes
-            held += sum(a.nbytes for a in self._coarse[DTYPES[0]])
+            held += self._coarse[DTYPES[0]][2].nbytes
         return int(held)
 
 

@@ -182,3 +182,15 @@ def test_apply_takes_a_batch_of_fields():
     assert batch.shape == fields.shape and batch.dtype == np.float32
     for field, u in zip(fields, batch, strict=True):
         np.testing.assert_allclose(u, op.apply(field), rtol=1e-6, atol=1e-6 * np.abs(u).max())
+
+
+def test_hybrid_product_of_a_small_contact_set_equals_the_dense_matrix():
+    """A pressure on few elements loads few coarse elements: K is applied on those only."""
+    op = _hybrid((48, 40), (12, 10))
+    dense = op.to_dense()
+    p = np.zeros((40, 48))
+    p[3:6, 30:34] = np.random.default_rng(7).random((3, 4))
+    reference = dense @ p.ravel()
+    assert np.abs(op.apply(p).ravel() - reference).max() <= 1e-12 * np.abs(reference).max()
+    single = op.apply(p.astype(np.float32)).ravel()
+    assert np.abs(single - reference).max() <= 2e-6 * np.abs(reference).max()
