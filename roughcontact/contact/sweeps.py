@@ -122,6 +122,17 @@ def load_loop(method: Method, products: Products, gaps, loads, options: SweepOpt
     return approaches
 
 
+def _steps(problem, approaches, mean_pressures) -> np.ndarray:
+    """The checked steps (m, k): approaches [m] or mean pressures [Pa], exactly one."""
+    checks.check_control(approaches, mean_pressures, ("approaches", "mean_pressures"))
+    m = problem.gaps.shape[0]
+    if mean_pressures is not None:
+        return checks.approach_steps(mean_pressures, m, "Pa", "mean_pressures")
+    steps = checks.approach_steps(approaches, m, "m")
+    checks.check_bounded(problem.operator, problem.gaps, steps.max(axis=1), "approaches")
+    return steps
+
+
 def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto", tol=1e-10,
           max_iter=None, element_area=None, return_fields=False, stiffness=True,
           stiffness_tol=1e-6, precision="double", extrapolate=True, hardness=None,
@@ -192,12 +203,8 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
                             batched=True)
     stiffness_tol = checks.check_positive(stiffness_tol, "stiffness_tol")
     gaps = problem.gaps
-    checks.check_control(approaches, mean_pressures, ("approaches", "mean_pressures"))
+    steps = _steps(problem, approaches, mean_pressures)
     load_control = mean_pressures is not None
-    steps = (checks.approach_steps(mean_pressures, gaps.shape[0], "Pa", "mean_pressures")
-             if load_control else checks.approach_steps(approaches, gaps.shape[0], "m"))
-    if not load_control:
-        checks.check_bounded(problem.operator, gaps, steps.max(axis=1), "approaches")
     options = SweepOptions(problem.tol, problem.max_iter, problem.hardness, bool(stiffness),
                            stiffness_tol, bool(extrapolate))
     table = SweepTable(gaps.shape[0], steps.shape[1], problem.shape, return_fields, profile)
