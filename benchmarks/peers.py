@@ -1,5 +1,8 @@
 """roughcontact against its peers, Tamaas and ContactMechanics (run on demand).
 
+ASPHER is compared in ``benchmarks/peers_aspher.py`` (``--parts aspher``
+runs it here on one thread).
+
 Part 1, periodic half-space: cold solves of the same periodic Gaussian
 surface (exponential ACF, about 20 % contact, tol 1e-10) on 256 x 256 and
 512 x 512 grids, with the spectral kernel ``2 / (E* |q|)`` shared by the three
@@ -561,8 +564,10 @@ def main(argv=None) -> None:
     parser.add_argument("--repeats", type=int, default=3,
                         help="rounds of alternating cold solves; the minimum is kept (>= 3 "
                              "for numbers to quote)")
-    parser.add_argument("--parts", nargs="+", choices=("periodic", "capped", "layer"),
-                        default=["periodic", "capped", "layer"])
+    parser.add_argument("--parts", nargs="+", choices=("periodic", "capped", "layer", "aspher"),
+                        default=["periodic", "capped", "layer"],
+                        help="aspher: benchmarks/peers_aspher.py on one thread (its own "
+                             "report; run that script for two threads or other options)")
     parser.add_argument("--capped-grids", nargs="+", type=int, default=None,
                         help="grids of the capped part (default 32 256; --quick: 32 128); "
                              f"a BVLS referee runs on grids <= {BVLS_MAX_GRID}")
@@ -584,6 +589,11 @@ def main(argv=None) -> None:
     for name, why in skipped.items():
         print(f"skipped {name}: {why}", flush=True)
 
+    if "aspher" in args.parts:
+        import peers_aspher
+
+        peers_aspher.main(["--repeats", str(args.repeats), "--out", str(args.out)]
+                          + (["--grids", "128"] if args.quick else []))
     rows = []
     for grid in grids if "periodic" in args.parts else ():
         start = time.perf_counter()

@@ -204,11 +204,10 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
     stiffness_tol = checks.check_positive(stiffness_tol, "stiffness_tol")
     gaps = problem.gaps
     steps = _steps(problem, approaches, mean_pressures)
-    load_control = mean_pressures is not None
     options = SweepOptions(problem.tol, problem.max_iter, problem.hardness, bool(stiffness),
                            stiffness_tol, bool(extrapolate))
     table = SweepTable(gaps.shape[0], steps.shape[1], problem.shape, return_fields, profile)
-    if load_control:
+    if mean_pressures is not None:  # load control
         steps = load_loop(problem.method, problem.products, gaps, steps, options, table)
     else:
         loop = problem.method.sweep or approach_loop
