@@ -81,13 +81,16 @@ import time
 from pathlib import Path
 
 import numpy as np
-import scipy.fft
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from roughcontact.contact import kkt_residual, solve, solve_many, sweep  # noqa: E402
-from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence  # noqa: E402
+from roughcontact.elasticity.halfspace import (  # noqa: E402
+    PeriodicHalfSpace,
+    SpectralHalfSpace,
+    halfspace_influence,
+)
 
 SIGMA = 24.5e-6  # surface standard deviation [m]
 CORRELATION = 1.0e-3  # ACF length b at 10 % [m] (Eq 1)
@@ -230,45 +233,10 @@ def case_baseline_block(args, method: str) -> dict:
     return summarize([result], time.perf_counter() - start)
 
 
-class SpectralHalfSpace:
-    """Periodic half-space with the spectral kernel ``2 / (E* |q|)`` [m/Pa].
-
-    The operator of Tamaas (``basic_2d``) and ContactMechanics
-    (``PeriodicFFTElasticHalfSpace``): pressure samples at grid points, a
-    circulant compliance with eigenvalues ``2 / (E* |q|)``, ``q != 0``, and
-    zero for the mean (zero-mean convention, ``mean_compliance = 0``).
-    """
-
-    mean_compliance = 0.0
-
-    def __init__(self, grid: int, size: float, modulus: float):
-        self.grid = (grid, grid)
-        self.element_area = (size / grid) ** 2
-        self.shape = (grid * grid, grid * grid)
-        qx = 2 * np.pi * np.fft.rfftfreq(grid, size / grid)
-        qy = 2 * np.pi * np.fft.fftfreq(grid, size / grid)
-        q = np.hypot(qx[None, :], qy[:, None])
-        q[0, 0] = np.inf
-        self.spectrum = 2.0 / (modulus * q)
-
-    def diagonal(self) -> np.ndarray:
-        n = self.shape[0]
-        full = np.fft.irfft2(self.spectrum, s=self.grid)
-        return np.full(n, full[0, 0])
-
-    def matvec(self, pressure) -> np.ndarray:
-        p = np.asarray(pressure, dtype=float)
-        nx, ny = self.grid
-        fields = p.reshape(nx * ny, -1).T.reshape(-1, ny, nx)
-        u = scipy.fft.irfft2(scipy.fft.rfft2(fields) * self.spectrum, s=(ny, nx))
-        return u.reshape(-1, nx * ny).T.reshape(p.shape)
-
-
 def periodic_problem(grid: int, spectral: bool):
     """Operator, gaps and the approach for about 20 % contact on a periodic grid."""
     size = SIZE * grid / 60  # same element size as the 60 x 60 study
-    modulus = E / (1 - NU**2)
-    operator = (SpectralHalfSpace(grid, size, modulus) if spectral
+    operator = (SpectralHalfSpace((grid, grid), (size, size), E, NU) if spectral
                 else PeriodicHalfSpace((grid, grid), (size, size), E, NU))
     gap0 = initial_gaps(gaussian_surfaces(1, grid, size, seed=512)[0])
     # Bisection on the contact fraction with loose, cheap solves. The approach

@@ -3,8 +3,11 @@
 The solver minimizes the complementary energy with p >= 0 (Eq 27 of Kumar
 et al. 2006) for one or many surfaces and through approach sweeps, one
 module per part: ``methods`` (the methods by name, ``solve``,
-``solve_many``), ``cg``, ``steepest`` and ``pivot`` (one algorithm each,
-``iteration`` the projected iteration the first two share), ``sweeps`` (the
+``solve_many``), ``cg``, ``steepest``, ``pivot`` and ``pcg`` (one
+algorithm each, ``iteration`` the projected iteration the first two share;
+``pcg`` the preconditioned CG of the grid FFT operators, ``nested`` its
+coarse-grid starts), ``loads`` (load control by an outer solve on the
+approach), ``sweeps`` (the
 approach loop and its warm starts), ``stiffness`` (the tangent dF/dd),
 ``kkt`` (the residual every method stops on), ``result`` (the results all
 methods return), ``checks`` (input checks) and ``products`` (the products

@@ -21,6 +21,7 @@ from roughcontact.elasticity.protocol import (
     DenseInfluence,
     InfluenceOperator,
     MatrixFreeInfluence,
+    PreconditionedOperator,
 )
 
 __all__ = [
@@ -33,12 +34,15 @@ __all__ = [
     "check_element_area",
     "check_hardness",
     "check_initial_pressure",
+    "check_control",
     "check_max_iter",
+    "check_mean_pressure",
     "check_positive",
     "check_precision",
     "check_pressure",
     "check_surfaces",
     "given_matrix",
+    "preconditioned_operator",
 ]
 
 #: Relative asymmetry max|C - C^T| / max|C| accepted for a dense matrix.
@@ -118,6 +122,20 @@ def given_matrix(operator):
     if not hasattr(operator, "matvec"):
         return operator
     return operator.matrix if isinstance(operator, InfluenceOperator) else None
+
+
+def preconditioned_operator(operator) -> PreconditionedOperator | None:
+    """The grid FFT operator an operator argument is (or wraps), or None.
+
+    A :class:`~roughcontact.elasticity.protocol.PreconditionedOperator`
+    (half-space, periodic, spectral, hybrid block), possibly wrapped by
+    :func:`as_operator` (its ``base``); None for a dense matrix or any other
+    matrix-free operator.
+    """
+    base = getattr(operator, "base", operator)
+    if isinstance(base, PreconditionedOperator) and getattr(base, "grid", None) is not None:
+        return base
+    return None
 
 
 def _grid(operator, n: int) -> tuple[int, int] | None:
@@ -242,13 +260,20 @@ def check_surfaces(gaps0, op: InfluenceOperator, name: str, batched: bool):
     return np.ascontiguousarray(gaps.reshape(-1, n)), tuple(surface_shape)
 
 
+def _per_surface(value, m: int, name: str) -> np.ndarray:
+    """``value`` as an (m,) float array (a scalar is shared)."""
+    values = np.asarray(value, dtype=float)
+    if values.ndim == 0:
+        values = np.full(m, float(values))
+    if values.shape != (m,):
+        raise ValueError(
+            f"{name} must be a scalar or an array of length m = {m}, got {values.shape}")
+    return values
+
+
 def check_approach(approach, m: int, name: str = "approach") -> np.ndarray:
     """Approaches ``d >= 0`` [m] as an (m,) array (a scalar is shared)."""
-    d = np.asarray(approach, dtype=float)
-    if d.ndim == 0:
-        d = np.full(m, float(d))
-    if d.shape != (m,):
-        raise ValueError(f"{name} must be a scalar or an array of length m = {m}, got {d.shape}")
+    d = _per_surface(approach, m, name)
     if not np.isfinite(d).all():
         raise ValueError(f"{name} must be finite (m)")
     if (d < 0.0).any():
@@ -256,17 +281,34 @@ def check_approach(approach, m: int, name: str = "approach") -> np.ndarray:
     return d
 
 
-def approach_steps(approaches, m: int, unit: str) -> np.ndarray:
-    """Approaches as an (m, k) array, shared (k,) ones broadcast; checked finite and >= 0."""
+def check_control(approach, mean_pressure, names=("approach", "mean_pressure")) -> None:
+    """Exactly one of the displacement control ``approach`` [m] and the load control
+    ``mean_pressure`` [Pa] is given (the messages use ``names``)."""
+    if (approach is None) == (mean_pressure is None):
+        raise ValueError(f"give exactly one of {names[0]} (m, displacement control) and "
+                         f"{names[1]} (Pa, load control)")
+
+
+def check_mean_pressure(mean_pressure, m: int, name: str = "mean_pressure") -> np.ndarray:
+    """Mean pressures ``P >= 0`` [Pa] as an (m,) array (a scalar is shared)."""
+    P = _per_surface(mean_pressure, m, name)
+    if not np.isfinite(P).all() or (P < 0.0).any():
+        raise ValueError(f"{name} must be finite and non-negative (Pa)")
+    return P
+
+
+def approach_steps(approaches, m: int, unit: str, name: str = "approaches") -> np.ndarray:
+    """Approaches (or the steps ``name``) as an (m, k) array, shared (k,) ones broadcast;
+    checked finite and >= 0."""
     steps = np.asarray(approaches, dtype=float)
     if steps.ndim == 1:
         steps = np.broadcast_to(steps, (m, steps.size))
     if steps.ndim != 2 or steps.shape[0] != m or steps.shape[1] < 1:
         raise ValueError(
-            f"approaches must have shape (k,) or (m, k) with m = {m}, got {np.shape(approaches)}"
+            f"{name} must have shape (k,) or (m, k) with m = {m}, got {np.shape(approaches)}"
         )
     if not np.isfinite(steps).all() or (steps < 0.0).any():
-        raise ValueError(f"approaches must be finite and non-negative ({unit})")
+        raise ValueError(f"{name} must be finite and non-negative ({unit})")
     return steps
 
 

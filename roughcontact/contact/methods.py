@@ -32,6 +32,16 @@ Methods (:data:`REGISTRY`; :data:`METHODS` also holds ``"auto"``):
 ``"cg"``
     Constrained conjugate gradients of Polonsky & Keer (1999)
     (:mod:`roughcontact.contact.cg`).
+``"pcg"``
+    Preconditioned constrained CG for grid FFT operators (half-space,
+    periodic, spectral, hybrid block: a
+    :class:`~roughcontact.elasticity.protocol.PreconditionedOperator`):
+    the |q| stencil preconditioner on the free set, Polak-Ribiere
+    conjugacy kept across changes of the contact set, float32 direction
+    products with ``precision="mixed"``, load control inside the iteration,
+    cold solves above 128 x 128 started from coarser grids
+    (:mod:`roughcontact.contact.pcg`, :mod:`roughcontact.contact.nested`).
+    Any other operator is solved unpreconditioned. No hardness cap.
 ``"pivot"``
     Block principal pivoting (:mod:`roughcontact.contact.pivot`), finite,
     for dense matrices (or up to a few thousand unknowns): the reference.
@@ -40,8 +50,9 @@ Methods (:data:`REGISTRY`; :data:`METHODS` also holds ``"auto"``):
     The same pivoting, whose sweep solves one approach at a time with the
     shared approach loop (:mod:`roughcontact.contact.sweeps`).
 ``"auto"``
-    ``"pivot"`` for a dense matrix, ``"cg"`` for a matrix-free operator
-    (:func:`resolve_method`); the default.
+    ``"pivot"`` for a dense matrix, ``"pcg"`` for a grid FFT operator
+    without a hardness cap, ``"cg"`` for any other matrix-free operator or a
+    capped problem on one (:func:`resolve_method`); the default.
 
 Operators: ``operator`` is a dense symmetric influence matrix (ndarray, n x
 n, m/Pa; then ``element_area`` [m^2] must be given), an
@@ -55,7 +66,8 @@ Performance: the products ``C p`` dominate the iterative methods.
 :func:`solve_many` and :func:`roughcontact.contact.sweep` apply ``C`` to all
 unfinished surfaces at once (BLAS 3), and ``precision="mixed"`` takes the
 search-direction products in single precision (about half the time; the
-result still meets ``tol`` in double precision). On a 2-core machine
+result still meets ``tol`` in double precision): from a float32 copy of a
+dense matrix, or float32 FFTs of a grid operator (``"pcg"``). On a 2-core machine
 shared with other jobs one BLAS thread (``OPENBLAS_NUM_THREADS=1``) was
 faster than two.
 """
@@ -68,13 +80,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughcontact.contact import cg, checks, pivot, steepest
+from roughcontact.contact import cg, checks, pcg, pivot, steepest
+from roughcontact.contact.loads import solve_at_loads
 from roughcontact.contact.products import PRECISIONS, Products
 from roughcontact.contact.result import Batch, ContactResult
 from roughcontact.elasticity.protocol import InfluenceOperator
 
 __all__ = ["METHODS", "PRECISIONS", "REGISTRY", "Method", "Problem", "check_method",
-           "check_problem", "method_for", "resolve_method", "run", "solve", "solve_many"]
+           "check_problem", "method_for", "resolve_method", "run", "run_loads", "solve",
+           "solve_many", "warn_unconverged"]
 
 logger = logging.getLogger("roughcontact.contact")
 
@@ -96,6 +110,11 @@ class Method:
     sweep : callable or None
         ``sweep(method, products, gaps, steps, options, table)``, its own
         approach loop; None: the shared loop of :mod:`roughcontact.contact.sweeps`.
+    load : callable or None
+        ``load(products, gaps, P, pressure, tol, max_iter, hardness) -> (Batch,
+        approaches)``, load control at mean pressures ``P`` [Pa] inside the
+        method; None: an outer solve on the approach
+        (:mod:`roughcontact.contact.loads`).
     """
 
     name: str
@@ -103,6 +122,7 @@ class Method:
     default_max_iter: Callable[[int], int]
     single_precision: bool
     sweep: Callable[..., None] | None = None
+    load: Callable[..., tuple] | None = None
 
     def max_iter(self, max_iter, n: int) -> int:
         """``max_iter`` as an int, or the method's default for ``n`` unknowns."""
@@ -119,13 +139,19 @@ REGISTRY = {
     "cg": Method("cg", cg.solve, cg.default_max_iter, True),
     "exact": Method("exact", pivot.solve, pivot.default_max_iter, False),
     "pivot": Method("pivot", pivot.solve, pivot.default_max_iter, False, pivot.sweep),
+    "pcg": Method("pcg", pcg.solve, pcg.default_max_iter, True, load=pcg.solve_load),
 }
 
 
-def _auto(operator) -> str:
+def _auto(operator, hardness) -> str:
     """Block principal pivoting needs the dense ``C`` (it factors its blocks
-    ``C_AA``); a matrix-free operator (hybrid, half-space) is solved by CG."""
-    return "cg" if checks.given_matrix(operator) is None else "pivot"
+    ``C_AA``); a grid FFT operator (half-space, periodic, spectral, hybrid)
+    is solved by preconditioned CG unless capped, any other matrix-free
+    operator or a capped problem by CG."""
+    if checks.given_matrix(operator) is not None:
+        return "pivot"
+    uncapped = hardness is None or np.isinf(float(hardness))
+    return "pcg" if uncapped and checks.preconditioned_operator(operator) is not None else "cg"
 
 
 #: Names that stand for a method chosen from the operator.
@@ -139,20 +165,34 @@ def check_method(method) -> None:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
 
 
-def resolve_method(method: str, operator) -> str:
-    """The method ``"auto"`` stands for: ``"pivot"`` for a dense matrix, else ``"cg"``.
+def resolve_method(method: str, operator, hardness=None) -> str:
+    """The method ``"auto"`` stands for: ``"pivot"`` for a dense matrix, ``"pcg"`` for
+    a grid FFT operator without a cap (``hardness`` [Pa] None), else ``"cg"``.
 
     Other methods are returned unchanged. Block principal pivoting needs the
-    dense ``C`` (its blocks ``C_AA`` are factored); a matrix-free operator
-    (hybrid, half-space) is solved by CG.
+    dense ``C`` (its blocks ``C_AA`` are factored); the preconditioned CG
+    needs a :class:`~roughcontact.elasticity.protocol.PreconditionedOperator`
+    and solves only the uncapped problem; CG takes any operator and a cap.
     """
     choose = _CHOSEN.get(method)
-    return method if choose is None else choose(operator)
+    return method if choose is None else choose(operator, hardness)
 
 
-def method_for(method: str, operator) -> Method:
+def method_for(method: str, operator, hardness=None) -> Method:
     """The :class:`Method` ``method`` names for ``operator`` (``"auto"`` resolved)."""
-    return REGISTRY[resolve_method(method, operator)]
+    return REGISTRY[resolve_method(method, operator, hardness)]
+
+
+def warn_unconverged(method: Method, batch: Batch, max_iter: int, tol: float) -> None:
+    """Warn (on the ``roughcontact.contact`` logger) if some surfaces did not converge."""
+    failed = np.flatnonzero(~batch.converged)
+    if failed.size:
+        logger.warning(
+            "contact solve (%s) did not converge in %d iterations for %d of %d surfaces; "
+            "largest KKT residual %.3g > tol %.3g",
+            method.name, max_iter, failed.size, batch.converged.size,
+            float(batch.residual[failed].max()), tol,
+        )
 
 
 def run(method: Method, products: Products, gaps, d, pressure, tol: float, max_iter: int,
@@ -160,15 +200,18 @@ def run(method: Method, products: Products, gaps, d, pressure, tol: float, max_i
     """Solve the rows of ``gaps`` at approaches ``d`` with ``method``; warn if some
     surfaces did not converge (on the ``roughcontact.contact`` logger)."""
     batch = method.solve(products, gaps, d, pressure, tol, max_iter, hardness)
-    failed = np.flatnonzero(~batch.converged)
-    if failed.size:
-        logger.warning(
-            "contact solve (%s) did not converge in %d iterations for %d of %d surfaces; "
-            "largest KKT residual %.3g > tol %.3g",
-            method.name, max_iter, failed.size, gaps.shape[0],
-            float(batch.residual[failed].max()), tol,
-        )
+    warn_unconverged(method, batch, max_iter, tol)
     return batch
+
+
+def run_loads(method: Method, products: Products, gaps, mean_pressures, pressure, tol: float,
+              max_iter: int, hardness=None):
+    """Solve the rows of ``gaps`` at mean pressures [Pa] (load control,
+    :func:`roughcontact.contact.loads.solve_at_loads`); the batch and the approaches [m]."""
+    batch, approaches = solve_at_loads(method, products, gaps, mean_pressures, pressure, tol,
+                                       max_iter, hardness)
+    warn_unconverged(method, batch, max_iter, tol)
+    return batch, approaches
 
 
 @dataclass(frozen=True)
@@ -201,29 +244,39 @@ def check_problem(operator, gaps0, name: str, *, method, tol, max_iter, precisio
     checks.check_precision(precision)
     hardness = checks.check_hardness(hardness)
     op = checks.as_operator(operator, element_area)
-    chosen = method_for(method, op)
+    chosen = method_for(method, op, hardness)
     gaps, shape = checks.check_surfaces(gaps0, op, name, batched=batched)
     return Problem(op, chosen, gaps, shape, tol, chosen.max_iter(max_iter, gaps.shape[1]),
                    chosen.products(op, precision), hardness)
 
 
-def _solve_rows(problem: Problem, approach, p0) -> list[ContactResult]:
-    """Solve every surface of ``problem`` at ``approach``; one :class:`ContactResult` each."""
+def _solve_rows(problem: Problem, approach, p0, mean_pressure=None) -> list[ContactResult]:
+    """Solve every surface of ``problem`` at ``approach`` or ``mean_pressure``; one
+    :class:`ContactResult` each."""
     gaps, hardness = problem.gaps, problem.hardness
     m, n = gaps.shape
-    d = checks.check_approach(approach, m)
-    checks.check_bounded(problem.operator, gaps, d, "approach")
+    checks.check_control(approach, mean_pressure)
+    if mean_pressure is None:
+        d = checks.check_approach(approach, m)
+        checks.check_bounded(problem.operator, gaps, d, "approach")
+    else:
+        loads = checks.check_mean_pressure(mean_pressure, m)
     pressure = checks.check_initial_pressure(p0, m, n, hardness=hardness)
-    batch = run(problem.method, problem.products, gaps, d, pressure, problem.tol,
-                problem.max_iter, hardness)
+    if mean_pressure is None:
+        batch = run(problem.method, problem.products, gaps, d, pressure, problem.tol,
+                    problem.max_iter, hardness)
+    else:
+        batch, d = run_loads(problem.method, problem.products, gaps, loads, pressure,
+                             problem.tol, problem.max_iter, hardness)
     return [batch.contact_result(j, gaps[j] - d[j], problem.operator.element_area,
                                  problem.shape, problem.method.name, problem.tol, d[j], hardness)
             for j in range(m)]
 
 
-def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, p0=None,
-          element_area=None, precision="double", hardness=None) -> ContactResult:
-    """Contact pressure under a rigid flat at prescribed approach (Eq 27).
+def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", tol=1e-10,
+          max_iter=None, p0=None, element_area=None, precision="double",
+          hardness=None) -> ContactResult:
+    """Contact pressure under a rigid flat at prescribed approach or mean pressure (Eq 27).
 
     Minimizes ``V = 1/2 p.C p - p.(d - f)`` over ``p >= 0`` (Eq 17, 18, 27 of
     Kumar et al. 2006): at the solution the gap ``u + f - d`` vanishes where
@@ -238,16 +291,25 @@ def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, 
     gap0 : ndarray, (ny, nx) or (n,)
         Initial separation ``f = z_max - z`` [m] (Eq 21), element order
         ``k = iy * nx + ix``. Results come back in the same shape.
-    approach : float
+    approach : float, optional
         Rigid-body approach ``d >= 0`` [m] (displacement control).
-    method : {"auto", "cg", "steepest", "exact", "pivot"}
+    mean_pressure : float, optional
+        Nominal (mean) pressure ``P = sum p / n >= 0`` [Pa] (load control);
+        exactly one of ``approach`` and ``mean_pressure``. The approach is
+        then found with the solution (``approach`` of the result): inside
+        the iteration for ``"pcg"`` (Polonsky & Keer's mean-gap shift), by
+        an outer solve on the approach for the other methods, to
+        ``|P(d) - P| <= tol P`` (:mod:`roughcontact.contact.loads`).
+    method : {"auto", "cg", "pcg", "steepest", "exact", "pivot"}
         See the module docstring; ``"pivot"`` and ``"exact"`` are the same
         for a single solve; ``"auto"`` (default) is ``"pivot"`` for a dense
-        matrix and ``"cg"`` for a matrix-free operator (:func:`resolve_method`).
+        matrix, ``"pcg"`` for a grid FFT operator (uncapped) and ``"cg"``
+        otherwise (:func:`resolve_method`).
     tol : float
         Tolerance on the dimensionless KKT residual (:mod:`roughcontact.contact.kkt`).
     max_iter : int, optional
         Iteration limit; default ``max(1000, 2n)`` for ``"cg"``,
+        ``max(1000, 4 sqrt(n))`` for ``"pcg"``,
         ``max(20000, 20n)`` for ``"steepest"``, ``10n + 100`` pivots for
         ``"exact"`` and ``"pivot"``.
     p0 : ndarray, optional
@@ -258,9 +320,10 @@ def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, 
     precision : {"double", "mixed"}
         ``"mixed"`` takes the search-direction products of ``"cg"`` and
         ``"steepest"`` with a single-precision copy of a dense ``C`` (about
-        twice as fast); convergence is still decided on double-precision
-        residuals, so the result meets ``tol`` either way. Ignored for
-        matrix-free operators and pivoting.
+        twice as fast), and as float32 FFTs of a grid FFT operator (also
+        the direction products of ``"pcg"``); convergence is still decided on
+        double-precision residuals, so the result meets ``tol`` either way.
+        Ignored by pivoting and by other matrix-free operators.
     hardness : float, optional
         Pressure cap ``H`` [Pa] (elastic-perfectly-plastic elements): solves
         Eq 27 over ``0 <= p <= H`` instead of ``p >= 0``; default None (no
@@ -282,11 +345,11 @@ def solve(operator, gap0, approach, *, method="auto", tol=1e-10, max_iter=None, 
     problem = check_problem(operator, gap0, "gap0", method=method, tol=tol, max_iter=max_iter,
                             precision=precision, element_area=element_area, hardness=hardness,
                             batched=False)
-    return _solve_rows(problem, approach, p0)[0]
+    return _solve_rows(problem, approach, p0, mean_pressure)[0]
 
 
-def solve_many(operator, gaps0, approach, *, method="auto", tol=1e-10, max_iter=None, p0=None,
-               element_area=None, precision="double",
+def solve_many(operator, gaps0, approach=None, *, mean_pressure=None, method="auto", tol=1e-10,
+               max_iter=None, p0=None, element_area=None, precision="double",
                hardness=None) -> tuple[ContactResult, ...]:
     """Solve m contact problems with one operator in one batched call (Eq 27).
 
@@ -302,8 +365,10 @@ def solve_many(operator, gaps0, approach, *, method="auto", tol=1e-10, max_iter=
         Influence coefficients ``C`` [m/Pa], see :func:`solve`.
     gaps0 : ndarray, (m, ny, nx) or (m, n)
         Initial separations ``f`` [m] (Eq 21), one per surface.
-    approach : float or ndarray (m,)
+    approach : float or ndarray (m,), optional
         Rigid-body approach ``d >= 0`` [m], shared or per surface.
+    mean_pressure : float or ndarray (m,), optional
+        Mean pressure ``P >= 0`` [Pa] instead (load control, see :func:`solve`).
     method, tol, max_iter, element_area, precision, hardness
         As in :func:`solve`.
     p0 : ndarray, optional
@@ -317,4 +382,4 @@ def solve_many(operator, gaps0, approach, *, method="auto", tol=1e-10, max_iter=
     problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
                             precision=precision, element_area=element_area, hardness=hardness,
                             batched=True)
-    return tuple(_solve_rows(problem, approach, p0))
+    return tuple(_solve_rows(problem, approach, p0, mean_pressure))

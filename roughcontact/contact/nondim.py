@@ -60,7 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from roughcontact.contact import validity
-from roughcontact.contact.checks import approach_steps, check_positive
+from roughcontact.contact.checks import approach_steps, check_positive, preconditioned_operator
 from roughcontact.contact.curves import (
     DIAGNOSTICS,
     PROFILES,
@@ -214,6 +214,31 @@ class _ScaledOperator:
         return np.asarray(self._operator.matvec(pressure), dtype=float) * self._scale
 
 
+class _ScaledGridOperator(_ScaledOperator):
+    """A grid FFT operator divided by ``L``, still a
+    :class:`~roughcontact.elasticity.protocol.PreconditionedOperator` (so the
+    preconditioned CG solves the dimensionless problem too)."""
+
+    def __init__(self, operator, thickness: float):
+        super().__init__(operator, thickness)
+        self.size = operator.size
+        self.column_budget = operator.column_budget
+        self._thickness = thickness
+
+    def apply(self, pressure) -> np.ndarray:
+        u = self._operator.apply(pressure)
+        return u * u.dtype.type(self._scale)
+
+    def preconditioner(self):
+        return self._operator.preconditioner()  # its scale does not matter to CG
+
+    def add_columns(self, target, rows, cols, values) -> None:
+        self._operator.add_columns(target, rows, cols, np.asarray(values) * self._scale)
+
+    def coarsened(self) -> _ScaledGridOperator:
+        return _ScaledGridOperator(self._operator.coarsened(), self._thickness)
+
+
 def dimensionless_operator(unit_influence, thickness: float):
     """``K = Chat / L``, the influence operator of the dimensionless problem.
 
@@ -235,6 +260,8 @@ def dimensionless_operator(unit_influence, thickness: float):
     thickness = check_positive(thickness, "thickness")
     if isinstance(unit_influence, np.ndarray) or not hasattr(unit_influence, "matvec"):
         return np.asarray(unit_influence, dtype=float) / thickness
+    if preconditioned_operator(unit_influence) is not None:
+        return _ScaledGridOperator(unit_influence, thickness)
     return _ScaledOperator(unit_influence, thickness)
 
 
@@ -323,9 +350,9 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
     steps = _check_steps(approaches, m)
     batch_size = _check_batch_size(batch_size, m)
     operator = dimensionless_operator(unit_influence, thickness)
-    method = resolve_method(method, operator)  # recorded as solved
     hardness = (None if nondim_hardness is None
                 else check_positive(nondim_hardness, "nondim_hardness (H L / (E sigma))"))
+    method = resolve_method(method, operator, hardness)  # recorded as solved
     ranks = validity.rank_grid(n) if profile else None
     arrays = _sweep_batches(operator, gaps, steps, batch_size, progress, method=method, tol=tol,
                             max_iter=max_iter, stiffness_tol=stiffness_tol, precision=precision,

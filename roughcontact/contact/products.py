@@ -4,8 +4,9 @@ The solvers store pressures one surface per row, shape (m, n), and apply
 ``C`` to all unfinished surfaces at once (for a dense matrix one BLAS 3
 product ``P C``, since ``C`` is symmetric). The products are the cost of
 the iterative methods; ``precision="mixed"`` takes the search-direction
-products with a single-precision copy of a dense ``C`` (about half the
-time), while the residuals that decide convergence stay double precision.
+products with a single-precision copy of a dense ``C`` or the float32
+FFTs of a grid operator (about half the time), while the residuals that
+decide convergence stay double precision.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughcontact.elasticity.protocol import InfluenceOperator
+from roughcontact.elasticity.protocol import InfluenceOperator, PreconditionedOperator
 
 __all__ = ["PRECISIONS", "SINGLE_PRECISION", "SPARSE_ROWS", "Products", "rows_product"]
 
@@ -38,23 +39,34 @@ class Products:
     ----------
     operator : InfluenceOperator
         ``C`` [m/Pa].
-    single : ndarray (n, n) of float32 or None
+    single : ndarray (n, n) of float32, PreconditionedOperator or None
         Single-precision copy of a dense ``C`` for the search-direction
-        products (``precision="mixed"``); None: every product is exact.
+        products (``precision="mixed"``), or the grid FFT operator whose
+        float32 products serve them; None: every product is exact.
+    precision : str
+        The precision asked for (:data:`PRECISIONS`); a method that takes
+        its own single-precision products from a grid operator
+        (:mod:`roughcontact.contact.pcg`) reads it here.
     """
 
     operator: InfluenceOperator
     single: np.ndarray | None = None
+    precision: str = "double"
 
     @classmethod
     def of(cls, operator: InfluenceOperator, precision: str = "double",
            single_ok: bool = True) -> Products:
-        """The products for ``precision``: single-precision search products only for a
-        dense matrix and a method that takes them (``single_ok``)."""
+        """The products for ``precision``: single-precision search products for a dense
+        matrix (a float32 copy) or a grid FFT operator (its float32 transforms), and a
+        method that takes them (``single_ok``)."""
         single = None
-        if SINGLE_PRECISION[precision] and single_ok and operator.matrix is not None:
-            single = operator.matrix.astype(np.float32)
-        return cls(operator, single)
+        base = getattr(operator, "base", operator)
+        if SINGLE_PRECISION[precision] and single_ok:
+            if operator.matrix is not None:
+                single = operator.matrix.astype(np.float32)
+            elif isinstance(base, PreconditionedOperator):
+                single = base
+        return cls(operator, single, precision if single_ok else "double")
 
     @property
     def mixed(self) -> bool:
@@ -69,7 +81,11 @@ class Products:
         """``C s_i`` for search directions: single precision when :attr:`mixed`."""
         if self.single is None:
             return self.exact(rows)
-        return (rows.astype(np.float32) @ self.single).astype(float)
+        if isinstance(self.single, np.ndarray):
+            return (rows.astype(np.float32) @ self.single).astype(float)
+        nx, ny = self.single.grid
+        fields = self.single.apply(rows.astype(np.float32).reshape(-1, ny, nx))
+        return np.asarray(fields, dtype=float).reshape(rows.shape)
 
     def correction(self, rows, cols, values, m: int, cost: np.ndarray) -> np.ndarray:
         """``delta C`` for the sparse change ``delta[rows, cols] = values``, shape (m, n).

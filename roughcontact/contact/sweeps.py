@@ -20,12 +20,12 @@ import numpy as np
 from roughcontact.contact import cg, checks
 from roughcontact.contact.checks import SweepOptions
 from roughcontact.contact.kkt import free_set
-from roughcontact.contact.methods import Method, check_problem, run
+from roughcontact.contact.methods import Method, check_problem, run, run_loads
 from roughcontact.contact.products import Products
 from roughcontact.contact.result import SweepResult, SweepTable
 from roughcontact.contact.stiffness import free_set_cg
 
-__all__ = ["approach_loop", "predict", "sweep"]
+__all__ = ["approach_loop", "load_loop", "predict", "sweep"]
 
 logger = logging.getLogger("roughcontact.contact")
 
@@ -72,7 +72,6 @@ def approach_loop(method: Method, products: Products, gaps, steps, options: Swee
     (``stiffness``) or else the secant of the last two steps. Fills ``table``.
     """
     m, n = gaps.shape
-    operator = products.operator
     pressure = np.zeros((m, n))
     tangent = np.zeros((m, n))
     rate = np.full((m, n), np.nan)
@@ -88,18 +87,57 @@ def approach_loop(method: Method, products: Products, gaps, steps, options: Swee
             with np.errstate(invalid="ignore", divide="ignore"):
                 rate = (batch.pressure - pressure) / delta[:, None]
         pressure = batch.pressure
-        table.record(slice(None), step, pressure, batch.displacement, batch.residual,
-                     operator.element_area, options.hardness)
-        table.record_work(slice(None), step, batch.iterations, batch.matvecs, batch.converged)
+        tangent = _record(products, batch, tangent, options, step, table)
         if options.stiffness:
-            tangent = _tangent(products, pressure, tangent, options, step, table)
             rate = tangent
 
 
-def sweep(operator, gaps0, approaches, *, method="auto", tol=1e-10, max_iter=None,
-          element_area=None, return_fields=False, stiffness=True, stiffness_tol=1e-6,
-          precision="double", extrapolate=True, hardness=None, profile=False) -> SweepResult:
-    """Force-deflection curves of m surfaces over k approaches (Eq 27, 33, 35).
+def _record(products: Products, batch, tangent, options: SweepOptions, step: int,
+            table: SweepTable):
+    """A step's solutions, work and (with ``stiffness``) tangent in ``table``; the tangent."""
+    table.record(slice(None), step, batch.pressure, batch.displacement, batch.residual,
+                 products.operator.element_area, options.hardness)
+    table.record_work(slice(None), step, batch.iterations, batch.matvecs, batch.converged)
+    if options.stiffness:
+        tangent = _tangent(products, batch.pressure, tangent, options, step, table)
+    return tangent
+
+
+def load_loop(method: Method, products: Products, gaps, loads, options: SweepOptions,
+              table: SweepTable) -> np.ndarray:
+    """The loop of a load-controlled sweep: all surfaces through the mean pressures
+    ``loads`` (m, k) [Pa], each step started from the previous step's pressure
+    (:func:`roughcontact.contact.loads.solve_at_loads`). Fills ``table``; returns the
+    approaches found (m, k) [m]."""
+    m, n = gaps.shape
+    pressure = np.zeros((m, n))
+    tangent = np.zeros((m, n))
+    approaches = np.zeros(loads.shape)
+    for step in range(loads.shape[1]):
+        batch, approaches[:, step] = run_loads(method, products, gaps, loads[:, step].copy(),
+                                               pressure, options.tol, options.max_iter,
+                                               options.hardness)
+        pressure = batch.pressure
+        tangent = _record(products, batch, tangent, options, step, table)
+    return approaches
+
+
+def _steps(problem, approaches, mean_pressures) -> np.ndarray:
+    """The checked steps (m, k): approaches [m] or mean pressures [Pa], exactly one."""
+    checks.check_control(approaches, mean_pressures, ("approaches", "mean_pressures"))
+    m = problem.gaps.shape[0]
+    if mean_pressures is not None:
+        return checks.approach_steps(mean_pressures, m, "Pa", "mean_pressures")
+    steps = checks.approach_steps(approaches, m, "m")
+    checks.check_bounded(problem.operator, problem.gaps, steps.max(axis=1), "approaches")
+    return steps
+
+
+def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto", tol=1e-10,
+          max_iter=None, element_area=None, return_fields=False, stiffness=True,
+          stiffness_tol=1e-6, precision="double", extrapolate=True, hardness=None,
+          profile=False) -> SweepResult:
+    """Force-deflection curves of m surfaces over k approaches or loads (Eq 27, 33, 35).
 
     Solves Eq 27 for every surface at every approach, all surfaces at once
     (see :func:`roughcontact.contact.solve_many`). With the default
@@ -125,9 +163,15 @@ def sweep(operator, gaps0, approaches, *, method="auto", tol=1e-10, max_iter=Non
         Influence coefficients ``C`` [m/Pa], see :func:`roughcontact.contact.solve`.
     gaps0 : ndarray, (m, ny, nx) or (m, n)
         Initial separations ``f`` [m] (Eq 21).
-    approaches : ndarray, (k,) or (m, k)
+    approaches : ndarray, (k,) or (m, k), optional
         Rigid-body approaches ``d >= 0`` [m] at each step, shared or per
         surface; warm starts help most when they increase.
+    mean_pressures : ndarray, (k,) or (m, k), optional
+        Mean pressures ``P >= 0`` [Pa] instead (load control, exactly one of
+        the two): every step solved at its load (:func:`load_loop`; inside
+        the iteration for ``"pcg"``, else by an outer solve on the
+        approach), started from the previous step's pressure; the approaches
+        found are the result's ``approach``.
     method, tol, max_iter, element_area, precision, hardness
         As in :func:`roughcontact.contact.solve`; ``precision`` also applies
         to the stiffness CG. With ``hardness`` the tangent and the
@@ -159,11 +203,14 @@ def sweep(operator, gaps0, approaches, *, method="auto", tol=1e-10, max_iter=Non
                             batched=True)
     stiffness_tol = checks.check_positive(stiffness_tol, "stiffness_tol")
     gaps = problem.gaps
-    steps = checks.approach_steps(approaches, gaps.shape[0], "m")
-    checks.check_bounded(problem.operator, gaps, steps.max(axis=1), "approaches")
+    steps = _steps(problem, approaches, mean_pressures)
+    load_control = mean_pressures is not None
     options = SweepOptions(problem.tol, problem.max_iter, problem.hardness, bool(stiffness),
                            stiffness_tol, bool(extrapolate))
     table = SweepTable(gaps.shape[0], steps.shape[1], problem.shape, return_fields, profile)
-    loop = problem.method.sweep or approach_loop
-    loop(problem.method, problem.products, gaps, steps, options, table)
+    if load_control:
+        steps = load_loop(problem.method, problem.products, gaps, steps, options, table)
+    else:
+        loop = problem.method.sweep or approach_loop
+        loop(problem.method, problem.products, gaps, steps, options, table)
     return table.result(steps, problem.method.name, problem.tol, problem.hardness)

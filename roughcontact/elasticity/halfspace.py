@@ -9,6 +9,14 @@ Reference operators for the contact solver of :mod:`roughcontact.contact`:
   pressure on rectangular elements and displacements at the element centres.
 - :class:`PeriodicHalfSpace`: the same discretization made periodic and applied
   by FFT, for large grids where a dense matrix does not fit.
+- :class:`SpectralHalfSpace`: the periodic half-space with the spectral
+  kernel ``2 / (E* |q|)`` sampled at grid points, the discrete problem of
+  Tamaas, ContactMechanics and ASPHER, so that their results compare.
+
+Both periodic operators apply in float32 or float64 with ``workers``
+threads (:mod:`roughcontact.elasticity.transforms`) and offer what the
+preconditioned CG needs
+(:class:`roughcontact.elasticity.protocol.PreconditionedOperator`).
 
 The paper computes ``C`` for a finite block by finite elements; the half-space
 is the limit of a thick block and the standard check of the contact solver
@@ -24,14 +32,16 @@ K. L. Johnson, Contact Mechanics, Cambridge University Press (1985), Sec 3.2.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.fft
 
 from roughcontact.elasticity.protocol import GridOperator
+from roughcontact.elasticity.transforms import CirculantConvolution, ColumnTable, q_stencil
 
-__all__ = ["PeriodicHalfSpace", "halfspace_influence", "love_rectangle"]
+__all__ = ["PeriodicHalfSpace", "SpectralHalfSpace", "halfspace_influence", "love_rectangle"]
 
 
 def _check_material(E: float, nu: float) -> tuple[float, float]:
@@ -223,8 +233,44 @@ def _periodic_kernel(
     return np.roll(folded, (jy0, jx0), axis=(0, 1))
 
 
+class _Circulant(GridOperator):
+    """Members of the periodic (circulant) operators: ``grid``, ``size``, ``E``, ``nu``,
+    ``workers``, and ``_product``, ``_columns`` from :meth:`_set_spectrum`."""
+
+    #: A kernel column costs about 1/8 of a single-precision periodic product.
+    column_budget = 8
+
+    def _set_spectrum(self, spectrum: np.ndarray) -> None:
+        """The product of ``spectrum`` [m/Pa] (both dtypes) and the kernel columns."""
+        product = CirculantConvolution(spectrum, int(self.workers))
+        object.__setattr__(self, "_product", product)
+        object.__setattr__(self, "_columns", ColumnTable.periodic(product.kernel()))
+
+    def _apply(self, fields: np.ndarray) -> np.ndarray:
+        """Displacements [m] of pressure fields [Pa] of shape (m, ny, nx) (circulant ``C``),
+        in their dtype (float32 or float64)."""
+        return self._product(fields)
+
+    def preconditioner(self):
+        """The 13-tap stencil of ``E* |q| / 2`` (:func:`.transforms.q_stencil`), periodic."""
+        nx, ny = self.grid
+        spacing = (self.size[0] / nx, self.size[1] / ny)
+        return q_stencil(spacing, self.E / (1.0 - self.nu**2), periodic=True)
+
+    def coarsened(self):
+        """The same periodic body on the grid coarser by 2 per side."""
+        nx, ny = self.grid
+        if nx % 2 or ny % 2:
+            raise ValueError(f"grid {self.grid} cannot be halved")
+        return dataclasses.replace(self, grid=(nx // 2, ny // 2))
+
+    def nbytes(self) -> int:
+        """Memory held by the operator [bytes]."""
+        return int(self.spectrum.nbytes + self._product.nbytes() + self._columns.nbytes())
+
+
 @dataclass(frozen=True)
-class PeriodicHalfSpace(GridOperator):
+class PeriodicHalfSpace(_Circulant):
     """Influence operator of the periodic elastic half-space, applied by FFT.
 
     Discretization as :func:`halfspace_influence` (uniform pressure on each
@@ -274,6 +320,8 @@ class PeriodicHalfSpace(GridOperator):
         Image shells summed exactly, default 3 (kernel error about 1e-5 of
         its peak; construction cost grows as ``(2 images + 1)^2``, about 0.5 s
         for 512 x 512).
+    workers : int, optional
+        Threads of the FFTs, default 1.
 
     Attributes
     ----------
@@ -294,7 +342,10 @@ class PeriodicHalfSpace(GridOperator):
     nu: float
     mean_compliance: float = 0.0
     images: int = 3
+    workers: int = 1
     spectrum: np.ndarray = field(init=False, repr=False, compare=False)
+    _product: CirculantConvolution = field(init=False, repr=False, compare=False)
+    _columns: ColumnTable = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         E, nu = _check_material(self.E, self.nu)
@@ -317,6 +368,7 @@ class PeriodicHalfSpace(GridOperator):
         spectrum = scipy.fft.rfft2(kernel).real
         spectrum.setflags(write=False)
         object.__setattr__(self, "spectrum", spectrum)
+        self._set_spectrum(spectrum)
 
     def diagonal(self) -> np.ndarray:
         """Self-compliances ``C[i, i]`` [m/Pa], shape (n,), all equal."""
@@ -324,7 +376,74 @@ class PeriodicHalfSpace(GridOperator):
         c_ii = self.spectrum.sum() + self.spectrum[:, 1 : (nx + 1) // 2].sum()
         return np.full(nx * ny, c_ii / (nx * ny))
 
-    def _apply(self, fields: np.ndarray) -> np.ndarray:
-        """Displacements [m] of pressure fields [Pa] of shape (m, ny, nx) (circulant ``C``)."""
+
+
+@dataclass(frozen=True)
+class SpectralHalfSpace(_Circulant):
+    """Periodic half-space with the spectral compliance ``2 / (E* |q|)`` [m/Pa], by FFT.
+
+    Pressures and displacements are samples at the grid points of a periodic
+    ``Lx x Ly`` cell; ``C`` is circulant with eigenvalues ``2 / (E* |q|)``
+    (Johnson 1985, the half-space's response to a surface wave of
+    wavenumber ``|q|``), ``E* = E / (1 - nu^2)``, and zero for the mean
+    (``q = 0``): a uniform pressure produces no displacement, so the
+    approach is measured from the mean deflected plane and Eq 27 has a
+    bounded solution only for approaches below the mean initial separation
+    (as :class:`PeriodicHalfSpace` with ``mean_compliance = 0``). This is
+    the discrete problem of Tamaas (``basic_2d``), ContactMechanics
+    (``PeriodicFFTElasticHalfSpace``) and ASPHER (``backend="periodic"``);
+    unlike :class:`PeriodicHalfSpace` it does not integrate the pressure
+    over the elements, so its self-compliance is softer by a few percent.
+
+    Parameters
+    ----------
+    grid, size, E, nu, workers
+        As :class:`PeriodicHalfSpace`: grid points ``(nx, ny)``, periods
+        ``(Lx, Ly)`` [m], Young's modulus [Pa], Poisson's ratio [-], threads
+        of the FFTs (default 1).
+
+    Attributes
+    ----------
+    spectrum : ndarray, shape (ny, nx // 2 + 1)
+        Eigenvalues ``2 / (E* |q|)`` [m/Pa] on the ``rfft2`` grid, 0 at ``q = 0``.
+
+    It is an :class:`roughcontact.elasticity.protocol.InfluenceOperator`
+    (matrix-free) and a
+    :class:`roughcontact.elasticity.protocol.PreconditionedOperator`.
+
+    References
+    ----------
+    K. L. Johnson, Contact Mechanics (1985), Sec 13.2; L. Frerot, G. Anciaux,
+    V. Rey, S. Pham-Ba, J.-F. Molinari, J. Open Source Softw. 5 (2020) 2121.
+    """
+
+    grid: tuple[int, int]
+    size: tuple[float, float]
+    E: float
+    nu: float
+    workers: int = 1
+    spectrum: np.ndarray = field(init=False, repr=False, compare=False)
+    _product: CirculantConvolution = field(init=False, repr=False, compare=False)
+    _columns: ColumnTable = field(init=False, repr=False, compare=False)
+    mean_compliance = 0.0
+
+    def __post_init__(self):
+        E, nu = _check_material(self.E, self.nu)
+        nx, ny, lx, ly = _check_grid(self.grid, self.size)
+        object.__setattr__(self, "grid", (nx, ny))
+        object.__setattr__(self, "size", (lx, ly))
+        object.__setattr__(self, "E", E)
+        object.__setattr__(self, "nu", nu)
+        qx = 2.0 * np.pi * np.fft.rfftfreq(nx, lx / nx)
+        qy = 2.0 * np.pi * np.fft.fftfreq(ny, ly / ny)
+        q = np.hypot(qx[None, :], qy[:, None])
+        q[0, 0] = np.inf  # zero mode: no mean displacement
+        spectrum = 2.0 * (1.0 - nu**2) / (E * q)
+        spectrum.setflags(write=False)
+        object.__setattr__(self, "spectrum", spectrum)
+        self._set_spectrum(spectrum)
+
+    def diagonal(self) -> np.ndarray:
+        """Self-compliances ``C[i, i]`` [m/Pa] (the mean eigenvalue), shape (n,), all equal."""
         nx, ny = self.grid
-        return scipy.fft.irfft2(scipy.fft.rfft2(fields) * self.spectrum, s=(ny, nx))
+        return np.full(nx * ny, float(self._product.kernel()[0, 0]))

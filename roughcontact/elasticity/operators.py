@@ -50,12 +50,13 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.fft
+import scipy.sparse
 
 from roughcontact.elasticity.halfspace import _check_grid, _element_kernel
 from roughcontact.elasticity.hybrid import centre_interpolation, finite_body_correction
 from roughcontact.elasticity.influence import estimate_cost, unit_modulus_influence
 from roughcontact.elasticity.protocol import GridOperator
+from roughcontact.elasticity.transforms import DTYPES, ColumnTable, PaddedConvolution, q_stencil
 
 __all__ = [
     "COARSE_MAX",
@@ -85,6 +86,9 @@ COARSE_MAX = 64
 #: up to 64 x 64 its product (BLAS) is as fast as the FFT operator and its
 #: entries are the finite-element model's own (benchmarks/bench_operators.py).
 DENSE_MAX_ELEMENTS = 64 * 64
+#: Share of loaded coarse elements below which the correction's product uses only
+#: the rows of K they load.
+SPARSE_COARSE = 0.5
 
 
 def default_coarse_grid(grid, coarse_max: int | None = None) -> tuple[int, int]:
@@ -112,16 +116,6 @@ def coarsened_side(grid: int, coarsening: int = 2) -> int:
     return coarse
 
 
-def _padded_love_spectrum(nx: int, ny: int, dx: float, dy: float, nu: float) -> np.ndarray:
-    """rfft2 of the Love kernel (E = 1) laid out for a zero-padded (2ny, 2nx) convolution."""
-    kernel = _element_kernel(nx, ny, dx, dy, 1.0, nu)
-    full = np.zeros((2 * ny, 2 * nx))
-    full[:ny, :nx] = kernel
-    full[:ny, nx + 1:] = kernel[:, 1:][:, ::-1]  # offsets -(nx-1) .. -1
-    full[ny + 1:, :] = full[1:ny, :][::-1]  # offsets -(ny-1) .. -1
-    return scipy.fft.rfft2(full)
-
-
 @dataclass(frozen=True)
 class BlockOperator(GridOperator):
     """Matrix-free unit-modulus compliance ``E C`` [m] of the finite block.
@@ -144,6 +138,18 @@ class BlockOperator(GridOperator):
         grid (symmetric), or None for the half-space alone.
     coarse_grid : (int, int) or None
         Coarse contact elements ``(ncx, ncy)`` of ``correction``.
+    workers : int
+        Threads of the FFTs (``scipy.fft``), default 1.
+
+    Products: the Love part by the pruned zero-padded FFT of
+    :class:`roughcontact.elasticity.transforms.PaddedConvolution`, the
+    correction by the interpolations and the dense ``nc x nc`` product,
+    both in the dtype of the pressure (:meth:`apply`: float32 or float64).
+    The half-space alone (no correction) also sums kernel columns
+    (:meth:`add_columns`, ``column_budget`` 24); both offer the stencil of
+    Love's part as preconditioner (:meth:`preconditioner`) and a copy on
+    the grid coarser by 2 (:meth:`coarsened`, the same correction), so
+    they are :class:`roughcontact.elasticity.protocol.PreconditionedOperator`.
 
     It is an :class:`roughcontact.elasticity.protocol.InfluenceOperator`
     (matrix-free: ``matrix`` is None; it fixes no common row sum, so
@@ -155,9 +161,12 @@ class BlockOperator(GridOperator):
     nu: float
     correction: np.ndarray | None = field(default=None, repr=False, compare=False)
     coarse_grid: tuple[int, int] | None = None
-    _spectrum: np.ndarray = field(init=False, repr=False, compare=False)
+    workers: int = 1
+    _love: PaddedConvolution = field(init=False, repr=False, compare=False)
+    _columns: ColumnTable | None = field(init=False, repr=False, compare=False)
     _px: np.ndarray | None = field(init=False, repr=False, compare=False)
     _py: np.ndarray | None = field(init=False, repr=False, compare=False)
+    _coarse: dict = field(init=False, repr=False, compare=False)
     _diagonal: np.ndarray = field(init=False, repr=False, compare=False)
     mean_compliance = None
 
@@ -171,13 +180,16 @@ class BlockOperator(GridOperator):
         set_(self, "size", (lx, ly))
         set_(self, "nu", nu)
         dx, dy = lx / nx, ly / ny
-        set_(self, "_spectrum", _padded_love_spectrum(nx, ny, dx, dy, nu))
-        diagonal = np.full(nx * ny, _element_kernel(1, 1, dx, dy, 1.0, nu)[0, 0])
+        kernel = _element_kernel(nx, ny, dx, dy, 1.0, nu)
+        set_(self, "_love", PaddedConvolution(kernel, int(self.workers)))
+        diagonal = np.full(nx * ny, kernel[0, 0])
+        set_(self, "_coarse", {})
         if self.correction is None:
             if self.coarse_grid is not None:
                 raise ValueError("coarse_grid is given but correction is None")
             set_(self, "_px", None)
             set_(self, "_py", None)
+            set_(self, "_columns", ColumnTable.even(kernel))
         else:
             if self.coarse_grid is None:
                 raise ValueError("correction needs its coarse_grid (ncx, ncy)")
@@ -197,6 +209,13 @@ class BlockOperator(GridOperator):
             py = centre_interpolation(ny, ncy)
             set_(self, "_px", px)
             set_(self, "_py", py)
+            set_(self, "_columns", None)
+            # the correction's product in the dtype of the pressure; the
+            # interpolations have two taps per row: sparse
+            self._coarse.update({t: (scipy.sparse.csr_array(px.astype(t)),
+                                     scipy.sparse.csr_array(py.astype(t)),
+                                     correction.astype(t, copy=False))
+                                 for t in DTYPES})
             diagonal = diagonal + dx * dy * _interpolated_diagonal(correction, px, py)
         if not np.all(diagonal > 0):
             raise ValueError("operator has a non-positive self-compliance: the correction "
@@ -213,18 +232,52 @@ class BlockOperator(GridOperator):
         """Self-compliances ``E C_ii`` [m], shape (n,)."""
         return self._diagonal
 
+    @property
+    def column_budget(self) -> int:
+        """Changed elements summed by kernel columns rather than a product (0: hybrid)."""
+        return 24 if self.correction is None else 0
+
     def _apply(self, fields: np.ndarray) -> np.ndarray:
-        """``E C p`` [m * Pa / Pa = m] of pressure fields of shape (m, ny, nx)."""
-        nx, ny = self.grid
-        m = fields.shape[0]
-        u = scipy.fft.irfft2(scipy.fft.rfft2(fields, s=(2 * ny, 2 * nx)) * self._spectrum,
-                             s=(2 * ny, 2 * nx))[:, :ny, :nx]
+        """``E C p`` [m * Pa / Pa = m] of pressure fields of shape (m, ny, nx), in their
+        dtype (float32 or float64)."""
+        u = self._love(fields)
         if self.correction is not None:
-            ncx, ncy = self.coarse_grid
-            coarse = (self._py.T @ fields @ self._px).reshape(m, ncx * ncy)
-            coarse = (coarse @ self.correction).reshape(m, ncy, ncx)  # K symmetric
-            u = u + self.element_area * (self._py @ coarse @ self._px.T)
+            u = u + u.dtype.type(self.element_area) * self._correct(fields.astype(u.dtype))
         return u
+
+    def _correct(self, fields: np.ndarray) -> np.ndarray:
+        """``W K W^T p`` [m/m^2 * ...] of fields (m, ny, nx): the interpolations by their
+        two taps per row (sparse), ``K`` only on the coarse elements the fields load
+        (a contact set loads few of them)."""
+        nx, ny = self.grid
+        ncx, ncy = self.coarse_grid
+        px, py, correction = self._coarse[fields.dtype]
+        m = fields.shape[0]
+        rows = (fields.reshape(m * ny, nx) @ px).reshape(m, ny, ncx)  # p W_x
+        coarse = (py.T @ rows.transpose(1, 0, 2).reshape(ny, m * ncx))  # W_y^T p W_x
+        coarse = coarse.reshape(ncy, m, ncx).transpose(1, 0, 2).reshape(m, ncx * ncy)
+        loaded = np.flatnonzero(coarse.any(axis=0))
+        if loaded.size < SPARSE_COARSE * coarse.shape[1]:
+            coarse = coarse[:, loaded] @ correction[loaded]  # K symmetric: rows = columns
+        else:
+            coarse = coarse @ correction
+        back = py @ coarse.reshape(m, ncy, ncx).transpose(1, 0, 2).reshape(ncy, m * ncx)
+        back = back.reshape(ny, m, ncx).transpose(1, 0, 2).reshape(m * ny, ncx)
+        return (back @ px.T).reshape(m, ny, nx)
+
+    def preconditioner(self):
+        """The 13-tap stencil of Love's part, ``E* |q| / 2`` with ``E* = 1 / (1 - nu^2)``
+        (:func:`roughcontact.elasticity.transforms.q_stencil`, not periodic)."""
+        nx, ny = self.grid
+        spacing = (self.size[0] / nx, self.size[1] / ny)
+        return q_stencil(spacing, 1.0 / (1.0 - self.nu**2), periodic=False)
+
+    def coarsened(self) -> BlockOperator:
+        """The same body on the grid coarser by 2 per side, with the same correction."""
+        nx, ny = self.grid
+        if nx % 2 or ny % 2:
+            raise ValueError(f"grid {self.grid} cannot be halved")
+        return dataclasses.replace(self, grid=(nx // 2, ny // 2))
 
     def to_dense(self, max_elements: int = 6000) -> np.ndarray:
         """The (n, n) matrix, for small grids (checks and the exact solver)."""
@@ -235,9 +288,12 @@ class BlockOperator(GridOperator):
 
     def nbytes(self) -> int:
         """Memory held by the operator [bytes]."""
-        held = self._spectrum.nbytes + self._diagonal.nbytes
+        held = self._love.nbytes() + self._diagonal.nbytes
+        if self._columns is not None:
+            held += self._columns.nbytes()
         if self.correction is not None:
             held += self.correction.nbytes + self._px.nbytes + self._py.nbytes
+            held += self._coarse[DTYPES[0]][2].nbytes
         return int(held)
 
 
@@ -260,9 +316,10 @@ def _interpolated_diagonal(correction, px, py) -> np.ndarray:
     return np.einsum("is,it,ist->i", w, w, values)
 
 
-def halfspace_operator(grid, size, nu: float) -> BlockOperator:
-    """Love's half-space at the contact grid, matrix-free (no finite body)."""
-    return BlockOperator(grid=tuple(grid), size=tuple(size), nu=nu)
+def halfspace_operator(grid, size, nu: float, *, workers: int = 1) -> BlockOperator:
+    """Love's half-space at the contact grid (E = 1), matrix-free (no finite body);
+    ``workers`` threads run its FFTs."""
+    return BlockOperator(grid=tuple(grid), size=tuple(size), nu=nu, workers=workers)
 
 
 def block_operator(geom, *, coarse_grid=None, solver: str = "auto",

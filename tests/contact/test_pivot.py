@@ -11,7 +11,7 @@ from test_solver import nnls_reference  # scipy NNLS on the Cholesky factor of C
 
 from roughcontact.contact import resolve_method, solve, solve_many, sweep, tangent_stiffness
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
-from roughcontact.elasticity.protocol import DenseInfluence
+from roughcontact.elasticity.protocol import DenseInfluence, MatrixFreeInfluence
 
 E, NU = 2.1e11, 0.3
 
@@ -85,18 +85,21 @@ def test_ill_conditioned_matrix_is_solved_to_rounding():
     assert result.converged.all() and result.residual.max() < 1e-10
 
 
-def test_auto_picks_pivot_for_dense_and_cg_for_matrix_free(problem):
+def test_auto_picks_pivot_for_dense_pcg_for_grid_operators_cg_for_matrix_free(problem):
     C, gaps, approaches, area = problem
     assert resolve_method("auto", C) == "pivot"
     assert resolve_method("auto", DenseInfluence(C, area)) == "pivot"
     periodic = PeriodicHalfSpace((16, 16), (1e-3, 1e-3), E, NU)
-    assert resolve_method("auto", periodic) == "cg"
+    assert resolve_method("auto", periodic) == "pcg"
+    assert resolve_method("auto", periodic, 1e6) == "cg"  # capped
+    assert resolve_method("auto", MatrixFreeInfluence(DenseInfluence(C, area), area,
+                                                      np.diag(C).copy())) == "cg"
     assert resolve_method("steepest", C) == "steepest"
     # "auto" is the default of the entry points: the study's solver
     assert solve(C, gaps[0], approaches[0, 2], element_area=area).method == "pivot"
     assert sweep(C, gaps[:1], approaches[:1, :2], element_area=area).method == "pivot"
     ramp = np.linspace(0.0, 1e-6, 256).reshape(16, 16)
-    assert solve(periodic, ramp, 1e-7).method == "cg"
+    assert solve(periodic, ramp, 1e-7).method == "pcg"
 
 
 def test_single_solves_and_the_sweep_share_the_pivoting(problem):

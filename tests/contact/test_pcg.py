@@ -1,0 +1,152 @@
+"""The preconditioned constrained CG (roughcontact.contact.pcg) against independent solves.
+
+References: block principal pivoting on the same operator's dense matrix,
+scipy's NNLS on the Cholesky-transformed problem (min 1/2 |L^T p - L^-1 b|^2
+over p >= 0, C = L L^T, b = d - f, the same minimizer as Eq 27) and the
+Hertz closed form.
+"""
+
+import logging
+
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.optimize
+
+from roughcontact import contact
+from roughcontact.contact import pcg
+from roughcontact.contact.nondim import dimensionless_operator
+from roughcontact.elasticity import operators
+from roughcontact.elasticity.halfspace import PeriodicHalfSpace, SpectralHalfSpace
+
+E, NU = 1.0e9, 0.3
+E_STAR = E / (1.0 - NU**2)
+SIZE = (1.2e-3, 1.0e-3)
+
+
+def rough_gap(shape, seed, sigma=1e-6):
+    """A smooth random surface's initial separation ``max z - z`` [m]."""
+    ny, nx = shape
+    rng = np.random.default_rng(seed)
+    q = np.hypot(*np.meshgrid(np.fft.rfftfreq(nx) * nx, np.fft.fftfreq(ny) * ny))
+    z = np.fft.irfft2(np.fft.rfft2(rng.standard_normal(shape)) / (1.0 + q**2), s=shape)
+    z *= sigma / z.std()
+    return z.max() - z
+
+
+def nnls_reference(C, gap0, approach):
+    """Independent solution of Eq 27 by NNLS on the Cholesky factor of C."""
+    factor = np.linalg.cholesky(C)
+    target = scipy.linalg.solve_triangular(factor, approach - np.ravel(gap0), lower=True)
+    pressure, _ = scipy.optimize.nnls(factor.T, target, maxiter=50 * C.shape[0])
+    return pressure
+
+
+def hybrid(grid=(24, 20)):
+    """A block operator with a smooth symmetric positive correction."""
+    rng = np.random.default_rng(0)
+    a = rng.random((30, 30))
+    return operators.BlockOperator(grid=grid, size=SIZE, nu=NU, correction=(a + a.T) * 1e-3,
+                                   coarse_grid=(6, 5))
+
+
+OPERATORS = {
+    "halfspace": lambda: operators.halfspace_operator((24, 20), SIZE, NU),
+    "hybrid": hybrid,
+    "periodic": lambda: PeriodicHalfSpace((24, 20), SIZE, E, NU, images=1),
+    "spectral": lambda: SpectralHalfSpace((24, 20), SIZE, E, NU),
+}
+
+
+@pytest.mark.parametrize("precision", ["mixed", "double"])
+@pytest.mark.parametrize("name", list(OPERATORS))
+def test_pcg_equals_pivoting_on_the_dense_matrix(name, precision):
+    op = OPERATORS[name]()
+    dense = op.matvec(np.eye(op.shape[0]))
+    gap = rough_gap((20, 24), seed=3)
+    for fraction in (0.1, 0.3, 0.45):  # approaches below the mean gap (periodic operators)
+        d = fraction * gap.mean() * 2.0
+        ours = contact.solve(op, gap, d, method="pcg", tol=1e-10, precision=precision)
+        reference = contact.solve(dense, gap, d, method="pivot", tol=1e-13,
+                                  element_area=op.element_area)
+        assert ours.converged and ours.method == "pcg" and ours.residual <= 1e-10
+        assert 0.01 < reference.real_area_fraction < 0.9
+        np.testing.assert_array_equal(ours.contact_set, reference.contact_set)
+        assert np.abs(ours.pressure - reference.pressure).max() <= 1e-7 * reference.max_pressure
+        assert ours.approach == d
+
+
+def test_pcg_equals_scipy_nnls():
+    op = operators.halfspace_operator((16, 14), SIZE, NU)
+    dense = op.matvec(np.eye(op.shape[0]))
+    gap = rough_gap((14, 16), seed=5)
+    d = 0.8 * gap.mean()
+    ours = contact.solve(op, gap, d, method="pcg", tol=1e-11, precision="mixed")
+    reference = nnls_reference(dense, gap, d).reshape(gap.shape)
+    np.testing.assert_array_equal(ours.pressure > 0, reference > 0)
+    assert np.abs(ours.pressure - reference).max() <= 1e-7 * reference.max()
+
+
+def test_pcg_hertz_on_a_fine_halfspace_grid():
+    """Rigid sphere on Love's half-space: contact radius, peak pressure and load of Hertz
+    at the approach d = a^2 / R (nested grids from 64^2 up to 256^2)."""
+    n, dx, radius = 256, 0.5e-6, 1e-2
+    a = 48 * dx
+    op = operators.halfspace_operator((n, n), (n * dx, n * dx), NU)  # E = 1 Pa
+    x = (np.arange(n) - n // 2 + 0.5) * dx
+    gap = (x[None, :] ** 2 + x[:, None] ** 2) / (2.0 * radius)
+    result = contact.solve(op, gap, a**2 / radius, tol=1e-9, precision="mixed")
+    assert result.method == "pcg" and result.converged
+    e_star = 1.0 / (1.0 - NU**2)
+    load = 4.0 / 3.0 * e_star * np.sqrt(radius) * (a**2 / radius) ** 1.5
+    area = np.count_nonzero(result.pressure) * dx * dx
+    assert np.sqrt(area / np.pi) == pytest.approx(a, rel=0.01)
+    assert result.load == pytest.approx(load, rel=0.01)
+    assert result.max_pressure == pytest.approx(3 * load / (2 * np.pi * a**2), rel=0.01)
+
+
+def test_pcg_reports_non_convergence(caplog):
+    op = operators.halfspace_operator((24, 20), SIZE, NU)
+    gap = rough_gap((20, 24), seed=4)
+    with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
+        result = contact.solve(op, gap, gap.mean(), method="pcg", tol=1e-12, max_iter=2)
+    assert not result.converged and result.iterations == 2
+    assert result.residual > 1e-12
+    assert result.residual == pytest.approx(
+        contact.kkt_residual(op, gap, result.approach, result.pressure), rel=1e-6)
+    assert "did not converge" in caplog.text
+
+
+def test_auto_chooses_pcg_for_grid_operators_only():
+    half = operators.halfspace_operator((8, 8), SIZE, NU)
+    resolve = contact.resolve_method
+    assert resolve("auto", half) == "pcg"
+    assert resolve("auto", hybrid()) == "pcg"
+    assert resolve("auto", SpectralHalfSpace((8, 8), SIZE, E, NU)) == "pcg"
+    assert resolve("auto", dimensionless_operator(hybrid(), 1e-2)) == "pcg"
+    assert resolve("auto", half.to_dense()) == "pivot"
+    assert resolve("auto", half, 1e6) == "cg"  # capped: CG takes the cap
+    assert resolve("auto", half, np.inf) == "pcg"
+
+
+def test_pcg_refuses_a_cap_and_solves_a_dense_matrix_unpreconditioned():
+    half = operators.halfspace_operator((8, 8), SIZE, NU)
+    gap = rough_gap((8, 8), seed=1)
+    with pytest.raises(ValueError, match="method='cg'"):
+        contact.solve(half, gap, gap.mean(), method="pcg", hardness=1e-6)
+    dense = contact.solve(half.to_dense(), gap.ravel(), gap.mean(), method="pcg", tol=1e-11,
+                          element_area=half.element_area, precision="mixed")
+    reference = nnls_reference(half.to_dense(), gap, gap.mean())
+    assert dense.converged
+    np.testing.assert_array_equal(dense.pressure > 0, reference > 0)
+    assert np.abs(dense.pressure - reference).max() <= 1e-7 * reference.max()
+    # auto on a capped problem is CG, which honours the cap
+    capped = contact.solve(half, gap, gap.mean(), hardness=1e-6, tol=1e-9)
+    assert capped.method == "cg" and capped.converged and capped.max_pressure <= 1e-6
+
+
+def test_constrained_pcg_at_zero_load_touches_the_highest_point():
+    op = operators.halfspace_operator((8, 8), SIZE, NU)
+    gap = rough_gap((8, 8), seed=2)
+    solution = pcg.constrained_pcg(op, gap, mean_pressure=0.0)
+    assert not solution.pressure.any() and solution.approach == gap.min()
