@@ -10,8 +10,12 @@ On a fixed free set ``F`` (the elements with ``p > 0``; with a cap ``H``,
 It is the derivative of the load-approach curve between changes of the
 contact set, and it feeds the normalized stiffness ``k_P = (L / A_n) dF/dd``
 of Eq 33. :func:`free_set_cg` solves ``C_FF x = 1`` for many surfaces at
-once (the sweeps of :mod:`roughcontact.contact.sweeps`);
-:mod:`roughcontact.contact.pivot` takes ``x`` from its factor instead.
+once (the sweeps of :mod:`roughcontact.contact.sweeps`), preconditioned on
+a grid FFT operator by the 13-tap |q| stencil of its
+:meth:`~roughcontact.elasticity.protocol.PreconditionedOperator.preconditioner`
+restricted to ``F`` (symmetric positive definite: the stencil's symbol is
+positive); :mod:`roughcontact.contact.pivot` takes ``x`` from its factor
+instead.
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ from roughcontact.contact.checks import (
     check_max_iter,
     check_positive,
     check_pressure,
+    preconditioned_operator,
 )
 from roughcontact.contact.kkt import free_set
 from roughcontact.contact.products import Products
@@ -54,6 +59,8 @@ def free_set_cg(products: Products, free, start, tol: float, max_iter: int):
     surfaces = np.flatnonzero(~converged)
     xs, ms = x[surfaces], mask[surfaces]
     limit = (tol * target[surfaces]) ** 2
+    grid = preconditioned_operator(products.operator)
+    precondition = None if grid is None else _StencilOnSets(grid)
     iteration = 0
     while surfaces.size and iteration < max_iter:
         # Exact residual, then CG until its recursive estimate meets tol.
@@ -71,15 +78,40 @@ def free_set_cg(products: Products, free, start, tol: float, max_iter: int):
             if not surfaces.size:
                 break
         iteration = _inner_cg(products, xs, ms, residual, rr, limit, count, surfaces,
-                              iteration, max_iter)
+                              iteration, max_iter, precondition)
     x[surfaces] = xs
     return x, converged, count
 
 
-def _inner_cg(products, xs, ms, residual, rr, limit, count, surfaces, iteration, max_iter):
+class _StencilOnSets:
+    """``z = Pi_F S Pi_F r`` for residuals (m, n) on free sets ``F`` (masks), ``S`` the
+    operator's stencil (zero beyond the grid, or wrapped for a periodic operator)."""
+
+    def __init__(self, operator):
+        stencil = operator.preconditioner()
+        self.nx, self.ny = operator.grid
+        self.radius = int(np.abs(stencil.offsets).max())
+        self.taps = list(zip(stencil.offsets.tolist(), stencil.weights.tolist(), strict=True))
+        self.mode = "wrap" if stencil.periodic else "constant"
+
+    def __call__(self, residual, mask):
+        m, r, nx, ny = residual.shape[0], self.radius, self.nx, self.ny
+        padded = np.pad((residual * mask).reshape(m, ny, nx), ((0, 0), (r, r), (r, r)),
+                        mode=self.mode)
+        z = np.zeros((m, ny, nx))
+        for (jy, jx), weight in self.taps:
+            z += weight * padded[:, r + jy: r + jy + ny, r + jx: r + jx + nx]
+        return z.reshape(m, -1) * mask
+
+
+def _inner_cg(products, xs, ms, residual, rr, limit, count, surfaces, iteration, max_iter,
+              precondition=None):
     """CG from the exact ``residual`` until its recursive estimate meets ``limit``
-    (``xs`` and ``residual`` updated in place); returns the iteration count."""
-    direction = residual.copy()
+    (``xs`` and ``residual`` updated in place), preconditioned when ``precondition``
+    is given; returns the iteration count."""
+    z = residual if precondition is None else precondition(residual, ms)
+    rz = rr if precondition is None else np.einsum("ij,ij->i", residual, z)
+    direction = z.copy()
     inner = np.ones(surfaces.size, dtype=bool)
     while inner.any() and iteration < max_iter:
         iteration += 1
@@ -87,17 +119,22 @@ def _inner_cg(products, xs, ms, residual, rr, limit, count, surfaces, iteration,
         q *= ms
         count[surfaces] += inner
         curvature = np.einsum("ij,ij->i", direction, q)
-        alpha = np.divide(rr, curvature, out=np.zeros_like(rr),
+        alpha = np.divide(rz, curvature, out=np.zeros_like(rz),
                           where=inner & (curvature > 0.0))
         xs += alpha[:, None] * direction
         residual -= alpha[:, None] * q
         rr_new = np.einsum("ij,ij->i", residual, residual)
         inner &= (rr_new > limit) & (alpha > 0.0)
-        beta = np.divide(rr_new, rr, out=np.zeros_like(rr), where=rr > 0.0)
+        if precondition is None:
+            z, rz_new = residual, rr_new
+        else:
+            z = precondition(residual, ms)
+            rz_new = np.einsum("ij,ij->i", residual, z)
+        beta = np.divide(rz_new, rz, out=np.zeros_like(rz), where=rz > 0.0)
         direction *= beta[:, None]
-        direction += residual
+        direction += z
         direction[~inner] = 0.0
-        rr = rr_new
+        rz = rz_new
     return iteration
 
 

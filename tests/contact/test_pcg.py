@@ -150,3 +150,17 @@ def test_constrained_pcg_at_zero_load_touches_the_highest_point():
     gap = rough_gap((8, 8), seed=2)
     solution = pcg.constrained_pcg(op, gap, mean_pressure=0.0)
     assert not solution.pressure.any() and solution.approach == gap.min()
+
+
+@pytest.mark.parametrize("name", ["halfspace", "hybrid", "spectral"])
+def test_preconditioned_tangent_stiffness_equals_the_dense_solve(name):
+    """dF/dd = dA 1^T (C_AA)^-1 1: the stencil-preconditioned free-set CG of a grid operator
+    against a dense linear solve on the contact set."""
+    op = OPERATORS[name]()
+    gap = rough_gap((20, 24), seed=8)
+    result = contact.solve(op, gap, 0.6 * gap.mean(), tol=1e-10)
+    stiffness = contact.tangent_stiffness(op, result.pressure, tol=1e-12)
+    contact_set = np.flatnonzero(result.pressure.ravel() > 0)
+    dense = op.matvec(np.eye(op.shape[0]))[np.ix_(contact_set, contact_set)]
+    expected = op.element_area * np.linalg.solve(dense, np.ones(contact_set.size)).sum()
+    assert stiffness == pytest.approx(expected, rel=1e-9)
