@@ -246,6 +246,15 @@ def plot_by_mesh(table, validity, quantity: str, *, y_scale: float, ylabel: str,
     return fig
 
 
+def _draw_cells(ax, table, quantity: str, *, y_scale: float, label: str) -> None:
+    """One curve with its band per cell of ``table`` (:func:`plot_band`), labelled
+    ``label.format(**row)`` with the cell's first row; log P axis and grid."""
+    for _, cell in table.groupby("cell", sort=True):
+        plot_band(ax, cell, quantity, y_scale=y_scale, label=label.format(**cell.iloc[0]))
+    ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]")
+    ax.grid(True, which="both", alpha=0.3)
+
+
 def plot_cells(table, quantity: str, *, y_scale: float, ylabel: str, title: str, label: str,
                legend_fontsize: float | None = None):
     """``quantity`` of every cell of ``table`` against nominal pressure [MPa], one panel.
@@ -257,13 +266,63 @@ def plot_cells(table, quantity: str, *, y_scale: float, ylabel: str, title: str,
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(5.4, 4.2))
-    for _, cell in table.groupby("cell", sort=True):
-        plot_band(ax, cell, quantity, y_scale=y_scale, label=label.format(**cell.iloc[0]))
-    ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]", ylabel=ylabel, title=title)
-    ax.grid(True, which="both", alpha=0.3)
+    _draw_cells(ax, table, quantity, y_scale=y_scale, label=label)
+    ax.set(ylabel=ylabel, title=title)
     ax.legend(fontsize=legend_fontsize)
     fig.tight_layout()
     return fig
+
+
+def plot_cells_panels(table, panels, *, label: str, title: str):
+    """Several quantities of every cell of ``table`` against nominal pressure [MPa], one
+    panel each, side by side (as :func:`plot_cells`).
+
+    ``panels`` holds ``(quantity, y_scale, ylabel, log_y)`` per panel; the
+    legend is on the first panel, ``title`` above all. Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels), 4.2), squeeze=False)
+    for ax, (quantity, y_scale, ylabel, log_y) in zip(axes[0], panels, strict=True):
+        _draw_cells(ax, table, quantity, y_scale=y_scale, label=label)
+        ax.set(ylabel=ylabel, yscale="log" if log_y else "linear")
+    axes[0][0].legend(fontsize=8)
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def cells_at_pressures(table, quantities, pressures, *, by: str):
+    """Mean and 95 % half width of each quantity for every cell of an aggregate table,
+    at the nominal-pressure levels nearest ``pressures`` [Pa], side by side.
+
+    One row per (quantity, level), columns ``<by>=<value> mean`` and ``... half
+    width`` per cell (``by`` a column of the table naming its cells, e.g.
+    ``b_mm``), then ``spread``, the largest minus the smallest mean relative
+    to their average, and ``separated``: whether the two extremes differ by
+    more than the 95 % half width of their difference, sqrt(h1^2 + h2^2)
+    (independent cells). Values in the table's units (SI).
+    """
+    import numpy as np
+    import pandas as pd
+
+    levels = np.unique(table["nominal_pressure"])
+    rows = []
+    for quantity in quantities:
+        for target in pressures:
+            level = levels[np.argmin(np.abs(np.log(levels / target)))]
+            at = table[table["nominal_pressure"] == level].sort_values(by)
+            mean = at[f"{quantity}_mean"].to_numpy()
+            half = at[f"{quantity}_half_width"].to_numpy()
+            row = {"quantity": quantity, "nominal_pressure": level}
+            for value, m, h in zip(at[by], mean, half, strict=True):
+                row |= {f"{by}={value:g} mean": m, f"{by}={value:g} half width": h}
+            low, high = np.argmin(mean), np.argmax(mean)
+            row["spread"] = (mean[high] - mean[low]) / np.mean(mean)
+            row["separated"] = bool(mean[high] - mean[low]
+                                    > np.hypot(half[high], half[low]))
+            rows.append(row)
+    return pd.DataFrame(rows)
 
 
 def describe_study(table) -> str:

@@ -39,9 +39,10 @@ SURFACE_FIGURES = ("fig03", "fig04", "fig05")
 #: Figures that need no contact solve (Fig 1 and 2 need no surfaces either).
 SURFACE_ONLY_FIGURES = ("fig01", "fig02", "fig03", "fig04", "fig05")
 #: Figures drawn from contact results, and the source of their cells ("measured": a
-#: measured surface against its synthetic twin, usually ``from:`` a sweep).
+#: measured surface against its synthetic twin, usually ``from:`` a sweep;
+#: "fig11_resolved": Fig 11 on a grid that resolves the ACF, config/fig11_resolved.yaml).
 CONTACT_FIGURES = ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu",
-                   "hardness", "measured")
+                   "hardness", "measured", "fig11_resolved")
 
 
 @dataclasses.dataclass(frozen=True)

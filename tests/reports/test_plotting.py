@@ -10,11 +10,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from roughcontact.reports.plotting import (  # noqa: E402
+    cells_at_pressures,
     describe_study,
     draw_surfaces,
     draw_table,
     plot_by_mesh,
     plot_cells,
+    plot_cells_panels,
     save_table,
     surface_moments,
 )
@@ -122,6 +124,51 @@ def test_plot_cells_labels_each_cell_from_its_row():
         "Sk 0, $b$ = 0.5 mm", "Sk -0.8, $b$ = 0.5 mm"]
     assert ax.get_legend().get_texts()[0].get_fontsize() == 8
     plt.close(fig)
+
+
+def b_table() -> pd.DataFrame:
+    """Three correlation lengths at three levels: k_P and real area with half widths."""
+    rows = []
+    for cell, b in enumerate((2.0, 0.5, 1.0)):
+        for P in (1e5, 1e6, 5e6):
+            rows.append({"cell": cell, "b_mm": b, "nominal_pressure": P, "surfaces": 4,
+                         "normalized_stiffness_mean": 3e8 + 1e7 * b,
+                         "normalized_stiffness_half_width": 4e6,
+                         "normalized_stiffness_count": 4,
+                         "real_area_fraction_mean": 0.01 * b,
+                         "real_area_fraction_half_width": 1e-3,
+                         "real_area_fraction_count": 4})
+    return pd.DataFrame(rows)
+
+
+def test_plot_cells_panels_draws_each_quantity_with_a_curve_per_cell():
+    panels = [("normalized_stiffness", 1e-6, "$k_P$ [MPa]", False),
+              ("real_area_fraction", 100.0, "area [%]", True)]
+    fig = plot_cells_panels(b_table(), panels, label="$b$ = {b_mm:g} mm", title="Fig 11")
+    stiffness, area = fig.axes
+    assert (stiffness.get_ylabel(), area.get_ylabel()) == ("$k_P$ [MPa]", "area [%]")
+    assert stiffness.get_yscale() == "linear" and area.get_yscale() == "log"
+    assert [t.get_text() for t in stiffness.get_legend().get_texts()] == [
+        "$b$ = 2 mm", "$b$ = 0.5 mm", "$b$ = 1 mm"]
+    np.testing.assert_allclose(area.lines[1].get_ydata(), [0.5, 0.5, 0.5])
+    assert fig.get_suptitle() == "Fig 11"
+    plt.close(fig)
+
+
+def test_cells_at_pressures_reads_the_nearest_level_and_compares_the_extremes():
+    at = cells_at_pressures(b_table(), ["normalized_stiffness", "real_area_fraction"],
+                            [1.2e6, 4e6], by="b_mm").set_index(["quantity", "nominal_pressure"])
+    assert list(at.index.get_level_values(1)) == [1e6, 5e6, 1e6, 5e6]
+    row = at.loc[("normalized_stiffness", 1e6)]
+    assert [row[f"b_mm={b:g} mean"] for b in (0.5, 1.0, 2.0)] == [3.05e8, 3.1e8, 3.2e8]
+    # extremes 1.5e7 apart, half width of the difference sqrt(2) * 4e6 = 5.7e6
+    assert row["spread"] == pytest.approx(1.5e7 / np.mean([3.05e8, 3.1e8, 3.2e8]))
+    assert row["separated"]
+    area = at.loc[("real_area_fraction", 5e6)]
+    assert area["separated"] and area["spread"] == pytest.approx(0.015 / (0.035 / 3))
+    wide = b_table().assign(normalized_stiffness_half_width=1.1e7)  # sqrt(2) * 1.1e7 > 1.5e7
+    assert not cells_at_pressures(wide, ["normalized_stiffness"], [1e6],
+                                  by="b_mm")["separated"].iloc[0]
 
 
 def test_describe_study_names_every_cell_under_the_note():
