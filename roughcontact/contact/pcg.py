@@ -274,10 +274,11 @@ class _Iteration:
 
     def step(self) -> None:
         """One preconditioned CG step on ``F`` and the update of ``F`` (module docstring)."""
-        if self.rows.size >= 2:
-            trial, tau_join = self._descend()
-        else:  # (almost) nothing in contact: Jacobi activation of the penetrating elements
-            trial, tau_join = self.p_free, None
+        descent = self._descend() if self.rows.size >= 2 else None
+        if descent is None:  # nothing to descend on F: Jacobi activation of the penetrating
+            trial, tau_join = self.p_free, None  # elements (one element, or r = 0 on F)
+        else:
+            trial, tau_join = descent
         leaving = trial <= 0.0
         if leaving.any() or self.out_flat.size:
             self._change_set(trial, leaving, tau_join)
@@ -290,11 +291,17 @@ class _Iteration:
             self.u *= s
 
     def _descend(self):
-        """Direction, step length and the carried ``u``; the trial pressures on ``F``."""
+        """Direction, step length and the carried ``u``; the trial pressures on ``F``.
+
+        None when the direction vanishes: then only the free set can change.
+        """
         r_free = self.r_free
         z = self.stencil(self.rows, self.cols, r_free)
+        if not z.any():  # r is constant on F (its mean is set by the rescaling)
+            return None
         zr = _dot(z, r_free)
-        beta = max(0.0, _dot(z, r_free - self.r_prev) / self.zr_old) if self.conjugate else 0.0
+        conjugate = self.conjugate and self.zr_old > 0.0
+        beta = max(0.0, _dot(z, r_free - self.r_prev) / self.zr_old) if conjugate else 0.0
         t_free = z + beta * self.t_free if beta else z
         if beta:
             t_free -= t_free.mean()  # a carried direction must keep the mean mode
