@@ -1,7 +1,7 @@
 """Memory [MB] and wall time [min] every job asks a scheduler for.
 
 Estimated from the grid, the surface count, the mesh and the solver settings,
-scaled from runs on the reference machine (2 cores, see README). The measured
+scaled from runs on the reference machine (2 cores, see docs/). The measured
 numbers live in ``config/cost_model.yaml`` (each with what was measured); this
 module holds the formulas. A job that outlives its wall time is killed, so a
 time estimate is multiplied by the margin and by the attempt (``retries`` in
