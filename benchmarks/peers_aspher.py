@@ -81,6 +81,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_contact import NU, SIZE, E, gaussian_surfaces, initial_gaps, score  # noqa: E402
+from peers import alternate  # noqa: E402
 
 from roughcontact.contact import solve  # noqa: E402
 from roughcontact.elasticity.halfspace import SpectralHalfSpace  # noqa: E402
@@ -198,16 +199,17 @@ def bench_case(kind, grid, load, args, python, scratch) -> list[dict]:
         "aspher": lambda: run_aspher(kind, grid, gap0, size, args.threads, load, python, scratch),
     }
     names = [name for name in runners if name in args.runners]
-    times = {name: [] for name in names}
-    last = {}
-    for round_ in range(args.repeats):
-        shift = round_ % len(names)
-        for name in names[shift:] + names[:shift]:
+
+    def timed(name):
+        def run():
             out = runners[name]()
-            times[name].append((out["cpu"], out["wall"]))
-            last[name] = out
-            print(f"  {kind} {grid} P={load:.3g} round {round_} {name}: CPU {out['cpu']:.2f} s, "
+            print(f"  {kind} {grid} P={load:.3g} {name}: CPU {out['cpu']:.2f} s, "
                   f"wall {out['wall']:.2f} s, {out['iterations']} iterations", flush=True)
+            return (out["cpu"], out["wall"]), out
+        return run
+
+    times, outputs = alternate({name: timed(name) for name in names}, args.repeats)
+    last = {name: outputs[name][0] for name in names}
     base = "aspher" if "aspher" in names else names[0]
     cpu_base = min(c for c, _ in times[base])
     wall_base = min(w for _, w in times[base])
