@@ -43,7 +43,7 @@ YAML_BLOCKS = [(p, line, code) for p in PAGES for line, code in blocks(p, "yaml"
 
 
 def test_the_docs_have_examples():
-    assert len(PYTHON_PAGES) >= 2 and len(YAML_BLOCKS) >= 5
+    assert len(PYTHON_PAGES) >= 3 and len(YAML_BLOCKS) >= 5
 
 
 @pytest.mark.parametrize("page", PYTHON_PAGES, ids=_name)

@@ -86,14 +86,18 @@ def test_configuration_reference_shows_every_description(site):
 
 
 def test_link_checker_finds_broken_references(tmp_path):
-    """The checker itself: a missing page, a missing anchor and a missing image are
-    reported; an external link and a good anchor are not."""
+    """The checker itself: a missing page, a missing anchor, a missing image and an
+    unresolved cross-reference are reported; an external link, a good anchor and a
+    resolved cross-reference are not."""
     (tmp_path / "a.html").write_text(
         '<p id="here"></p><a href="b.html">b</a><a href="a.html#here">ok</a>'
         '<a href="a.html#gone">x</a><img src="_images/fig.png">'
-        '<a href="https://example.org/x.html">ext</a>')
+        '<a href="https://example.org/x.html">ext</a>'
+        '<a href="a.html#here"><code class="xref py"><span>pkg.found</span></code></a>'
+        '<code class="xref py py-func"><span>pkg.lost()</span></code>')
     problems = check_links.broken_references(tmp_path)
-    assert len(problems) == 3
+    assert len(problems) == 4
+    assert any("unresolved cross-reference pkg.lost()" in p for p in problems)
     assert any("b.html: no such file" in p for p in problems)
     assert any("'gone'" in p for p in problems)
     assert any("fig.png" in p for p in problems)
