@@ -180,7 +180,8 @@ def _branch_defaults(node: dict) -> dict[str, str]:
     out: dict[str, list[str]] = {}
     for branch in node.get("allOf", []):
         condition = branch.get("if", {})
-        required = [r for alt in condition.get("anyOf", [condition]) for r in alt.get("required", [])]
+        alternatives = condition.get("anyOf", [condition])
+        required = [r for alt in alternatives for r in alt.get("required", [])]
         for part, when in (("then", "with " + " or ".join(required)),
                            ("else", "without " + " or ".join(required))):
             for key, sub in branch.get(part, {}).get("properties", {}).items():

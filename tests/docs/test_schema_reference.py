@@ -5,7 +5,6 @@ import re
 
 import pytest
 import yaml
-
 from docs_helpers import SCHEMA, docs_module
 
 #: Parts of a schema that state conditions on keys declared elsewhere, not keys.
