@@ -12,7 +12,7 @@ from html.parser import HTMLParser
 
 import pytest
 import yaml
-from docs_helpers import DOCS, ROOT, SCHEMA, docs_module
+from docs_helpers import DOCS, ROOT, SCHEMA, description, docs_module, is_overlay, schema_properties
 
 pytest.importorskip("sphinx")
 pytest.importorskip("myst_parser")
@@ -59,24 +59,10 @@ def test_configuration_reference_shows_every_description(site):
     _, html = site
     parser = _Text()
     parser.feed((html / "reference" / "configuration.html").read_text(encoding="utf-8"))
-    text = " ".join(" ".join(parser.parts).split())
+    text = " ".join("".join(parser.parts).split())
     schema = yaml.safe_load(SCHEMA.read_text())
-    wanted = set()
-
-    def walk(node):
-        if isinstance(node, dict):
-            for key, value in node.items():
-                if key in ("if", "not"):
-                    continue
-                if key == "description" and isinstance(value, str):
-                    wanted.add(" ".join(value.replace("`", "").split()))
-                walk(value)
-        elif isinstance(node, list):
-            for item in node:
-                walk(item)
-
-    walk(schema["properties"])
-    walk(schema["definitions"])
+    wanted = {" ".join((description(schema, sub) or "").replace("`", "").split())
+              for _, _, sub in schema_properties(schema) if not is_overlay(sub)} - {""}
     missing = [d for d in wanted if d not in text]
     assert len(wanted) > 90
     assert not missing, "\n".join(missing)
