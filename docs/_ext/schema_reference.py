@@ -186,7 +186,7 @@ def _branch_defaults(node: dict) -> dict[str, str]:
                            ("else", "without " + " or ".join(required))):
             for key, sub in branch.get(part, {}).get("properties", {}).items():
                 if isinstance(sub, dict) and "default" in sub:
-                    out.setdefault(key, []).append(f"{flow(sub['default'])} ({when})")
+                    out.setdefault(key, []).append(f"``{flow(sub['default'])}`` ({when})")
     return {k: "; ".join(v) for k, v in out.items()}
 
 
@@ -210,7 +210,8 @@ def rows_of(schema: dict, node: dict, prefix: str) -> list[Row]:
     """Rows for every key under ``node``, nested objects expanded, shared definitions
     linked to their own section."""
     node = resolve(schema, node)
-    required = set(node.get("required", []))
+    required = set(node.get("required", [])).union(
+        *(branch.get("then", {}).get("required", []) for branch in node.get("allOf", [])))
     branch_defaults = _branch_defaults(node)
     rows = []
     for key, sub, case in _properties(schema, node):

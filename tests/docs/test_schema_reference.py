@@ -68,7 +68,8 @@ def test_reference_columns_of_known_keys(schema):
     assert rows[("<study>.sigma_um", "")].unit == "µm"
     assert rows[("<study>.pressure_MPa", "")].unit == "MPa"
     assert rows[("<measured_surface>.file", "")].default == "required"
-    assert rows[("<study>.b_mm", "")].default == "1.0 (without from or surface)"
+    assert rows[("<study>.b_mm", "")].default == "``1.0`` (without from or surface)"
+    assert rows[("<spectrum>.hurst", "kind: self-affine")].default == "required"
     assert rows[("<spectrum>.hurst", "kind: self-affine")].unit == "-"
     assert rows[("contact.method", "")].type.startswith("one of ``auto``")
     assert "a study" in rows[("figures.fig07", "")].type
