@@ -1,6 +1,7 @@
 # Two commands do all the set-up on a fresh machine:
 #   make run    create .venv if needed, install, run the study (config/config.yaml)
-#   make test   same environment; lint and the test suite
+#   make test   same environment; lint and the test suite (with the docs' examples and site)
+#   make docs   the documentation site, docs/_build/html (warnings are errors)
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -11,7 +12,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 export MKL_NUM_THREADS ?= 1
 
-.PHONY: run test test-cluster lint bench clean-results
+.PHONY: run test test-cluster lint bench docs docs-check clean-results
 
 $(BIN)/python:
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || \
@@ -21,7 +22,7 @@ $(BIN)/python:
 $(STAMP): $(BIN)/python pyproject.toml requirements.lock
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check --upgrade pip
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check \
-		--constraint requirements.lock --editable '.[test]'
+		--constraint requirements.lock --editable '.[test,docs]'
 	@touch $(STAMP)
 
 run: $(STAMP)
@@ -35,6 +36,15 @@ lint: $(STAMP)
 
 test: lint
 	$(BIN)/pytest -q
+
+# The documentation site (Sphinx): every warning is an error. docs-check also checks
+# that every internal link, anchor, image and API cross-reference of the built site
+# resolves (tests/docs/test_site.py runs the same build and check in make test).
+docs: $(STAMP)
+	$(BIN)/sphinx-build -W --keep-going -q -b html docs docs/_build/html
+
+docs-check: docs
+	$(BIN)/python docs/check_links.py docs/_build/html
 
 # profiles/slurm against a real Slurm: a throw-away one-node cluster (root; installs
 # slurm-wlm and munge with apt-get if missing) runs Fig 14 of config/quick.yaml.

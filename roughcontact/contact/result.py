@@ -93,7 +93,7 @@ class SweepResult:
     """Force-deflection sweep of m surfaces over k approaches.
 
     Every array has shape (m, k): surface by approach step, except
-    ``pressure`` (m, k, *surface shape), present only when fields were asked
+    ``pressure`` ``(m, k, *surface shape)``, present only when fields were asked
     for.
 
     Attributes
@@ -248,7 +248,7 @@ class SweepTable:
     """The (m, k) columns of a :class:`SweepResult` being filled step by step (mutable).
 
     ``columns`` holds every array field of the result by name; ``fields``
-    the pressure fields (m, k, *shape) or None; ``ranks`` the profile ranks
+    the pressure fields ``(m, k, *shape)`` or None; ``ranks`` the profile ranks
     or None.
     """
 

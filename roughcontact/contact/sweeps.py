@@ -177,7 +177,7 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
         to the stiffness CG. With ``hardness`` the tangent and the
         extrapolation hold the saturated elements (``p = H``) fixed.
     return_fields : bool
-        Keep the pressure fields (m, k, *surface shape) [Pa].
+        Keep the pressure fields ``(m, k, *surface shape)`` [Pa].
     stiffness : bool
         Compute ``contact_stiffness`` (otherwise NaN).
     stiffness_tol : float

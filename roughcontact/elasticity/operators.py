@@ -141,6 +141,8 @@ class BlockOperator(GridOperator):
     workers : int
         Threads of the FFTs (``scipy.fft``), default 1.
 
+    Notes
+    -----
     Products: the Love part by the pruned zero-padded FFT of
     :class:`roughcontact.elasticity.transforms.PaddedConvolution`, the
     correction by the interpolations and the dense ``nc x nc`` product,

@@ -100,6 +100,8 @@ class SurfaceSpec:
         positive. Stored as a tuple of float pairs, so the spec stays
         hashable (:func:`check_psd_table`).
 
+    Notes
+    -----
     For ``"self-affine"`` and ``"psd"``, ``corr_length`` may be left out
     (None): it is then set along both axes to the longest wavelength of the
     spectrum's band, beyond which the PSD is flat and heights decorrelate: the
