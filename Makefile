@@ -34,8 +34,9 @@ lint: $(STAMP)
 	$(BIN)/lint-imports --no-cache
 	$(BIN)/snakefmt --check --compact-diff Snakefile rules/
 
+# both cores: one test file per worker, so a file's module fixtures (a study run) run once
 test: lint
-	$(BIN)/pytest -q
+	$(BIN)/pytest -q -n $(CORES) --dist loadfile
 
 # The documentation site (Sphinx): every warning is an error. docs-check also checks
 # that every internal link, anchor, image and API cross-reference of the built site
