@@ -1,0 +1,428 @@
+"""Certificates that an influence operator is symmetric positive definite (Eq 39).
+
+Eq 27 of Kumar et al. (2006), ``min 1/2 p.C p - p.(d - f)`` over ``p >= 0``,
+is a convex problem with one minimizer only when ``C`` is symmetric positive
+definite. On an indefinite ``C`` a solver can still meet its tolerance at a
+point that satisfies the KKT conditions (Eq 19-22): the iterative methods see
+the curvature of ``C`` only along their own search directions and block
+principal pivoting only on its contact sets, so ``converged=True`` proves
+nothing about ``C``. The operator is therefore certified once, where it is
+built or loaded (:func:`certify`), and the :class:`Certificate` is kept on it
+(attribute ``spd_certificate``), so that later solves with the same operator
+do not pay again:
+
+- a dense matrix (``matrix``) of at most :data:`CHOLESKY_MAX_ELEMENTS`
+  elements: symmetric to ``max|C - C^T| <= SYMMETRY_RTOL max|C|`` and its
+  Cholesky factorization exists (LAPACK ``dpotrf``, n^3 / 3 flops and one
+  copy of the matrix: 0.5-1 s at 60 x 60 on one core). That is a proof, to
+  rounding. A larger dense matrix is certified like a matrix-free operator.
+- a circulant operator (``spectrum``: the periodic half-spaces of
+  :mod:`roughcontact.elasticity.halfspace`): its spectrum *is* its
+  eigenvalues, so the certificate is exact. With ``mean_compliance = 0`` the
+  zero mode (uniform pressure, no mean displacement) is left out: the contact
+  solver limits the approach for it
+  (:func:`roughcontact.contact.checks.check_bounded`).
+- any other operator: an estimate by :data:`LANCZOS_STEPS` Lanczos steps
+  from a fixed random start. On a grid (``grid``) the steps run on
+  ``R C R``, ``R`` the circulant with the symbol ``|q|^(1/2)`` (the square
+  root of the half-space's inverse, which preconditions
+  :mod:`roughcontact.contact.pcg`): by Sylvester's law of inertia ``R C R``
+  has as many negative eigenvalues as ``C``, and its spectrum is compact
+  (extreme eigenvalues within a factor of about 10 at 64 x 64 and 256 x 256
+  for Love's half-space, against about 100 and 400 for ``C``), so a few
+  steps single out a negative eigenvalue that plain Lanczos on ``C`` would
+  have to resolve from the cluster of its smallest eigenvalues (60 steps at
+  256 x 256). Without a grid the steps run on ``C`` itself
+  (:data:`PLAIN_LANCZOS_STEPS`). The smallest Ritz value bounds the
+  smallest eigenvalue from above: a negative one proves the operator
+  indefinite, a positive one is an estimate, not a proof. Symmetry is
+  checked on two random vectors (``x.C y = y.C x``). With
+  ``mean_compliance = 0`` the steps run on the complement of the uniform
+  pressure, as for a circulant.
+
+An operator that fails is refused with
+:class:`roughcontact.errors.IndefiniteOperator`, which names it and gives
+estimates of its smallest and largest eigenvalues.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.fft
+import scipy.linalg
+from scipy.linalg import lapack
+
+from roughcontact.errors import IndefiniteOperator
+
+__all__ = [
+    "CHOLESKY_MAX_ELEMENTS",
+    "DEFINITE_RTOL",
+    "LANCZOS_STEPS",
+    "PLAIN_LANCZOS_STEPS",
+    "SYMMETRY_RTOL",
+    "Certificate",
+    "asymmetry",
+    "carry",
+    "certificate_of",
+    "certify",
+    "check_symmetric",
+]
+
+#: Largest dense matrix (elements) certified by its Cholesky factorization;
+#: the study's dense matrices go up to 64 x 64 (``operators.DENSE_MAX_ELEMENTS``).
+CHOLESKY_MAX_ELEMENTS = 64 * 64
+#: Lanczos steps on ``R C R`` for an operator on a grid.
+LANCZOS_STEPS = 20
+#: Lanczos steps on ``C`` for an operator without a grid.
+PLAIN_LANCZOS_STEPS = 60
+#: Relative asymmetry max|C - C^T| / max|C| accepted for a dense matrix, and
+#: |x.C y - y.C x| / (|x| |C y| + |y| |C x|) for a matrix-free operator.
+SYMMETRY_RTOL = 1e-8
+#: An operator whose smallest eigenvalue (estimate) is at most this share of its
+#: largest is refused: negative, or zero to rounding.
+DEFINITE_RTOL = 1e-12
+#: Dense matrices up to this many elements get their exact extreme eigenvalues
+#: in a refusal (``eigvalsh``, under a second at 1024); larger ones an estimate.
+EXACT_EIGENVALUES_MAX = 1024
+#: The attribute that holds an operator's certificate.
+ATTRIBUTE = "spd_certificate"
+#: The seed of the random start vectors, so that a certificate is reproducible.
+SEED = 20060101
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """How an operator was found symmetric positive definite.
+
+    Attributes
+    ----------
+    method : str
+        ``"cholesky"``, ``"spectrum"``, ``"lanczos"`` or ``"preconditioned lanczos"``.
+    smallest, largest : float
+        Estimates of the extreme eigenvalues [unit of C]: for ``"cholesky"``
+        the smallest squared pivot (at least the smallest eigenvalue) and the
+        largest diagonal entry (at most the largest); for ``"spectrum"`` the
+        eigenvalues themselves (the zero mode of ``mean_compliance = 0``
+        left out); for ``"lanczos"`` the extreme Ritz values (within the
+        spectrum); for ``"preconditioned lanczos"`` the extreme Ritz values of
+        ``R C R``, which has the signs of ``C``'s eigenvalues, not their sizes.
+    steps : int
+        Lanczos steps taken (0 for the exact methods).
+    """
+
+    method: str
+    smallest: float
+    largest: float
+    steps: int = 0
+
+    def scaled(self, factor: float) -> Certificate:
+        """The certificate of ``factor * C`` (``factor > 0``), e.g. ``C = E C / E``."""
+        return dataclasses.replace(self, smallest=self.smallest * factor,
+                                   largest=self.largest * factor)
+
+
+def certificate_of(operator) -> Certificate | None:
+    """The certificate an operator (or the object it wraps, ``base``) carries, or None."""
+    for holder in (operator, getattr(operator, "base", None)):
+        found = getattr(holder, ATTRIBUTE, None) if holder is not None else None
+        if isinstance(found, Certificate):
+            return found
+    return None
+
+
+def _remember(operator, found: Certificate) -> None:
+    """Keep ``found`` on the operator and on the object it wraps (``base``), which
+    outlives a wrapper made per solve; objects that refuse attributes keep nothing."""
+    for holder in (operator, getattr(operator, "base", None)):
+        if holder is None or isinstance(holder, np.ndarray):
+            continue
+        try:
+            object.__setattr__(holder, ATTRIBUTE, found)
+        except (AttributeError, TypeError):
+            pass
+
+
+def carry(source, target, factor: float = 1.0) -> None:
+    """Give ``target`` the certificate of ``source`` times ``factor`` (> 0), if it has one:
+    ``target`` is ``factor`` times the same operator (a view, a rescaled copy)."""
+    found = certificate_of(source)
+    if found is not None:
+        _remember(target, found if factor == 1.0 else found.scaled(factor))
+
+
+def certify(operator, *, name: str = "the influence operator", unit: str = "m/Pa",
+            advice: str | None = None) -> Certificate:
+    """Certify ``operator`` symmetric positive definite, once; refuse it otherwise.
+
+    Parameters
+    ----------
+    operator : ndarray (n, n) or operator object
+        A dense symmetric matrix, or an object with ``shape`` and ``matvec``
+        (optional ``matrix``, ``spectrum``, ``grid``, ``size``,
+        ``mean_compliance``), e.g. an
+        :class:`~roughcontact.elasticity.protocol.InfluenceOperator`.
+    name : str
+        What the messages call the operator (e.g. the file it was read from).
+    unit : str
+        Unit of its entries, for the messages (m/Pa for C, m for E * C).
+    advice : str, optional
+        What to do about a refused operator; default: check how it was built.
+
+    Returns
+    -------
+    Certificate
+        Kept on the operator (not on a plain ndarray), and returned at once
+        when it is certified again.
+
+    Raises
+    ------
+    IndefiniteOperator
+        When the operator has a negative (or zero) eigenvalue, with its
+        estimates of the smallest and largest eigenvalues.
+    ValueError
+        When it is not symmetric.
+    """
+    found = certificate_of(operator)
+    if found is not None:
+        return found
+    found = _measure(operator, name, unit, advice)
+    _remember(operator, found)
+    return found
+
+
+# ---------------------------------------------------------------------------
+# The three ways
+
+
+def _measure(operator, name: str, unit: str, advice: str | None) -> Certificate:
+    matrix = operator if isinstance(operator, np.ndarray) else getattr(operator, "matrix", None)
+    if matrix is not None:
+        matrix = np.asarray(matrix, dtype=float)
+        check_symmetric(matrix, name)
+        if matrix.shape[0] <= CHOLESKY_MAX_ELEMENTS:
+            return _cholesky(matrix, operator, name, unit, advice)
+    spectrum = _spectrum_without_zero_mode(operator)
+    if spectrum is not None:
+        found = Certificate("spectrum", float(spectrum.min()), float(spectrum.max()))
+        if not found.smallest > DEFINITE_RTOL * found.largest:
+            _refuse(name, found.smallest, found.largest, unit, "its spectrum", advice)
+        return found
+    return _lanczos_certificate(_products(operator, matrix), name, unit, advice)
+
+
+def check_symmetric(matrix: np.ndarray, name: str = "the influence operator") -> None:
+    """Refuse a dense matrix with ``max|C - C^T| > SYMMETRY_RTOL max|C|``, naming it."""
+    scale = float(np.abs(matrix).max())
+    difference = asymmetry(matrix)
+    if difference > SYMMETRY_RTOL * scale:
+        raise ValueError(
+            f"operator must be symmetric (Eq 39): {name} has max|C - C^T| / max|C| = "
+            f"{difference / scale:.3g} > {SYMMETRY_RTOL:g}; symmetrize with (C + C.T) / 2")
+
+
+def asymmetry(matrix: np.ndarray, block: int = 128) -> float:
+    """``max|C - C^T|`` of a square matrix, compared in square tiles (cache-friendly:
+    about 5 matrix-vector products of time, against 60 for whole rows and columns)."""
+    size = matrix.shape[0]
+    worst = 0.0
+    for start in range(0, size, block):
+        rows = slice(start, start + block)
+        for other in range(start, size, block):
+            cols = slice(other, other + block)
+            worst = max(worst, float(np.abs(matrix[rows, cols] - matrix[cols, rows].T).max()))
+    return worst
+
+
+def _cholesky(matrix, operator, name, unit, advice) -> Certificate:
+    """Cholesky of the lower triangle (the transpose of a C-ordered matrix is Fortran
+    ordered, so LAPACK reads it in place and factors a copy)."""
+    factor, info = lapack.dpotrf(matrix.T, lower=False, clean=False, overwrite_a=False)
+    if info == 0:
+        pivots = np.diag(factor)
+        return Certificate("cholesky", float(pivots.min()) ** 2, float(np.diag(matrix).max()))
+    del factor
+    evidence = f"its Cholesky factorization fails at row {info}"
+    if info < 0 or matrix.shape[0] <= EXACT_EIGENVALUES_MAX:
+        values = scipy.linalg.eigvalsh(matrix)
+        smallest, largest = float(values[0]), float(values[-1])
+    else:
+        smallest, largest = _estimates(_products(operator, matrix))
+    _refuse(name, smallest, largest, unit, evidence, advice)
+
+
+def _spectrum_without_zero_mode(operator) -> np.ndarray | None:
+    """The eigenvalues of a circulant operator (its ``spectrum``), the zero mode left
+    out when ``mean_compliance`` is 0; None for any other operator."""
+    holder = getattr(operator, "base", operator)
+    spectrum = getattr(holder, "spectrum", None)
+    if spectrum is None:
+        return None
+    values = np.asarray(spectrum, dtype=float).ravel()
+    if getattr(holder, "mean_compliance", None) == 0.0 and values.size > 1:
+        values = values[1:]  # the rfft2 layout puts q = 0 first
+    return values
+
+
+# ---------------------------------------------------------------------------
+# Lanczos
+
+
+@dataclass(frozen=True)
+class _Products:
+    """The products Lanczos takes: ``C x`` and the congruence ``R`` (None: identity),
+    on the complement of the uniform pressure when ``zero_mean``."""
+
+    n: int
+    matvec: Callable[[np.ndarray], np.ndarray]
+    root: Callable[[np.ndarray], np.ndarray] | None
+    zero_mean: bool
+
+    def project(self, x: np.ndarray) -> np.ndarray:
+        return x - x.mean() if self.zero_mean else x
+
+    def operator(self, x: np.ndarray) -> np.ndarray:
+        """``C x``, projected."""
+        return self.project(np.asarray(self.matvec(x), dtype=float).reshape(-1))
+
+    def congruent(self, x: np.ndarray) -> np.ndarray:
+        """``R C R x`` (``C x`` without a grid), projected."""
+        if self.root is None:
+            return self.operator(x)
+        return self.project(self.root(self.operator(self.root(x))))
+
+
+def _products(operator, matrix) -> _Products:
+    n = int(operator.shape[0]) if matrix is None else matrix.shape[0]
+    matvec = (lambda x: matrix @ x) if matrix is not None else operator.matvec
+    grid = getattr(operator, "grid", None)
+    root = None
+    if grid is not None and int(grid[0]) * int(grid[1]) == n and n > 1:
+        root = _circulant_root(grid, getattr(operator, "size", None))
+    return _Products(n, matvec, root, getattr(operator, "mean_compliance", None) == 0.0)
+
+
+def _circulant_root(grid, size) -> Callable[[np.ndarray], np.ndarray]:
+    """``R x``: the circulant with symbol ``|q|^(1/2)`` on the ``(ny, nx)`` grid, its
+    zero mode given the smallest non-zero ``|q|`` (so that ``R`` is invertible)."""
+    nx, ny = (int(g) for g in grid)
+    lx, ly = (float(s) for s in size) if size is not None else (float(nx), float(ny))
+    qx = np.fft.rfftfreq(nx, lx / nx)
+    qy = np.fft.fftfreq(ny, ly / ny)
+    q = np.hypot(qx[None, :], qy[:, None])
+    q[0, 0] = q[q > 0].min()
+    symbol = np.sqrt(q)
+
+    def root(x: np.ndarray) -> np.ndarray:
+        field = scipy.fft.rfft2(x.reshape(ny, nx))
+        return scipy.fft.irfft2(field * symbol, s=(ny, nx)).reshape(-1)
+
+    return root
+
+
+def _start(products: _Products, seed: int = SEED) -> np.ndarray:
+    return products.project(np.random.default_rng(seed).standard_normal(products.n))
+
+
+def _lanczos(apply, start: np.ndarray, steps: int, combine=None):
+    """Three-term Lanczos with one local re-orthogonalization per step.
+
+    Returns the diagonal and off-diagonal of the tridiagonal matrix and, when
+    ``combine`` (coefficients of the Lanczos vectors) is given, the vector
+    ``sum combine[j] q_j`` (a Ritz vector, from a second run).
+    """
+    q = start / np.linalg.norm(start)
+    previous = np.zeros_like(q)
+    beta = 0.0
+    alphas, betas = [], []
+    vector = None if combine is None else np.zeros_like(q)
+    for step in range(steps):
+        if vector is not None:
+            vector += combine[step] * q
+        w = apply(q) - beta * previous
+        alpha = float(q @ w)
+        w -= alpha * q
+        again = float(q @ w)
+        w -= again * q
+        alphas.append(alpha + again)
+        beta = float(np.linalg.norm(w))
+        if step == steps - 1 or beta <= 1e-14 * max(abs(a) for a in alphas):
+            break  # the Krylov space is invariant: its Ritz values are eigenvalues
+        betas.append(beta)
+        previous, q = q, w / beta
+    return np.array(alphas), np.array(betas), vector
+
+
+def _ritz(alphas, betas):
+    """Eigenvalues and eigenvectors of the Lanczos tridiagonal matrix."""
+    if alphas.size == 1:
+        return alphas.copy(), np.ones((1, 1))
+    return scipy.linalg.eigh_tridiagonal(alphas, betas)
+
+
+def _check_symmetric(products: _Products, name: str) -> None:
+    rng = np.random.default_rng(SEED + 1)
+    x = products.project(rng.standard_normal(products.n))
+    y = products.project(rng.standard_normal(products.n))
+    cx, cy = products.operator(x), products.operator(y)
+    scale = np.linalg.norm(x) * np.linalg.norm(cy) + np.linalg.norm(y) * np.linalg.norm(cx)
+    difference = abs(float(x @ cy) - float(y @ cx))
+    if difference > SYMMETRY_RTOL * scale:
+        raise ValueError(
+            f"operator must be symmetric (Eq 39): {name} gives x.Cy - y.Cx = "
+            f"{difference / scale:.3g} of |x||Cy| + |y||Cx| > {SYMMETRY_RTOL:g} for random x "
+            f"and y; its product must be the same read by rows or by columns")
+
+
+def _lanczos_certificate(products: _Products, name, unit, advice) -> Certificate:
+    _check_symmetric(products, name)
+    start = _start(products)
+    if not np.any(start):
+        return Certificate("lanczos", math.nan, math.nan)  # nothing beside the zero mode
+    steps = min(LANCZOS_STEPS if products.root is not None else PLAIN_LANCZOS_STEPS,
+                products.n)
+    alphas, betas, _ = _lanczos(products.congruent, start, steps)
+    values, vectors = _ritz(alphas, betas)
+    method = "lanczos" if products.root is None else "preconditioned lanczos"
+    found = Certificate(method, float(values[0]), float(values[-1]), int(alphas.size))
+    if found.smallest > DEFINITE_RTOL * abs(found.largest):
+        return found
+    smallest, largest = _estimates(products, (alphas.size, vectors[:, 0]))
+    _refuse(name, smallest, largest, unit,
+            f"a {found.steps}-step {method} estimate", advice)
+
+
+def _estimates(products: _Products, ritz=None) -> tuple[float, float]:
+    """Estimates of the smallest and largest eigenvalues of ``C`` itself, for a refusal:
+    the Rayleigh quotient of ``R x`` for the smallest Ritz vector ``x`` of ``R C R``
+    (``ritz``: steps and coefficients; found by a run here if not given), and the
+    extremes of plain Lanczos steps on ``C``."""
+    start = _start(products)
+    if ritz is None and products.root is not None:
+        alphas, betas, _ = _lanczos(products.congruent, start, min(LANCZOS_STEPS, products.n))
+        ritz = (alphas.size, _ritz(alphas, betas)[1][:, 0])
+    alphas, betas, _ = _lanczos(products.operator, start,
+                                min(PLAIN_LANCZOS_STEPS, products.n))
+    plain = _ritz(alphas, betas)[0]
+    smallest, largest = float(plain[0]), float(plain[-1])
+    if ritz is not None and products.root is not None:
+        steps, coefficients = ritz
+        _, _, vector = _lanczos(products.congruent, start, steps, combine=coefficients)
+        vector = products.root(vector)
+        smallest = min(smallest, float(vector @ products.operator(vector) / (vector @ vector)))
+    return smallest, largest
+
+
+def _refuse(name, smallest, largest, unit, evidence, advice):
+    raise IndefiniteOperator(
+        f"operator must be positive definite (Eq 39), but {name} has a negative or zero "
+        f"eigenvalue: smallest about {smallest:.4g} {unit}, largest about {largest:.4g} "
+        f"{unit} ({evidence}). Eq 27 is then not a convex problem: a solver can meet its "
+        f"tolerance at a point that is not its solution. "
+        + (advice or "Check how C was built: the influence matrix of an elastic body is "
+                     "symmetric positive definite."),
+        name=name, smallest=smallest, largest=largest)
