@@ -24,15 +24,16 @@ do not pay again:
   (:func:`roughcontact.contact.checks.check_bounded`).
 - any other operator: an estimate by :data:`LANCZOS_STEPS` Lanczos steps
   from a fixed random start. On a grid (``grid``) the steps run on
-  ``R C R``, ``R`` the circulant with the symbol ``|q|^(1/2)`` (the square
-  root of the half-space's inverse, which preconditions
-  :mod:`roughcontact.contact.pcg`): by Sylvester's law of inertia ``R C R``
-  has as many negative eigenvalues as ``C``, and its spectrum is compact
-  (extreme eigenvalues within a factor of about 10 at 64 x 64 and 256 x 256
-  for Love's half-space, against about 100 and 400 for ``C``), so a few
-  steps single out a negative eigenvalue that plain Lanczos on ``C`` would
-  have to resolve from the cluster of its smallest eigenvalues (60 steps at
-  256 x 256). Without a grid the steps run on ``C`` itself
+  ``S = M^(1/2) C M^(1/2)``, ``M`` the circulant with the symbol ``|q|`` (the
+  half-space's inverse, which also preconditions
+  :mod:`roughcontact.contact.pcg`), at the cost of one product with ``C``
+  and one with ``M`` (two FFTs) per step: by Sylvester's law of inertia
+  ``S`` has as many negative eigenvalues as ``C``, and its spectrum is
+  compact (extreme eigenvalues within a factor of about 10 at 64 x 64 and
+  256 x 256 for Love's half-space, against about 100 and 400 for ``C``), so
+  a few steps single out a negative eigenvalue that plain Lanczos on ``C``
+  would have to resolve from the cluster of its smallest eigenvalues (60
+  steps at 256 x 256). Without a grid the steps run on ``C`` itself
   (:data:`PLAIN_LANCZOS_STEPS`). The smallest Ritz value bounds the
   smallest eigenvalue from above: a negative one proves the operator
   indefinite, a positive one is an estimate, not a proof. Symmetry is
@@ -76,8 +77,8 @@ __all__ = [
 #: Largest dense matrix (elements) certified by its Cholesky factorization;
 #: the study's dense matrices go up to 64 x 64 (``operators.DENSE_MAX_ELEMENTS``).
 CHOLESKY_MAX_ELEMENTS = 64 * 64
-#: Lanczos steps on ``R C R`` for an operator on a grid.
-LANCZOS_STEPS = 20
+#: Lanczos steps on ``S = M^(1/2) C M^(1/2)`` for an operator on a grid.
+LANCZOS_STEPS = 12
 #: Lanczos steps on ``C`` for an operator without a grid.
 PLAIN_LANCZOS_STEPS = 60
 #: Relative asymmetry max|C - C^T| / max|C| accepted for a dense matrix, and
@@ -89,6 +90,9 @@ DEFINITE_RTOL = 1e-12
 #: Dense matrices up to this many elements get their exact extreme eigenvalues
 #: in a refusal (``eigvalsh``, under a second at 1024); larger ones an estimate.
 EXACT_EIGENVALUES_MAX = 1024
+#: A Lanczos step whose new direction is this small next to the operator's scale
+#: ends the run: the Krylov space is invariant (to rounding).
+INVARIANT_RTOL = 1e-10
 #: The attribute that holds an operator's certificate.
 ATTRIBUTE = "spd_certificate"
 #: The seed of the random start vectors, so that a certificate is reproducible.
@@ -110,7 +114,8 @@ class Certificate:
         eigenvalues themselves (the zero mode of ``mean_compliance = 0``
         left out); for ``"lanczos"`` the extreme Ritz values (within the
         spectrum); for ``"preconditioned lanczos"`` the extreme Ritz values of
-        ``R C R``, which has the signs of ``C``'s eigenvalues, not their sizes.
+        ``S = M^(1/2) C M^(1/2)``, which has the signs of ``C``'s eigenvalues,
+        not their sizes.
     steps : int
         Lanczos steps taken (0 for the exact methods).
     """
@@ -212,7 +217,7 @@ def _measure(operator, name: str, unit: str, advice: str | None) -> Certificate:
         if not found.smallest > DEFINITE_RTOL * found.largest:
             _refuse(name, found.smallest, found.largest, unit, "its spectrum", advice)
         return found
-    return _lanczos_certificate(_products(operator, matrix), name, unit, advice)
+    return _lanczos_certificate(_products(operator, matrix, name), name, unit, advice)
 
 
 def check_symmetric(matrix: np.ndarray, name: str = "the influence operator") -> None:
@@ -251,7 +256,7 @@ def _cholesky(matrix, operator, name, unit, advice) -> Certificate:
         values = scipy.linalg.eigvalsh(matrix)
         smallest, largest = float(values[0]), float(values[-1])
     else:
-        smallest, largest = _estimates(_products(operator, matrix))
+        smallest, largest = _estimates(_products(operator, matrix, name))
     _refuse(name, smallest, largest, unit, evidence, advice)
 
 
@@ -274,13 +279,14 @@ def _spectrum_without_zero_mode(operator) -> np.ndarray | None:
 
 @dataclass(frozen=True)
 class _Products:
-    """The products Lanczos takes: ``C x`` and the congruence ``R`` (None: identity),
+    """The products Lanczos takes: ``C x`` and the preconditioner ``M x`` (None: none),
     on the complement of the uniform pressure when ``zero_mean``."""
 
     n: int
     matvec: Callable[[np.ndarray], np.ndarray]
-    root: Callable[[np.ndarray], np.ndarray] | None
+    precondition: Callable[[np.ndarray], np.ndarray] | None
     zero_mean: bool
+    name: str
 
     def project(self, x: np.ndarray) -> np.ndarray:
         return x - x.mean() if self.zero_mean else x
@@ -289,71 +295,85 @@ class _Products:
         """``C x``, projected."""
         return self.project(np.asarray(self.matvec(x), dtype=float).reshape(-1))
 
-    def congruent(self, x: np.ndarray) -> np.ndarray:
-        """``R C R x`` (``C x`` without a grid), projected."""
-        if self.root is None:
-            return self.operator(x)
-        return self.project(self.root(self.operator(self.root(x))))
+    def preconditioned(self, x: np.ndarray) -> np.ndarray:
+        """``M x`` (``x`` without a preconditioner), projected."""
+        return self.project(x if self.precondition is None else self.precondition(x))
 
 
-def _products(operator, matrix) -> _Products:
+def _products(operator, matrix, name: str) -> _Products:
     n = int(operator.shape[0]) if matrix is None else matrix.shape[0]
     matvec = (lambda x: matrix @ x) if matrix is not None else operator.matvec
     grid = getattr(operator, "grid", None)
-    root = None
+    size = getattr(operator, "size", None) or getattr(getattr(operator, "base", None), "size",
+                                                       None)
+    precondition = None
     if grid is not None and int(grid[0]) * int(grid[1]) == n and n > 1:
-        root = _circulant_root(grid, getattr(operator, "size", None))
-    return _Products(n, matvec, root, getattr(operator, "mean_compliance", None) == 0.0)
+        precondition = _circulant_q(grid, size)
+    return _Products(n, matvec, precondition, getattr(operator, "mean_compliance", None) == 0.0,
+                     name)
 
 
-def _circulant_root(grid, size) -> Callable[[np.ndarray], np.ndarray]:
-    """``R x``: the circulant with symbol ``|q|^(1/2)`` on the ``(ny, nx)`` grid, its
-    zero mode given the smallest non-zero ``|q|`` (so that ``R`` is invertible)."""
+def _circulant_q(grid, size) -> Callable[[np.ndarray], np.ndarray]:
+    """``M x``: the circulant with symbol ``|q|`` on the ``(ny, nx)`` grid (spacing
+    from ``size`` [m], or square elements), its zero mode given the smallest non-zero
+    ``|q|`` so that ``M`` is positive definite."""
     nx, ny = (int(g) for g in grid)
     lx, ly = (float(s) for s in size) if size is not None else (float(nx), float(ny))
     qx = np.fft.rfftfreq(nx, lx / nx)
     qy = np.fft.fftfreq(ny, ly / ny)
     q = np.hypot(qx[None, :], qy[:, None])
     q[0, 0] = q[q > 0].min()
-    symbol = np.sqrt(q)
 
-    def root(x: np.ndarray) -> np.ndarray:
-        field = scipy.fft.rfft2(x.reshape(ny, nx))
-        return scipy.fft.irfft2(field * symbol, s=(ny, nx)).reshape(-1)
+    def precondition(x: np.ndarray) -> np.ndarray:
+        return scipy.fft.irfft2(scipy.fft.rfft2(x.reshape(ny, nx)) * q, s=(ny, nx)).reshape(-1)
 
-    return root
+    return precondition
 
 
-def _start(products: _Products, seed: int = SEED) -> np.ndarray:
-    return products.project(np.random.default_rng(seed).standard_normal(products.n))
+def _lanczos(products: _Products, steps: int, *, plain: bool = False, combine=None):
+    """Lanczos on ``S = M^(1/2) C M^(1/2)`` (``C`` itself when ``plain`` or without ``M``).
 
-
-def _lanczos(apply, start: np.ndarray, steps: int, combine=None):
-    """Three-term Lanczos with one local re-orthogonalization per step.
-
-    Returns the diagonal and off-diagonal of the tridiagonal matrix and, when
-    ``combine`` (coefficients of the Lanczos vectors) is given, the vector
-    ``sum combine[j] q_j`` (a Ritz vector, from a second run).
+    Runs in ``p_j = M^(-1/2) q_j`` and ``z_j = M p_j = M^(1/2) q_j`` (``q_j`` the
+    Lanczos vectors of ``S``), so that it needs ``C`` and ``M`` only, one product of
+    each per step: ``alpha_j = z_j.C z_j``, ``beta_(j+1) p_(j+1) = C z_j - alpha_j p_j
+    - beta_j p_(j-1)``, ``beta_(j+1)^2 = p_(j+1).M p_(j+1)``; one local
+    re-orthogonalization per step. Every vector is projected (the products' zero
+    mode cannot come back by rounding); the run stops early when the Krylov space
+    is invariant (few distinct eigenvalues, such as a small circulant). Starts
+    from a fixed random vector. Returns the diagonal and off-diagonal of the
+    tridiagonal matrix and, when ``combine`` (coefficients of the Lanczos
+    vectors) is given, ``y = sum combine[j] z_j = M^(1/2) x`` for the Ritz vector
+    ``x`` of ``S`` they describe (``y.C y`` has the sign of ``x.S x``).
     """
-    q = start / np.linalg.norm(start)
-    previous = np.zeros_like(q)
+    precondition = products.project if plain else products.preconditioned
+    p = products.project(np.random.default_rng(SEED).standard_normal(products.n))
+    z = precondition(p)
+    scale = math.sqrt(float(p @ z))
+    p, z = p / scale, z / scale
+    previous = np.zeros_like(p)
     beta = 0.0
-    alphas, betas = [], []
-    vector = None if combine is None else np.zeros_like(q)
+    alphas, betas, probes = [], [], []
+    vector = None if combine is None else np.zeros_like(p)
     for step in range(steps):
         if vector is not None:
-            vector += combine[step] * q
-        w = apply(q) - beta * previous
-        alpha = float(q @ w)
-        w -= alpha * q
-        again = float(q @ w)
-        w -= again * q
+            vector += combine[step] * z
+        product = products.operator(z)
+        if step < 2:
+            probes.append((z, product))
+        w = product - beta * previous
+        alpha = float(z @ w)
+        w -= alpha * p
+        again = float(z @ w)
+        w = products.project(w - again * p)
         alphas.append(alpha + again)
-        beta = float(np.linalg.norm(w))
-        if step == steps - 1 or beta <= 1e-14 * max(abs(a) for a in alphas):
+        following = precondition(w)
+        beta = math.sqrt(max(float(w @ following), 0.0))
+        if step == steps - 1 or beta <= INVARIANT_RTOL * max(abs(a) for a in alphas):
             break  # the Krylov space is invariant: its Ritz values are eigenvalues
         betas.append(beta)
-        previous, q = q, w / beta
+        previous, p, z = p, w / beta, following / beta
+    if len(probes) == 2:
+        _check_symmetric(*probes, name=products.name)
     return np.array(alphas), np.array(betas), vector
 
 
@@ -364,30 +384,27 @@ def _ritz(alphas, betas):
     return scipy.linalg.eigh_tridiagonal(alphas, betas)
 
 
-def _check_symmetric(products: _Products, name: str) -> None:
-    rng = np.random.default_rng(SEED + 1)
-    x = products.project(rng.standard_normal(products.n))
-    y = products.project(rng.standard_normal(products.n))
-    cx, cy = products.operator(x), products.operator(y)
+def _check_symmetric(first, second, name: str) -> None:
+    """Refuse ``C`` unless ``x.C y = y.C x`` for the first two vectors ``x``, ``y`` of a
+    Lanczos run and their products (``C x``, ``C y``), to rounding."""
+    (x, cx), (y, cy) = first, second
     scale = np.linalg.norm(x) * np.linalg.norm(cy) + np.linalg.norm(y) * np.linalg.norm(cx)
     difference = abs(float(x @ cy) - float(y @ cx))
     if difference > SYMMETRY_RTOL * scale:
         raise ValueError(
             f"operator must be symmetric (Eq 39): {name} gives x.Cy - y.Cx = "
-            f"{difference / scale:.3g} of |x||Cy| + |y||Cx| > {SYMMETRY_RTOL:g} for random x "
-            f"and y; its product must be the same read by rows or by columns")
+            f"{difference / scale:.3g} of |x||Cy| + |y||Cx| > {SYMMETRY_RTOL:g}; its product "
+            f"must be the same read by rows or by columns")
 
 
 def _lanczos_certificate(products: _Products, name, unit, advice) -> Certificate:
-    _check_symmetric(products, name)
-    start = _start(products)
-    if not np.any(start):
+    if products.zero_mean and products.n == 1:
         return Certificate("lanczos", math.nan, math.nan)  # nothing beside the zero mode
-    steps = min(LANCZOS_STEPS if products.root is not None else PLAIN_LANCZOS_STEPS,
-                products.n)
-    alphas, betas, _ = _lanczos(products.congruent, start, steps)
+    plain = products.precondition is None
+    steps = min(PLAIN_LANCZOS_STEPS if plain else LANCZOS_STEPS, products.n)
+    alphas, betas, _ = _lanczos(products, steps)
     values, vectors = _ritz(alphas, betas)
-    method = "lanczos" if products.root is None else "preconditioned lanczos"
+    method = "lanczos" if plain else "preconditioned lanczos"
     found = Certificate(method, float(values[0]), float(values[-1]), int(alphas.size))
     if found.smallest > DEFINITE_RTOL * abs(found.largest):
         return found
@@ -398,23 +415,21 @@ def _lanczos_certificate(products: _Products, name, unit, advice) -> Certificate
 
 def _estimates(products: _Products, ritz=None) -> tuple[float, float]:
     """Estimates of the smallest and largest eigenvalues of ``C`` itself, for a refusal:
-    the Rayleigh quotient of ``R x`` for the smallest Ritz vector ``x`` of ``R C R``
-    (``ritz``: steps and coefficients; found by a run here if not given), and the
-    extremes of plain Lanczos steps on ``C``."""
-    start = _start(products)
-    if ritz is None and products.root is not None:
-        alphas, betas, _ = _lanczos(products.congruent, start, min(LANCZOS_STEPS, products.n))
-        ritz = (alphas.size, _ritz(alphas, betas)[1][:, 0])
-    alphas, betas, _ = _lanczos(products.operator, start,
-                                min(PLAIN_LANCZOS_STEPS, products.n))
+    the extremes of plain Lanczos steps on ``C`` and, with a preconditioner, the
+    Rayleigh quotient of ``M^(1/2) x`` for the smallest Ritz vector ``x`` of ``S``
+    (``ritz``: its steps and coefficients; found by a run here if not given)."""
+    alphas, betas, _ = _lanczos(products, min(PLAIN_LANCZOS_STEPS, products.n), plain=True)
     plain = _ritz(alphas, betas)[0]
     smallest, largest = float(plain[0]), float(plain[-1])
-    if ritz is not None and products.root is not None:
-        steps, coefficients = ritz
-        _, _, vector = _lanczos(products.congruent, start, steps, combine=coefficients)
-        vector = products.root(vector)
-        smallest = min(smallest, float(vector @ products.operator(vector) / (vector @ vector)))
-    return smallest, largest
+    if products.precondition is None:
+        return smallest, largest
+    if ritz is None:
+        alphas, betas, _ = _lanczos(products, min(LANCZOS_STEPS, products.n))
+        ritz = (alphas.size, _ritz(alphas, betas)[1][:, 0])
+    steps, coefficients = ritz
+    _, _, vector = _lanczos(products, steps, combine=coefficients)
+    quotient = float(vector @ products.operator(vector) / (vector @ vector))
+    return min(smallest, quotient), largest
 
 
 def _refuse(name, smallest, largest, unit, evidence, advice):

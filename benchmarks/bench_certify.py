@@ -1,0 +1,175 @@
+"""What certifying an influence operator positive definite costs, next to one solve.
+
+The entry points of :mod:`roughcontact.contact` certify the operator once
+(:mod:`roughcontact.elasticity.definiteness`) and keep the certificate on it.
+Measured here with one thread (the BLAS and FFT thread counts are set to 1
+before numpy is imported), each time against one cold contact solve on the
+same operator (a Gaussian surface, exponential ACF, b = 1 mm on the paper's
+9 mm block, L = 10 mm, nu = 0; the dimensionless problem of
+:mod:`roughcontact.contact.nondim` at the middle approach of
+``approach_grid(heights, 4, 10)``, tol 1e-8, precision "mixed", method
+"auto") and, for the dense matrix, one sweep of that surface over the 10
+approaches with the tangent stiffness at each (what a contact job does per
+surface):
+
+- dense 60 x 60: Love's half-space matrix (the cost does not depend on the
+  values; the finite-element matrix of the same grid costs the same): the
+  symmetry check alone and the whole certificate (symmetry and Cholesky);
+  the solve by block principal pivoting ("auto") and by CG.
+- matrix-free 256 x 256 and 1024 x 1024: Love's half-space operator and the
+  hybrid block operator (correction from the "refined" finite-element model
+  on the default 64 x 64 coarse grid, built once): the 12-step
+  preconditioned Lanczos certificate; the solve by preconditioned CG.
+
+Each certificate is taken on a fresh operator (none cached), the median of
+3 repeats (1 at 1024 x 1024). Writes results/benchmarks/certify.md.
+
+Usage::
+
+    .venv/bin/python benchmarks/bench_certify.py           # 256 and 1024 (3-6 min, 2.5 GB)
+    .venv/bin/python benchmarks/bench_certify.py --quick   # dense 60 and 256 only (1 min)
+"""
+
+from __future__ import annotations
+
+import os
+
+for _name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS"):
+    os.environ[_name] = "1"
+
+import argparse  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from roughcontact import contact  # noqa: E402
+from roughcontact.contact import nondim  # noqa: E402
+from roughcontact.contact.cell import approach_grid  # noqa: E402
+from roughcontact.elasticity import definiteness  # noqa: E402
+from roughcontact.elasticity.halfspace import halfspace_influence  # noqa: E402
+from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence  # noqa: E402
+from roughcontact.elasticity.operators import (  # noqa: E402
+    default_coarse_grid,
+    halfspace_operator,
+    hybrid_operator,
+)
+from roughcontact.elasticity.protocol import DenseInfluence  # noqa: E402
+from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402
+from roughcontact.surfaces.synthetic import generate_many  # noqa: E402
+
+OUT = ROOT / "results" / "benchmarks"
+SIZE = (9e-3, 9e-3)  # plan size of the block [m]
+THICKNESS = 10e-3  # m
+STEPS = 10
+PRESSURE_END = 4.0  # P L / (E sigma) at the last approach
+TOL = 1e-8
+
+
+def seconds(function, repeats: int = 3) -> float:
+    """Median wall time [s] of ``function()``."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def surface(grid: int):
+    """Heights (1, ny, nx) in units of sigma and the approaches of their sweep."""
+    spec = SurfaceSpec(grid=(grid, grid), size=SIZE, corr_length=(1e-3, 1e-3), sigma=1.0)
+    heights = generate_many(spec, (2006,))
+    return heights, approach_grid(heights, PRESSURE_END, STEPS)
+
+
+def one_solve(unit, grid: int, method: str = "auto") -> tuple[float, int]:
+    """A cold solve of the dimensionless problem at the middle approach: [s], products."""
+    heights, approaches = surface(grid)
+    n = grid * grid
+    operator = contact.checks.as_operator(nondim.dimensionless_operator(unit, THICKNESS), 1 / n)
+    definiteness.certify(operator)  # kept on it: the solve below does not pay it
+    gap = nondim.initial_separation(heights)[0]
+    start = time.perf_counter()
+    result = contact.solve(operator, gap, approaches[STEPS // 2], method=method, tol=TOL,
+                           precision="mixed")
+    return time.perf_counter() - start, int(result.matvecs)
+
+
+def dense_rows(grid: int = 60) -> list[dict]:
+    matrix = halfspace_influence((grid, grid), SIZE, 1.0, 0.0)
+    symmetry = seconds(lambda: definiteness.check_symmetric(matrix))
+    certify = seconds(lambda: definiteness.certify(DenseInfluence(matrix, 1.0)))
+    unit = DenseInfluence(matrix, SIZE[0] * SIZE[1] / grid**2)
+    definiteness.certify(unit)
+    heights, approaches = surface(grid)
+    start = time.perf_counter()
+    nondim.solve_cell(unit, heights, thickness=THICKNESS, element_area=unit.element_area,
+                      approaches=approaches, method="auto", tol=TOL, precision="mixed")
+    sweep = time.perf_counter() - start
+    rows = []
+    for method in ("auto", "cg"):
+        solve, products = one_solve(unit, grid, method)
+        rows.append({"operator": f"dense {grid}^2 ({'pivot' if method == 'auto' else method})",
+                     "check": "Cholesky", "check_s": certify, "symmetry_s": symmetry,
+                     "solve_s": solve, "products": products, "sweep_s": sweep})
+    return rows
+
+
+def matrix_free_rows(grids) -> list[dict]:
+    coarse = BlockGeometry(size=SIZE, thickness=THICKNESS, grid=default_coarse_grid((256, 256)),
+                           mesh="refined")
+    coarse_unit = unit_modulus_influence(coarse)
+    rows = []
+    for grid in grids:
+        fine = BlockGeometry(size=SIZE, thickness=THICKNESS, grid=(grid, grid), mesh="refined")
+        makers = {"halfspace": lambda fine=fine: halfspace_operator(fine.grid, SIZE, 0.0),
+                  "hybrid": lambda fine=fine: hybrid_operator(fine, coarse_unit.copy(), coarse)}
+        for name, make in makers.items():
+            fresh = [make() for _ in range(1 if grid > 256 else 3)]
+            certify = seconds(lambda fresh=fresh: definiteness.certify(fresh.pop()), len(fresh))
+            solve, products = one_solve(make(), grid)
+            rows.append({"operator": f"{name} {grid}^2 (pcg)", "check": "Lanczos, 12 steps",
+                         "check_s": certify, "symmetry_s": float("nan"), "solve_s": solve,
+                         "products": products, "sweep_s": float("nan")})
+    return rows
+
+
+def markdown(rows: list[dict]) -> str:
+    lines = [
+        "# Certifying an influence operator positive definite",
+        "",
+        f"One thread, load average {os.getloadavg()[0]:.1f} at the end. check: the whole "
+        "certificate on a fresh operator; solve: one cold solve at the middle approach; "
+        "sweep: one surface over 10 approaches with the stiffness (dense only).",
+        "",
+        "| operator | check | check [s] | of which symmetry [s] | one solve [s] | products "
+        "| check / solve | one sweep [s] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(f"| {r['operator']} | {r['check']} | {r['check_s']:.3f} | "
+                     f"{r['symmetry_s']:.3f} | {r['solve_s']:.3f} | {r['products']} | "
+                     f"{r['check_s'] / r['solve_s']:.2f} | {r['sweep_s']:.2f} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="dense 60 and 256 only")
+    args = parser.parse_args(argv)
+    rows = dense_rows()
+    rows += matrix_free_rows((256,) if args.quick else (256, 1024))
+    text = markdown(rows)
+    OUT.mkdir(parents=True, exist_ok=True)
+    (OUT / "certify.md").write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
