@@ -188,24 +188,94 @@ def mark_hardness(ax, validity, cells) -> float | None:
     return x
 
 
+#: How the figures draw bands (for captions and notes).
+BAND_NOTE = ("bands: 95 % confidence interval of the mean, drawn in log space (in logit "
+             "space for fractions), so that they stay within the quantity's range")
+
+
+def positive_band(mean, half_width):
+    """Lower and upper ends [unit of ``mean``] of the band of a positive quantity.
+
+    The aggregate tables give the Student-t interval ``mean +- half_width``
+    (95 %), symmetric. For a positive quantity averaged over few surfaces with
+    a large scatter its lower end falls below zero (n = 4: t = 3.18 times the
+    standard error), a value the quantity cannot take, and on a log axis the
+    band then has no lower edge. The mean of a positive, right-skewed quantity
+    scatters more upwards than downwards; the interval transformed to log
+    space (delta method: standard error of ``log(mean)`` = standard error /
+    mean) says so: ``mean * exp(-+ half_width / mean)``, positive,
+    asymmetric, and ``mean -+ half_width`` to first order when the band is
+    narrow (``half_width / mean = 0.1``: -9.5 % / +10.5 %). A zero mean (every
+    surface zero: no scatter) gives a zero band; a NaN half width (a single
+    surface) none.
+
+    Parameters
+    ----------
+    mean, half_width : array_like
+        Means and 95 % half widths of the table (``<quantity>_mean`` and
+        ``<quantity>_half_width``), non-negative.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Lower and upper ends.
+    """
+    import numpy as np
+
+    mean = np.asarray(mean, dtype=float)
+    ratio = np.divide(np.nan_to_num(np.asarray(half_width, dtype=float)), mean,
+                      out=np.zeros_like(mean), where=mean > 0)
+    return mean * np.exp(-ratio), mean * np.exp(ratio)
+
+
+def fraction_band(mean, half_width):
+    """Lower and upper ends of the band of a fraction (a share in [0, 1]).
+
+    As :func:`positive_band`, in logit space: ``logit(mean) -+ half_width /
+    (mean (1 - mean))``, mapped back; within (0, 1), ``mean -+ half_width``
+    to first order. A mean of 0 or 1 (no scatter) gives a zero band.
+    """
+    import numpy as np
+
+    mean = np.asarray(mean, dtype=float)
+    inside = (mean > 0) & (mean < 1)
+    spread = np.divide(np.nan_to_num(np.asarray(half_width, dtype=float)), mean * (1 - mean),
+                       out=np.zeros_like(mean), where=inside)
+    logit = np.log(np.where(inside, mean, 0.5) / np.where(inside, 1 - mean, 0.5))
+
+    def back(value):
+        return np.where(inside, 1.0 / (1.0 + np.exp(-value)), mean)
+
+    return back(logit - spread), back(logit + spread)
+
+
+#: The band of each kind of quantity (:func:`plot_band`).
+BANDS = {"positive": positive_band, "fraction": fraction_band}
+
+
 def plot_band(ax, frame, quantity: str, *, y_scale: float = 1.0, label=None, color=None,
-              linestyle="-"):
+              linestyle="-", band: str | None = None):
     """Mean curve of ``quantity`` against nominal pressure [MPa] with its confidence band.
 
-    ``frame`` holds one cell's rows of an aggregate table. Levels that rest on
+    ``frame`` holds one cell's rows of an aggregate table. The quantities of
+    the tables are positive (stiffness, pressures, deflections) or fractions
+    (``*_fraction``, shares above a hardness): their band is drawn in log
+    space (:func:`positive_band`) or logit space (:func:`fraction_band`), so
+    that it stays in their range; ``band`` names the kind (``"positive"``,
+    ``"fraction"``; default by the name of ``quantity``). Levels that rest on
     no surface are left out; a level resting on fewer surfaces than the cell
     has is drawn with a hollow marker, so a thin band there is not mistaken
     for a tight one. Returns the line.
     """
-    import numpy as np
-
     count = frame[f"{quantity}_count"].to_numpy()
     ok = count > 0
     x = frame["nominal_pressure"].to_numpy()[ok] / 1e6
-    y = frame[f"{quantity}_mean"].to_numpy()[ok] * y_scale
-    hw = np.nan_to_num(frame[f"{quantity}_half_width"].to_numpy()[ok] * y_scale)
+    mean = frame[f"{quantity}_mean"].to_numpy()[ok]
+    kind = band or ("fraction" if quantity.endswith("_fraction") else "positive")
+    low, high = BANDS[kind](mean, frame[f"{quantity}_half_width"].to_numpy()[ok])
+    y, low, high = mean * y_scale, low * y_scale, high * y_scale
     (line,) = ax.plot(x, y, label=label, color=color, linestyle=linestyle)
-    ax.fill_between(x, y - hw, y + hw, color=line.get_color(), alpha=0.2, linewidth=0)
+    ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, linewidth=0)
     partial = count[ok] < frame["surfaces"].to_numpy()[ok]
     if partial.any():
         ax.plot(x[partial], y[partial], "o", mfc="none", color=line.get_color(), ms=4)
@@ -336,5 +406,4 @@ def study_note(table) -> str:
     cells = table.drop_duplicates("cell")
     bad = int(cells["unconverged_steps"].sum())
     return (f"{int(cells['surfaces'].min())}-{int(cells['surfaces'].max())} surfaces per "
-            f"curve; bands: 95 % confidence interval of the mean; unconverged solves "
-            f"excluded: {bad}")
+            f"curve; {BAND_NOTE}; unconverged solves excluded: {bad}")
