@@ -16,9 +16,108 @@ from roughcontact.hashes import file_sha256
 from roughcontact.reports.execution import remove_stale_temporaries
 from roughcontact.study.provenance import atomic_path
 
+#: Mantissas whose minor ticks keep their labels, tried in turn until the labels of a
+#: log axis no longer overlap (the last: major labels only).
+MINOR_LABELS = ((2, 3, 5), (2, 5), (3,), ())
+
+
+def drawn_tick_labels(axis, renderer) -> list:
+    """Window extents of the non-empty tick labels ``axis`` draws (ticks within its view),
+    in their order along the axis."""
+    low, high = sorted(axis.get_view_interval())
+    boxes = []
+    for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+        if not low <= tick.get_loc() <= high:
+            continue
+        for label in (tick.label1, tick.label2):
+            if label.get_visible() and label.get_text():
+                boxes.append((tick.get_loc(), label.get_window_extent(renderer)))
+    return [box for _, box in sorted(boxes, key=lambda item: item[0])]
+
+
+def overlapping_labels(fig) -> list[tuple]:
+    """The pairs of tick labels of ``fig`` that overlap once drawn: ``(axes index, "x" or
+    "y", first box, second box)``."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    found = []
+    for index, ax in enumerate(fig.axes):
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            boxes = drawn_tick_labels(axis, renderer)
+            found += [(index, name, a, b) for k, a in enumerate(boxes) for b in boxes[k + 1:]
+                      if a.overlaps(b)]
+    return found
+
+
+def tidy_log_ticks(fig) -> None:
+    """Keep the tick labels of every log axis of ``fig`` from overlapping.
+
+    Matplotlib labels the minor ticks of a log axis spanning less than a
+    decade or two (``2x10^-1 3x10^-1 4x10^-1 ...``); on a narrow panel they
+    run into each other. Each such axis keeps the labels of fewer mantissas
+    (:data:`MINOR_LABELS`) until none overlap, then, if the major labels
+    still do, fewer major ticks. Draws the figure once, and again after each
+    round of changes (call it once the layout is set; :func:`save_figure`
+    does).
+    """
+    from matplotlib.ticker import LogLocator
+
+    steps = {}  # axis -> the next step to take on it
+    while True:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        crowded = [axis for ax in fig.axes for axis in (ax.xaxis, ax.yaxis)
+                   if axis.get_scale() == "log" and _overlap(drawn_tick_labels(axis, renderer))]
+        crowded = [axis for axis in crowded if steps.get(axis, 0) < len(MINOR_LABELS) + 3]
+        if not crowded:
+            return
+        for axis in crowded:
+            step = steps.get(axis, 0)
+            if step < len(MINOR_LABELS):
+                axis.set_minor_formatter(_MantissaFormatter(MINOR_LABELS[step]))
+            else:  # major labels only, and still crowded: fewer decades labelled
+                axis.set_major_locator(LogLocator(numticks=8 - 2 * (step - len(MINOR_LABELS))))
+            steps[axis] = step + 1
+
+
+def _overlap(boxes) -> bool:
+    """Whether any two neighbouring boxes (in order along the axis) overlap."""
+    return any(a.overlaps(b) for a, b in zip(boxes, boxes[1:], strict=False))
+
+
+def _mantissa_formatter():
+    """The class of :class:`_MantissaFormatter`, made on first use (matplotlib stays an
+    import of the figures only)."""
+    import math
+
+    from matplotlib.ticker import LogFormatterSciNotation
+
+    class MantissaFormatter(LogFormatterSciNotation):
+        """Labels of the minor ticks whose mantissa is in ``keep`` (all of them
+        labelled, none of the others), major ticks as usual."""
+
+        def __init__(self, keep):
+            super().__init__(labelOnlyBase=False, minor_thresholds=(math.inf, math.inf))
+            self.keep = frozenset(keep)
+
+        def __call__(self, x, pos=None):
+            if x <= 0:
+                return ""
+            mantissa = round(x / 10 ** math.floor(math.log10(x) + 1e-9), 6)
+            keep = mantissa == 1 or mantissa in self.keep
+            return super().__call__(x, pos) if keep else ""
+
+    return MantissaFormatter
+
+
+def _MantissaFormatter(keep):  # noqa: N802 - stands for the class
+    return _mantissa_formatter()(keep)
+
 
 def save_figure(fig, *paths, dpi: int = 150) -> None:
-    """Save a matplotlib figure to each path (format from the suffix), atomically."""
+    """Save a matplotlib figure to each path (format from the suffix), atomically, with
+    the tick labels of its log axes kept apart (:func:`tidy_log_ticks`)."""
+    tidy_log_ticks(fig)
     for path in paths:
         path = Path(path)
         remove_stale_temporaries(path)

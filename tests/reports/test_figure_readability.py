@@ -1,9 +1,13 @@
-"""Figures: bands of positive quantities stay positive, symbols are typeset.
+"""Figures: bands of positive quantities stay positive, log tick labels stay apart.
 
 With 4 surfaces per cell (the quick study) and a large scatter, the
 Student-t band of the tables, mean +- t s / sqrt(n) with t = 3.18, reaches
 below zero; the figures drew it so (the hardness figure). They now draw the
-same interval in log space (logit space for fractions).
+same interval in log space (logit space for fractions). On the narrow panels
+of the measured figure, a log axis spanning about a decade (pressures of a
+few kPa to a few tenths of a MPa) labelled its minor ticks so that they ran
+into each other; save_figure now keeps them apart. (Typeset symbols:
+tests/reports/test_convergence.py.)
 """
 
 import matplotlib
@@ -16,9 +20,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from roughcontact.contact.aggregate import statistics  # noqa: E402
 from roughcontact.reports.plotting import (  # noqa: E402
+    drawn_tick_labels,
     fraction_band,
+    overlapping_labels,
     plot_band,
     positive_band,
+    save_figure,
+    tidy_log_ticks,
 )
 
 #: k_P of 4 surfaces [Pa] with a large scatter (one surface far stiffer).
@@ -81,3 +89,45 @@ def test_fractions_stay_within_zero_and_one_and_zero_means_have_no_band():
     assert fraction_band([0.0, 1.0], [0.0, 0.0])[1].tolist() == [0.0, 1.0]
     # one surface: no half width, no band
     assert positive_band([5.0], [np.nan]) == ([5.0], [5.0])
+
+
+def measured_layout(low: float, high: float):
+    """The measured figure's grid (four panels above, three below, 16 x 7.6 in), log x
+    axes over ``low`` .. ``high``, and the spectrum panel log-log."""
+    fig = plt.figure(figsize=(16, 7.6))
+    grid = fig.add_gridspec(2, 12)
+    top = [fig.add_subplot(grid[0, 3 * k:3 * k + 3]) for k in range(4)]
+    bottom = [fig.add_subplot(grid[1, 4 * k:4 * k + 4]) for k in range(3)]
+    x = np.geomspace(low, high, 12)
+    for ax in bottom:
+        ax.plot(x, x)
+        ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]")
+    top[3].loglog(x, np.geomspace(2e-20, 5e-20, 12))
+    fig.tight_layout()
+    return fig
+
+
+def log_axes(fig):
+    return [axis for ax in fig.axes for axis in (ax.xaxis, ax.yaxis) if axis.get_scale() == "log"]
+
+
+@pytest.mark.parametrize(("low", "high"), [(5e-5, 5e-4), (0.1, 0.5), (0.2, 0.9), (1.0, 50.0)])
+def test_log_tick_labels_are_kept_apart_and_still_read(low, high):
+    fig = measured_layout(low, high)
+    crowded = overlapping_labels(fig)
+    if (low, high) == (5e-5, 5e-4):
+        assert crowded  # the case of the issue: minor labels run into each other
+    tidy_log_ticks(fig)
+    assert overlapping_labels(fig) == []
+    renderer = fig.canvas.get_renderer()
+    for axis in log_axes(fig):  # every log axis still reads: two labels at least
+        assert len(drawn_tick_labels(axis, renderer)) >= 2
+    plt.close(fig)
+
+
+def test_save_figure_keeps_the_labels_apart(tmp_path):
+    fig = measured_layout(5e-5, 5e-4)
+    save_figure(fig, tmp_path / "figure.png")
+    assert (tmp_path / "figure.png").stat().st_size > 0
+    assert overlapping_labels(fig) == []
+    plt.close(fig)
