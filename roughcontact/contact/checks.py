@@ -141,7 +141,8 @@ def _dense_operator(operator, matrix, element_area) -> DenseInfluence:
     if element_area is None:
         raise ValueError("element_area must be given (m^2) when operator is a dense matrix")
     area = check_element_area(element_area)
-    if isinstance(operator, DenseInfluence):  # kept, with its certificate if it has one
+    if isinstance(operator, DenseInfluence) and \
+            operator.grid == _grid(operator, operator.shape[0]):  # kept, with its certificate
         if definiteness.certificate_of(operator) is None:
             _check_dense(operator.matrix)
         if area == operator.element_area:
@@ -156,11 +157,24 @@ def _dense_operator(operator, matrix, element_area) -> DenseInfluence:
             "operator must be a dense (n, n) matrix or an object with matvec"
         ) from None
     _check_dense(matrix)
-    return DenseInfluence(matrix, area, _grid(operator, matrix.shape[0]))
+    dense = DenseInfluence(matrix, area, _grid(operator, matrix.shape[0]))
+    definiteness.carry(operator, dense)
+    return dense
+
+
+def _check_diagonal(diagonal, n: int) -> np.ndarray:
+    """The self-compliances ``C_ii`` [m/Pa] as a float array, checked finite, positive, (n,)."""
+    diagonal = np.asarray(diagonal, dtype=float).reshape(-1)
+    if diagonal.shape != (n,) or not np.isfinite(diagonal).all() or (diagonal <= 0.0).any():
+        raise ValueError(
+            "operator must have a finite positive diagonal (C_ii > 0 m/Pa) of length n"
+        )
+    return diagonal
 
 
 def _matrix_free_operator(operator, element_area) -> MatrixFreeInfluence:
-    if isinstance(operator, MatrixFreeInfluence):  # checked before (its diagonal and area)
+    if isinstance(operator, MatrixFreeInfluence):  # kept: its base keeps the certificate
+        _check_diagonal(operator.self_compliance, operator.shape[0])
         if element_area is None or check_element_area(element_area) == operator.element_area:
             return operator
         return dataclasses.replace(operator, element_area=check_element_area(element_area))
@@ -178,11 +192,7 @@ def _matrix_free_operator(operator, element_area) -> MatrixFreeInfluence:
             raise ValueError("element_area must be given (m^2): operator has no element_area")
         element_area = operator.element_area
     area = check_element_area(element_area)
-    diagonal = np.asarray(operator.diagonal(), dtype=float).reshape(-1)
-    if diagonal.shape != (n,) or not np.isfinite(diagonal).all() or (diagonal <= 0.0).any():
-        raise ValueError(
-            "operator must have a finite positive diagonal (C_ii > 0 m/Pa) of length n"
-        )
+    diagonal = _check_diagonal(operator.diagonal(), n)
     return MatrixFreeInfluence(operator, area, diagonal, _grid(operator, n),
                                getattr(operator, "mean_compliance", None))
 

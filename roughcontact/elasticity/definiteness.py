@@ -61,6 +61,7 @@ from scipy.linalg import lapack
 from roughcontact.errors import IndefiniteOperator
 
 __all__ = [
+    "ATTRIBUTE",
     "CHOLESKY_MAX_ELEMENTS",
     "DEFINITE_RTOL",
     "LANCZOS_STEPS",
