@@ -36,3 +36,21 @@ class StoredFileError(RuntimeError):
     def __init__(self, message: str, path=None):
         super().__init__(message)
         self.path = None if path is None else str(path)
+
+
+class IndefiniteOperator(ValueError):
+    """An influence operator is not positive definite (Eq 39), so Eq 27 is not a
+    convex problem and a converged solve proves nothing.
+
+    The message names the operator (the file it was read from, where there is
+    one) and gives estimates of its smallest and largest eigenvalues, kept as
+    the attributes ``smallest`` and ``largest`` (in the unit of the operator's
+    entries) beside ``name``.
+    """
+
+    def __init__(self, message: str, name: str | None = None, smallest: float | None = None,
+                 largest: float | None = None):
+        super().__init__(message)
+        self.name = name
+        self.smallest = smallest
+        self.largest = largest

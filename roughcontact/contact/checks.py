@@ -11,12 +11,15 @@ once, and view the influence operator they were given through
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from roughcontact.contact.products import PRECISIONS
+from roughcontact.elasticity import definiteness
+from roughcontact.elasticity.definiteness import SYMMETRY_RTOL
 from roughcontact.elasticity.protocol import (
     DenseInfluence,
     InfluenceOperator,
@@ -31,6 +34,7 @@ __all__ = [
     "as_operator",
     "check_approach",
     "check_bounded",
+    "check_definite",
     "check_element_area",
     "check_hardness",
     "check_initial_pressure",
@@ -44,10 +48,6 @@ __all__ = [
     "given_matrix",
     "preconditioned_operator",
 ]
-
-#: Relative asymmetry max|C - C^T| / max|C| accepted for a dense matrix.
-SYMMETRY_RTOL = 1e-8
-
 
 @dataclass(frozen=True)
 class SweepOptions:
@@ -97,19 +97,7 @@ def _check_dense(matrix: np.ndarray) -> None:
             f"operator must have a positive diagonal (self-compliance C_ii > 0 m/Pa), "
             f"got C[{i}, {i}] = {diagonal[i]!r}"
         )
-    scale = np.abs(matrix).max()
-    n = matrix.shape[0]
-    block = max(1, 2_000_000 // n)
-    asymmetry = 0.0
-    for start in range(0, n, block):
-        stop = min(n, start + block)
-        part = np.abs(matrix[start:stop] - matrix[:, start:stop].T).max()
-        asymmetry = max(asymmetry, float(part))
-    if asymmetry > SYMMETRY_RTOL * scale:
-        raise ValueError(
-            f"operator must be symmetric (Eq 39): max|C - C^T| / max|C| = "
-            f"{asymmetry / scale:.3g} > {SYMMETRY_RTOL:g}; symmetrize with (C + C.T) / 2"
-        )
+    definiteness.check_symmetric(matrix, "the matrix")
 
 
 def given_matrix(operator):
@@ -153,6 +141,15 @@ def _dense_operator(operator, matrix, element_area) -> DenseInfluence:
     if element_area is None:
         raise ValueError("element_area must be given (m^2) when operator is a dense matrix")
     area = check_element_area(element_area)
+    if isinstance(operator, DenseInfluence) and \
+            operator.grid == _grid(operator, operator.shape[0]):  # kept, with its certificate
+        if definiteness.certificate_of(operator) is None:
+            _check_dense(operator.matrix)
+        if area == operator.element_area:
+            return operator
+        same = dataclasses.replace(operator, element_area=area)
+        definiteness.carry(operator, same)
+        return same
     try:
         matrix = np.ascontiguousarray(matrix, dtype=float)
     except (TypeError, ValueError):
@@ -160,10 +157,27 @@ def _dense_operator(operator, matrix, element_area) -> DenseInfluence:
             "operator must be a dense (n, n) matrix or an object with matvec"
         ) from None
     _check_dense(matrix)
-    return DenseInfluence(matrix, area, _grid(operator, matrix.shape[0]))
+    dense = DenseInfluence(matrix, area, _grid(operator, matrix.shape[0]))
+    definiteness.carry(operator, dense)
+    return dense
+
+
+def _check_diagonal(diagonal, n: int) -> np.ndarray:
+    """The self-compliances ``C_ii`` [m/Pa] as a float array, checked finite, positive, (n,)."""
+    diagonal = np.asarray(diagonal, dtype=float).reshape(-1)
+    if diagonal.shape != (n,) or not np.isfinite(diagonal).all() or (diagonal <= 0.0).any():
+        raise ValueError(
+            "operator must have a finite positive diagonal (C_ii > 0 m/Pa) of length n"
+        )
+    return diagonal
 
 
 def _matrix_free_operator(operator, element_area) -> MatrixFreeInfluence:
+    if isinstance(operator, MatrixFreeInfluence):  # kept: its base keeps the certificate
+        _check_diagonal(operator.self_compliance, operator.shape[0])
+        if element_area is None or check_element_area(element_area) == operator.element_area:
+            return operator
+        return dataclasses.replace(operator, element_area=check_element_area(element_area))
     missing = [name for name in ("shape", "diagonal") if not hasattr(operator, name)]
     if missing:
         raise ValueError(
@@ -178,11 +192,7 @@ def _matrix_free_operator(operator, element_area) -> MatrixFreeInfluence:
             raise ValueError("element_area must be given (m^2): operator has no element_area")
         element_area = operator.element_area
     area = check_element_area(element_area)
-    diagonal = np.asarray(operator.diagonal(), dtype=float).reshape(-1)
-    if diagonal.shape != (n,) or not np.isfinite(diagonal).all() or (diagonal <= 0.0).any():
-        raise ValueError(
-            "operator must have a finite positive diagonal (C_ii > 0 m/Pa) of length n"
-        )
+    diagonal = _check_diagonal(operator.diagonal(), n)
     return MatrixFreeInfluence(operator, area, diagonal, _grid(operator, n),
                                getattr(operator, "mean_compliance", None))
 
@@ -212,6 +222,24 @@ def as_operator(operator, element_area=None) -> InfluenceOperator:
     if matrix is not None:
         return _dense_operator(operator, matrix, element_area)
     return _matrix_free_operator(operator, element_area)
+
+
+def check_definite(op: InfluenceOperator) -> None:
+    """Refuse an operator that is not symmetric positive definite (Eq 39).
+
+    Certified once per operator (:func:`roughcontact.elasticity.definiteness.certify`:
+    Cholesky for a dense matrix, the spectrum of a periodic one, a Lanczos
+    estimate for any other) and the certificate kept on it, so that the
+    solves that follow with the same operator object (a
+    :class:`~roughcontact.elasticity.protocol.DenseInfluence`, a grid
+    operator) pay nothing; a plain ndarray is certified at every call.
+
+    Raises
+    ------
+    roughcontact.errors.IndefiniteOperator
+        With estimates of its smallest and largest eigenvalues [m/Pa].
+    """
+    definiteness.certify(op)
 
 
 def check_bounded(op: InfluenceOperator, gaps: np.ndarray, d: np.ndarray, name: str) -> None:

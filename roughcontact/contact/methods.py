@@ -60,7 +60,14 @@ n, m/Pa; then ``element_area`` [m^2] must be given), an
 :class:`~roughcontact.elasticity.halfspace.PeriodicHalfSpace`), or any
 object with ``shape == (n, n)``, ``diagonal()`` and ``matvec(p)`` accepting
 (n,) and (n, m) arrays; it is checked and wrapped once
-(:func:`roughcontact.contact.checks.as_operator`).
+(:func:`roughcontact.contact.checks.as_operator`) and certified symmetric
+positive definite (:func:`roughcontact.contact.checks.check_definite`):
+Eq 27 has one minimizer only then, and a method meeting its tolerance on
+an indefinite ``C`` would prove nothing. The certificate is kept on the
+operator object, so pass a
+:class:`~roughcontact.elasticity.protocol.DenseInfluence` rather than a
+plain ndarray to solve many times with one dense matrix (the Cholesky
+factorization of a 60 x 60 grid's matrix costs about one second).
 
 Performance: the products ``C p`` dominate the iterative methods.
 :func:`solve_many` and :func:`roughcontact.contact.sweep` apply ``C`` to all
@@ -246,6 +253,7 @@ def check_problem(operator, gaps0, name: str, *, method, tol, max_iter, precisio
     op = checks.as_operator(operator, element_area)
     chosen = method_for(method, op, hardness)
     gaps, shape = checks.check_surfaces(gaps0, op, name, batched=batched)
+    checks.check_definite(op)
     return Problem(op, chosen, gaps, shape, tol, chosen.max_iter(max_iter, gaps.shape[1]),
                    chosen.products(op, precision), hardness)
 

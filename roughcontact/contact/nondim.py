@@ -60,7 +60,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from roughcontact.contact import validity
-from roughcontact.contact.checks import approach_steps, check_positive, preconditioned_operator
+from roughcontact.contact.checks import (
+    approach_steps,
+    as_operator,
+    check_positive,
+    given_matrix,
+    preconditioned_operator,
+)
 from roughcontact.contact.curves import (
     DIAGNOSTICS,
     PROFILES,
@@ -71,6 +77,8 @@ from roughcontact.contact.curves import (
 )
 from roughcontact.contact.methods import resolve_method
 from roughcontact.contact.sweeps import sweep
+from roughcontact.elasticity import definiteness
+from roughcontact.elasticity.protocol import DenseInfluence
 
 __all__ = [
     "SI_SCALES",
@@ -255,14 +263,23 @@ def dimensionless_operator(unit_influence, thickness: float):
     Returns
     -------
     ndarray or operator object
-        ``K`` [-], of the same kind as ``unit_influence``.
+        ``K`` [-], of the same kind as ``unit_influence`` (a
+        :class:`~roughcontact.elasticity.protocol.DenseInfluence` for one),
+        carrying its certificate of definiteness
+        (:mod:`roughcontact.elasticity.definiteness`) divided by ``L``.
     """
     thickness = check_positive(thickness, "thickness")
     if isinstance(unit_influence, np.ndarray) or not hasattr(unit_influence, "matvec"):
         return np.asarray(unit_influence, dtype=float) / thickness
-    if preconditioned_operator(unit_influence) is not None:
-        return _ScaledGridOperator(unit_influence, thickness)
-    return _ScaledOperator(unit_influence, thickness)
+    if isinstance(unit_influence, DenseInfluence):
+        scaled = DenseInfluence(given_matrix(unit_influence) / thickness,
+                                unit_influence.element_area, unit_influence.grid)
+    elif preconditioned_operator(unit_influence) is not None:
+        scaled = _ScaledGridOperator(unit_influence, thickness)
+    else:
+        scaled = _ScaledOperator(unit_influence, thickness)
+    definiteness.carry(unit_influence, scaled, 1.0 / thickness)
+    return scaled
 
 
 def _check_steps(approaches, m: int) -> np.ndarray:
@@ -349,7 +366,8 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
     m, n = gaps.shape
     steps = _check_steps(approaches, m)
     batch_size = _check_batch_size(batch_size, m)
-    operator = dimensionless_operator(unit_influence, thickness)
+    # checked once for every batch: a certificate of definiteness stays on it
+    operator = as_operator(dimensionless_operator(unit_influence, thickness), 1.0 / n)
     hardness = (None if nondim_hardness is None
                 else check_positive(nondim_hardness, "nondim_hardness (H L / (E sigma))"))
     method = resolve_method(method, operator, hardness)  # recorded as solved

@@ -59,6 +59,11 @@ class InfluenceOperator(Protocol):
         ``u = mean_compliance P``) when the operator fixes it, else None.
         Zero means the mean displacement is always zero: Eq 27 is then
         bounded only for approaches below the mean initial separation.
+
+    ``C`` must be positive definite (Eq 39; on the complement of the uniform
+    pressure when ``mean_compliance`` is 0). The solvers certify it once
+    (:mod:`roughcontact.elasticity.definiteness`) and keep the certificate
+    on the operator as ``spd_certificate``.
     """
 
     @property
@@ -142,8 +147,9 @@ class DenseInfluence:
     Parameters
     ----------
     matrix : ndarray (n, n)
-        Influence coefficients [m/Pa], symmetric (not checked here; the
-        contact solver checks what it is given).
+        Influence coefficients [m/Pa], symmetric positive definite (not
+        checked here; the contact solver checks and certifies what it is
+        given, once per object).
     element_area : float
         Contact element area [m^2].
     grid : (int, int), optional
@@ -154,6 +160,8 @@ class DenseInfluence:
     element_area: float
     grid: tuple[int, int] | None = None
     mean_compliance = None
+    #: Its :class:`~roughcontact.elasticity.definiteness.Certificate`, once certified.
+    spd_certificate = None
 
     def __post_init__(self):
         object.__setattr__(self, "matrix", np.ascontiguousarray(self.matrix, dtype=float))
@@ -257,6 +265,8 @@ class MatrixFreeInfluence:
     grid: tuple[int, int] | None = None
     mean_compliance: float | None = None
     matrix = None
+    #: Its :class:`~roughcontact.elasticity.definiteness.Certificate`, once certified.
+    spd_certificate = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -296,6 +306,8 @@ class GridOperator:
 
     matrix = None
     _columns = None
+    #: Its :class:`~roughcontact.elasticity.definiteness.Certificate`, once certified.
+    spd_certificate = None
     #: Changed elements worth one product when summed column by column
     #: (a column costs about 1/25 of a free-space and 1/8 of a periodic
     #: single-precision product at 512^2 and 1024^2); 0: no columns.

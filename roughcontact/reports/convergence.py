@@ -542,9 +542,11 @@ PLOTTED_ENTRIES = ("self_compliance", "neighbour_1_0", "neighbour_1_1", "neighbo
 #: Line style of each kind of row that is not a finite-element mesh.
 KIND_LINESTYLES = MappingProxyType({HALFSPACE: "--", "richardson": ":"})
 #: Contact panels (c)-(e): quantity, scale to the axis unit, axis label, title.
-CONTACT_PANELS = (("k_P_Pa", 1e-6, "k_P [MPa]", "(c) normalized stiffness (Eq 33)"),
-                  ("real_area_fraction", 100.0, "real contact area [%]", "(d) real contact area"),
-                  ("max_pressure_Pa", 1e-6, "max pressure [MPa]", "(e) peak contact pressure"))
+CONTACT_PANELS = (("k_P_Pa", 1e-6, "$k_P$ [MPa]", "(c) normalized stiffness $k_P$ (Eq 33)"),
+                  ("real_area_fraction", 100.0, "real contact area $A_r / A_n$ [%]",
+                   "(d) real contact area"),
+                  ("max_pressure_Pa", 1e-6, r"peak pressure $p_\max$ [MPa]",
+                   "(e) peak contact pressure"))
 
 
 def _entry_ticks(first: pd.DataFrame) -> list[str]:
@@ -559,8 +561,8 @@ def _plot_entries(ax, first: pd.DataFrame, styles: Mapping) -> None:
                 **style)
     ax.set_xticks(range(len(PLOTTED_ENTRIES)), _entry_ticks(first))
     ax.set_yscale("log")
-    ax.set_xlabel("offset from the centre element (x, y)")
-    ax.set_ylabel("E C / h [-]")
+    ax.set_xlabel("offset from the centre element $(x, y)$")
+    ax.set_ylabel(r"$E\,C / h$ [-]")
     ax.set_title("(a) influence coefficients, centre row")
     ax.legend(fontsize=8)
 
@@ -579,7 +581,7 @@ def _plot_entry_errors(ax, first: pd.DataFrame, meshes: list[str], reference) ->
     ax.set_yscale("log")
     ax.axhline(0.05, color="grey", linewidth=0.8, linestyle=":")
     ax.set_ylabel(f"|relative error| vs {reference}")
-    ax.set_title("(b) error of E C / h per offset (x, y)")
+    ax.set_title(r"(b) error of $E\,C / h$ per offset $(x, y)$")
     ax.legend(fontsize=8, ncol=2)
 
 
@@ -589,7 +591,7 @@ def _plot_contact(axes, table: pd.DataFrame, styles: Mapping) -> None:
         for mesh, style in styles.items():
             rows = table[table["mesh"] == mesh]
             ax.plot(rows["pressure_Pa"] * 1e-6, rows[q] * scale, **style)
-        ax.set_xlabel("nominal pressure P [MPa]")
+        ax.set_xlabel("nominal pressure $P$ [MPa]")
         ax.set_ylabel(ylabel)
         ax.set_title(title)
         ax.grid(alpha=0.3)
@@ -608,19 +610,20 @@ def _plot_cost(ax, first: pd.DataFrame, meshes: list[str]) -> None:
     twin.set_ylabel("peak memory [GB]")
     ax.set_ylim(0, 1.3 * np.nanmax(first["build_s"].to_numpy(float)))
     twin.set_ylim(0, 1.3 * np.nanmax(first["peak_memory_GB"].to_numpy(float)))
-    ax.set_title("(f) cost of building E C")
+    ax.set_title(r"(f) cost of building $E\,C$")
     ax.legend(loc="upper left", fontsize=8)
     twin.legend(loc="upper center", fontsize=8)
 
 
-def plot_influence_convergence(table: pd.DataFrame, path_png: str | os.PathLike) -> None:
+def plot_influence_convergence(table: pd.DataFrame, path_png: str | os.PathLike) -> Figure:
     """Six-panel summary of an ``influence_convergence`` table, saved as PNG (Agg).
 
     Panels: (a) centre-row entries E C / h per mesh; (b) |relative error| of
     each entry against the reference mesh (dotted line: 5 %); (c) k_P, (d)
     real area fraction and (e) peak pressure against nominal pressure per
     mesh; (f) build time and peak memory per mesh. The half-space is drawn
-    dashed, the reference mesh thick.
+    dashed, the reference mesh thick; symbols are typeset (mathtext).
+    Returns the figure.
     """
     meshes = list(dict.fromkeys(table["mesh"]))
     reference = table["reference"].iloc[0] if "reference" in table else None
@@ -639,6 +642,7 @@ def plot_influence_convergence(table: pd.DataFrame, path_png: str | os.PathLike)
     row = table.iloc[0]
     fig.suptitle(f"Influence-coefficient mesh convergence: {int(row['grid_x'])} x "
                  f"{int(row['grid_y'])} contact elements of "
-                 f"{row['element_size_m'] * 1e3:.3g} mm, L = {row['thickness_m'] * 1e3:g} mm, "
-                 f"nu = {row['nu']:g}; errors against {reference}")
+                 f"{row['element_size_m'] * 1e3:.3g} mm, $L$ = {row['thickness_m'] * 1e3:g} mm, "
+                 f"$\\nu$ = {row['nu']:g}; errors against {reference}")
     save_figure(fig, path_png)
+    return fig

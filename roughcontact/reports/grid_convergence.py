@@ -50,7 +50,7 @@ from matplotlib.figure import Figure
 from roughcontact.contact import aggregate
 from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.reports.convergence import richardson
-from roughcontact.reports.plotting import save_figure
+from roughcontact.reports.plotting import BANDS, positive_band, save_figure
 from roughcontact.study.grid_convergence import GridConvergenceSettings, read_grid_contact
 from roughcontact.study.provenance import atomic_path
 
@@ -192,9 +192,11 @@ def _plot_levels(ax, table: pd.DataFrame, quantity: str, scale: float, ylabel: s
     rows = table[table["quantity"] == quantity]
     for i, (level, part) in enumerate(rows.groupby("reduced_pressure", sort=True)):
         color = f"C{i}"
-        mean, half = part["mean"] * scale, part["half_width"].fillna(0.0) * scale
-        ax.plot(part["grid"], mean, "o-", color=color, label=f"p* = {level:.3g}")
-        ax.fill_between(part["grid"], mean - half, mean + half, color=color, alpha=0.2)
+        band = BANDS["fraction" if quantity.endswith("_fraction") else "positive"]
+        low, high = band(part["mean"], part["half_width"])
+        ax.plot(part["grid"], part["mean"] * scale, "o-", color=color,
+                label=f"$p^*$ = {level:.3g}")
+        ax.fill_between(part["grid"], low * scale, high * scale, color=color, alpha=0.2)
         extrapolated = part["extrapolated"].iloc[0] * scale
         if math.isfinite(extrapolated):
             ax.axhline(extrapolated, color=color, ls="--", lw=0.8)
@@ -226,33 +228,39 @@ def _plot_changes(ax, table: pd.DataFrame, within: float) -> None:
 def _plot_kappa(ax, table: pd.DataFrame) -> None:
     """kappa per grid with its 95 % band over the surfaces, and the literature's values."""
     rows = table[table["quantity"] == "kappa"]
-    ax.errorbar(rows["grid"], rows["mean"], yerr=rows["half_width"].fillna(0.0), fmt="o-",
-                color="k", capsize=3, label="this study (95 % band)")
+    low, high = positive_band(rows["mean"], rows["half_width"])
+    ax.errorbar(rows["grid"], rows["mean"], yerr=[rows["mean"] - low, high - rows["mean"]],
+                fmt="o-", color="k", capsize=3, label="this study (95 % band, log space)")
     for (name, value), style in zip(KAPPA_REFERENCES.items(), ("--", "-.", ":"), strict=True):
         ax.axhline(value, ls=style, color="C3", lw=0.9)
         ax.annotate(f"{name} = {value:.2f}", (rows["grid"].min(), value), fontsize=7,
                     va="bottom")
     ax.set_xscale("log", base=2)
     ax.set_xlabel("grid (elements per side)")
-    ax.set_ylabel("kappa = (A/A0) / (p0 / (E* h'_rms))")
+    ax.set_ylabel(r"$\kappa = (A / A_0) \,/\, (p_0 / (E^* h'_\mathrm{rms}))$")
     ax.legend(fontsize=7, loc="lower right")
 
 
 def plot_grid_convergence(table: pd.DataFrame, path_png: str | os.PathLike,
-                          within: float = 0.01) -> None:
-    """Four panels: real area, peak pressure (over E* h'_rms), kappa, changes; PNG."""
+                          within: float = 0.01) -> Figure:
+    """Four panels: real area, peak pressure (over E* h'_rms), kappa, changes; PNG.
+
+    Bands of the 95 % intervals drawn in log (logit) space
+    (:func:`roughcontact.reports.plotting.positive_band`); returns the figure."""
     fig = Figure(figsize=(11, 8.5))
     FigureCanvasAgg(fig)
     axes = fig.subplots(2, 2)
     scale = table.attrs.get("pressure_scale", 1.0)
-    _plot_levels(axes[0, 0], table, "real_area_fraction", 1.0, "real area fraction A/A0")
-    _plot_levels(axes[0, 1], table, "max_pressure", 1.0 / scale, "p_max / (E* h'_rms)")
+    _plot_levels(axes[0, 0], table, "real_area_fraction", 1.0, r"real area fraction $A / A_0$")
+    _plot_levels(axes[0, 1], table, "max_pressure", 1.0 / scale,
+                 r"$p_\max / (E^* h'_\mathrm{rms})$")
     _plot_kappa(axes[1, 0], table)
     _plot_changes(axes[1, 1], table, within)
     fig.suptitle("Grid convergence on the periodic half-space: the same self-affine surfaces "
                  "on every grid (dashed: Richardson extrapolation)", fontsize=10)
     fig.tight_layout()
     save_figure(fig, path_png)
+    return fig
 
 
 def grid_convergence_report(contact_paths: Sequence, csv_path, png_path) -> pd.DataFrame:

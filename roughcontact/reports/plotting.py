@@ -16,9 +16,108 @@ from roughcontact.hashes import file_sha256
 from roughcontact.reports.execution import remove_stale_temporaries
 from roughcontact.study.provenance import atomic_path
 
+#: Mantissas whose minor ticks keep their labels, tried in turn until the labels of a
+#: log axis no longer overlap (the last: major labels only).
+MINOR_LABELS = ((2, 3, 5), (2, 5), (3,), ())
+
+
+def drawn_tick_labels(axis, renderer) -> list:
+    """Window extents of the non-empty tick labels ``axis`` draws (ticks within its view),
+    in their order along the axis."""
+    low, high = sorted(axis.get_view_interval())
+    boxes = []
+    for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+        if not low <= tick.get_loc() <= high:
+            continue
+        for label in (tick.label1, tick.label2):
+            if label.get_visible() and label.get_text():
+                boxes.append((tick.get_loc(), label.get_window_extent(renderer)))
+    return [box for _, box in sorted(boxes, key=lambda item: item[0])]
+
+
+def overlapping_labels(fig) -> list[tuple]:
+    """The pairs of tick labels of ``fig`` that overlap once drawn: ``(axes index, "x" or
+    "y", first box, second box)``."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    found = []
+    for index, ax in enumerate(fig.axes):
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            boxes = drawn_tick_labels(axis, renderer)
+            found += [(index, name, a, b) for k, a in enumerate(boxes) for b in boxes[k + 1:]
+                      if a.overlaps(b)]
+    return found
+
+
+def tidy_log_ticks(fig) -> None:
+    """Keep the tick labels of every log axis of ``fig`` from overlapping.
+
+    Matplotlib labels the minor ticks of a log axis spanning less than a
+    decade or two (``2x10^-1 3x10^-1 4x10^-1 ...``); on a narrow panel they
+    run into each other. Each such axis keeps the labels of fewer mantissas
+    (:data:`MINOR_LABELS`) until none overlap, then, if the major labels
+    still do, fewer major ticks. Draws the figure once, and again after each
+    round of changes (call it once the layout is set; :func:`save_figure`
+    does).
+    """
+    from matplotlib.ticker import LogLocator
+
+    steps = {}  # axis -> the next step to take on it
+    while True:
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        crowded = [axis for ax in fig.axes for axis in (ax.xaxis, ax.yaxis)
+                   if axis.get_scale() == "log" and _overlap(drawn_tick_labels(axis, renderer))]
+        crowded = [axis for axis in crowded if steps.get(axis, 0) < len(MINOR_LABELS) + 3]
+        if not crowded:
+            return
+        for axis in crowded:
+            step = steps.get(axis, 0)
+            if step < len(MINOR_LABELS):
+                axis.set_minor_formatter(_MantissaFormatter(MINOR_LABELS[step]))
+            else:  # major labels only, and still crowded: fewer decades labelled
+                axis.set_major_locator(LogLocator(numticks=8 - 2 * (step - len(MINOR_LABELS))))
+            steps[axis] = step + 1
+
+
+def _overlap(boxes) -> bool:
+    """Whether any two neighbouring boxes (in order along the axis) overlap."""
+    return any(a.overlaps(b) for a, b in zip(boxes, boxes[1:], strict=False))
+
+
+def _mantissa_formatter():
+    """The class of :class:`_MantissaFormatter`, made on first use (matplotlib stays an
+    import of the figures only)."""
+    import math
+
+    from matplotlib.ticker import LogFormatterSciNotation
+
+    class MantissaFormatter(LogFormatterSciNotation):
+        """Labels of the minor ticks whose mantissa is in ``keep`` (all of them
+        labelled, none of the others), major ticks as usual."""
+
+        def __init__(self, keep):
+            super().__init__(labelOnlyBase=False, minor_thresholds=(math.inf, math.inf))
+            self.keep = frozenset(keep)
+
+        def __call__(self, x, pos=None):
+            if x <= 0:
+                return ""
+            mantissa = round(x / 10 ** math.floor(math.log10(x) + 1e-9), 6)
+            keep = mantissa == 1 or mantissa in self.keep
+            return super().__call__(x, pos) if keep else ""
+
+    return MantissaFormatter
+
+
+def _MantissaFormatter(keep):  # noqa: N802 - stands for the class
+    return _mantissa_formatter()(keep)
+
 
 def save_figure(fig, *paths, dpi: int = 150) -> None:
-    """Save a matplotlib figure to each path (format from the suffix), atomically."""
+    """Save a matplotlib figure to each path (format from the suffix), atomically, with
+    the tick labels of its log axes kept apart (:func:`tidy_log_ticks`)."""
+    tidy_log_ticks(fig)
     for path in paths:
         path = Path(path)
         remove_stale_temporaries(path)
@@ -188,24 +287,94 @@ def mark_hardness(ax, validity, cells) -> float | None:
     return x
 
 
+#: How the figures draw bands (for captions and notes).
+BAND_NOTE = ("bands: 95 % confidence interval of the mean, drawn in log space (in logit "
+             "space for fractions), so that they stay within the quantity's range")
+
+
+def positive_band(mean, half_width):
+    """Lower and upper ends [unit of ``mean``] of the band of a positive quantity.
+
+    The aggregate tables give the Student-t interval ``mean +- half_width``
+    (95 %), symmetric. For a positive quantity averaged over few surfaces with
+    a large scatter its lower end falls below zero (n = 4: t = 3.18 times the
+    standard error), a value the quantity cannot take, and on a log axis the
+    band then has no lower edge. The mean of a positive, right-skewed quantity
+    scatters more upwards than downwards; the interval transformed to log
+    space (delta method: standard error of ``log(mean)`` = standard error /
+    mean) says so: ``mean * exp(-+ half_width / mean)``, positive,
+    asymmetric, and ``mean -+ half_width`` to first order when the band is
+    narrow (``half_width / mean = 0.1``: -9.5 % / +10.5 %). A zero mean (every
+    surface zero: no scatter) gives a zero band; a NaN half width (a single
+    surface) none.
+
+    Parameters
+    ----------
+    mean, half_width : array_like
+        Means and 95 % half widths of the table (``<quantity>_mean`` and
+        ``<quantity>_half_width``), non-negative.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Lower and upper ends.
+    """
+    import numpy as np
+
+    mean = np.asarray(mean, dtype=float)
+    ratio = np.divide(np.nan_to_num(np.asarray(half_width, dtype=float)), mean,
+                      out=np.zeros_like(mean), where=mean > 0)
+    return mean * np.exp(-ratio), mean * np.exp(ratio)
+
+
+def fraction_band(mean, half_width):
+    """Lower and upper ends of the band of a fraction (a share in [0, 1]).
+
+    As :func:`positive_band`, in logit space: ``logit(mean) -+ half_width /
+    (mean (1 - mean))``, mapped back; within (0, 1), ``mean -+ half_width``
+    to first order. A mean of 0 or 1 (no scatter) gives a zero band.
+    """
+    import numpy as np
+
+    mean = np.asarray(mean, dtype=float)
+    inside = (mean > 0) & (mean < 1)
+    spread = np.divide(np.nan_to_num(np.asarray(half_width, dtype=float)), mean * (1 - mean),
+                       out=np.zeros_like(mean), where=inside)
+    logit = np.log(np.where(inside, mean, 0.5) / np.where(inside, 1 - mean, 0.5))
+
+    def back(value):
+        return np.where(inside, 1.0 / (1.0 + np.exp(-value)), mean)
+
+    return back(logit - spread), back(logit + spread)
+
+
+#: The band of each kind of quantity (:func:`plot_band`).
+BANDS = {"positive": positive_band, "fraction": fraction_band}
+
+
 def plot_band(ax, frame, quantity: str, *, y_scale: float = 1.0, label=None, color=None,
-              linestyle="-"):
+              linestyle="-", band: str | None = None):
     """Mean curve of ``quantity`` against nominal pressure [MPa] with its confidence band.
 
-    ``frame`` holds one cell's rows of an aggregate table. Levels that rest on
+    ``frame`` holds one cell's rows of an aggregate table. The quantities of
+    the tables are positive (stiffness, pressures, deflections) or fractions
+    (``*_fraction``, shares above a hardness): their band is drawn in log
+    space (:func:`positive_band`) or logit space (:func:`fraction_band`), so
+    that it stays in their range; ``band`` names the kind (``"positive"``,
+    ``"fraction"``; default by the name of ``quantity``). Levels that rest on
     no surface are left out; a level resting on fewer surfaces than the cell
     has is drawn with a hollow marker, so a thin band there is not mistaken
     for a tight one. Returns the line.
     """
-    import numpy as np
-
     count = frame[f"{quantity}_count"].to_numpy()
     ok = count > 0
     x = frame["nominal_pressure"].to_numpy()[ok] / 1e6
-    y = frame[f"{quantity}_mean"].to_numpy()[ok] * y_scale
-    hw = np.nan_to_num(frame[f"{quantity}_half_width"].to_numpy()[ok] * y_scale)
+    mean = frame[f"{quantity}_mean"].to_numpy()[ok]
+    kind = band or ("fraction" if quantity.endswith("_fraction") else "positive")
+    low, high = BANDS[kind](mean, frame[f"{quantity}_half_width"].to_numpy()[ok])
+    y, low, high = mean * y_scale, low * y_scale, high * y_scale
     (line,) = ax.plot(x, y, label=label, color=color, linestyle=linestyle)
-    ax.fill_between(x, y - hw, y + hw, color=line.get_color(), alpha=0.2, linewidth=0)
+    ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, linewidth=0)
     partial = count[ok] < frame["surfaces"].to_numpy()[ok]
     if partial.any():
         ax.plot(x[partial], y[partial], "o", mfc="none", color=line.get_color(), ms=4)
@@ -336,5 +505,4 @@ def study_note(table) -> str:
     cells = table.drop_duplicates("cell")
     bad = int(cells["unconverged_steps"].sum())
     return (f"{int(cells['surfaces'].min())}-{int(cells['surfaces'].max())} surfaces per "
-            f"curve; bands: 95 % confidence interval of the mean; unconverged solves "
-            f"excluded: {bad}")
+            f"curve; {BAND_NOTE}; unconverged solves excluded: {bad}")

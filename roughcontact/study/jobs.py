@@ -27,7 +27,8 @@ import numpy as np
 
 from roughcontact.contact import cell as cell_module
 from roughcontact.contact import halfspace_criterion
-from roughcontact.elasticity import influence, operators
+from roughcontact.elasticity import definiteness, influence, operators
+from roughcontact.elasticity.protocol import DenseInfluence
 from roughcontact.errors import MeasurementError
 from roughcontact.study import sources
 from roughcontact.study.checks import memory_message
@@ -284,6 +285,44 @@ _SURFACE_JOBS = {GeneratedCell: _generated_surfaces, MeasuredCell: _measured_sur
 # Influence jobs: the elastic body of a geometry
 
 
+#: What to change when a built influence model is not positive definite.
+BUILD_ADVICE = ("A finite-element mesh that does not resolve the block gives such a matrix: "
+                "set body.mesh to refined or converged (they refine in plan until no element "
+                "is wider than the block is thick), or body.operator to halfspace for a thick "
+                "block (Love's half-space is positive definite).")
+#: What to do when a stored influence model is not positive definite.
+LOAD_ADVICE = ("Delete the file: the workflow rebuilds it, and the build refuses a model "
+               "that is not positive definite, naming the config keys to change.")
+
+
+def _certify_built(unit, key: str) -> definiteness.Certificate:
+    """Certify the model of geometry ``key`` positive definite before it is written."""
+    return definiteness.certify(unit, unit="m", advice=BUILD_ADVICE,
+                                name=f"the influence model E * C of geometry {key}")
+
+
+def certified_influence(unit, path, geometry: Geometry):
+    """The influence model read from ``path``, certified positive definite once.
+
+    A dense E * C [m] comes back as a
+    :class:`~roughcontact.elasticity.protocol.DenseInfluence` of the
+    geometry's grid, which keeps its certificate through the sweep's
+    batches (:mod:`roughcontact.elasticity.definiteness`); a matrix-free
+    operator keeps it itself.
+
+    Raises
+    ------
+    roughcontact.errors.IndefiniteOperator
+        Naming the file, with estimates of its extreme eigenvalues [m].
+    """
+    if isinstance(unit, np.ndarray):
+        block = geometry.block()
+        grid = block.grid if block.grid[0] * block.grid[1] == unit.shape[0] else None
+        unit = DenseInfluence(unit, block.element_area, grid)
+    definiteness.certify(unit, name=f"the influence file {path}", unit="m", advice=LOAD_ADVICE)
+    return unit
+
+
 def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
     n = unit.shape[0]
     nx, ny = geom.grid
@@ -297,21 +336,21 @@ def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
         "row_sum_max_m": float(rows.max()),
         "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
     }
-    if not eigmin > 0 and np.isfinite(eigmin):
-        raise FloatingPointError(f"geometry {key}: E * C is not positive definite "
-                                 f"(smallest eigenvalue {eigmin:.3g} m)")
+    checks["positive_definite"] = _certify_built(unit, key).method
     return checks
 
 
-def _operator_checks(op, geom) -> dict:
+def _operator_checks(op, geom, key: str) -> dict:
     nx, ny = geom.grid
     rows = op.matvec(np.ones(nx * ny))
     diag = op.diagonal()
+    certificate = _certify_built(op, key)
     return {
         "row_sum_min_m": float(rows.min()),
         "row_sum_max_m": float(rows.max()),
         "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
         "min_diagonal_m": float(diag.min()),
+        "positive_definite": certificate.method,
     }
 
 
@@ -321,12 +360,12 @@ def _dense_model(fe, geom, model, key: str) -> tuple:
 
 def _hybrid_model(fe, geom, model, key: str) -> tuple:
     unit = operators.hybrid_operator(geom, fe, model)
-    return unit, _operator_checks(unit, geom), {"coarse_mesh": model.mesh}
+    return unit, _operator_checks(unit, geom, key), {"coarse_mesh": model.mesh}
 
 
 def _halfspace_model(fe, geom, model, key: str) -> tuple:
     unit = operators.halfspace_operator(geom.grid, geom.size, geom.nu)
-    return unit, _operator_checks(unit, geom), {"coarse_mesh": model.mesh}
+    return unit, _operator_checks(unit, geom, key), {"coarse_mesh": model.mesh}
 
 
 #: How each influence model is made from the finite-element model's E * C:
@@ -472,6 +511,7 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
     start = time.perf_counter()
     surfaces = read_surfaces(surfaces_path)
     unit, geometry_attrs = read_influence(influence_path)
+    unit = certified_influence(unit, influence_path, job.geometry)
     heights = surfaces["heights"]
     m = heights.shape[0]
     name = f"{job.surface.key}__{job.geometry.key}"
@@ -514,7 +554,10 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
 
 __all__ = [
     "BATCH_SIZE",
+    "BUILD_ADVICE",
+    "LOAD_ADVICE",
     "build_influence",
     "build_surface_cell",
+    "certified_influence",
     "solve_contact_job",
 ]

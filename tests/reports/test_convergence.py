@@ -1,6 +1,7 @@
 """Tests of the influence-coefficient mesh-convergence study (roughcontact.convergence)."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -149,6 +150,20 @@ def test_plot_writes_a_png(study, tmp_path):
     image = imread(path)
     assert image.shape[0] > 600 and image.shape[1] > 1000
     assert image[..., :3].std() > 0.05  # not blank
+
+
+def test_plot_typesets_its_symbols(study, tmp_path):
+    table, _ = study
+    fig = plot_influence_convergence(table, tmp_path / "convergence.png")
+    stiffness = fig.axes[2]
+    assert stiffness.get_ylabel() == "$k_P$ [MPa]"  # was the plain text k_P
+    texts = [fig.get_suptitle()] + [t for ax in fig.axes
+                                     for t in (ax.get_title(), ax.get_xlabel(), ax.get_ylabel())]
+    for text in texts:  # every symbol inside $...$, which mathtext lays out
+        plain = re.sub(r"\$[^$]*\$", "", text)
+        assert not any(s in plain for s in ("k_P", "p_max", " nu ", "L =", "E C")), text
+    label = stiffness.yaxis.label
+    assert label._preprocess_math(label.get_text())[1] is True
 
 
 def test_richardson_recovers_a_power_law_and_refuses_oscillation():

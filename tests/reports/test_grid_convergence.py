@@ -27,6 +27,7 @@ from roughcontact.reports.grid_convergence import (
     fit_kappa,
     grid_convergence_report,
     kappa_levels,
+    plot_grid_convergence,
 )
 from roughcontact.study.config import validated
 from roughcontact.study.grid_convergence import (
@@ -157,3 +158,16 @@ def test_a_changed_or_foreign_file_is_refused(tiny, tmp_path):
         f.attrs["params"] = json.dumps(changed | {"surfaces": 3})
     with pytest.raises(ValueError, match="other settings"):
         grid_convergence_report([paths[0], other], tmp_path / "t.csv", tmp_path / "t.png")
+
+
+def test_the_figure_draws_bands_in_range_and_typesets_its_symbols(tiny, tmp_path):
+    _, _, _, table = tiny
+    fig = plot_grid_convergence(table, tmp_path / "figure.png")
+    area, pressure, kappa = fig.axes[:3]
+    for ax in (area, pressure):
+        for band in ax.collections:
+            ys = np.concatenate([path.vertices[:, 1] for path in band.get_paths()])
+            assert ys.min() > 0
+    assert area.get_ylabel() == "real area fraction $A / A_0$"
+    assert kappa.get_ylabel().startswith(r"$\kappa")
+    assert all(text.get_text().startswith("$p^*$") for text in area.get_legend().get_texts())
