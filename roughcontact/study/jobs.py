@@ -465,13 +465,18 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
     whose record ``job`` holds the surface cell, the geometry, the
     non-dimensional pressure P L / (E sigma) the sweep must reach and a capped
     job's cap H L / (E sigma); ``settings`` the solver's
-    (:meth:`~roughcontact.study.config.ContactSettings.params`). Returns the
-    root attributes written.
+    (:meth:`~roughcontact.study.config.ContactSettings.params`). The surface
+    and influence files must have been made for the job's cell (and the
+    configuration's ``study_seed``) and geometry, else
+    :class:`~roughcontact.errors.StoredFileError` names the file and the
+    field that differs. Returns the root attributes written.
     """
     job, settings = ContactJob.from_params(params), ContactSettings.from_section(settings)
     start = time.perf_counter()
-    surfaces = read_surfaces(surfaces_path)
-    unit, geometry_attrs = read_influence(influence_path)
+    # each input must have been made for this job (not only carry its name)
+    surfaces = read_surfaces(surfaces_path, cell=job.surface.params(),
+                             study_seed=None if config is None else config["study_seed"])
+    unit, geometry_attrs = read_influence(influence_path, geometry=job.geometry.params())
     heights = surfaces["heights"]
     m = heights.shape[0]
     name = f"{job.surface.key}__{job.geometry.key}"
