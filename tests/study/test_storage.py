@@ -2,7 +2,9 @@
 its job expects, the parameters the file was made for."""
 
 import dataclasses
+import errno
 import os
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -10,10 +12,10 @@ import pytest
 
 from roughcontact.contact.curves import NondimSweep
 from roughcontact.elasticity.operators import BlockOperator
-from roughcontact.errors import StoredFileError
+from roughcontact.errors import DiskFullError, StoredFileError
 from roughcontact.hashes import arrays_sha256
 from roughcontact.study import storage
-from roughcontact.study.provenance import canonical_json
+from roughcontact.study.provenance import atomic_path, canonical_json
 from roughcontact.study.records import Geometry, InfluenceModel
 from roughcontact.study.storage import CONTACT_ARRAYS, CONTACT_FIELDS
 
@@ -207,3 +209,51 @@ def test_a_contact_file_of_another_job_is_refused_and_labels_do_not_count(tmp_pa
     with pytest.raises(StoredFileError, match=r"geometry.mesh = \"refined\" in the file, "
                                               r"\"paper\" expected"):
         storage.read_contact(path, job=job | {"geometry": geometry("paper").params()})
+
+
+# ---------------------------------------------------------------------------
+# A full disk
+
+
+def test_a_full_disk_names_the_file_and_what_to_free(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    old = tmp_path / "results" / "contact" / "old.h5"
+    old.parent.mkdir(parents=True)
+    old.write_bytes(b"x" * 5000)
+    real_file = h5py.File
+
+    def full_disk(name, mode="r", **kwargs):
+        if mode == "w":  # a write that fills the disk part way
+            Path(name).write_bytes(b"y" * 3000)
+            raise OSError(errno.ENOSPC, "Can't synchronously write data (file write failed: "
+                                        "errno = 28, error message = 'No space left on device')")
+        return real_file(name, mode, **kwargs)
+
+    monkeypatch.setattr(storage.h5py, "File", full_disk)
+    target = Path("results", "surfaces", "cell.h5")
+    with pytest.raises(DiskFullError) as err:
+        surfaces_file(target)
+    message = str(err.value)
+    assert isinstance(err.value, OSError) and err.value.errno == errno.ENOSPC
+    assert message.startswith(f"{target}: cannot be written, the disk holding it is full")
+    assert "3 kB of it had been written" in message
+    assert f"{old.relative_to(tmp_path)} (5 kB)" in message  # what there is to free
+    assert "find results -name '.*.tmp*' -delete" in message
+    assert "Errno" not in message
+    assert not list(target.parent.iterdir())  # nothing half-written left
+    # space freed: the same write goes through
+    monkeypatch.setattr(storage.h5py, "File", real_file)
+    surfaces_file(target)
+    assert storage.read_surfaces(target)["heights"].shape == (3, 6, 5)
+
+
+def test_a_full_disk_under_any_atomic_write_is_named(tmp_path):
+    path = tmp_path / "table.csv"
+    with pytest.raises(DiskFullError, match=r"table\.csv: cannot be written.*full"):
+        with atomic_path(path) as tmp:
+            Path(tmp).write_text("a,b\n")
+            raise OSError(errno.EDQUOT, "Disk quota exceeded")
+    assert not list(tmp_path.iterdir())
+    with pytest.raises(PermissionError):  # other errors stay what they are
+        with atomic_path(path):
+            raise PermissionError(errno.EACCES, "Permission denied")
