@@ -167,5 +167,5 @@ def test_a_bad_key_is_named_in_one_line(tmp_path):
     proc = run(tmp_path, "-n", config=config)
     assert proc.returncode != 0
     output = proc.stdout + proc.stderr
-    assert "sweeps.small.sigma_um: -1 is less than or equal to the minimum of 0" in output
+    assert "sweeps.small.sigma_um: -1 is out of range: it must be above 0" in output
     assert len(output.splitlines()) < 30  # not the schema's text
