@@ -7,7 +7,6 @@ import os
 import re
 
 from snakemake.exceptions import WorkflowError
-from snakemake.logging import logger
 
 from roughcontact.study import grid_convergence, resources
 from roughcontact.study.cells import CONTACT_FIGURES, convergence_presets, study_plan
@@ -27,12 +26,12 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 NOTEBOOKS = os.path.join(workflow.basedir, "notebooks")
 # every job, cell and file key of the study, as typed records: made once per run
+# and every job's memory, reports included, within what a job may use (job_memory_gb)
 try:
     PLAN = study_plan(config)
+    resources.check_machine(config, plan=PLAN)
 except ConfigProblems as err:
     raise WorkflowError(str(err)) from None
-for _problem in resources.machine_problems(config, plan=PLAN):
-    logger.warning(f"Warning: {_problem}")
 FIGURES = PLAN.figures
 # contact studies: the paper's figures and the user's own sweeps
 STUDIES = PLAN.studies
@@ -275,8 +274,18 @@ def get_convergence_mem_mb(wildcards):
     return resources.convergence_mem_mb(PLAN.body, convergence_presets(config))
 
 
+def _on_demand_fits(kind):
+    """Refuse an on-demand report (asked for: its job is being planned) that would not
+    fit the memory a job may use."""
+    try:
+        resources.check_machine(config, plan=PLAN, kinds=(kind,))
+    except ConfigProblems as err:
+        raise WorkflowError(str(err)) from None
+
+
 def get_speed_vs_error_spectrum_files(wildcards):
     """The file of the grid study's spectrum (a PSD table or a measurement), if any."""
+    _on_demand_fits("speed_vs_error")
     spectrum = spectrum_from_entry(_report_settings("speed_vs_error").get("spectrum"))
     return [] if spectrum is None or spectrum.file is None else [spectrum.file]
 
@@ -297,6 +306,7 @@ def _grid_convergence():
 
 def get_grid_convergence_contacts(wildcards):
     """The contact file of every grid of the grid-convergence study."""
+    _on_demand_fits("grid_convergence")
     return [
         f"results/grid_convergence/contact_{grid}.h5"
         for grid in _grid_convergence().grids
