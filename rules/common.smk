@@ -6,7 +6,7 @@ import json
 import os
 import re
 
-from snakemake.exceptions import WorkflowError
+from snakemake.exceptions import IncompleteCheckpointException, WorkflowError
 
 from roughcontact.study import grid_convergence, resources
 from roughcontact.study.cells import CONTACT_FIGURES, convergence_presets, study_plan
@@ -18,6 +18,8 @@ from roughcontact.study.config import (
 )
 from roughcontact.study.grid_convergence import GridConvergenceSettings
 from roughcontact.study.provenance import canonical_json, config_hash
+from roughcontact.study.records import InfluenceModel
+from roughcontact.study.storage import read_choice
 from roughcontact.study.sources import spectrum_from_entry
 from roughcontact.study.studies import resolve_source, source_name
 
@@ -43,6 +45,7 @@ AGGREGATES = PLAN.aggregates
 
 
 wildcard_constraints:
+    auto="|".join(re.escape(k) for k in PLAN.choices) or "__none__",
     cell="|".join(re.escape(k) for k in SURFACE_CELLS) or "__none__",
     fig="|".join(FIGURES) or "__none__",
     geometry="|".join(re.escape(k) for k in GEOMETRIES) or "__none__",
@@ -61,7 +64,12 @@ def get_final_outputs():
     figures = expand(
         "results/figures/{fig}.{ext}", fig=FIGURES, ext=("png", "pdf", "ipynb")
     ) + [f"results/figures/{fig}.csv" for fig in FIGURES if fig.startswith("table_")]
-    influence = expand("results/influence/{geometry}.h5", geometry=GEOMETRIES)
+    # a half-space that only a choice of operator: auto may pick is built if picked
+    influence = [
+        f"results/influence/{key}.h5"
+        for key in GEOMETRIES
+        if key not in PLAN.alternatives
+    ] + [f"results/influence/choices/{key}.json" for key in PLAN.choices]
     aggregates = expand(
         "results/aggregates/{study}.{ext}",
         study=AGGREGATES,
@@ -81,6 +89,62 @@ def get_final_outputs():
     return figures + influence + aggregates + audit + reports + ["results/config.yaml"]
 
 
+# ---- operator: auto, resolved when the workflow runs ---------------------------
+# A geometry of operator: auto becomes its planned model (dense or hybrid) or the
+# half-space, as its choice (a checkpoint) says; the resolved geometry has the key
+# and files of a geometry configured with that model.
+
+
+def resolved_geometry(geometry):
+    """The geometry ``geometry`` resolves to (itself unless it is ``operator: auto``)."""
+    if geometry.key not in PLAN.choices:
+        return geometry
+    path = checkpoints.influence_choice.get(auto=geometry.key).output[0]
+    choice = read_choice(path, geometry=geometry.params())
+    return geometry.resolved(InfluenceModel(choice["operator"]))
+
+
+def resolved_cells(study):
+    """The study cells of ``study`` on their resolved geometries."""
+    return [
+        dataclasses.replace(cell, geometry=resolved_geometry(cell.geometry))
+        for cell in PLAN.cells[study]
+    ]
+
+
+def resolved_jobs():
+    """The contact jobs the study cells run, on their resolved geometries, by key."""
+    jobs = {}
+    for name in STUDIES:  # the plan's order
+        for cell in resolved_cells(name):
+            jobs.setdefault(cell.job.key, cell.job)
+    return jobs
+
+
+def settled(function, *args):
+    """``function(*args)``, or with every choice taken as planned while a choice is
+    still to be made (params are read before a checkpoint has run; the job is
+    planned again after it)."""
+    try:
+        return function(*args)
+    except IncompleteCheckpointException:
+        return None
+
+
+def get_choice_geometry(wildcards):
+    return PLAN.choices[wildcards.auto].params()
+
+
+def get_choice_planned(wildcards):
+    """The planned model of an operator: auto geometry (its first candidate)."""
+    return PLAN.choices[wildcards.auto].candidates(PLAN.build.max_bytes)[0].params()
+
+
+def get_choice_input(wildcards):
+    planned = PLAN.choices[wildcards.auto].candidates(PLAN.build.max_bytes)[0]
+    return f"results/influence/{planned.key}.h5"
+
+
 # ---- Params of the jobs: the plan's records in their plain form (params()) --
 
 
@@ -89,9 +153,12 @@ def get_body_geometry(wildcards):
 
 
 def get_convergence_stored(wildcards):
-    """Preset -> influence file of the body's geometry with that mesh."""
+    """Preset -> influence file of the body's geometry with that mesh (of operator: auto,
+    its planned model: the report compares finite-element models)."""
+    max_bytes = PLAN.build.max_bytes
     return {
-        mesh: f"results/influence/{dataclasses.replace(PLAN.body, mesh=mesh).key}.h5"
+        mesh: "results/influence/"
+        f"{dataclasses.replace(PLAN.body, mesh=mesh).candidates(max_bytes)[0].key}.h5"
         for mesh in convergence_presets(config)
     }
 
@@ -100,16 +167,20 @@ def get_convergence_inputs(wildcards):
     return sorted(get_convergence_stored(wildcards).values())
 
 
+def _audit_studies():
+    return {name: [c.params() for c in resolved_cells(name)] for name in AGGREGATES}
+
+
 def get_audit_studies(wildcards):
     # each cell once: a study "from:" another (fig12 from fig07, the measured figure
     # from its sweep) has the same cells
-    return {name: [c.params() for c in PLAN.cells[name]] for name in AGGREGATES}
+    return settled(_audit_studies)
 
 
 def get_audit_stamp(wildcards):
     """A hash of the size, mtime and ctime of every file the audit reads."""
     digest = hashlib.sha256()
-    for path in get_audit_inputs(wildcards):
+    for path in settled(get_audit_inputs, wildcards) or []:
         try:
             st = os.stat(path)
             digest.update(
@@ -121,8 +192,8 @@ def get_audit_stamp(wildcards):
 
 
 def get_audit_inputs(wildcards):
-    files = set()
-    for key, job in CONTACT_JOBS.items():
+    files = {f"results/influence/choices/{key}.json" for key in PLAN.choices}
+    for key, job in resolved_jobs().items():
         files.add(f"results/contact/{key}.h5")
         files.add(f"results/surfaces/{job.surface.key}.h5")
         files.add(f"results/influence/{job.geometry.key}.h5")
@@ -130,7 +201,7 @@ def get_audit_inputs(wildcards):
 
 
 def get_audit_jobs(wildcards):
-    return {key: job.params() for key, job in CONTACT_JOBS.items()}
+    return settled(lambda: {key: job.params() for key, job in resolved_jobs().items()})
 
 
 def get_contact_params(wildcards):
@@ -146,11 +217,11 @@ def get_contact_inputs(wildcards):
 
 
 def get_aggregate_cells(wildcards):
-    return [cell.params() for cell in PLAN.cells[wildcards.study]]
+    return settled(lambda: [cell.params() for cell in resolved_cells(wildcards.study)])
 
 
 def get_aggregate_inputs(wildcards):
-    cells = PLAN.cells[wildcards.study]
+    cells = resolved_cells(wildcards.study)
     return sorted({f"results/contact/{cell.contact_key}.h5" for cell in cells})
 
 
@@ -223,6 +294,16 @@ def get_influence_runtime(wildcards, attempt):
 def get_influence_mem_mb(wildcards):
     """Estimated peak memory of an influence build [MB], for the scheduler."""
     return resources.influence_mem_mb(GEOMETRIES[wildcards.geometry], PLAN.build)
+
+
+def get_choice_runtime(wildcards, attempt):
+    planned = PLAN.choices[wildcards.auto].candidates(PLAN.build.max_bytes)[0]
+    return resources.choice_runtime(planned, PLAN.build, attempt)
+
+
+def get_choice_mem_mb(wildcards):
+    planned = PLAN.choices[wildcards.auto].candidates(PLAN.build.max_bytes)[0]
+    return resources.choice_mem_mb(planned, PLAN.build)
 
 
 def get_surfaces_runtime(wildcards, attempt):

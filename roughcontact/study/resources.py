@@ -29,6 +29,7 @@ from types import MappingProxyType
 
 import yaml
 
+from roughcontact.contact.halfspace_criterion import CALIBRATION
 from roughcontact.elasticity.operators import COARSE_MAX, coarsened_side
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
@@ -225,6 +226,22 @@ def surfaces_runtime(cell, attempt: int = 1) -> int:
     return runtime_minutes(surfaces_seconds(cell), attempt)
 
 
+def choice_seconds(planned: Geometry, build: BuildSettings) -> float:
+    """Wall time [s] of the choice of an ``operator: auto`` geometry: the half-space
+    criterion's solves (its surfaces and steps, on both models) on the planned model's
+    finite-element grid, as dense solves by CG."""
+    grid = planned.finite_element_model(build.max_bytes).grid
+    solves = 2 * CALIBRATION["surfaces"] * CALIBRATION["steps"]
+    settings = ContactSettings(method="cg", tol=1e-8, precision="double", steps=1,
+                               pressure_levels=2)
+    return solves * dense_solve_seconds(grid, settings)
+
+
+def choice_runtime(planned: Geometry, build: BuildSettings, attempt: int = 1) -> int:
+    """Requested wall time [min] of a choice of ``operator: auto`` (:func:`choice_seconds`)."""
+    return runtime_minutes(choice_seconds(planned, build), attempt)
+
+
 def summary_runtime(attempt: int = 1) -> int:
     """Wall time [min] of an aggregate, a figure or the config snapshot: 3-6 s
     measured (a figure starts a notebook kernel), asked as 30 s."""
@@ -326,6 +343,13 @@ def stored_bytes(geometry: Geometry, build: BuildSettings) -> int:
     if not _dense(geometry, build):
         return DOUBLE_BYTES * (COARSE_MAX**2) ** 2
     return DOUBLE_BYTES * (nx * ny) ** 2
+
+
+def choice_mem_mb(planned: Geometry, build: BuildSettings) -> int:
+    """Peak memory [MB] of a choice of ``operator: auto``: the planned model read (the
+    dense matrix, or the coarse correction and Love's coarse matrix beside it) as the
+    audit holds one, plus its base."""
+    return audit_mem_mb([planned], build)
 
 
 def audit_mem_mb(geometries, build: BuildSettings) -> int:

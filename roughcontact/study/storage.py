@@ -434,6 +434,32 @@ def read_influence(path: str | os.PathLike, *, geometry: dict | None = None):
 
 
 # ---------------------------------------------------------------------------
+# Choices of operator: auto (JSON)
+
+
+def write_choice(path: str | os.PathLike, choice: dict) -> None:
+    """Write the choice of an ``operator: auto`` geometry (JSON, atomically)."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "w") as f:
+            json.dump(choice, f, indent=1, sort_keys=True)
+
+
+def read_choice(path: str | os.PathLike, *, geometry: dict | None = None) -> dict:
+    """The choice of an ``operator: auto`` geometry (:func:`write_choice`); with the
+    ``geometry`` (its ``params()``) a reader expects, it must have been made for it
+    (:func:`check_attributes`)."""
+    try:
+        with open(path) as f:
+            choice = json.load(f)
+    except ValueError as err:
+        raise StoredFileError(f"{path}: not a choice of operator: auto (not JSON: {err}); "
+                              f"{rebuild(path)}", path) from None
+    if geometry is not None:
+        check_attributes(path, choice, {"geometry": geometry})
+    return choice
+
+
+# ---------------------------------------------------------------------------
 # Contact files
 
 
