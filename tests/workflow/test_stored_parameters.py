@@ -11,7 +11,7 @@ import shutil
 
 import pandas as pd
 import pytest
-from test_stored_results import run
+from test_stored_results import copy_of, finish, run
 
 pytestmark = pytest.mark.workflow
 
@@ -23,17 +23,13 @@ AGGREGATE = ("results", "aggregates", "meshes.csv")
 
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
-    workdir = tmp_path_factory.mktemp("meshes")
-    proc = run(workdir, config=SWEEP)
-    assert proc.returncode == 0, proc.stderr[-4000:]
-    return workdir
+    return finish(tmp_path_factory, "meshes", config=SWEEP)
 
 
 @pytest.fixture
 def swapped(finished, tmp_path):
-    """A copy of the run with the paper mesh's influence file over the refined mesh's."""
-    target = tmp_path / "run"
-    shutil.copytree(finished, target, symlinks=True)
+    """A copy of the run and its paper and refined meshes' influence files."""
+    target = copy_of(finished, tmp_path)
     folder = target / "results" / "influence"
     paper, = folder.glob("*_paper.h5")
     refined, = folder.glob("*_refined.h5")

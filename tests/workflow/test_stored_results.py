@@ -35,19 +35,29 @@ def run(workdir, *targets, config=None):
                           env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
 
 
-@pytest.fixture(scope="module")
-def finished(tmp_path_factory):
-    workdir = tmp_path_factory.mktemp("sweep")
-    proc = run(workdir)
+def finish(tmp_path_factory, name: str, config=None) -> Path:
+    """A finished run of ``config`` (default: the sweep) in a new folder."""
+    workdir = tmp_path_factory.mktemp(name)
+    proc = run(workdir, config=config)
     assert proc.returncode == 0, proc.stderr[-4000:]
     return workdir
 
 
+def copy_of(workdir: Path, tmp_path: Path) -> Path:
+    """A copy of a finished run, to damage."""
+    target = tmp_path / "run"
+    shutil.copytree(workdir, target, symlinks=True)
+    return target
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    return finish(tmp_path_factory, "sweep")
+
+
 @pytest.fixture
 def copy(finished, tmp_path):
-    target = tmp_path / "run"
-    shutil.copytree(finished, target, symlinks=True)
-    return target
+    return copy_of(finished, tmp_path)
 
 
 def state(folder: Path) -> dict:
