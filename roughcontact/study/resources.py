@@ -438,6 +438,8 @@ MEMORY_KEYS = MappingProxyType({
                       "(surfaces.grid: its solver study uses dense matrices of it)",
     "grid_convergence": "Use smaller reports.grid_convergence.grids or fewer "
                         "reports.grid_convergence.surfaces",
+    "influence_choice": "Set body.operator: dense or hybrid in place of auto, or use a "
+                        "smaller grid (surfaces.grid)",
     "audit": "Set body.operator: auto (the audit reads each influence model), or use a "
              "smaller grid (surfaces.grid)",
     "audit_verify": "Set audit.verify: false or body.operator: auto, or use a smaller grid "
@@ -447,8 +449,13 @@ MEMORY_KEYS = MappingProxyType({
 
 def _report_memory(config: dict, plan) -> dict[str, dict[str, int]]:
     """Planned memory [MB] of the jobs of the default target besides the study's: the
-    mesh-convergence report when configured, and the audits; by kind of job and job."""
+    choices of ``operator: auto``, the mesh-convergence report when configured, and the
+    audits; by kind of job and job."""
     out = {}
+    if plan.choices:
+        out["influence_choice"] = {
+            key: choice_mem_mb(geometry.candidates(plan.build.max_bytes)[0], plan.build)
+            for key, geometry in plan.choices.items()}
     if "influence_convergence" in config["reports"]:  # optional: a report to run
         presets = list(config["reports"]["influence_convergence"]["presets"])
         out["influence_convergence"] = {"influence_convergence":
@@ -477,8 +484,8 @@ def on_demand_memory(config: dict, plan) -> dict[str, dict[str, int]]:
 def planned_memory(config: dict, plan=None) -> dict[str, dict[str, int]]:
     """Planned peak memory [MB] of every job a validated ``config`` (its ``plan``) runs by
     default, by kind of job (:data:`MEMORY_KEYS`) and job: the contact, influence and
-    surfaces jobs, the mesh-convergence report when configured and the audits (the
-    reports made on demand: :func:`on_demand_memory`)."""
+    surfaces jobs, the choices of ``operator: auto``, the mesh-convergence report when
+    configured and the audits (the reports made on demand: :func:`on_demand_memory`)."""
     plan = study_plan(config) if plan is None else plan
     jobs = {rule: {key: mem_mb for key, (_, mem_mb) in by_key.items()}
             for rule, by_key in predictions(config, plan).items()}
