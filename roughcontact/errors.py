@@ -54,3 +54,19 @@ class IndefiniteOperator(ValueError):
         self.name = name
         self.smallest = smallest
         self.largest = largest
+
+
+class DiskFullError(OSError):
+    """A result cannot be written: the file system holding it is full (or the user's
+    quota is). Nothing half-written is left behind. The message names the file, the
+    space left, the largest results beside it and what to free; ``path`` is kept as an
+    attribute (and ``errno`` is the system's: ENOSPC or EDQUOT).
+    """
+
+    def __init__(self, message: str, path=None, errno: int | None = None):
+        super().__init__(errno, message)
+        self.path = None if path is None else str(path)
+        self.message = message
+
+    def __str__(self) -> str:
+        return self.message

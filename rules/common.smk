@@ -6,8 +6,7 @@ import json
 import os
 import re
 
-from snakemake.exceptions import WorkflowError
-from snakemake.logging import logger
+from snakemake.exceptions import IncompleteCheckpointException, WorkflowError
 
 from roughcontact.study import grid_convergence, resources
 from roughcontact.study.cells import CONTACT_FIGURES, convergence_presets, study_plan
@@ -19,6 +18,8 @@ from roughcontact.study.config import (
 )
 from roughcontact.study.grid_convergence import GridConvergenceSettings
 from roughcontact.study.provenance import canonical_json, config_hash
+from roughcontact.study.records import InfluenceModel
+from roughcontact.study.storage import read_choice
 from roughcontact.study.sources import spectrum_from_entry
 from roughcontact.study.studies import resolve_source, source_name
 
@@ -27,12 +28,12 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 NOTEBOOKS = os.path.join(workflow.basedir, "notebooks")
 # every job, cell and file key of the study, as typed records: made once per run
+# and every job's memory, reports included, within what a job may use (job_memory_gb)
 try:
     PLAN = study_plan(config)
+    resources.check_machine(config, plan=PLAN)
 except ConfigProblems as err:
     raise WorkflowError(str(err)) from None
-for _problem in resources.machine_problems(config, plan=PLAN):
-    logger.warning(f"Warning: {_problem}")
 FIGURES = PLAN.figures
 # contact studies: the paper's figures and the user's own sweeps
 STUDIES = PLAN.studies
@@ -44,6 +45,7 @@ AGGREGATES = PLAN.aggregates
 
 
 wildcard_constraints:
+    auto="|".join(re.escape(k) for k in PLAN.choices) or "__none__",
     cell="|".join(re.escape(k) for k in SURFACE_CELLS) or "__none__",
     fig="|".join(FIGURES) or "__none__",
     geometry="|".join(re.escape(k) for k in GEOMETRIES) or "__none__",
@@ -62,7 +64,12 @@ def get_final_outputs():
     figures = expand(
         "results/figures/{fig}.{ext}", fig=FIGURES, ext=("png", "pdf", "ipynb")
     ) + [f"results/figures/{fig}.csv" for fig in FIGURES if fig.startswith("table_")]
-    influence = expand("results/influence/{geometry}.h5", geometry=GEOMETRIES)
+    # a half-space that only a choice of operator: auto may pick is built if picked
+    influence = [
+        f"results/influence/{key}.h5"
+        for key in GEOMETRIES
+        if key not in PLAN.alternatives
+    ] + [f"results/influence/choices/{key}.json" for key in PLAN.choices]
     aggregates = expand(
         "results/aggregates/{study}.{ext}",
         study=AGGREGATES,
@@ -82,6 +89,62 @@ def get_final_outputs():
     return figures + influence + aggregates + audit + reports + ["results/config.yaml"]
 
 
+# ---- operator: auto, resolved when the workflow runs ---------------------------
+# A geometry of operator: auto becomes its planned model (dense or hybrid) or the
+# half-space, as its choice (a checkpoint) says; the resolved geometry has the key
+# and files of a geometry configured with that model.
+
+
+def resolved_geometry(geometry):
+    """The geometry ``geometry`` resolves to (itself unless it is ``operator: auto``)."""
+    if geometry.key not in PLAN.choices:
+        return geometry
+    path = checkpoints.influence_choice.get(auto=geometry.key).output[0]
+    choice = read_choice(path, geometry=geometry.params())
+    return geometry.resolved(InfluenceModel(choice["operator"]))
+
+
+def resolved_cells(study):
+    """The study cells of ``study`` on their resolved geometries."""
+    return [
+        dataclasses.replace(cell, geometry=resolved_geometry(cell.geometry))
+        for cell in PLAN.cells[study]
+    ]
+
+
+def resolved_jobs():
+    """The contact jobs the study cells run, on their resolved geometries, by key."""
+    jobs = {}
+    for name in STUDIES:  # the plan's order
+        for cell in resolved_cells(name):
+            jobs.setdefault(cell.job.key, cell.job)
+    return jobs
+
+
+def settled(function, *args):
+    """``function(*args)``, or with every choice taken as planned while a choice is
+    still to be made (params are read before a checkpoint has run; the job is
+    planned again after it)."""
+    try:
+        return function(*args)
+    except IncompleteCheckpointException:
+        return None
+
+
+def get_choice_geometry(wildcards):
+    return PLAN.choices[wildcards.auto].params()
+
+
+def get_choice_planned(wildcards):
+    """The planned model of an operator: auto geometry (its first candidate)."""
+    return PLAN.choices[wildcards.auto].candidates(PLAN.build.max_bytes)[0].params()
+
+
+def get_choice_input(wildcards):
+    planned = PLAN.choices[wildcards.auto].candidates(PLAN.build.max_bytes)[0]
+    return f"results/influence/{planned.key}.h5"
+
+
 # ---- Params of the jobs: the plan's records in their plain form (params()) --
 
 
@@ -90,9 +153,12 @@ def get_body_geometry(wildcards):
 
 
 def get_convergence_stored(wildcards):
-    """Preset -> influence file of the body's geometry with that mesh."""
+    """Preset -> influence file of the body's geometry with that mesh (of operator: auto,
+    its planned model: the report compares finite-element models)."""
+    max_bytes = PLAN.build.max_bytes
     return {
-        mesh: f"results/influence/{dataclasses.replace(PLAN.body, mesh=mesh).key}.h5"
+        mesh: "results/influence/"
+        f"{dataclasses.replace(PLAN.body, mesh=mesh).candidates(max_bytes)[0].key}.h5"
         for mesh in convergence_presets(config)
     }
 
@@ -101,16 +167,20 @@ def get_convergence_inputs(wildcards):
     return sorted(get_convergence_stored(wildcards).values())
 
 
+def _audit_studies():
+    return {name: [c.params() for c in resolved_cells(name)] for name in AGGREGATES}
+
+
 def get_audit_studies(wildcards):
     # each cell once: a study "from:" another (fig12 from fig07, the measured figure
     # from its sweep) has the same cells
-    return {name: [c.params() for c in PLAN.cells[name]] for name in AGGREGATES}
+    return settled(_audit_studies)
 
 
 def get_audit_stamp(wildcards):
     """A hash of the size, mtime and ctime of every file the audit reads."""
     digest = hashlib.sha256()
-    for path in get_audit_inputs(wildcards):
+    for path in settled(get_audit_inputs, wildcards) or []:
         try:
             st = os.stat(path)
             digest.update(
@@ -122,8 +192,8 @@ def get_audit_stamp(wildcards):
 
 
 def get_audit_inputs(wildcards):
-    files = set()
-    for key, job in CONTACT_JOBS.items():
+    files = {f"results/influence/choices/{key}.json" for key in PLAN.choices}
+    for key, job in resolved_jobs().items():
         files.add(f"results/contact/{key}.h5")
         files.add(f"results/surfaces/{job.surface.key}.h5")
         files.add(f"results/influence/{job.geometry.key}.h5")
@@ -131,7 +201,7 @@ def get_audit_inputs(wildcards):
 
 
 def get_audit_jobs(wildcards):
-    return {key: job.params() for key, job in CONTACT_JOBS.items()}
+    return settled(lambda: {key: job.params() for key, job in resolved_jobs().items()})
 
 
 def get_contact_params(wildcards):
@@ -147,11 +217,11 @@ def get_contact_inputs(wildcards):
 
 
 def get_aggregate_cells(wildcards):
-    return [cell.params() for cell in PLAN.cells[wildcards.study]]
+    return settled(lambda: [cell.params() for cell in resolved_cells(wildcards.study)])
 
 
 def get_aggregate_inputs(wildcards):
-    cells = PLAN.cells[wildcards.study]
+    cells = resolved_cells(wildcards.study)
     return sorted({f"results/contact/{cell.contact_key}.h5" for cell in cells})
 
 
@@ -226,6 +296,16 @@ def get_influence_mem_mb(wildcards):
     return resources.influence_mem_mb(GEOMETRIES[wildcards.geometry], PLAN.build)
 
 
+def get_choice_runtime(wildcards, attempt):
+    planned = PLAN.choices[wildcards.auto].candidates(PLAN.build.max_bytes)[0]
+    return resources.choice_runtime(planned, PLAN.build, attempt)
+
+
+def get_choice_mem_mb(wildcards):
+    planned = PLAN.choices[wildcards.auto].candidates(PLAN.build.max_bytes)[0]
+    return resources.choice_mem_mb(planned, PLAN.build)
+
+
 def get_surfaces_runtime(wildcards, attempt):
     return resources.surfaces_runtime(SURFACE_CELLS[wildcards.cell], attempt)
 
@@ -275,8 +355,18 @@ def get_convergence_mem_mb(wildcards):
     return resources.convergence_mem_mb(PLAN.body, convergence_presets(config))
 
 
+def _on_demand_fits(kind):
+    """Refuse an on-demand report (asked for: its job is being planned) that would not
+    fit the memory a job may use."""
+    try:
+        resources.check_machine(config, plan=PLAN, kinds=(kind,))
+    except ConfigProblems as err:
+        raise WorkflowError(str(err)) from None
+
+
 def get_speed_vs_error_spectrum_files(wildcards):
     """The file of the grid study's spectrum (a PSD table or a measurement), if any."""
+    _on_demand_fits("speed_vs_error")
     spectrum = spectrum_from_entry(_report_settings("speed_vs_error").get("spectrum"))
     return [] if spectrum is None or spectrum.file is None else [spectrum.file]
 
@@ -297,6 +387,7 @@ def _grid_convergence():
 
 def get_grid_convergence_contacts(wildcards):
     """The contact file of every grid of the grid-convergence study."""
+    _on_demand_fits("grid_convergence")
     return [
         f"results/grid_convergence/contact_{grid}.h5"
         for grid in _grid_convergence().grids

@@ -20,3 +20,27 @@ rule influence:
         max_memory_gb=config["body"]["max_memory_gb"],
     script:
         "../scripts/build_influence.py"
+
+
+# operator: auto: the half-space where its errors, measured on the planned model
+# (dense or hybrid, built above under its own name), meet body.halfspace_tolerance,
+# else that model. The choice decides which contact jobs run (a checkpoint), so a
+# geometry that resolves to the model it had keeps its files.
+checkpoint influence_choice:
+    input:
+        get_choice_input,
+    output:
+        "results/influence/choices/{auto}.json",
+    log:
+        "results/logs/influence/choices/{auto}.log",
+    benchmark:
+        "results/benchmarks/rules/influence_choice/{auto}.tsv"
+    threads: 1
+    resources:
+        mem_mb=get_choice_mem_mb,
+        runtime=get_choice_runtime,
+    params:
+        geometry=get_choice_geometry,
+        planned=get_choice_planned,
+    script:
+        "../scripts/choose_influence.py"

@@ -5,7 +5,8 @@ from roughcontact.study.logs import route_logging
 from roughcontact.study.provenance import config_hash
 
 route_logging(snakemake.log[0])
-table = audit_table(snakemake.params.studies, levels=snakemake.params.levels)
+table = audit_table(snakemake.params.studies, levels=snakemake.params.levels,
+                    study_seed=snakemake.config["study_seed"])
 write_audit(table, snakemake.output.csv, snakemake.output.md,
             config_hash=config_hash(snakemake.config))
 flagged = table[table["flagged"]]

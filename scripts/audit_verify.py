@@ -6,7 +6,7 @@ from roughcontact.study.provenance import atomic_path
 
 route_logging(snakemake.log[0])
 table = verify_sample(snakemake.params.jobs, snakemake.params.sample, snakemake.params.seed,
-                      snakemake.config["contact"])
+                      snakemake.config["contact"], study_seed=snakemake.config["study_seed"])
 with atomic_path(snakemake.output[0]) as tmp:
     table.to_csv(tmp, index=False)
 bad = table[~table["ok"]]

@@ -2,11 +2,13 @@
 
 :func:`audit_table` collects, for each study cell, what produced it (its
 parameters, seeds, surfaces, influence matrix, solver settings, versions)
-and whether it can be trusted (convergence, realised moments against their
-targets, content hashes against the files), and flags the cells that fail.
-:func:`verify_sample` re-solves a seeded random sample of stored contact
-batches from their stored inputs and compares the result with what is
-stored: bit-identical for the same library versions.
+and whether it can be trusted (each file made for the cell's parameters,
+convergence, realised moments against their targets, content hashes against
+the files), and flags the cells that fail. :func:`verify_sample` first
+checks that every stored file of every job was made for the job's
+parameters (:func:`check_job_files`), then re-solves a seeded random sample
+of stored contact batches from their stored inputs and compares the result
+with what is stored: bit-identical for the same library versions.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from roughcontact.study.aggregation import validity_rows, validity_summary
 from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.study.records import Geometry, StudyCell
 from roughcontact.study.storage import (
+    check_parameters,
     contact_datasets,
     read_contact,
     read_influence,
@@ -107,10 +110,13 @@ def _moment_check(stats: dict, target: dict) -> tuple[dict, list[str]]:
 
 
 def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
-               levels: int = HARDNESS_LEVELS) -> dict:
+               levels: int = HARDNESS_LEVELS, study_seed: int | None = None) -> dict:
     """One row of the audit: parameters, provenance, checks and flags of a study cell.
 
     ``levels``: nominal-pressure levels of the hardness check (:func:`_hardness_check`).
+    Each file must have been made for the cell (its surface cell and
+    ``study_seed``, its geometry, its contact job), else the cell is flagged
+    with the file, the field, the value expected and the value found.
     """
     root = Path(root)
     key = StudyCell.from_params(cell).contact_key
@@ -136,24 +142,26 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
         row["flags"] = "missing: " + ", ".join(missing)
         return row
     try:
-        return _checked_cell(row, cell, surf_path, infl_path, cont_path, levels)
-    except StoredFileError as err:  # unreadable, or changed since it was written
+        return _checked_cell(row, cell, surf_path, infl_path, cont_path, levels, study_seed)
+    except StoredFileError as err:  # unreadable, made for another cell, or changed since
         log.warning("%s", err)
         row["flags"] = f"unusable file: {err}"
         return row
 
 
-def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels) -> dict:
+def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels,
+                  study_seed) -> dict:
     flags = []
     s, g = cell["surface"], cell["geometry"]
-    surfaces = read_surfaces(surf_path)
+    surfaces = read_surfaces(surf_path, cell=s, study_seed=study_seed)
     row["study_seed"] = int(surfaces["attrs"]["study_seed"])
     row["seeds"] = " ".join(str(int(v)) for v in surfaces["seeds"])
     moments, moment_flags = _moment_check(surfaces["stats"], s)
     row.update(moments)
     flags += moment_flags
 
-    unit, geometry_attrs = read_influence(infl_path)  # verified against its content hash
+    # made for this geometry and verified against its content hash
+    unit, geometry_attrs = read_influence(infl_path, geometry=g)
     influence_hash = geometry_attrs["content_sha256"]
     row["operator"] = geometry_attrs.get("operator", "dense")
     row["influence_sha256"] = influence_hash
@@ -161,7 +169,7 @@ def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels
         MESH_DIAGONAL_ERROR.get(g["mesh"], float("nan")) if row["operator"] == "dense"
         else OPERATOR_DIAGONAL_ERROR.get(row["operator"], float("nan")))
 
-    stored, attrs = read_contact(cont_path)
+    stored, attrs = read_contact(cont_path, job=StudyCell.from_params(cell).job.params())
     arrays = contact_datasets(stored)
     row.update({
         "method": attrs["sweep_method"], "tol": float(attrs["sweep_tol"]),
@@ -214,10 +222,10 @@ def _hardness_check(row: dict, cell: dict, stored, levels: int) -> list[str]:
 
 
 def audit_table(studies: dict[str, list[dict]], root: str | Path = ".",
-                levels: int = HARDNESS_LEVELS) -> pd.DataFrame:
+                levels: int = HARDNESS_LEVELS, study_seed: int | None = None) -> pd.DataFrame:
     """The audit rows of every cell of every study (``{name: contact_cells}``);
-    ``levels`` as in :func:`audit_cell`."""
-    rows = [audit_cell(name, i, cell, root, levels)
+    ``levels`` and ``study_seed`` as in :func:`audit_cell`."""
+    rows = [audit_cell(name, i, cell, root, levels, study_seed)
             for name, cells in studies.items() for i, cell in enumerate(cells)]
     table = pd.DataFrame(rows)
     table["flagged"] = table["flags"].fillna("") != ""
@@ -236,7 +244,9 @@ def write_audit(table: pd.DataFrame, csv_path, md_path, *, config_hash: str = ""
         f"{len(flagged)} flagged. Config hash {config_hash or 'n/a'}; "
         f"audited at git commit {git_commit()}.",
         "",
-        "Checks: every solve converged (KKT residual <= tol); realised mean Sk and Ku "
+        "Checks: every file made for its cell's parameters (surface cell and seed, "
+        "geometry, contact job); every solve converged (KKT residual <= tol); realised "
+        "mean Sk and Ku "
         f"within {MOMENT_SIGMAS:g} standard errors of the target; the contact result, "
         "its influence matrix and its surfaces unchanged since the solve (content "
         "hashes). `mesh_diagonal_error`: relative error of the self compliance of the "
@@ -264,11 +274,52 @@ def write_audit(table: pd.DataFrame, csv_path, md_path, *, config_hash: str = ""
         Path(tmp).write_text("\n".join(lines) + "\n")
 
 
+def _job_files(root: Path, key: str, job: dict) -> dict:
+    """The surface, influence and contact files of the contact job ``key`` (``job``: its
+    ``params()``)."""
+    return {"surfaces": root / "results" / "surfaces" / f"{job['surface_key']}.h5",
+            "influence": root / "results" / "influence" / f"{job['geometry_key']}.h5",
+            "contact": root / "results" / "contact" / f"{key}.h5"}
+
+
+def check_job_files(jobs: dict[str, dict], root: str | Path = ".",
+                    study_seed: int | None = None) -> None:
+    """Check that every file of every contact job was made for the job's parameters.
+
+    ``jobs``: contact key -> the job's ``params()``. Each job's surface file
+    must hold its surface cell (and ``study_seed``), its influence file its
+    geometry and its contact file its job (:func:`check_parameters`: the
+    attributes only, so every file is checked, not a sample). Raises
+    :class:`StoredFileError` naming each file that is not, with the field,
+    the values expected and found, and the command that rebuilds it.
+    """
+    problems, checked = [], set()
+    for key, job in jobs.items():
+        files = _job_files(Path(root), key, job)
+        expected = {"surfaces": {"cell": job["surface"], "study_seed": study_seed},
+                    "influence": {"geometry": job["geometry"]}, "contact": {"job": job}}
+        for kind, path in files.items():
+            if path in checked:
+                continue
+            checked.add(path)
+            try:
+                check_parameters(path, **expected[kind])
+            except StoredFileError as err:
+                problems.append(str(err))
+    if problems:
+        raise StoredFileError(f"{len(problems)} stored files were not made for the jobs that "
+                              "read them (no batch was re-solved):\n  " + "\n  ".join(problems))
+
+
 def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
-                  root: str | Path = ".", rtol: float | None = None) -> pd.DataFrame:
+                  root: str | Path = ".", rtol: float | None = None,
+                  study_seed: int | None = None) -> pd.DataFrame:
     """Re-solve a seeded random sample of stored contact batches and compare.
 
-    A batch (the surfaces solved together, ``batch_size`` of the file) is
+    First every stored file of every job must have been made for it
+    (:func:`check_job_files`: a file copied over another one is refused, even
+    where re-solving it would reproduce it bit for bit). A batch (the
+    surfaces solved together, ``batch_size`` of the file) is
     re-solved from the stored surfaces and influence matrix with the stored
     settings and approaches. Same library versions: the arrays must be
     bit-identical. Otherwise (another version, or a source tree with
@@ -276,6 +327,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
     of the solve) in the load, area and stiffness columns.
     """
     root = Path(root)
+    check_job_files(jobs, root, study_seed)
     rng = np.random.default_rng(seed)
     candidates = []
     for key in sorted(jobs):
@@ -289,9 +341,10 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
     for pick in sorted(picks):
         key, first, last = candidates[pick]
         job = jobs[key]
-        stored, attrs = read_contact(root / "results" / "contact" / f"{key}.h5")
-        surfaces = read_surfaces(root / "results" / "surfaces" / f"{job['surface_key']}.h5")
-        unit, _ = read_influence(root / "results" / "influence" / f"{job['geometry_key']}.h5")
+        files = _job_files(root, key, job)
+        stored, attrs = read_contact(files["contact"], job=job)
+        surfaces = read_surfaces(files["surfaces"], cell=job["surface"], study_seed=study_seed)
+        unit, _ = read_influence(files["influence"], geometry=job["geometry"])
         heights = surfaces["heights"]
         start = time.perf_counter()
         again = sweep_cell(

@@ -158,31 +158,36 @@ def draw_table(frame, *, title: str | None = None, fontsize: float = 9):
     return fig
 
 
-def surface_moments(files, sigma_um: float):
+def surface_moments(files, sigma_um: float, cells=None):
     """Realised moments of the first surface of each surface file, a row each.
 
     Columns ``file``, ``sigma_um`` (the stored unit std times ``sigma_um``
     [µm]), ``skew`` and ``kurt``: what the 3-D panels of
-    :func:`draw_surfaces` show. Returns a pandas DataFrame.
+    :func:`draw_surfaces` show. With ``cells`` (each file's cell, its
+    ``params()``), each file must have been made for its cell. Returns a
+    pandas DataFrame.
     """
     import pandas as pd
 
     from roughcontact.study.storage import read_surfaces
 
     rows = []
-    for path in files:
-        stats = read_surfaces(path, count=1)["stats"]
+    files = list(files)
+    for path, cell in zip(files, [None] * len(files) if cells is None else cells, strict=True):
+        stats = read_surfaces(path, count=1, cell=cell)["stats"]
         rows.append({"file": str(path), "sigma_um": stats["sigma"][0] * sigma_um,
                      "skew": stats["skew"][0], "kurt": stats["kurt"][0]})
     return pd.DataFrame(rows, columns=["file", "sigma_um", "skew", "kurt"])
 
 
-def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3):
+def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3, cells=None):
     """3-D views of the first surface of each surface file, ``columns`` per row.
 
     Heights [µm] are the stored unit heights times ``sigma_um``; plan
     coordinates in mm. ``titles`` (one per file, may hold line breaks and
-    mathtext) go above the panels with room kept for them. Returns the figure.
+    mathtext) go above the panels with room kept for them. With ``cells``
+    (each file's cell, its ``params()``), each file must have been made for
+    its cell. Returns the figure.
     """
     import matplotlib.pyplot as plt
     import numpy as np
@@ -193,8 +198,9 @@ def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3):
     columns = max(1, min(columns, len(files)))
     rows = -(-len(files) // columns)
     fig = plt.figure(figsize=(4.2 * columns, 4.0 * rows))
-    for k, (path, title) in enumerate(zip(files, titles, strict=True)):
-        data = read_surfaces(path, count=1)
+    cells = [None] * len(files) if cells is None else cells
+    for k, (path, title, cell) in enumerate(zip(files, titles, cells, strict=True)):
+        data = read_surfaces(path, count=1, cell=cell)
         spec = data["spec"]
         z = data["heights"][0] * sigma_um
         ny, nx = z.shape

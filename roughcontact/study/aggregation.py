@@ -81,7 +81,7 @@ class _CellTables(NamedTuple):
 
 def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTables:
     """Aggregate one cell's contact file at ``levels`` nominal pressures over its range."""
-    nd, attrs = read_contact(path)
+    nd, attrs = read_contact(path, job=cell.job.params())  # solved for this cell's job
     key, label = cell.contact_key, cell.label
     axis = aggregate.pressure_axis(*cell.pressure_range, levels)
     physical, frame = cell_module.aggregate_sweep(nd, cell.sigma, cell.E, axis,

@@ -24,7 +24,13 @@ from roughcontact.study.checks import (
     check_studies,
 )
 from roughcontact.study.config import BuildSettings, ContactSettings, as_pair, from_unit
-from roughcontact.study.records import ContactJob, Geometry, StudyCell, SurfaceCell
+from roughcontact.study.records import (
+    ContactJob,
+    Geometry,
+    InfluenceModel,
+    StudyCell,
+    SurfaceCell,
+)
 from roughcontact.study.sources import spectrum_from_entry
 from roughcontact.study.studies import (
     body_geometry,
@@ -57,6 +63,14 @@ class StudyPlan:
     surface cells each figure draws, in its order; ``body`` the geometry of
     the ``body`` section (the reports'); ``contact`` and ``build`` the settings
     of the contact jobs and the influence builds.
+
+    A geometry of ``operator: auto`` is resolved when the workflow runs (its
+    ``choices`` entry, by key: the half-space criterion measured on its
+    planned model): ``geometries`` and ``jobs`` hold its candidates
+    (:meth:`~roughcontact.study.records.Geometry.candidates`), each under the
+    key and file of a geometry configured with that model, so a geometry that
+    resolves to the model it had before keeps its files; ``alternatives``
+    are the keys built only where a choice picks them (the half-space).
     """
 
     figures: tuple[str, ...]
@@ -70,6 +84,8 @@ class StudyPlan:
     body: Geometry
     contact: ContactSettings
     build: BuildSettings
+    choices: Mapping[str, Geometry] = dataclasses.field(default_factory=dict)
+    alternatives: frozenset[str] = frozenset()
 
 
 def _raise(title: str, problems: list[str]) -> None:
@@ -102,14 +118,20 @@ def study_plan(config: dict) -> StudyPlan:
     surfaces |= {job.surface.key: job.surface for job in jobs.values()}
     _raise("Infeasible surface cells in the config", check_feasible(surfaces))
     build = BuildSettings.from_section(config["body"])
-    geometries = influence_geometries(config) | {job.geometry.key: job.geometry
-                                                 for job in jobs.values()}
+    asked = influence_geometries(config) | {job.geometry.key: job.geometry
+                                            for job in jobs.values()}
+    geometries = {c.key: c for g in asked.values() for c in g.candidates(build.max_bytes)}
+    planned = {g.candidates(build.max_bytes)[0].key for g in asked.values()}
     _raise("Influence models that do not fit body.max_memory_gb",
            check_memory(geometries, build))
     return StudyPlan(figures=figures, studies=studies,
-                     aggregates=tuple(sorted(set(sources.values()))), cells=cells, jobs=jobs,
-                     surfaces=surfaces, geometries=geometries, figure_surfaces=figure_cells,
-                     body=body_geometry(config), contact=contact_settings(config), build=build)
+                     aggregates=tuple(sorted(set(sources.values()))), cells=cells,
+                     jobs=candidate_jobs(jobs, build), surfaces=surfaces,
+                     geometries=geometries, figure_surfaces=figure_cells,
+                     body=body_geometry(config), contact=contact_settings(config), build=build,
+                     choices={k: g for k, g in asked.items()
+                              if g.operator is InfluenceModel.AUTO},
+                     alternatives=frozenset(geometries) - planned)
 
 
 def contact_jobs(cells) -> dict[str, ContactJob]:
@@ -121,6 +143,17 @@ def contact_jobs(cells) -> dict[str, ContactJob]:
         job = cell.job
         jobs.setdefault(job.key, job)
     return jobs
+
+
+def candidate_jobs(jobs: Mapping[str, ContactJob], build: BuildSettings) -> dict[str, ContactJob]:
+    """The contact jobs by file key with each ``operator: auto`` job replaced by one job per
+    candidate of its geometry (the one its choice picks runs)."""
+    out = {}
+    for job in jobs.values():
+        for geometry in job.geometry.candidates(build.max_bytes):
+            candidate = dataclasses.replace(job, geometry=geometry)
+            out.setdefault(candidate.key, candidate)
+    return out
 
 
 def influence_geometries(config: dict) -> dict[str, Geometry]:

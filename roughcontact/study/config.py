@@ -13,6 +13,8 @@ of :mod:`roughcontact.study.records` and their plain ``params()``.
 from __future__ import annotations
 
 import copy
+import difflib
+import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -65,18 +67,108 @@ class ConfigError(ValueError):
     the configuration, the value and what was expected)."""
 
 
+def config_path(path) -> str:
+    """A key's place in the configuration in plain words: ``sweeps.rough.moments[0]``."""
+    text = ""
+    for part in path:
+        text += f"[{part}]" if isinstance(part, int) else f".{part}" if text else str(part)
+    return text or "the configuration"
+
+
+def _listed(values, last: str = "or") -> str:
+    words = [json.dumps(v) if not isinstance(v, str) else f"'{v}'" for v in values]
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} {last} {words[-1]}"
+
+
+def _described(schema: dict, key: str) -> str:
+    """`` (its description)`` of a key the schema describes, else ''."""
+    text = (schema.get("properties", {}).get(key) or {}).get("description")
+    return f" ({' '.join(text.split())})" if text else ""
+
+
+def _alternatives(error) -> str | None:
+    """An ``anyOf`` of required keys (a study: from, or sigma_um and pressure_MPa, or
+    surface and pressure_MPa): the keys missing from the alternative begun, else all."""
+    branches = [b.get("required") for b in error.validator_value]
+    if not isinstance(error.instance, dict) or not all(branches):
+        return None
+    given = set(error.instance)
+    begun = [b for b in branches if given & set(b)]
+    if begun:
+        missing = min(([k for k in b if k not in given] for b in begun), key=len)
+        schema = error.schema
+        return "; ".join(f"'{key}' is missing{_described(schema, key)}" for key in missing)
+    options = "; ".join(f"'{b[0]}'" if len(b) == 1 else _listed(b, "with") for b in branches)
+    return f"needs one of: {options}"
+
+
+def _unknown_keys(error) -> str:
+    known = list(error.schema.get("properties", {}))
+    unknown = [k for k in error.instance if k not in known]
+    hints = []
+    for key in unknown:
+        close = difflib.get_close_matches(str(key), known, n=1)
+        hints.append(f"'{key}'" + (f" (did you mean '{close[0]}'?)" if close else ""))
+    return (f"unknown key{'s' if len(unknown) > 1 else ''} {', '.join(hints)}; the keys here "
+            f"are {_listed(known, 'and')}" if known else f"unknown key {', '.join(hints)}")
+
+
+_TYPES = {"number": "a number", "integer": "a whole number", "string": "text",
+          "boolean": "true or false", "array": "a list", "object": "a section of keys",
+          "null": "null"}
+_BOUNDS = {"minimum": "at least", "maximum": "at most", "exclusiveMinimum": "above",
+           "exclusiveMaximum": "below"}
+
+
+def _plain(error) -> str:
+    """One schema violation in plain words (the value found and what is expected)."""
+    value, rule, kind = error.instance, error.validator_value, error.validator
+    if "message" in error.schema and kind == "not":
+        return " ".join(error.schema["message"].split())
+    if kind == "required":
+        key = error.message.split("'")[1]
+        return f"'{key}' is missing{_described(error.schema, key)}"
+    if kind == "additionalProperties":
+        return _unknown_keys(error)
+    if kind == "enum":
+        return f"{json.dumps(value)} is not one of {_listed(rule)}"
+    if kind == "type":
+        wanted = " or ".join(_TYPES.get(t, t) for t in ([rule] if isinstance(rule, str) else rule))
+        return f"{json.dumps(value)} is not {wanted}"
+    if kind in _BOUNDS:
+        return f"{json.dumps(value)} is out of range: it must be {_BOUNDS[kind]} {rule:g}"
+    if kind in ("minItems", "maxItems"):
+        bound = "at least" if kind == "minItems" else "at most"
+        items = f"{len(value)} item{'' if len(value) == 1 else 's'}"
+        return f"{json.dumps(value)} has {items}, {bound} {rule} expected"
+    if kind == "anyOf" and (text := _alternatives(error)):
+        return text
+    if kind in ("oneOf", "anyOf") and error.context:
+        # of the branches, the error of a value of the right type says most
+        specific = [e for e in error.context if e.validator != "type"]
+        if specific:
+            return _plain(jsonschema.exceptions.best_match(specific))
+        wanted = " or ".join(_TYPES.get(e.validator_value, str(e.validator_value))
+                             for e in error.context)
+        return f"{json.dumps(value)} is not {wanted}"
+    return error.message
+
+
 def schema_errors(config: dict) -> list[str]:
-    """``key.path: message`` of every schema violation of ``config`` (none: [])."""
+    """``key.path: message`` in plain words of every schema violation of ``config``
+    (none: [])."""
     schema = yaml.safe_load(SCHEMA.read_text())
     validator = jsonschema.validators.validator_for(schema)(schema)
     lines = []
     for error in sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.path))):
-        where = ".".join(str(p) for p in error.absolute_path) or "(top level)"
-        # of a oneOf's branches, the error of a value of the right type says most
-        specific = [e for e in error.context if e.validator != "type"]
-        detail = jsonschema.exceptions.best_match(specific or error.context) \
-            if error.context else error
-        lines.append(f"{where}: {detail.message}")
+        # of a oneOf's branches, the one for a value of the right type gives the place
+        deepest = error
+        while deepest.validator in ("oneOf", "anyOf") and deepest.context:
+            specific = [e for e in deepest.context if e.validator != "type"]
+            if not specific:
+                break
+            deepest = jsonschema.exceptions.best_match(specific)
+        lines.append(f"{config_path(deepest.absolute_path)}: {_plain(error)}")
     return lines
 
 

@@ -49,7 +49,14 @@ from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import arrays_sha256
 from roughcontact.study.provenance import canonical_json, provenance
-from roughcontact.study.storage import REBUILD, open_h5, read_surfaces, verify, write_h5
+from roughcontact.study.storage import (
+    REBUILD,
+    check_attributes,
+    open_h5,
+    read_surfaces,
+    verify,
+    write_h5,
+)
 from roughcontact.surfaces.multiresolution import band_grid, generate_resolved
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.statistics import height_stats, spectral_moments
@@ -229,11 +236,7 @@ def solve_grid(params: dict, surfaces_path, grid: int, out_path, config=None) ->
     """
     settings = GridConvergenceSettings.from_section(params)
     surfaces = read_surfaces(surfaces_path)
-    stored = surfaces["attrs"]
-    if stored.get("params") != canonical_json(params) or int(stored.get("grid", -1)) != grid:
-        raise StoredFileError(f"{surfaces_path}: made for other settings or another grid than "
-                              f"the {grid} x {grid} grid of this study; {REBUILD}",
-                              surfaces_path)
+    check_attributes(surfaces_path, surfaces["attrs"], {"params": params, "grid": int(grid)})
     heights = surfaces["heights"]
     wall, cpu = time.perf_counter(), time.process_time()
     approaches = aimed_approaches(settings, surfaces["seeds"])

@@ -28,6 +28,7 @@ import numpy as np
 from roughcontact.contact import cell as cell_module
 from roughcontact.contact import halfspace_criterion
 from roughcontact.elasticity import definiteness, influence, operators
+from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence
 from roughcontact.errors import MeasurementError
 from roughcontact.study import sources
@@ -45,11 +46,13 @@ from roughcontact.study.records import (
     Geometry,
     InfluenceModel,
     MeasuredCell,
+    coarse_geometry,
     surface_cell_from_params,
 )
 from roughcontact.study.storage import (
     read_influence,
     read_surfaces,
+    write_choice,
     write_contact,
     write_influence,
     write_surfaces,
@@ -365,7 +368,7 @@ def _hybrid_model(fe, geom, model, key: str) -> tuple:
 
 def _halfspace_model(fe, geom, model, key: str) -> tuple:
     unit = operators.halfspace_operator(geom.grid, geom.size, geom.nu)
-    return unit, _operator_checks(unit, geom, key), {"coarse_mesh": model.mesh}
+    return unit, _operator_checks(unit, geom, key), {} if fe is None else {"coarse_mesh": model.mesh}
 
 
 #: How each influence model is made from the finite-element model's E * C:
@@ -387,6 +390,28 @@ def _halfspace_choice(fe, model, geometry: Geometry, key: str) -> tuple[dict, bo
     return {"halfspace_errors": errors, "halfspace_tolerance": tolerance}, meets
 
 
+def _finite_element_matrix(geometry: Geometry, build: BuildSettings, model) -> tuple:
+    """``(E C, cost)`` of the finite-element ``model`` a geometry's build solves (the
+    half-space needs none: ``(None, zero cost)``), after its memory check."""
+    if geometry.operator is InfluenceModel.HALFSPACE:  # Love alone
+        return None, geometry.influence_cost(build)
+    try:
+        cost = influence.check_memory(model, build.max_bytes, build.solver)
+    except influence.ModelTooLarge as err:  # name the config keys, not the Python argument
+        peak = influence.estimate_cost(model, build.solver).peak_bytes
+        raise influence.ModelTooLarge(memory_message(geometry, build, peak)) from err
+    log.info(
+        "geometry %s: operator %s; finite-element model %s grid %s, %d dofs, estimated peak "
+        "%.2f GB (limit %.1f GB)", geometry.key, geometry.operator.value, model.mesh,
+        model.grid, cost.dofs, cost.peak_bytes / GB, in_unit(build.max_bytes, GB),
+    )
+    fe = influence.unit_modulus_influence(model, solver=build.solver, max_bytes=build.max_bytes)
+    if not np.isfinite(fe).all():
+        raise FloatingPointError(f"geometry {geometry.key}: the influence matrix has "
+                                 "non-finite entries")
+    return fe, cost
+
+
 def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
                     config=None) -> dict:
     """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
@@ -405,27 +430,16 @@ def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
 
     The peak memory is estimated first; a geometry that would not fit raises
     :class:`~roughcontact.influence.ModelTooLarge` with the estimate and the
-    options before anything is built. Returns the root attributes.
+    options before anything is built (the half-space builds no finite-element
+    model). Returns the root attributes.
     """
     geometry = Geometry.from_params(params)
     build = BuildSettings.from_section({"solver": solver, "max_memory_gb": max_memory_gb})
     key, block = geometry.key, geometry.block()
     operator = geometry.planned_model(build.max_bytes)
     model = geometry.finite_element_model(build.max_bytes)
-    try:
-        cost = influence.check_memory(model, build.max_bytes, build.solver)
-    except influence.ModelTooLarge as err:  # name the config keys, not the Python argument
-        peak = influence.estimate_cost(model, build.solver).peak_bytes
-        raise influence.ModelTooLarge(memory_message(geometry, build, peak)) from err
-    log.info(
-        "geometry %s: operator %s (requested %s); finite-element model %s grid %s, %d dofs, "
-        "estimated peak %.2f GB (limit %.1f GB)", key, operator.value, geometry.operator.value,
-        model.mesh, model.grid, cost.dofs, cost.peak_bytes / GB, in_unit(build.max_bytes, GB),
-    )
     start = time.perf_counter()
-    fe = influence.unit_modulus_influence(model, solver=build.solver, max_bytes=build.max_bytes)
-    if not np.isfinite(fe).all():
-        raise FloatingPointError(f"geometry {key}: the influence matrix has non-finite entries")
+    fe, cost = _finite_element_matrix(geometry, build, model)
     criterion = {}
     if geometry.operator is InfluenceModel.AUTO:
         criterion, meets = _halfspace_choice(fe, model, geometry, key)
@@ -454,6 +468,48 @@ def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
         **provenance(config),
     }
     return write_influence(path, unit, attrs)
+
+
+def _criterion_matrix(unit, planned: Geometry) -> tuple:
+    """The finite-element matrix [m] the half-space criterion is measured on, and its
+    model: a dense model's matrix, or a hybrid operator's coarse model (its correction
+    times the coarse element area plus Love's coarse matrix, as the build made it)."""
+    if not isinstance(unit, operators.BlockOperator):
+        return unit, planned.block()
+    coarse = coarse_geometry(planned.block())
+    fe = unit.correction * (coarse.spacing[0] * coarse.spacing[1])
+    return fe + halfspace_influence(coarse.grid, coarse.size, 1.0, coarse.nu), coarse
+
+
+def choose_influence(params: dict, planned: dict, planned_path, out_path,
+                     config=None) -> dict:
+    """Resolve an ``operator: auto`` geometry: the half-space, or its planned model.
+
+    ``params``: the auto geometry's :meth:`~roughcontact.study.records.Geometry.params`;
+    ``planned``: its planned candidate's (dense or hybrid,
+    :meth:`~roughcontact.study.records.Geometry.candidates`), whose influence file
+    ``planned_path`` must have been made for it. The half-space errors
+    (:func:`roughcontact.contact.halfspace_criterion.halfspace_errors`) are
+    measured on the planned model's finite-element matrix (:func:`_criterion_matrix`);
+    within the geometry's ``halfspace_tolerance`` the half-space is chosen,
+    else the planned model. The choice (the geometry, the chosen ``operator``,
+    the ``resolved`` geometry and its key, the errors and tolerance, the
+    planned file's content hash, provenance) is written to ``out_path``
+    (:func:`~roughcontact.study.storage.write_choice`) and returned. A
+    geometry whose choice is its planned model shares that model's file and
+    results with a study configured with it.
+    """
+    geometry, model = Geometry.from_params(params), Geometry.from_params(planned)
+    unit, attrs = read_influence(planned_path, geometry=planned)
+    fe, fe_model = _criterion_matrix(unit, model)
+    criterion, meets = _halfspace_choice(fe, fe_model, geometry, geometry.key)
+    resolved = geometry.resolved(InfluenceModel.HALFSPACE if meets else model.operator)
+    choice = {"geometry": geometry.params(), "geometry_key": geometry.key,
+              "operator": resolved.operator.value, "resolved": resolved.params(),
+              "resolved_key": resolved.key, **criterion, "measured_on": str(planned_path),
+              "measured_on_sha256": attrs["content_sha256"], **provenance(config)}
+    write_choice(out_path, choice)
+    return choice
 
 
 # ---------------------------------------------------------------------------
@@ -504,13 +560,18 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
     whose record ``job`` holds the surface cell, the geometry, the
     non-dimensional pressure P L / (E sigma) the sweep must reach and a capped
     job's cap H L / (E sigma); ``settings`` the solver's
-    (:meth:`~roughcontact.study.config.ContactSettings.params`). Returns the
-    root attributes written.
+    (:meth:`~roughcontact.study.config.ContactSettings.params`). The surface
+    and influence files must have been made for the job's cell (and the
+    configuration's ``study_seed``) and geometry, else
+    :class:`~roughcontact.errors.StoredFileError` names the file and the
+    field that differs. Returns the root attributes written.
     """
     job, settings = ContactJob.from_params(params), ContactSettings.from_section(settings)
     start = time.perf_counter()
-    surfaces = read_surfaces(surfaces_path)
-    unit, geometry_attrs = read_influence(influence_path)
+    # each input must have been made for this job (not only carry its name)
+    surfaces = read_surfaces(surfaces_path, cell=job.surface.params(),
+                             study_seed=None if config is None else config["study_seed"])
+    unit, geometry_attrs = read_influence(influence_path, geometry=job.geometry.params())
     unit = certified_influence(unit, influence_path, job.geometry)
     heights = surfaces["heights"]
     m = heights.shape[0]
@@ -557,6 +618,7 @@ __all__ = [
     "BUILD_ADVICE",
     "LOAD_ADVICE",
     "build_influence",
+    "choose_influence",
     "build_surface_cell",
     "certified_influence",
     "solve_contact_job",

@@ -4,13 +4,32 @@ from __future__ import annotations
 
 import logging
 import os
+import sys
 from pathlib import Path
+
+from roughcontact.errors import DiskFullError, MeasurementError, StoredFileError
+
+#: Errors a user can meet whose message says all there is to do (the file, what was
+#: expected and found, the command that fixes it): a job that ends in one logs the
+#: message alone, not the traceback.
+USER_ERRORS = (DiskFullError, MeasurementError, StoredFileError)
+
+
+def _excepthook(kind, value, traceback) -> None:
+    """End a job on a :data:`USER_ERRORS` error with its message (log and stderr)."""
+    if issubclass(kind, USER_ERRORS):
+        logging.getLogger("roughcontact").error("%s", value)
+        return
+    sys.__excepthook__(kind, value, traceback)
 
 
 def route_logging(path: str | os.PathLike, level: int = logging.INFO) -> None:
     """Send the ``roughcontact`` loggers (and warnings) to ``path``, and to stderr.
 
-    Each record carries a time stamp, so a job's log shows its progress.
+    Each record carries a time stamp, so a job's log shows its progress. A
+    job that ends in one of :data:`USER_ERRORS` (a stored file made for
+    other parameters, a full disk, ...) logs its message as the last line,
+    without a traceback (the process still exits with status 1).
     """
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     fmt = logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s")
@@ -23,3 +42,4 @@ def route_logging(path: str | os.PathLike, level: int = logging.INFO) -> None:
     logging.captureWarnings(True)
     # scikit-fem reports every assembly at INFO; keep job logs to our own progress
     logging.getLogger("skfem").setLevel(logging.WARNING)
+    sys.excepthook = _excepthook

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import errno
 import hashlib
 import json
 import os
 import resource
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -20,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from roughcontact import __version__
+from roughcontact.errors import DiskFullError
 
 _SOURCE_DIR = Path(__file__).resolve().parent.parent
 
@@ -87,19 +90,74 @@ def provenance(config=None) -> dict:
     }
 
 
+#: The system's errors of a full disk (or quota).
+NO_SPACE = (errno.ENOSPC, errno.EDQUOT)
+
+
+def _size(size: float) -> str:
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if size >= scale:
+            return f"{size / scale:.3g} {unit}"
+    return f"{size:.0f} bytes"
+
+
+def _largest_files(folder: Path, count: int = 3) -> list[tuple[int, Path]]:
+    """The ``count`` largest files under ``folder`` (size [bytes], path), largest first."""
+    sizes = []
+    for root, _, names in os.walk(folder):
+        for name in names:
+            try:
+                sizes.append((os.stat(os.path.join(root, name)).st_size, Path(root, name)))
+            except OSError:
+                continue
+    return sorted(sizes, reverse=True)[:count]
+
+
+def disk_full(path: Path, tmp: Path, err: OSError) -> DiskFullError:
+    """The error of a write of ``path`` (through ``tmp``) that found the disk full: the
+    file, the space left, the largest results beside it and what to free."""
+    try:
+        written = _size(tmp.stat().st_size)
+        tmp.unlink()  # before the free space is measured
+    except OSError:
+        written = "nothing"
+    try:
+        free = _size(shutil.disk_usage(path.parent).free)
+    except OSError:
+        free = "unknown"
+    parts = path.parts
+    folder = Path(*parts[:parts.index("results") + 1]) if "results" in parts[:-1] \
+        else path.parent
+    largest = ", ".join(f"{p} ({_size(size)})" for size, p in _largest_files(folder))
+    return DiskFullError(
+        f"{path}: cannot be written, the disk holding it is full ({os.strerror(err.errno)}; "
+        f"{written} of it had been written, {free} free now); nothing half-written was "
+        f"left. Free space on that disk and run the same command again: delete results you "
+        f"no longer need under {folder}" + (f" (the largest: {largest})" if largest else "")
+        + f", files named .*.tmp* that killed jobs left (find {folder} -name '.*.tmp*' "
+        "-delete), or old logs in .snakemake/log; or run from a folder on a larger disk.",
+        path, err.errno)
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike):
     """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
 
     An interrupted or failed write leaves no file at ``path`` (the temporary
-    file is removed), so a half-written output never looks finished.
+    file is removed), so a half-written output never looks finished. A full
+    disk raises :class:`~roughcontact.errors.DiskFullError` naming ``path``,
+    the space left and what to free, in place of the system's bare error.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.stem}.tmp{os.getpid()}{path.suffix}")
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         yield tmp
         os.replace(tmp, path)
+    except OSError as err:
+        if err.errno in NO_SPACE and not isinstance(err, DiskFullError):
+            raise disk_full(path, tmp, err) from None
+        raise
     finally:
         if tmp.exists():
             tmp.unlink()

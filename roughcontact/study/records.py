@@ -35,7 +35,7 @@ from typing import ClassVar
 import numpy as np
 
 from roughcontact.contact.cell import nondim_pressure
-from roughcontact.elasticity.influence import BlockGeometry, estimate_cost
+from roughcontact.elasticity.influence import BlockGeometry, CostEstimate, estimate_cost
 from roughcontact.elasticity.operators import HYBRID_MESHES, choose_operator, default_coarse_grid
 from roughcontact.study import sources
 from roughcontact.study.config import (
@@ -323,6 +323,20 @@ class Geometry:
         return BlockGeometry(size=self.size, thickness=self.thickness, grid=self.grid, E=E,
                              nu=self.nu, base=self.base, mesh=self.mesh)
 
+    def resolved(self, model: InfluenceModel) -> Geometry:
+        """The geometry with the influence ``model`` in place of ``auto``: the key, params
+        and file of a geometry configured with that model."""
+        return dataclasses.replace(self, operator=model, halfspace_tolerance=())
+
+    def candidates(self, max_bytes: float) -> tuple[Geometry, ...]:
+        """The geometries an ``operator: auto`` geometry resolves to: its planned model
+        (dense or hybrid, :meth:`planned_model`; the half-space criterion is measured
+        on it), then the half-space; any other geometry is its own one candidate."""
+        if self.operator is not InfluenceModel.AUTO:
+            return (self,)
+        return (self.resolved(self.planned_model(max_bytes)),
+                self.resolved(InfluenceModel.HALFSPACE))
+
     def planned_model(self, max_bytes: float) -> InfluenceModel:
         """The influence model a build starts with: dense, hybrid or half-space.
 
@@ -345,7 +359,11 @@ class Geometry:
 
     def influence_cost(self, build: BuildSettings):
         """:class:`~roughcontact.elasticity.influence.CostEstimate` of the finite-element
-        model a build solves with ``build``'s solver within its memory limit."""
+        model a build solves with ``build``'s solver within its memory limit (none for
+        the half-space: zero)."""
+        if self.operator is InfluenceModel.HALFSPACE:
+            return CostEstimate(dofs=0, stiffness_nonzeros=0, condensed_size=0,
+                                peak_bytes=0.0)
         return estimate_cost(self.finite_element_model(build.max_bytes), build.solver)
 
 

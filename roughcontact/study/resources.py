@@ -29,8 +29,10 @@ from types import MappingProxyType
 
 import yaml
 
+from roughcontact.contact.halfspace_criterion import CALIBRATION
 from roughcontact.elasticity.operators import COARSE_MAX, coarsened_side
 from roughcontact.study.cells import study_plan
+from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import (
     SCHEMA,
     BuildSettings,
@@ -38,7 +40,9 @@ from roughcontact.study.config import (
     ConvergenceSettings,
     SpeedReportSettings,
     load_config,
+    report_section,
 )
+from roughcontact.study.grid_convergence import GridConvergenceSettings, grid_mem_mb
 from roughcontact.study.records import ContactJob, Generator, Geometry, InfluenceModel
 from roughcontact.units import GB
 
@@ -222,6 +226,22 @@ def surfaces_runtime(cell, attempt: int = 1) -> int:
     return runtime_minutes(surfaces_seconds(cell), attempt)
 
 
+def choice_seconds(planned: Geometry, build: BuildSettings) -> float:
+    """Wall time [s] of the choice of an ``operator: auto`` geometry: the half-space
+    criterion's solves (its surfaces and steps, on both models) on the planned model's
+    finite-element grid, as dense solves by CG."""
+    grid = planned.finite_element_model(build.max_bytes).grid
+    solves = 2 * CALIBRATION["surfaces"] * CALIBRATION["steps"]
+    settings = ContactSettings(method="cg", tol=1e-8, precision="double", steps=1,
+                               pressure_levels=2)
+    return solves * dense_solve_seconds(grid, settings)
+
+
+def choice_runtime(planned: Geometry, build: BuildSettings, attempt: int = 1) -> int:
+    """Requested wall time [min] of a choice of ``operator: auto`` (:func:`choice_seconds`)."""
+    return runtime_minutes(choice_seconds(planned, build), attempt)
+
+
 def summary_runtime(attempt: int = 1) -> int:
     """Wall time [min] of an aggregate, a figure or the config snapshot: 3-6 s
     measured (a figure starts a notebook kernel), asked as 30 s."""
@@ -325,6 +345,13 @@ def stored_bytes(geometry: Geometry, build: BuildSettings) -> int:
     return DOUBLE_BYTES * (nx * ny) ** 2
 
 
+def choice_mem_mb(planned: Geometry, build: BuildSettings) -> int:
+    """Peak memory [MB] of a choice of ``operator: auto``: the planned model read (the
+    dense matrix, or the coarse correction and Love's coarse matrix beside it) as the
+    audit holds one, plus its base."""
+    return audit_mem_mb([planned], build)
+
+
 def audit_mem_mb(geometries, build: BuildSettings) -> int:
     """Peak memory [MB] of the audit: one influence model of ``geometries`` (held
     twice while hashed) at a time, plus 1 GB."""
@@ -395,23 +422,131 @@ def machine_memory_mb() -> float:
         return math.nan
 
 
-def machine_problems(config: dict, total_mb: float | None = None, plan=None) -> list[str]:
-    """The contact, influence and surfaces jobs of a validated ``config`` (its ``plan``)
-    whose planned memory exceeds ``total_mb`` (default: this machine's), with the keys
-    to change."""
-    total_mb = machine_memory_mb() if total_mb is None else total_mb
+#: What changes the memory of each kind of job: the config keys a refusal names.
+MEMORY_KEYS = MappingProxyType({
+    "contact": "Set body.operator: auto (matrix-free above 64 x 64 elements), or use a "
+               "smaller grid (surfaces.grid) or fewer surfaces per cell (surfaces.count or "
+               "the study's count)",
+    "influence": "Set body.operator: auto (matrix-free above 64 x 64 elements), or use a "
+                 "coarser body.mesh or a smaller grid (surfaces.grid)",
+    "surfaces": "Use fewer surfaces per cell (surfaces.count or the study's count) or a "
+                "smaller grid (surfaces.grid)",
+    "influence_convergence": "Remove reports.influence_convergence (it compares dense "
+                             "matrices of the body's grid, whatever body.operator), or give "
+                             "it fewer presets, or use a smaller grid (surfaces.grid)",
+    "speed_vs_error": "Use fewer or smaller reports.speed_vs_error.grids, or a smaller grid "
+                      "(surfaces.grid: its solver study uses dense matrices of it)",
+    "grid_convergence": "Use smaller reports.grid_convergence.grids or fewer "
+                        "reports.grid_convergence.surfaces",
+    "influence_choice": "Set body.operator: dense or hybrid in place of auto, or use a "
+                        "smaller grid (surfaces.grid)",
+    "audit": "Set body.operator: auto (the audit reads each influence model), or use a "
+             "smaller grid (surfaces.grid)",
+    "audit_verify": "Set audit.verify: false or body.operator: auto, or use a smaller grid "
+                    "(surfaces.grid)",
+})
+
+
+def _report_memory(config: dict, plan) -> dict[str, dict[str, int]]:
+    """Planned memory [MB] of the jobs of the default target besides the study's: the
+    choices of ``operator: auto``, the mesh-convergence report when configured, and the
+    audits; by kind of job and job."""
+    out = {}
+    if plan.choices:
+        out["influence_choice"] = {
+            key: choice_mem_mb(geometry.candidates(plan.build.max_bytes)[0], plan.build)
+            for key, geometry in plan.choices.items()}
+    if "influence_convergence" in config["reports"]:  # optional: a report to run
+        presets = list(config["reports"]["influence_convergence"]["presets"])
+        out["influence_convergence"] = {"influence_convergence":
+                                        convergence_mem_mb(plan.body, presets)}
+    if plan.studies:
+        out["audit"] = {"audit": audit_mem_mb(plan.geometries.values(), plan.build)}
+        if config["audit"]["verify"]:
+            out["audit_verify"] = {"audit_verify": audit_verify_mem_mb(
+                plan.jobs.values(), plan.geometries.values(), plan.build)}
+    return out
+
+
+def on_demand_memory(config: dict, plan) -> dict[str, dict[str, int]]:
+    """Planned memory [MB] of the reports made only when asked for (their targets): the
+    speed-against-error report, and the grid-convergence jobs when configured."""
+    section = SpeedReportSettings.from_section(report_section(config, "speed_vs_error"))
+    out = {"speed_vs_error": {"speed_vs_error":
+                              speed_vs_error_mem_mb(plan.body, section, plan.build)}}
+    if "grid_convergence" in config["reports"]:  # optional: a report to run
+        settings = GridConvergenceSettings.from_section(config["reports"]["grid_convergence"])
+        out["grid_convergence"] = {f"grid {g}": grid_mem_mb(settings, g)
+                                   for g in settings.grids}
+    return out
+
+
+def planned_memory(config: dict, plan=None) -> dict[str, dict[str, int]]:
+    """Planned peak memory [MB] of every job a validated ``config`` (its ``plan``) runs by
+    default, by kind of job (:data:`MEMORY_KEYS`) and job: the contact, influence and
+    surfaces jobs, the choices of ``operator: auto``, the mesh-convergence report when
+    configured and the audits (the reports made on demand: :func:`on_demand_memory`)."""
+    plan = study_plan(config) if plan is None else plan
+    jobs = {rule: {key: mem_mb for key, (_, mem_mb) in by_key.items()}
+            for rule, by_key in predictions(config, plan).items()}
+    return jobs | _report_memory(config, plan)
+
+
+def _amount(mem_mb: float) -> str:
+    """A memory [MB] in the unit that suits it (MB, GB, TB, PB)."""
+    for unit, scale in (("PB", 1e9), ("TB", 1e6), ("GB", 1e3)):
+        if mem_mb >= scale:
+            return f"{mem_mb / scale:.3g} {unit}"
+    return f"{mem_mb:.0f} MB"
+
+
+def memory_limit_mb(config: dict) -> tuple[float, str]:
+    """The memory [MB] one job may use and where it comes from: ``job_memory_gb``, or
+    this machine's physical memory."""
+    configured = config.get("job_memory_gb")  # null: this machine's
+    if configured is not None:
+        return float(configured) * GB / MB, f"job_memory_gb = {configured:g}"
+    total = machine_memory_mb()
+    return total, f"this machine's {_amount(total)}"
+
+
+def machine_problems(config: dict, total_mb: float | None = None, plan=None,
+                     jobs: dict | None = None) -> list[str]:
+    """The ``jobs`` (default: :func:`planned_memory`'s, every job of the default
+    target, reports included) of a validated ``config`` (its ``plan``) whose planned
+    memory exceeds ``total_mb`` (default: ``job_memory_gb``, else this machine's): one
+    message per kind of job, with the largest, the count and the keys to change."""
+    if total_mb is None:
+        total_mb, source = memory_limit_mb(config)
+    else:
+        source = f"the limit of {_amount(total_mb)}"
     if not math.isfinite(total_mb):
         return []
     problems = []
-    for rule, jobs in predictions(config, plan).items():
-        for key, (_, mem_mb) in jobs.items():
-            if mem_mb > total_mb:
-                problems.append(
-                    f"{rule} job {key}: planned {mem_mb / 1e3:.3g} GB, this machine has "
-                    f"{total_mb / 1e3:.3g} GB (fine on cluster nodes with more; else "
-                    "body.operator: auto, body.max_memory_gb, a coarser body.mesh or a "
-                    "smaller grid)")
+    for kind, by_key in (planned_memory(config, plan) if jobs is None else jobs).items():
+        over = {key: mem for key, mem in by_key.items() if mem > total_mb}
+        if not over:
+            continue
+        key, mem = max(over.items(), key=lambda item: item[1])
+        more = f" (and {len(over) - 1} more of its kind)" if len(over) > 1 else ""
+        problems.append(
+            f"{kind} job {key}: planned {_amount(mem)} of memory{more}, more than {source}. "
+            f"{MEMORY_KEYS[kind]}; or, if the jobs run on cluster nodes with more, set "
+            "job_memory_gb to their memory [GB]")
     return problems
+
+
+def check_machine(config: dict, plan=None, kinds: tuple[str, ...] | None = None) -> None:
+    """Raise :class:`~roughcontact.study.checks.ConfigProblems` naming every kind of job
+    that would not fit (:func:`machine_problems`), before any job runs: the jobs of the
+    default target, or the on-demand reports of ``kinds`` (when their target is asked
+    for)."""
+    plan = study_plan(config) if plan is None else plan
+    jobs = None if kinds is None else \
+        {k: v for k, v in on_demand_memory(config, plan).items() if k in kinds}
+    problems = machine_problems(config, plan=plan, jobs=jobs)
+    if problems:
+        raise ConfigProblems("Jobs planned beyond the memory a job may use", problems)
 
 
 def _number(text: str) -> float:

@@ -6,6 +6,15 @@ read checks that hash first: a file that is unreadable, has no hash or no
 longer matches it raises :class:`~roughcontact.errors.StoredFileError` naming
 the file (delete it, and the workflow rebuilds it), never a silent use.
 
+A file is also never trusted by its name: each carries the parameters that
+define it (a surface cell's ``params`` and ``study_seed``, a geometry's
+``params``, a contact job's ``job``), and a reader given what its job
+expects (``cell=``, ``geometry=``, ``job=``) compares them field by field,
+and the shapes of the datasets with them, before it uses anything
+(:func:`check_parameters`); a file copied or renamed from another one is
+refused naming the field, the value expected and the value found, and the
+command that rebuilds it.
+
 Layout of a surface file (``results/surfaces/<cell>.h5``)::
 
     /heights        (m, ny, nx) float64  heights / sigma, zero mean per surface
@@ -95,12 +104,12 @@ def open_h5(path: str | os.PathLike):
         raise
     except OSError as err:
         raise StoredFileError(f"{path}: not a readable HDF5 file (truncated or damaged: "
-                              f"{err}); {REBUILD}", path) from None
+                              f"{err}); {rebuild(path)}", path) from None
     try:
         yield f
     except (OSError, KeyError) as err:
         raise StoredFileError(f"{path}: a dataset cannot be read (truncated or damaged: "
-                              f"{err}); {REBUILD}", path) from None
+                              f"{err}); {rebuild(path)}", path) from None
     finally:
         f.close()
 
@@ -123,12 +132,149 @@ def verify(path, attrs: dict, computed: str) -> None:
     stored = attrs.get("content_sha256")
     if not stored:
         raise StoredFileError(f"{path}: no content hash (written by an older version of "
-                              f"roughcontact, or not by it); {REBUILD}", path)
+                              f"roughcontact, or not by it); {rebuild(path)}", path)
     if stored != computed:
         raise StoredFileError(
             f"{path}: its datasets no longer match the hash written with them (sha256 "
             f"{computed[:12]}, written {stored[:12]}): the file was changed or damaged after "
-            f"it was made; {REBUILD}", path)
+            f"it was made; {rebuild(path)}", path)
+
+
+def rebuild(path) -> str:
+    """The advice of a refusal: how the workflow rebuilds the stored file ``path``."""
+    return (f"delete it and run the workflow again to rebuild it (rm {path}, then the same "
+            "snakemake command: it remakes the file and every result made from it)")
+
+
+#: The fields of a contact job's ``params()`` that define its file (its surfaces, geometry,
+#: sweep end and cap; the accuracy preset's name and expected errors only label it).
+CONTACT_DEFINING = ("surface", "geometry", "pressure_end", "hardness")
+
+
+def _json(value):
+    """An attribute stored as JSON text, parsed (None when absent or not JSON)."""
+    if not isinstance(value, str) or not value:
+        return value if isinstance(value, dict) else None
+    try:
+        return json.loads(value)
+    except ValueError:
+        return None
+
+
+def _same(expected, found) -> bool:
+    """Equal values; numbers to a relative 1e-9 (a bool is no number here)."""
+    flags = (bool, np.bool_)
+    if isinstance(expected, flags) or isinstance(found, flags):
+        return isinstance(expected, flags) and isinstance(found, flags) \
+            and bool(expected) == bool(found)
+    numbers = (int, float, np.number)
+    if isinstance(expected, numbers) and isinstance(found, numbers):
+        return bool(np.isclose(float(expected), float(found), rtol=1e-9, atol=0.0))
+    return expected == found
+
+
+def _differences(expected, found, where: str = "") -> list[tuple[str, object, object]]:
+    """``(field, expected, found)`` of every field where ``found`` differs (nested dicts
+    field by field, dotted paths)."""
+    if isinstance(expected, dict) and isinstance(found, dict):
+        out = []
+        for key in sorted(set(expected) | set(found), key=str):
+            out += _differences(expected.get(key), found.get(key),
+                                f"{where}.{key}" if where else str(key))
+        return out
+    if isinstance(expected, list | tuple) and isinstance(found, list | tuple) \
+            and len(expected) == len(found):
+        if all(_same(a, b) if not isinstance(a, dict | list) else not _differences(a, b)
+               for a, b in zip(expected, found, strict=True)):
+            return []
+        return [(where, expected, found)]
+    return [] if _same(expected, found) else [(where, expected, found)]
+
+
+def _shown(value) -> str:
+    """A value of a parameter as the message shows it (JSON; numbers to 12 digits)."""
+    if value is None:
+        return "(not set)"
+    if isinstance(value, float):
+        return f"{value:.12g}"
+    text = json.dumps(value) if isinstance(value, str | list | dict) else str(value)
+    return text if len(text) <= 160 else text[:150] + " ..."
+
+
+def parameters_error(path, differences: list[tuple[str, object, object]]) -> StoredFileError:
+    """The refusal of a file made for other parameters than its name and the config say."""
+    shown = [f"{field} = {_shown(found)} in the file, {_shown(expected)} expected"
+             for field, expected, found in differences[:4]]
+    more = f" (and {len(differences) - 4} more)" if len(differences) > 4 else ""
+    return StoredFileError(
+        f"{path}: made for other parameters than its name and the configuration say: "
+        + "; ".join(shown) + more + ". A file copied or renamed from another one, or made by "
+        f"another configuration, is never used; {rebuild(path)}", path)
+
+
+def _expected(cell=None, geometry=None, job=None, study_seed=None) -> dict:
+    """Root attribute -> the value a reader expects of it (see :func:`check_parameters`)."""
+    expected = {}
+    if cell is not None:
+        expected["params"] = cell
+    if geometry is not None:
+        expected["params"] = geometry
+    if job is not None:
+        expected["job"] = {k: job.get(k) for k in CONTACT_DEFINING}
+    if study_seed is not None:
+        expected["study_seed"] = int(study_seed)
+    return expected
+
+
+def check_attributes(path, attrs: dict, expected: dict) -> None:
+    """Raise :func:`parameters_error` unless a file's root attributes ``attrs`` hold the
+    ``expected`` values (attribute -> value; a dict is compared with the attribute's JSON
+    field by field)."""
+    differences = []
+    for name, want in expected.items():
+        found = attrs.get(name)
+        if name == "job":
+            found = _json(found)
+            found = None if found is None else {k: found.get(k) for k in CONTACT_DEFINING}
+        elif isinstance(want, dict):
+            found = _json(found)
+        elif isinstance(found, np.generic):
+            found = found.item()
+        if isinstance(want, dict) and isinstance(found, dict):
+            differences += _differences(want, found)
+        elif not _same(want, found):
+            differences.append((name, want, found))
+    if differences:
+        raise parameters_error(path, differences)
+
+
+def _check_shape(path, name: str, shape: tuple, expected: tuple, what: str) -> None:
+    """Raise :func:`parameters_error` unless a dataset's ``shape`` is the ``expected`` one."""
+    if tuple(shape) != tuple(expected):
+        raise parameters_error(path, [(f"shape of {name} ({what})", list(expected),
+                                       list(shape))])
+
+
+def check_parameters(path: str | os.PathLike, *, cell: dict | None = None,
+                     geometry: dict | None = None, job: dict | None = None,
+                     study_seed: int | None = None) -> dict:
+    """Check the parameters a stored file was made for against what its reader expects.
+
+    ``cell``: a surface cell's :meth:`~roughcontact.study.records.GeneratedCell.params`
+    (the ``params`` attribute of a surface file, with ``study_seed``);
+    ``geometry``: a geometry's :meth:`~roughcontact.study.records.Geometry.params`
+    (of an influence file); ``job``: a contact job's
+    :meth:`~roughcontact.study.records.ContactJob.params` (the fields of
+    :data:`CONTACT_DEFINING` of a contact file's ``job``). Numbers agree to a
+    relative 1e-9. Only the attributes are read (no dataset, no hash: the
+    readers check those). Raises :class:`StoredFileError` naming the file,
+    each field that differs with the value expected and found, and the
+    command that rebuilds it. Returns the attributes.
+    """
+    with open_h5(path) as f:
+        attrs = _decoded(f.attrs)
+    check_attributes(path, attrs, _expected(cell, geometry, job, study_seed))
+    return attrs
 
 
 def write_h5(path: str | os.PathLike, datasets: dict, attrs: dict) -> None:
@@ -161,18 +307,27 @@ def write_surfaces(path: str | os.PathLike, datasets: dict, attrs: dict) -> None
     write_h5(path, datasets, attrs)
 
 
-def read_surfaces(path: str | os.PathLike, count: int | None = None) -> dict:
+def read_surfaces(path: str | os.PathLike, count: int | None = None, *,
+                  cell: dict | None = None, study_seed: int | None = None) -> dict:
     """Read a surface file written by the ``surfaces`` rule.
 
     Returns a dict with ``heights`` (m, ny, nx, in units of sigma), ``seeds``,
     ``stats`` (dict of per-surface arrays), ``spec`` (dict) and ``attrs``.
-    ``count`` limits how many surfaces are read (the first ``count``).
+    ``count`` limits how many surfaces are read (the first ``count``). With
+    the ``cell`` (its ``params()``) and ``study_seed`` the job expects, the
+    file must have been made for them (:func:`check_parameters`), its
+    heights of shape (count, ny, nx) of the cell.
     """
     sl = slice(None) if count is None else slice(0, count)
     with open_h5(path) as f:
-        arrays = _all_datasets(f)
         attrs = _decoded(f.attrs)
+        check_attributes(path, attrs, _expected(cell=cell, study_seed=study_seed))
+        arrays = _all_datasets(f)
     verify(path, attrs, arrays_sha256(arrays))
+    if cell is not None and "heights" in arrays:
+        nx, ny = cell["grid"]
+        _check_shape(path, "heights", arrays["heights"].shape, (cell["count"], ny, nx),
+                     "surfaces, ny, nx")
     stats = {name.split("/", 1)[1]: value for name, value in arrays.items()
              if name.startswith("stats/")}
     return {
@@ -226,16 +381,32 @@ def write_influence(path: str | os.PathLike, unit, attrs: dict) -> dict:
     return attrs
 
 
-def read_influence(path: str | os.PathLike):
+def _influence_shape(path, unit, geometry: dict) -> None:
+    """The stored model's grid against the ``grid`` of the geometry a reader expects."""
+    nx, ny = geometry["grid"]
+    if isinstance(unit, BlockOperator):
+        _check_shape(path, "the operator's grid", unit.grid, (nx, ny), "nx, ny")
+    else:
+        _check_shape(path, "unit_influence", unit.shape, (nx * ny, nx * ny),
+                     f"n x n for the {nx} x {ny} grid")
+
+
+def read_influence(path: str | os.PathLike, *, geometry: dict | None = None):
     """``(E C, attributes)`` of an influence file: a dense ndarray [m] or a :class:`BlockOperator`.
 
-    Divide by Young's modulus for C [m/Pa].
+    Divide by Young's modulus for C [m/Pa]. With the ``geometry`` (its
+    ``params()``) the job expects, the file must have been made for it
+    (:func:`check_parameters`, before any dataset is read), its model on the
+    geometry's grid.
     """
     with open_h5(path) as f:
         attrs = _decoded(f.attrs)
+        check_attributes(path, attrs, _expected(geometry=geometry))
         if "unit_influence" in f:
             unit = f["unit_influence"][...]
             verify(path, attrs, influence_sha256(unit))
+            if geometry is not None:
+                _influence_shape(path, unit, geometry)
             return unit, attrs
         correction = f["correction"][...] if "correction" in f else None
 
@@ -244,13 +415,48 @@ def read_influence(path: str | os.PathLike):
 
     kind = attrs.get("operator")
     if kind not in ("hybrid", "halfspace"):
-        raise ValueError(f"{path}: not an influence file (no unit_influence dataset and "
-                         f"operator attribute {kind!r})")
-    coarse = pair(attrs["coarse_grid"]) if correction is not None else None
-    op = BlockOperator(grid=pair(attrs["operator_grid"]), size=pair(attrs["operator_size_m"]),
-                       nu=float(attrs["operator_nu"]), correction=correction, coarse_grid=coarse)
+        raise StoredFileError(f"{path}: not an influence file (no unit_influence dataset and "
+                              f"operator attribute {kind!r}); {rebuild(path)}", path)
+    try:
+        coarse = pair(attrs["coarse_grid"]) if correction is not None else None
+        op = BlockOperator(grid=pair(attrs["operator_grid"]),
+                           size=pair(attrs["operator_size_m"]),
+                           nu=float(attrs["operator_nu"]), correction=correction,
+                           coarse_grid=coarse)
+    except (KeyError, TypeError, ValueError) as err:
+        raise StoredFileError(f"{path}: its {kind} operator cannot be made from the stored "
+                              f"attributes and correction ({err}); {rebuild(path)}",
+                              path) from None
     verify(path, attrs, influence_sha256(op))
+    if geometry is not None:
+        _influence_shape(path, op, geometry)
     return op, attrs
+
+
+# ---------------------------------------------------------------------------
+# Choices of operator: auto (JSON)
+
+
+def write_choice(path: str | os.PathLike, choice: dict) -> None:
+    """Write the choice of an ``operator: auto`` geometry (JSON, atomically)."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "w") as f:
+            json.dump(choice, f, indent=1, sort_keys=True)
+
+
+def read_choice(path: str | os.PathLike, *, geometry: dict | None = None) -> dict:
+    """The choice of an ``operator: auto`` geometry (:func:`write_choice`); with the
+    ``geometry`` (its ``params()``) a reader expects, it must have been made for it
+    (:func:`check_attributes`)."""
+    try:
+        with open(path) as f:
+            choice = json.load(f)
+    except ValueError as err:
+        raise StoredFileError(f"{path}: not a choice of operator: auto (not JSON: {err}); "
+                              f"{rebuild(path)}", path) from None
+    if geometry is not None:
+        check_attributes(path, choice, {"geometry": geometry})
+    return choice
 
 
 # ---------------------------------------------------------------------------
@@ -291,16 +497,26 @@ def write_contact(path: str | os.PathLike, sweep: NondimSweep, attrs: dict) -> d
     return attrs
 
 
-def read_contact(path: str | os.PathLike) -> tuple[NondimSweep, dict]:
-    """The :class:`~roughcontact.contact.curves.NondimSweep` and attributes of a contact file."""
+def read_contact(path: str | os.PathLike, *,
+                 job: dict | None = None) -> tuple[NondimSweep, dict]:
+    """The :class:`~roughcontact.contact.curves.NondimSweep` and attributes of a contact file.
+
+    With the ``job`` (its ``params()``) the reader expects, the file must have
+    been solved for it (:func:`check_parameters`: surfaces, geometry, sweep
+    end and cap), one row per surface of the job's cell.
+    """
     with open_h5(path) as f:
+        attrs = _decoded(f.attrs)
+        check_attributes(path, attrs, _expected(job=job))
         missing = [name for name in CONTACT_ARRAYS if name not in f]
         if missing:
             raise StoredFileError(f"{path}: no {', '.join(missing)} (written by an older "
-                                  f"version of roughcontact); {REBUILD}", path)
+                                  f"version of roughcontact); {rebuild(path)}", path)
         arrays = {name: f[name][...] for name in CONTACT_ARRAYS + PROFILE_ARRAYS if name in f}
-        attrs = _decoded(f.attrs)
     verify(path, attrs, arrays_sha256(arrays))
+    if job is not None:
+        count = job["surface"]["count"]
+        _check_shape(path, "approach", arrays["approach"].shape[:1], (count,), "surfaces")
     settings = {k: attrs[f"sweep_{k}"] for k in SWEEP_SETTINGS}
     settings["n_elements"] = int(settings["n_elements"])
     for key in ("method", "precision"):

@@ -143,8 +143,11 @@ def test_tiny_study_area_matches_a_direct_solve(tiny):
 
 def test_a_changed_or_foreign_file_is_refused(tiny, tmp_path):
     root, params, paths, _ = tiny
-    with pytest.raises(StoredFileError, match="other settings"):
+    with pytest.raises(StoredFileError, match=r"surfaces_64\.h5: made for other parameters.*"
+                                              r"grid = 64 in the file, 128 expected"):
         solve_grid(params, root / "surfaces_64.h5", 128, tmp_path / "c.h5")
+    with pytest.raises(StoredFileError, match=r"surfaces = 2 in the file, 3 expected"):
+        solve_grid(params | {"surfaces": 3}, root / "surfaces_64.h5", 64, tmp_path / "c.h5")
     damaged = tmp_path / "damaged.h5"
     damaged.write_bytes(paths[0].read_bytes())
     with h5py.File(damaged, "r+") as f:

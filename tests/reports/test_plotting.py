@@ -1,6 +1,8 @@
 """Figure helpers of the notebooks: tables as CSV and as figures, 3-D surface panels,
 curves against nominal pressure per mesh or per cell, the study summary."""
 
+import json
+
 import matplotlib
 import numpy as np
 import pandas as pd
@@ -9,6 +11,7 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from roughcontact.errors import StoredFileError  # noqa: E402
 from roughcontact.reports.plotting import (  # noqa: E402
     cells_at_pressures,
     describe_study,
@@ -56,7 +59,7 @@ def test_surface_panel_titles_are_legible(monkeypatch, panels):
     the number of panels (a row of five panels shrank them to 3 pt)."""
     rng = np.random.default_rng(0)
 
-    def fake_read(path, count=None):
+    def fake_read(path, count=None, cell=None):
         return {"spec": {"size": [4.8e-3, 4.8e-3]}, "heights": rng.standard_normal((1, 16, 16))}
 
     monkeypatch.setattr(storage, "read_surfaces", fake_read)
@@ -184,9 +187,25 @@ def test_surface_moments_are_those_of_each_files_first_surface(monkeypatch):
     stored = {"a.h5": {"sigma": [0.9, 1.1], "skew": [0.1, 0.2], "kurt": [2.9, 3.1]},
               "b.h5": {"sigma": [1.05], "skew": [-0.75], "kurt": [3.5]}}
     monkeypatch.setattr(storage, "read_surfaces",
-                        lambda path, count=None: {"stats": stored[path]})
+                        lambda path, count=None, cell=None: {"stats": stored[path]})
     table = surface_moments(["a.h5", "b.h5"], 40.0)
     assert list(table.columns) == ["file", "sigma_um", "skew", "kurt"]
     assert table["file"].tolist() == ["a.h5", "b.h5"]
     np.testing.assert_allclose(table["sigma_um"], [36.0, 42.0])
     assert table["skew"].tolist() == [0.1, -0.75] and table["kurt"].tolist() == [2.9, 3.5]
+
+
+def test_the_figures_draw_only_surfaces_made_for_their_cells(tmp_path):
+    cell = {"skew": 0.0, "kurt": 3.0, "b_mm": [0.5, 0.5], "grid": [4, 4], "size_mm": [1, 1],
+            "acf": "exponential", "periodic": True, "method": "filter", "count": 1}
+    path = tmp_path / "cell.h5"
+    storage.write_surfaces(path, {"heights": np.zeros((1, 4, 4)), "seeds": np.zeros(1),
+                                  "stats/sigma": [1.0], "stats/skew": [0.0],
+                                  "stats/kurt": [3.0]},
+                           {"spec": "{}", "params": json.dumps(cell)})
+    assert surface_moments([path], 40.0, cells=[cell])["kurt"].tolist() == [3.0]
+    with pytest.raises(StoredFileError, match=r"cell\.h5: made for other parameters.*kurt = 3 "
+                                              r"in the file, 4 expected"):
+        surface_moments([path], 40.0, cells=[cell | {"kurt": 4.0}])
+    with pytest.raises(StoredFileError, match="kurt = 3 in the file, 4 expected"):
+        draw_surfaces([path], 40.0, ["t"], cells=[cell | {"kurt": 4.0}])

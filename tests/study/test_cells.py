@@ -167,9 +167,15 @@ def test_a_measured_map_too_large_for_the_dense_model_stops_when_the_plan_is_mad
     # the matrix-free operator plans the same file within the limit
     config["body"]["operator"] = "auto"
     plan = study_plan(validated(config))
-    (geom,) = plan.geometries.values()
-    assert geom.grid == (1024, 1024)
-    assert geom.planned_model(16e9) is InfluenceModel.HYBRID
+    (auto,) = plan.choices.values()
+    assert auto.grid == (1024, 1024)
+    assert auto.planned_model(16e9) is InfluenceModel.HYBRID
+    # built: the planned hybrid operator, and the half-space if the choice picks it
+    planned, halfspace = plan.geometries.values()
+    assert (planned.operator, halfspace.operator) == (InfluenceModel.HYBRID,
+                                                      InfluenceModel.HALFSPACE)
+    assert plan.alternatives == {halfspace.key}
+    assert {job.geometry.key for job in plan.jobs.values()} == {planned.key, halfspace.key}
 
 
 def test_the_schema_fills_the_axes_of_a_generated_study_only():

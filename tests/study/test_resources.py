@@ -10,6 +10,7 @@ from snakemake.utils import validate
 
 from roughcontact.study import resources
 from roughcontact.study.cells import study_plan
+from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import (
     BuildSettings,
     ContactSettings,
@@ -197,9 +198,56 @@ def test_jobs_planned_beyond_the_machine_are_named_with_the_keys_to_change():
     config = yaml.safe_load(quick.read_text())
     validate(config, str(resources.SCHEMA_FILE))
     plan = study_plan(config)
-    largest = max(mem for jobs in resources.predictions(config, plan).values()
-                  for _, mem in jobs.values())
+    planned = resources.planned_memory(config, plan)
+    # the study's jobs and, beside them, the configured report and the audit
+    assert {"contact", "influence", "surfaces", "influence_convergence", "audit"} <= set(planned)
+    largest = max(mem for jobs in planned.values() for mem in jobs.values())
     assert resources.machine_problems(config, total_mb=largest, plan=plan) == []
-    problems = resources.machine_problems(config, total_mb=largest - 1, plan=plan)
-    assert problems and all("this machine has" in p and "body.operator: auto" in p
-                            for p in problems)
+    contact = max(resources.predictions(config, plan)["contact"].values())[1]
+    problems = resources.machine_problems(config, total_mb=contact - 1, plan=plan)
+    by_kind = {p.split(" job ")[0]: p for p in problems}
+    assert "contact" in by_kind and "body.operator: auto" in by_kind["contact"]
+    assert "more than the limit of" in by_kind["contact"]
+    assert "reports.influence_convergence" in by_kind["influence_convergence"]
+    assert all("set job_memory_gb to their memory" in p for p in problems)
+
+
+def huge_grid_config(**extra):
+    """The issue's case: a 4096 x 4096 grid with operator: auto and the mesh report."""
+    config = yaml.safe_load((resources.SCHEMA_FILE.parent / "quick.yaml").read_text())
+    config["surfaces"]["grid"] = [4096, 4096]
+    config["body"]["operator"] = "auto"
+    config |= {"figures": {}, "sweeps": {}, **extra}
+    return config
+
+
+def test_a_report_beyond_the_machine_is_refused_before_any_job():
+    config = validated(huge_grid_config(job_memory_gb=64))
+    with pytest.raises(ConfigProblems) as err:
+        resources.check_machine(config)
+    (problem,) = err.value.problems
+    assert problem.startswith("influence_convergence job influence_convergence: planned "
+                              "6.76 PB of memory, more than job_memory_gb = 64. Remove "
+                              "reports.influence_convergence")
+    # the advice, followed: without the report the plan fits
+    del config["reports"]["influence_convergence"]
+    resources.check_machine(config)
+    assert "influence_convergence" not in resources.planned_memory(config)
+
+
+def test_a_report_made_on_demand_is_refused_only_when_asked_for():
+    config = validated(huge_grid_config(job_memory_gb=64))
+    del config["reports"]["influence_convergence"]
+    resources.check_machine(config)  # the default target fits
+    with pytest.raises(ConfigProblems, match=r"speed_vs_error job speed_vs_error: planned "
+                                             r"[\d.]+ PB .* reports.speed_vs_error.grids"):
+        resources.check_machine(config, kinds=("speed_vs_error",))
+
+
+def test_the_memory_a_job_may_use_is_this_machines_unless_configured():
+    config = validated(huge_grid_config())
+    assert config["job_memory_gb"] is None
+    limit, source = resources.memory_limit_mb(config)
+    assert limit == resources.machine_memory_mb() and source.startswith("this machine's ")
+    config["job_memory_gb"] = 2.5
+    assert resources.memory_limit_mb(config) == (2500.0, "job_memory_gb = 2.5")

@@ -35,19 +35,29 @@ def run(workdir, *targets, config=None):
                           env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
 
 
-@pytest.fixture(scope="module")
-def finished(tmp_path_factory):
-    workdir = tmp_path_factory.mktemp("sweep")
-    proc = run(workdir)
+def finish(tmp_path_factory, name: str, config=None) -> Path:
+    """A finished run of ``config`` (default: the sweep) in a new folder."""
+    workdir = tmp_path_factory.mktemp(name)
+    proc = run(workdir, config=config)
     assert proc.returncode == 0, proc.stderr[-4000:]
     return workdir
 
 
+def copy_of(workdir: Path, tmp_path: Path) -> Path:
+    """A copy of a finished run, to damage."""
+    target = tmp_path / "run"
+    shutil.copytree(workdir, target, symlinks=True)
+    return target
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    return finish(tmp_path_factory, "sweep")
+
+
 @pytest.fixture
 def copy(finished, tmp_path):
-    target = tmp_path / "run"
-    shutil.copytree(finished, target, symlinks=True)
-    return target
+    return copy_of(finished, tmp_path)
 
 
 def state(folder: Path) -> dict:
@@ -167,5 +177,5 @@ def test_a_bad_key_is_named_in_one_line(tmp_path):
     proc = run(tmp_path, "-n", config=config)
     assert proc.returncode != 0
     output = proc.stdout + proc.stderr
-    assert "sweeps.small.sigma_um: -1 is less than or equal to the minimum of 0" in output
+    assert "sweeps.small.sigma_um: -1 is out of range: it must be above 0" in output
     assert len(output.splitlines()) < 30  # not the schema's text
