@@ -93,8 +93,9 @@ def study_plan(config: dict) -> StudyPlan:
     by_source = {source: contact_cells(config, source) for source in sources.values()}
     cells = {name: by_source[source] for name, source in sources.items()}
     if config["plausibility_check"]:
-        _raise("Values that are almost surely a unit slip (set plausibility_check: false if "
-               "they are meant)", check_plausible(cells))
+        _raise("Values that are almost surely a mistake (a unit slip, or noise in place of a "
+               "height map; set plausibility_check: false if they are meant)",
+               check_plausible(cells))
     jobs = contact_jobs(cell for name in studies for cell in cells[name])
     figure_cells = {name: figure_surfaces(config, name, cells) for name in figures}
     surfaces = {cell.key: cell for name in SURFACE_FIGURES if name in figure_cells

@@ -12,6 +12,7 @@ import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
 from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.measured_checks import check_measured_plausible
 from roughcontact.study.records import (
     GeneratedCell,
     Generator,
@@ -175,11 +176,19 @@ def _slip(key: str, value: float) -> str:
 
 def check_plausible(cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
     """Messages for study values that are almost surely a unit slip (:data:`PLAUSIBLE`),
-    in the units they were written in; ``cells`` by study name."""
+    in the units they were written in, and for measured maps that are noise or whose
+    measured sigma is out of range
+    (:func:`~roughcontact.study.measured_checks.check_measured_plausible`); ``cells``
+    by study name."""
     problems = set()
     for name, study_cells in cells.items():
+        measured, answered = check_measured_plausible(name, study_cells,
+                                                      PLAUSIBLE["sigma_um"])
+        problems.update(measured)
         for cell in study_cells:
             values = {"sigma_um": in_unit(cell.sigma, UM), "E_MPa": in_unit(cell.E, MPA)}
+            if cell.sigma in answered:  # the measured sigma: not typed, judged above
+                del values["sigma_um"]
             for key, value in values.items():
                 low, high = PLAUSIBLE[key]
                 if not low <= value <= high:

@@ -15,21 +15,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from scipy import ndimage
+from topographies import DATA, needs_data
 
 from roughcontact.errors import MeasurementError
 from roughcontact.surfaces import measured
 from roughcontact.surfaces.measured import load_measurement, statistics
 from roughcontact.surfaces.preparation import remove_polynomial
 from roughcontact.surfaces.readers import read_instrument, read_text_grid
-
-#: Real instrument files (SurfaceTopography's test collection), read in place: the folder
-#: ROUGHCONTACT_TOPOGRAPHIES names, else ``shared/data/topographies`` beside the checkout.
-DATA = Path(os.environ.get("ROUGHCONTACT_TOPOGRAPHIES",
-                           Path(__file__).resolve().parents[3] / "shared" / "data"
-                           / "topographies"))
-needs_data = pytest.mark.skipif(
-    not DATA.is_dir(), reason=f"shared instrument files not found at {DATA}"
-)
 
 FILES = ("di-1.di", "frt-1.frt", "matrix-3.txt", "opd-1.opd", "plu-1.plu", "sur-2.sur",
          "x3p-2.x3p")
