@@ -119,9 +119,11 @@ def check_measured(config: dict, name: str, entry: dict) -> list[str]:
     """Messages for a study whose measured surface cannot be used as configured
     (``entry``: the study as configured)."""
     if entry.get("surface") is None:
-        if entry.get("compare_synthetic"):
-            return [f"{name}: compare_synthetic needs a measured surface ('surface:')"]
-        return []
+        return [f"{name}: {key} needs a measured surface ('surface:'){why}"
+                for key, why in (("compare_synthetic", ""),
+                                 ("thickness_mm", "; the block under generated surfaces is "
+                                                  "body.thickness_mm"))
+                if entry.get(key)]
     if entry.get("spectrum") is not None and not entry["compare_synthetic"]:
         return [f"{name}: 'spectrum' applies to the generated twin of a measured surface; "
                 "add compare_synthetic: true or remove spectrum"]

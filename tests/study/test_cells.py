@@ -155,7 +155,7 @@ def test_a_measured_map_too_large_for_the_dense_model_stops_when_the_plan_is_mad
                "spacing_mm": [0.01, 0.01]}
     config = {"study_seed": 0, "figures": {},
               "surfaces": {"grid": 8, "size_mm": 1.0, "count": 1},
-              "body": {"thickness_mm": 10.0, "E_MPa": 511.0, "nu": 0.0},
+              "body": {"thickness_mm": 0.5, "E_MPa": 511.0, "nu": 0.0},
               "sweeps": {"big": {"surface": surface, "pressure_MPa": [1.0, 5.0]}}}
     with pytest.raises(ConfigProblems) as raised:
         study_plan(validated(config))

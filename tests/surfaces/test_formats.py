@@ -31,7 +31,7 @@ def sweep_config(surface: dict) -> dict:
     return validated({
         "study_seed": 0, "figures": {},
         "surfaces": {"grid": 8, "size_mm": 1.0, "count": 1},
-        "body": {"thickness_mm": 1.0},
+        "body": {"thickness_mm": 0.5},
         "sweeps": {"s": {"surface": surface, "pressure_MPa": [1.0, 5.0]}},
     })
 
