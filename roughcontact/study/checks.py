@@ -20,7 +20,7 @@ from roughcontact.study.records import (
     InfluenceModel,
     StudyCell,
 )
-from roughcontact.study.sources import SPECTRA, spectrum_from_entry
+from roughcontact.study.sources import SPECTRA, load_measurement, spectrum_from_entry
 from roughcontact.study.studies import (
     CAP_MODES,
     as_list,
@@ -30,7 +30,7 @@ from roughcontact.study.studies import (
     study_section,
     study_surfaces,
 )
-from roughcontact.surfaces import johnson
+from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.spectra import filter_kernel
@@ -137,10 +137,10 @@ def check_measured(config: dict, name: str, entry: dict) -> list[str]:
         return [f"{name}.surface: {err}"]
     bx, by = (in_unit(b, MM) for b in surfaces[0].corr_length)
     if len(surfaces) > 1 and not (math.isfinite(bx) and math.isfinite(by)):
+        advice = measured.form_advice(load_measurement(surfaces[0].source))
         return [f"{name}: the measured autocorrelation does not decay to 10 % within half "
-                f"the measured length (b = {bx:g} x {by:g} mm), so no synthetic "
-                "twin can be made; remove the form (surface.form_degree: 2 or more), measure "
-                "or crop a larger area, or drop compare_synthetic"]
+                f"the measured length (b = {bx:g} x {by:g} mm), so no synthetic twin can be "
+                f"made. {advice}; or set compare_synthetic: false (the measurement alone)"]
     return []
 
 

@@ -382,8 +382,8 @@ REPO = Path(__file__).resolve().parents[2]
 
 def instrument_config(file, grid=24, count=3):
     """A Digital Surf measurement, cropped, form and outliers removed, resampled, beside
-    its synthetic twin on the paper's block (the measured sigma of a few nm: pressures
-    up to P L / (E sigma) of about 4)."""
+    its synthetic twin on the paper's mesh, under a block as thick as the 1.5 mm patch
+    (the measured sigma of a few nm: pressures up to P L / (E sigma) of about 0.3)."""
     return {
         "study_seed": 11,
         "surfaces": {"grid": [grid, grid], "size_mm": [1.5, 1.5], "method": "exact",
@@ -395,7 +395,7 @@ def instrument_config(file, grid=24, count=3):
             "surface": {"file": str(file), "format": "auto", "fill_holes": 0.01,
                         "crop_mm": [0.1, 0.1, 1.5, 1.5], "form_degree": 2,
                         "outliers_sigma": 5, "resample_grid": [grid, grid]},
-            "compare_synthetic": True, "count": count,
+            "compare_synthetic": True, "count": count, "thickness_mm": "patch",
             "pressure_MPa": [5e-5, 5e-4]}},
     }
 
