@@ -17,7 +17,11 @@ two-process, plateau-honed surface as found on cylinder liners,
    random position;
 3. a tilt of the mounting (removed again by the import's plane fit), and a
    few points dropped from the deepest valleys, as optical instruments lose
-   them on steep flanks (filled again by the import's ``fill_holes``).
+   them on steep flanks (filled again by the import's ``fill_holes``);
+   optionally (``--spikes``, none by default) points written at a wrong
+   height, as instruments that write a lost point as a value rather than
+   leaving it out do (dropouts: the import reports them and the
+   ``outliers_sigma`` that removes them).
 
 The result has a strong negative skewness and a high kurtosis that come from
 the valleys, not from a Johnson law, and an anisotropic autocorrelation. It is
@@ -80,6 +84,9 @@ def main(argv=None) -> None:
     parser.add_argument("--hatch-deg", type=float, default=25.0)
     parser.add_argument("--tilt-um-per-mm", type=float, nargs=2, default=[0.4, -0.25])
     parser.add_argument("--dropouts", type=int, default=10, help="points dropped from valleys")
+    parser.add_argument("--spikes", type=int, default=0,
+                        help="points written at --spike-um instead of their height")
+    parser.add_argument("--spike-um", type=float, default=-20.0)
     args = parser.parse_args(argv)
 
     z = plateau_honed(args.grid, args.spacing_mm, args.seed,
@@ -93,14 +100,19 @@ def main(argv=None) -> None:
     deepest = np.argsort(z - args.tilt_um_per_mm[0] * x - args.tilt_um_per_mm[1] * y,
                          axis=None)[: max(1, z.size // 50)]
     dropped = set(rng.choice(deepest, size=args.dropouts, replace=False).tolist())
+    kept = np.setdiff1d(np.arange(z.size), list(dropped))
+    z.ravel()[rng.choice(kept, size=args.spikes, replace=False)] = args.spike_um
+    settings = {k: v for k, v in vars(args).items()  # no spikes: the committed file's
+                if args.spikes or k not in ("spikes", "spike_um")}
     header = [
         "SYNTHETIC STAND-IN, NOT A MEASUREMENT.",
         "A plateau-honed (two-process) surface made by scripts/make_example_measurement.py",
         "for the example of the measured-surface workflow (config/measured.yaml):",
         "a truncated fine Gaussian plateau with cross-hatched honing grooves cut into it,",
         f"a tilt of {args.tilt_um_per_mm[0]:g}, {args.tilt_um_per_mm[1]:g} um/mm and "
-        f"{args.dropouts} points dropped from the deepest valleys.",
-        f"Settings: {vars(args)}",
+        f"{args.dropouts} points dropped from the deepest valleys"
+        + (f", {args.spikes} written at {args.spike_um:g} um." if args.spikes else "."),
+        f"Settings: {settings}",
         f"Grid {args.grid} x {args.grid}, spacing {args.spacing_mm:g} mm; "
         "columns: x [mm], y [mm], z [um].",
     ]

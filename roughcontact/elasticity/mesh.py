@@ -93,6 +93,22 @@ class HexMesh:
         return len(self.x_edges) - 1, len(self.y_edges) - 1, len(self.z_edges) - 1
 
     @property
+    def aspect_ratio(self) -> float:
+        """Largest ratio of two edges of one element (1: cubes), over every layer.
+
+        An element of layer k has the plan edges of the top layer times its
+        coarsening factor and the layer's thickness as its third edge.
+        """
+        hx = (self.x_edges[-1] - self.x_edges[0]) / (len(self.x_edges) - 1)
+        hy = (self.y_edges[-1] - self.y_edges[0]) / (len(self.y_edges) - 1)
+        worst = 1.0
+        for low, high, factor in zip(self.z_edges[:-1], self.z_edges[1:], self.factors,
+                                     strict=True):
+            edges = (hx * factor, hy * factor, high - low)
+            worst = max(worst, max(edges) / min(edges))
+        return worst
+
+    @property
     def lattice_shape(self) -> tuple[int, int, int]:
         """Lattice points along (z, y, x) of a single-slab mesh (``node_numbers``' shape)."""
         ex, ey, ez = self.n_elements

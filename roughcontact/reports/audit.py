@@ -24,7 +24,12 @@ import pandas as pd
 
 from roughcontact import __version__
 from roughcontact.contact.aggregate import pressure_axis
-from roughcontact.contact.cell import sweep_cell
+from roughcontact.contact.cell import aggregate_sweep, sweep_cell
+from roughcontact.contact.plausibility import (
+    MAX_PRESSURE_OVER_E_STAR,
+    MIN_CONTACT_ELEMENTS,
+    implausible,
+)
 from roughcontact.errors import StoredFileError
 from roughcontact.study.aggregation import validity_rows, validity_summary
 from roughcontact.study.provenance import atomic_path, git_commit
@@ -193,8 +198,29 @@ def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels
     if attrs.get("surfaces_content_sha256") != surfaces["content_sha256"]:
         flags.append("solved on other surfaces")
     flags += _hardness_check(row, cell, stored, levels)
+    flags += _plausibility_check(row, cell, stored, levels)
     row["flags"] = "; ".join(flags)
     return row
+
+
+def _plausibility_check(row: dict, cell: dict, stored, levels: int) -> list[str]:
+    """The cell's results at its pressure levels against physical plausibility
+    (:func:`roughcontact.contact.plausibility.implausible`: p_max beyond a multiple of
+    E*, too few elements in contact), a flag per reason; ``max_pressure_over_E_star``
+    and ``contact_elements_at_P_max`` (at the highest level with values) in the row."""
+    study_cell = StudyCell.from_params(cell)
+    axis = pressure_axis(*study_cell.pressure_range, levels)
+    _, frame = aggregate_sweep(stored, study_cell.sigma, study_cell.E, axis,
+                               hardness=study_cell.hardness)
+    (nx, ny), nu = study_cell.geometry.grid, study_cell.geometry.nu
+    valued = frame[frame["real_area_fraction_count"] > 0]
+    row["max_pressure_over_E_star"] = (float(np.nanmax(frame["max_pressure_mean"]))
+                                       * (1.0 - nu * nu) / study_cell.E
+                                       if len(valued) else float("nan"))
+    row["contact_elements_at_P_max"] = (float(valued["real_area_fraction_mean"].iloc[-1])
+                                        * nx * ny if len(valued) else float("nan"))
+    return [f"implausible: {reason}"
+            for reason in implausible(frame, nx * ny, study_cell.E, nu)]
 
 
 def _hardness_check(row: dict, cell: dict, stored, levels: int) -> list[str]:
@@ -249,8 +275,11 @@ def write_audit(table: pd.DataFrame, csv_path, md_path, *, config_hash: str = ""
         "mean Sk and Ku "
         f"within {MOMENT_SIGMAS:g} standard errors of the target; the contact result, "
         "its influence matrix and its surfaces unchanged since the solve (content "
-        "hashes). `mesh_diagonal_error`: relative error of the self compliance of the "
-        "mesh preset at 60 x 60 (the error that dominates real area and peak pressure).",
+        "hashes); the results physically plausible (peak pressure at most "
+        f"{MAX_PRESSURE_OVER_E_STAR:g} E*, at least {MIN_CONTACT_ELEMENTS} elements in "
+        "contact at the highest pressure). `mesh_diagonal_error`: relative error of the "
+        "self compliance of the mesh preset at 60 x 60 (the error that dominates real area "
+        "and peak pressure).",
         "",
         "## Flagged cells",
         "",

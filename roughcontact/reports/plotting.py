@@ -500,6 +500,43 @@ def cells_at_pressures(table, quantities, pressures, *, by: str):
     return pd.DataFrame(rows)
 
 
+#: The quantities :func:`measured_against_twin` compares: (column, unit, scale) with the
+#: unit None for MPa, or GPa where the values exceed 10 GPa.
+_MEASURED_QUANTITIES = (("normalized_stiffness", None, 1.0), ("real_area_fraction", "%", 100.0),
+                        ("max_pressure", None, 1.0))
+
+
+def measured_against_twin(table, source: dict, levels: int = 4) -> str:
+    """The measured surface's k_P, real area and peak pressure beside its synthetic twin's
+    (mean +- 95 % half width, and their ratio) at ``levels`` nominal pressures spread over
+    an aggregate table, a line each; the measured values alone where the study has no
+    twin (``compare_synthetic: false``). ``source`` names each cell's source
+    (``"measured"`` or another name for the twin) by cell index.
+    """
+    import numpy as np
+
+    all_levels = np.unique(table["nominal_pressure"])
+    picks = all_levels[np.linspace(0, len(all_levels) - 1, levels).round().astype(int)]
+    measured = [i for i, name in source.items() if name == "measured"][0]
+    twins = [i for i, name in source.items() if name != "measured"]
+    rows = [] if twins else ["no synthetic twin (compare_synthetic: false): the measured "
+                             "surface alone"]
+    for quantity, unit, scale in _MEASURED_QUANTITIES:
+        if unit is None:
+            big = np.nanmax(table[f"{quantity}_mean"]) > 1e10
+            scale, unit = (1e-9, "GPa") if big else (1e-6, "MPa")
+        for level in picks:
+            at = table[table["nominal_pressure"] == level].set_index("cell")
+            value = at.loc[measured, f"{quantity}_mean"] * scale
+            line = f"{quantity:22s} P = {level / 1e6:7.3g} MPa: measured {value:9.4g}"
+            if twins:
+                twin, half = (at.loc[twins[0], f"{quantity}_{k}"] * scale
+                              for k in ("mean", "half_width"))
+                line += f", twin {twin:9.4g} +- {half:7.2g} {unit}; ratio {value / twin:.3f}"
+            rows.append(line if twins else f"{line} {unit}")
+    return "\n".join(rows)
+
+
 def describe_study(table) -> str:
     """:func:`study_note` and the labels of the study's cells, one per line."""
     return "\n".join([study_note(table), "cells:",

@@ -17,7 +17,7 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from roughcontact.contact import aggregate
+from roughcontact.contact import aggregate, plausibility
 from roughcontact.contact import cell as cell_module
 from roughcontact.hashes import file_sha256
 from roughcontact.study.config import in_unit
@@ -79,6 +79,23 @@ class _CellTables(NamedTuple):
     checks: list  # their summaries
 
 
+def _plausibility(cell: StudyCell, frame: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """The table with its ``plausibility`` column
+    (:func:`~roughcontact.contact.plausibility.plausibility_flags`), and the cell's
+    reasons (:func:`~roughcontact.contact.plausibility.implausible`, logged as a warning)."""
+    n = cell.geometry.grid[0] * cell.geometry.grid[1]
+    flags = plausibility.plausibility_flags(frame, n, cell.E, cell.geometry.nu)
+    reasons = plausibility.implausible(frame, n, cell.E, cell.geometry.nu)
+    if reasons:
+        log.warning("cell %s: results outside physical plausibility: %s; see its rows' "
+                    "plausibility column (a block too thick for its patch, or a mesh too "
+                    "coarse, gives this)", cell.label, "; ".join(reasons))
+    units = {**frame.attrs["units"], "plausibility": "-"}
+    frame = frame.assign(plausibility=flags)
+    frame.attrs["units"] = units
+    return frame, reasons
+
+
 def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTables:
     """Aggregate one cell's contact file at ``levels`` nominal pressures over its range."""
     nd, attrs = read_contact(path, job=cell.job.params())  # solved for this cell's job
@@ -86,6 +103,7 @@ def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTabl
     axis = aggregate.pressure_axis(*cell.pressure_range, levels)
     physical, frame = cell_module.aggregate_sweep(nd, cell.sigma, cell.E, axis,
                                                   hardness=cell.hardness)
+    frame, implausible = _plausibility(cell, frame)
     labels = {"cell": index, "label": label, "contact_key": key, **cell.columns()}
     if cell.hardness is not None or cell.checked_hardness:
         labels["cap_MPa"] = float("nan") if cell.hardness is None else in_unit(cell.hardness,
@@ -108,7 +126,8 @@ def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTabl
     unconverged = int(attrs["unconverged_steps"])
     summary = {**labels,
                **{k: float(v) for k, v in aggregate.modulus_summary(per_surface, cell.E).items()},
-               "unconverged_steps": unconverged, "worst_residual": float(attrs["worst_residual"])}
+               "unconverged_steps": unconverged, "worst_residual": float(attrs["worst_residual"]),
+               "implausible": implausible}
     if unconverged:
         log.warning("cell %s: %d unconverged steps excluded", key, unconverged)
     for reason in aggregate.COVERAGE[2:]:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 
+from roughcontact.study.block_checks import check_blocks
 from roughcontact.study.checks import (
     ConfigProblems,
     check_feasible,
@@ -109,15 +110,19 @@ def study_plan(config: dict) -> StudyPlan:
     by_source = {source: contact_cells(config, source) for source in sources.values()}
     cells = {name: by_source[source] for name, source in sources.items()}
     if config["plausibility_check"]:
-        _raise("Values that are almost surely a unit slip (set plausibility_check: false if "
-               "they are meant)", check_plausible(cells))
+        _raise("Values that are almost surely a mistake (a unit slip, or noise in place of a "
+               "height map; set plausibility_check: false if they are meant)",
+               check_plausible(cells))
+    build = BuildSettings.from_section(config["body"])
+    section = {name: "sweeps" if name in config["sweeps"] else "figures" for name in by_source}
+    _raise("Blocks that do not fit their surfaces",
+           check_blocks({f"{section[name]}.{name}": c for name, c in by_source.items()}, build))
     jobs = contact_jobs(cell for name in studies for cell in cells[name])
     figure_cells = {name: figure_surfaces(config, name, cells) for name in figures}
     surfaces = {cell.key: cell for name in SURFACE_FIGURES if name in figure_cells
                 for cell in figure_cells[name]}
     surfaces |= {job.surface.key: job.surface for job in jobs.values()}
     _raise("Infeasible surface cells in the config", check_feasible(surfaces))
-    build = BuildSettings.from_section(config["body"])
     asked = influence_geometries(config) | {job.geometry.key: job.geometry
                                             for job in jobs.values()}
     geometries = {c.key: c for g in asked.values() for c in g.candidates(build.max_bytes)}

@@ -12,6 +12,7 @@ import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
 from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.measured_checks import check_measured_plausible
 from roughcontact.study.records import (
     GeneratedCell,
     Generator,
@@ -19,7 +20,7 @@ from roughcontact.study.records import (
     InfluenceModel,
     StudyCell,
 )
-from roughcontact.study.sources import SPECTRA, spectrum_from_entry
+from roughcontact.study.sources import SPECTRA, load_measurement, spectrum_from_entry
 from roughcontact.study.studies import (
     CAP_MODES,
     as_list,
@@ -29,7 +30,7 @@ from roughcontact.study.studies import (
     study_section,
     study_surfaces,
 )
-from roughcontact.surfaces import johnson
+from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.spectra import filter_kernel
@@ -118,9 +119,11 @@ def check_measured(config: dict, name: str, entry: dict) -> list[str]:
     """Messages for a study whose measured surface cannot be used as configured
     (``entry``: the study as configured)."""
     if entry.get("surface") is None:
-        if entry.get("compare_synthetic"):
-            return [f"{name}: compare_synthetic needs a measured surface ('surface:')"]
-        return []
+        return [f"{name}: {key} needs a measured surface ('surface:'){why}"
+                for key, why in (("compare_synthetic", ""),
+                                 ("thickness_mm", "; the block under generated surfaces is "
+                                                  "body.thickness_mm"))
+                if entry.get(key)]
     if entry.get("spectrum") is not None and not entry["compare_synthetic"]:
         return [f"{name}: 'spectrum' applies to the generated twin of a measured surface; "
                 "add compare_synthetic: true or remove spectrum"]
@@ -134,10 +137,10 @@ def check_measured(config: dict, name: str, entry: dict) -> list[str]:
         return [f"{name}.surface: {err}"]
     bx, by = (in_unit(b, MM) for b in surfaces[0].corr_length)
     if len(surfaces) > 1 and not (math.isfinite(bx) and math.isfinite(by)):
+        advice = measured.form_advice(load_measurement(surfaces[0].source))
         return [f"{name}: the measured autocorrelation does not decay to 10 % within half "
-                f"the measured length (b = {bx:g} x {by:g} mm), so no synthetic "
-                "twin can be made; remove the form (surface.form_degree: 2 or more), measure "
-                "or crop a larger area, or drop compare_synthetic"]
+                f"the measured length (b = {bx:g} x {by:g} mm), so no synthetic twin can be "
+                f"made. {advice}; or set compare_synthetic: false (the measurement alone)"]
     return []
 
 
@@ -175,11 +178,19 @@ def _slip(key: str, value: float) -> str:
 
 def check_plausible(cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
     """Messages for study values that are almost surely a unit slip (:data:`PLAUSIBLE`),
-    in the units they were written in; ``cells`` by study name."""
+    in the units they were written in, and for measured maps that are noise or whose
+    measured sigma is out of range
+    (:func:`~roughcontact.study.measured_checks.check_measured_plausible`); ``cells``
+    by study name."""
     problems = set()
     for name, study_cells in cells.items():
+        measured, answered = check_measured_plausible(name, study_cells,
+                                                      PLAUSIBLE["sigma_um"])
+        problems.update(measured)
         for cell in study_cells:
             values = {"sigma_um": in_unit(cell.sigma, UM), "E_MPa": in_unit(cell.E, MPA)}
+            if cell.sigma in answered:  # the measured sigma: not typed, judged above
+                del values["sigma_um"]
             for key, value in values.items():
                 low, high = PLAUSIBLE[key]
                 if not low <= value <= high:

@@ -60,7 +60,7 @@ from roughcontact.study.storage import (
 from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.calibration import calibrate_filter, input_moments, moment_transfer
 from roughcontact.surfaces.exact import generate_exact
-from roughcontact.surfaces.spectra import filter_kernel
+from roughcontact.surfaces.spectra import check_domain, filter_kernel
 from roughcontact.surfaces.statistics import correlation_length, height_stats
 from roughcontact.surfaces.synthetic import derive_seeds, generate_many
 from roughcontact.units import GB, MM, UM
@@ -193,7 +193,9 @@ def _filtered_surfaces(cell: GeneratedCell, spec, seeds, *, calibrated: bool) ->
 
 
 def _exact_surfaces(cell: GeneratedCell, spec, seeds) -> tuple:
-    """Iterative amplitude adjustment, with each surface's spectral error and convergence."""
+    """Iterative amplitude adjustment, with each surface's spectral error and convergence
+    (the domain checked once for the cell)."""
+    check_domain(spec)
     results = [generate_exact(spec, s) for s in seeds]
     datasets = {
         "stats/spectral_error": (

@@ -29,7 +29,7 @@ from roughcontact.study.records import (
     StudyCell,
 )
 from roughcontact.study.sources import MeasurementImport, spectrum_from_entry
-from roughcontact.units import MPA, UM
+from roughcontact.units import MM, MPA, UM
 
 #: A study's (or ``contact.cap``'s) ``cap``: whether it has (elastic, capped) cells.
 CAP_MODES = {False: (True, False), True: (False, True), "both": (True, True)}
@@ -167,20 +167,37 @@ def _generated_cells(config: dict, study: dict, body: Geometry, common: dict) ->
     return cells
 
 
+#: A measured study's ``thickness_mm`` that sizes the block to the patch.
+PATCH_THICKNESS = "patch"
+
+
+def patch_thickness(value, size: tuple[float, float], body_thickness: float) -> float:
+    """The block thickness [m] under a measured patch of plan ``size`` [m]: a study's
+    ``thickness_mm`` (a number [mm], or ``patch``: the patch's longer side, the paper's
+    proportions), else the body's [m]."""
+    if value is None:
+        return body_thickness
+    if value == PATCH_THICKNESS:
+        return max(size)
+    return float(value) * MM
+
+
 def _measured_cells(config: dict, study: dict, body: Geometry, common: dict) -> list[StudyCell]:
     """The cells of a study on a measured surface: meshes x nu x (measurement, twin) x
-    sigma x E, on the measurement's grid and plan size; sigma by default the measured
-    one (the results of the measured heights; another value rescales both surfaces)."""
+    sigma x E, on the measurement's grid and plan size and under a block of the study's
+    ``thickness_mm`` (:func:`patch_thickness`); sigma by default the measured one (the
+    results of the measured heights; another value rescales both surfaces)."""
     surfaces = study_surfaces(config, study)
     first = surfaces[0]
     sigmas = ([first.sigma] if study.get("sigma_um") is None  # the measurement's
               else [float(s) * UM for s in as_list(study["sigma_um"])])
+    thickness = patch_thickness(study.get("thickness_mm"), first.size, body.thickness)
     cells = []
     for mesh, nu, surface, sigma, E in itertools.product(
             as_list(study["meshes"]), as_list(study["nu"]), surfaces, sigmas,
             as_list(study["E_MPa"])):
         geometry = dataclasses.replace(body, nu=float(nu), mesh=str(mesh), size=first.size,
-                                       grid=first.grid)
+                                       grid=first.grid, thickness=thickness)
         cells.append(StudyCell(surface, geometry, sigma=sigma, E=float(E) * MPA, **common))
     return cells
 

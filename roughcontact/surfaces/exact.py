@@ -24,7 +24,7 @@ from scipy import special
 from roughcontact.surfaces import johnson
 from roughcontact.surfaces.memory import MAX_GENERATION_BYTES, check_memory
 from roughcontact.surfaces.spec import SurfaceSpec
-from roughcontact.surfaces.spectra import apply_filter, check_domain, filter_kernel, white_noise
+from roughcontact.surfaces.spectra import apply_filter, filter_kernel, white_noise
 
 #: Largest |error| of the standardized sample moments (mean, variance, Sk, Ku) of
 #: :func:`target_heights` before scaling: the Newton correction stops below it.
@@ -179,7 +179,10 @@ def generate_exact(
     than b (0.953 b for b = L/9, exponential ACF). Periodic surfaces only.
     Refuses with :class:`memory.SurfaceTooLarge`, before allocating, when
     :func:`memory.estimate_generation_bytes` exceeds ``max_bytes`` [bytes]
-    (default :data:`MAX_GENERATION_BYTES`).
+    (default :data:`MAX_GENERATION_BYTES`). Whether the spectrum suits the
+    grid is the caller's to check once for all its seeds
+    (:func:`~roughcontact.surfaces.spectra.check_domain`; ``generate_many``
+    and the workflow do).
 
     Parameters
     ----------
@@ -202,7 +205,6 @@ def generate_exact(
             "method='exact' generates periodic surfaces only; set periodic=True in the spec"
         )
     check_memory(spec, 1, "exact", max_bytes)
-    check_domain(spec)
     heights = target_heights(spec) / spec.sigma
     target_amp = exact_target_amplitude(spec)
     kern = filter_kernel(spec)

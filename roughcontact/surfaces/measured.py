@@ -40,7 +40,7 @@ import numpy as np
 from roughcontact.errors import MeasurementError
 from roughcontact.hashes import file_sha256
 from roughcontact.surfaces import johnson
-from roughcontact.surfaces.preparation import prepare
+from roughcontact.surfaces.preparation import prepare, remove_polynomial
 from roughcontact.surfaces.readers import HEIGHT_UNITS, read_heights, resolve_format, unit_scale
 from roughcontact.surfaces.spec import check_psd_table
 from roughcontact.surfaces.statistics import correlation_length, height_stats, spectral_moments
@@ -71,9 +71,10 @@ class Measurement:
         The removed plane ``a + b x + c y``: offset [m], slopes [1].
     preparation : dict
         What was done, for the provenance: the reader and channel, the units
-        and pixel size from the file, the crop window in points, the masked,
-        filled and outlier points, the form's polynomial coefficients, the
-        resampling.
+        and pixel size from the file, the crop window in points, the points
+        the instrument masked (``masked_points`` in the window used,
+        ``file_masked_points`` in the whole file), the missing, filled and
+        outlier points, the form's polynomial coefficients, the resampling.
     """
 
     heights: np.ndarray
@@ -175,6 +176,9 @@ def load_measurement(path: str | os.PathLike, format: str = "auto", *,
         raw, spacing, source=path, absent=absent, crop=crop, fill_holes=fill_holes,
         form_degree=form_degree, outliers_sigma=outliers_sigma, decimate_by=decimate_by,
         resample_grid=resample_grid)
+    if "masked_points" in said:  # the instrument's mask: counted in the window used
+        said = {**said, "file_masked_points": said["masked_points"],
+                "masked_points": steps["missing_points"]}
     options = {"format": format, "height_unit": height_unit, "lateral_unit": lateral_unit,
                "spacing": None if given is None else list(given),
                "fill_holes": float(fill_holes), "channel": channel, "decimal": decimal,
@@ -226,9 +230,8 @@ def statistics(measurement: Measurement, spectral: bool = False) -> dict:
         if not math.isfinite(value):
             log.warning(
                 "%s: the %s autocorrelation does not fall to 10 %% within half the window "
-                "(%.4g mm): corr_length_%s is NaN. A form or waviness is left: remove it "
-                "(form_degree: 2 or more), or measure (or crop) a window several "
-                "correlation lengths wide.", measurement.source, name, side / 2e-3, name)
+                "(%.4g mm): corr_length_%s is NaN. %s", measurement.source, name,
+                side / 2e-3, name, form_advice(measurement))
     curve = johnson.fit(moments["skew"], moments["kurt"])
     stats = {
         "sigma": moments["sigma"],
@@ -251,6 +254,36 @@ def statistics(measurement: Measurement, spectral: bool = False) -> dict:
     if spectral:
         stats.update(spectral_statistics(measurement))
     return stats
+
+
+def finite_form_degree(measurement: Measurement) -> tuple[int, tuple[float, float]] | None:
+    """The smallest ``form_degree`` above the measurement's (up to 6) whose heights
+    have finite correlation lengths, with them (bx, by) [m]; None if none has.
+
+    The polynomial of that degree is removed from the prepared heights: the
+    same heights as an import with that degree (least squares onto nested
+    polynomial spaces), but for the points an outlier step removes and the
+    interpolation of a resampled grid.
+    """
+    for degree in range(int(measurement.options["form_degree"]) + 1, 7):
+        heights, _ = remove_polynomial(measurement.heights, measurement.spacing, degree)
+        lags = correlation_length(heights, measurement.spacing, periodic=False)
+        if all(math.isfinite(b) for b in lags):
+            return degree, (float(lags[0]), float(lags[1]))
+    return None
+
+
+def form_advice(measurement: Measurement) -> str:
+    """What gives a measurement whose autocorrelation does not fall to 10 % within half
+    the window finite correlation lengths (:func:`finite_form_degree`), as a sentence."""
+    found = finite_form_degree(measurement)
+    if found is not None:
+        degree, (bx, by) = found
+        return (f"A form or waviness is left: surface.form_degree: {degree} removes it "
+                f"(then b = {bx / 1e-3:.3g} x {by / 1e-3:.3g} mm)")
+    return ("No form_degree up to 6 brings it within the window: the surface is "
+            "correlated over more than half the measured length; measure (or crop, "
+            "surface.crop_mm) a window several correlation lengths wide")
 
 
 def spectral_statistics(measurement: Measurement) -> dict:
@@ -355,6 +388,8 @@ def read_psd_table(path: str | os.PathLike) -> tuple[tuple[float, float], ...]:
 __all__ = [
     "PSD_COLUMNS",
     "Measurement",
+    "finite_form_degree",
+    "form_advice",
     "load_measurement",
     "psd_table_from_measurement",
     "read_psd_table",

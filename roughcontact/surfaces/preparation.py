@@ -34,6 +34,7 @@ arrays ``(ny, nx)``.
 from __future__ import annotations
 
 import logging
+import math
 
 import numpy as np
 from scipy import sparse
@@ -41,6 +42,12 @@ from scipy.interpolate import RegularGridInterpolator
 from scipy.sparse import linalg as sparse_linalg
 
 from roughcontact.errors import MeasurementError
+from roughcontact.surfaces.defects import (
+    SPIKE_ROBUST_SIGMAS,
+    find_spikes,
+    largest_complete_window,
+    spikes_matter,
+)
 from roughcontact.surfaces.readers import MIN_POINTS
 
 log = logging.getLogger(__name__)
@@ -55,7 +62,7 @@ def missing_message(source, missing: int, total: int, absent: int = 0) -> str:
 
 
 def fill_missing(heights: np.ndarray, max_fraction: float = 0.0, *, source="heights",
-               absent: int = 0) -> tuple[np.ndarray, int]:
+                 absent: int = 0, window=None) -> tuple[np.ndarray, int]:
     """Fill missing (NaN) points by discrete Laplace interpolation.
 
     The least-squares plane of the known points is removed first and added
@@ -78,6 +85,11 @@ def fill_missing(heights: np.ndarray, max_fraction: float = 0.0, *, source="heig
     absent : int
         How many of the missing points were absent from a point list (for
         the message only).
+    window : ((ix0, iy0), (dx, dy)), optional
+        Where ``heights`` lie in the file (the first point's indices) and
+        their spacing [m]: a refusal then also offers the ``crop_mm`` of the
+        largest window without missing points
+        (:func:`~roughcontact.surfaces.defects.largest_complete_window`).
 
     Returns
     -------
@@ -87,7 +99,8 @@ def fill_missing(heights: np.ndarray, max_fraction: float = 0.0, *, source="heig
     ------
     MeasurementError
         If more than ``max_fraction`` of the points are missing, with the
-        count and fraction in the message.
+        count and fraction in the message, the smallest ``fill_holes`` that
+        fills them and, with ``window``, the crop that leaves them out.
     """
     z = np.array(heights, dtype=float)
     missing = np.isnan(z)
@@ -96,7 +109,8 @@ def fill_missing(heights: np.ndarray, max_fraction: float = 0.0, *, source="heig
         return z, 0
     fraction = count / z.size
     if fraction > max_fraction or count == z.size:
-        _refuse_missing(z.size, count, max_fraction, source, absent)
+        crop = None if window is None else crop_advice(missing, *window)
+        _refuse_missing(z.size, count, max_fraction, source, absent, crop)
     ny, nx = z.shape
     y, x = np.nonzero(~missing)
     design = np.column_stack([np.ones(x.size), x, y]).astype(float)
@@ -109,9 +123,33 @@ def fill_missing(heights: np.ndarray, max_fraction: float = 0.0, *, source="heig
     return z, count
 
 
-def _refuse_missing(total: int, count: int, max_fraction: float, source, absent: int):
-    """Raise the MeasurementError of :func:`fill_missing` for too many missing points."""
+def crop_advice(missing: np.ndarray, origin, spacing) -> str | None:
+    """``crop_mm: [x0, y0, Lx, Ly]`` of the largest window without missing points, for a
+    map whose first point is point ``origin`` (ix0, iy0) of the file, spacing (dx, dy)
+    [m]; None where no window of :data:`MIN_POINTS` per side has none missing."""
+    found = largest_complete_window(missing)
+    if found is None or min(found[2:]) < MIN_POINTS:
+        return None
+    ix0, iy0, nx, ny = found
+    values = [(origin[0] + ix0) * spacing[0], (origin[1] + iy0) * spacing[1],
+              nx * spacing[0], ny * spacing[1]]
+    text = ", ".join(f"{v / 1e-3:.7g}" for v in values)
+    return (f"crop_mm: [{text}] (the largest window without missing points, {nx} x {ny} "
+            f"points, {100 * nx * ny / missing.size:.3g} % of the map)")
+
+
+def _at_least(fraction: float) -> float:
+    """``fraction`` rounded up to 3 significant digits (a ``fill_holes`` that admits it)."""
+    scale = 10.0 ** (2 - math.floor(math.log10(fraction)))
+    return math.ceil(fraction * scale * (1.0 - 1e-12)) / scale  # 1e-12: 0.2 stays 0.2
+
+
+def _refuse_missing(total: int, count: int, max_fraction: float, source, absent: int,
+                    crop: str | None = None):
+    """Raise the MeasurementError of :func:`fill_missing` for too many missing points
+    (``crop``: the :func:`crop_advice`, if any)."""
     fraction = count / total
+    or_crop = "" if crop is None else f" Or leave them out: {crop}."
     most = 0.5  # the largest fill_holes the config allows (config/schema.yaml)
     if count == total or fraction > most:
         reason = ("no point is known, so there is nothing to interpolate from"
@@ -121,14 +159,15 @@ def _refuse_missing(total: int, count: int, max_fraction: float, source, absent:
         raise MeasurementError(
             f"{missing_message(source, count, total, absent)}: {reason}. The data "
             f"cannot be filled; repair {source} or re-export it from the instrument "
-            "software (with the missing points measured or cropped away).",
+            f"software (with the missing points measured or cropped away).{or_crop}",
             source,
         )
     allowed = (f"fill_holes = {max_fraction:g} allows at most {100 * max_fraction:.3g} %"
                if max_fraction > 0 else "fill_holes is 0, so none may be missing")
     raise MeasurementError(
         f"{missing_message(source, count, total, absent)}; {allowed}. Raise fill_holes "
-        f"to at least {fraction:.3g} to fill them by interpolation, or repair the data.",
+        f"to at least {_at_least(fraction):.3g} to fill them by interpolation, or repair "
+        f"the data.{or_crop}",
         source,
     )
 
@@ -254,6 +293,68 @@ def resample(heights: np.ndarray, spacing, grid) -> tuple[np.ndarray, tuple[floa
     return values, (lx / gx, ly / gy)
 
 
+def remove_outliers(heights: np.ndarray, spacing, sigmas: float, form_degree: int, *,
+                    source="heights") -> tuple[np.ndarray, int]:
+    """Step 3: the points of ``heights`` (form removed, zero mean) farther than ``sigmas``
+    standard deviations from the mean plane, filled as holes (:func:`fill_missing`), and
+    the form of degree ``form_degree`` removed again. Returns the heights and the count."""
+    far = np.abs(heights) > float(sigmas) * heights.std()
+    count = int(far.sum())
+    if not count:
+        return heights, 0
+    log.info("%s: %d points beyond %g sigma filled as holes", source, count, sigmas)
+    heights, _ = fill_missing(np.where(far, np.nan, heights), 1.0 - 1e-12,
+                              source=f"{source} (outliers)")
+    heights, _ = remove_plane(heights, spacing)
+    if form_degree > 1:
+        heights, _ = remove_polynomial(heights, spacing, int(form_degree))
+    return heights, count
+
+
+def _clearing_sigmas(formed: np.ndarray, spacing, form_degree: int, source):
+    """The ``outliers_sigma`` that leaves no spikes that matter in ``formed`` (the
+    heights before step 3), with the kurtosis it gives, or None. Tried from just
+    below the nearest spike downwards (a spike may hide another: the standard
+    deviation shrinks when the first are filled)."""
+    spikes = find_spikes(formed)
+    nearest = float(np.abs(formed[spikes]).min() / formed.std())
+    sigmas = math.floor(0.99 * nearest * 10.0 ** (1 - math.floor(math.log10(nearest))))
+    sigmas /= 10.0 ** (1 - math.floor(math.log10(nearest)))
+    while sigmas >= 3.0:
+        cleared, _ = remove_outliers(formed, spacing, sigmas, form_degree, source=source)
+        if not spikes_matter(cleared, find_spikes(cleared))[0]:
+            return sigmas, spikes_matter(cleared, find_spikes(cleared))[1]
+        sigmas = round(0.8 * sigmas, 1)
+    return None
+
+
+def _report_spikes(formed: np.ndarray, heights: np.ndarray, spacing, form_degree: int,
+                   source) -> int:
+    """Count the spikes and dropouts left in ``heights`` (after step 3;
+    :func:`~roughcontact.surfaces.defects.find_spikes`) and, where they change the
+    kurtosis (:func:`~roughcontact.surfaces.defects.spikes_matter`), log a warning with
+    the ``outliers_sigma`` that removes them (tested on ``formed``, the heights
+    before step 3)."""
+    spikes = find_spikes(heights)
+    matter, with_them, without = spikes_matter(heights, spikes)
+    if not matter:
+        return int(spikes.sum())
+    iy, ix = np.unravel_index(int(np.argmax(np.where(spikes, np.abs(heights), -1.0))),
+                              heights.shape)
+    clearing = _clearing_sigmas(formed, spacing, form_degree, source)
+    advice = ("mark them missing in the file (nan) and set fill_holes" if clearing is None else
+              f"set surface.outliers_sigma: {clearing[0]:g} to fill them as holes (Ku "
+              f"{clearing[1]:.3g} then), or mark them missing in the file")
+    log.warning(
+        "%s: %d points (%.2g %%) lie more than %g robust standard deviations from the "
+        "median height (the farthest at x = %.4g mm, y = %.4g mm): spikes or dropouts of "
+        "the instrument, not the surface. They give Ku = %.4g; without them Ku = %.3g. To "
+        "leave them out, %s.", source, int(spikes.sum()), 100 * spikes.mean(),
+        SPIKE_ROBUST_SIGMAS, ix * spacing[0] / 1e-3, iy * spacing[1] / 1e-3, with_them,
+        without, advice)
+    return int(spikes.sum())
+
+
 def prepare(raw: np.ndarray, spacing, *, source, absent: int = 0, crop=None,
             fill_holes: float = 0.0, form_degree: int = 1, outliers_sigma: float | None = None,
             decimate_by: int | None = None, resample_grid=None):
@@ -264,7 +365,8 @@ def prepare(raw: np.ndarray, spacing, *, source, absent: int = 0, crop=None,
     options as :func:`roughcontact.surfaces.measured.load_measurement` takes
     them. Returns ``(heights [m] of zero mean, spacing [m], points filled,
     removed plane (a, b, c), steps)``, ``steps`` a dict for the provenance
-    (``file_grid``, ``crop_points``, ``form_coefficients``, ``outliers``,
+    (``file_grid``, ``crop_points``, ``missing_points`` (in the cropped window),
+    ``form_coefficients``, ``outliers``, ``spikes`` (left after step 3),
     ``decimated_by``, ``resampled_to``).
 
     Raises
@@ -284,24 +386,21 @@ def prepare(raw: np.ndarray, spacing, *, source, absent: int = 0, crop=None,
     if crop is not None:
         raw, window = crop_window(raw, spacing, crop, str(source))
         steps["crop_points"] = list(window)
-    filled_raw, filled = fill_missing(raw, float(fill_holes), source=str(source), absent=absent)
+    steps["missing_points"] = int(np.isnan(raw).sum())  # in the window: those to fill
+    origin = steps["crop_points"][:2] if crop is not None else (0, 0)
+    filled_raw, filled = fill_missing(raw, float(fill_holes), source=str(source), absent=absent,
+                                      window=(origin, spacing))
     heights, plane = remove_plane(filled_raw, spacing)
     if not np.ptp(heights) > 1e-12 * max(np.ptp(filled_raw), np.finfo(float).tiny):
         raise MeasurementError(f"{source}: the heights are a plane (no roughness left)", source)
     if form_degree > 1:
         heights, coefficients = remove_polynomial(heights, spacing, int(form_degree))
         steps["form_coefficients"] = coefficients
+    formed = heights
     if outliers_sigma is not None:
-        far = np.abs(heights) > float(outliers_sigma) * heights.std()
-        steps["outliers"] = int(far.sum())
-        if far.any():
-            log.info("%s: %d points beyond %g sigma filled as holes", source, int(far.sum()),
-                     outliers_sigma)
-            heights, _ = fill_missing(np.where(far, np.nan, heights), 1.0 - 1e-12,
-                                      source=f"{source} (outliers)")
-            heights, _ = remove_plane(heights, spacing)
-            if form_degree > 1:
-                heights, _ = remove_polynomial(heights, spacing, int(form_degree))
+        heights, steps["outliers"] = remove_outliers(heights, spacing, outliers_sigma,
+                                                     form_degree, source=source)
+    steps["spikes"] = _report_spikes(formed, heights, spacing, form_degree, source)
     if decimate_by is not None:
         heights = decimate(heights, int(decimate_by))
         spacing = (spacing[0] * decimate_by, spacing[1] * decimate_by)

@@ -3,15 +3,19 @@
 A measured surface (from a profilometer, an optical instrument or an AFM)
 enters the study in place of a generated one. Formats (``format``):
 
-- ``auto`` (the default): chosen by the file (:func:`resolve_format`).
+- ``auto`` (the default): chosen by the file's name (:func:`resolve_format`).
   ``.npy``, ``.xyz`` and ``.csv`` files are read as below; every other file
-  by SurfaceTopography (ContactEngineering), which recognises the
-  instrument's own format by its content (x3p, sur, opd, plu, datx,
-  MetroPro, al3d, frt, di, Gwyddion and other text exports, ...) and gives
-  the height unit, the pixel size and the instrument's mask of undefined
-  points from the file's metadata.
-- ``instrument``: through SurfaceTopography, whatever the file's name
-  (:func:`read_instrument`).
+  by SurfaceTopography (ContactEngineering) in the instrument's format its
+  suffix names (x3p, sur, opd, plu, datx, MetroPro dat, al3d, frt, Gwyddion
+  and text exports, ...; :func:`read_instrument`), which must parse the
+  file: a file that does not is refused, naming the file and the format.
+  A suffix no format claims (``.di``, ``.bin``, ...) is read by content, as
+  ``instrument``. SurfaceTopography gives the height unit, the pixel size and
+  the instrument's mask of undefined points from the file's metadata.
+- ``instrument``: through SurfaceTopography, the format recognised by the
+  file's content whatever its name, among the formats that check a
+  signature (:data:`UNSIGNED_FORMATS`, which would read any file of the
+  right size, only from files named for them).
 - ``npy``: a NumPy ``.npy`` file holding one 2-D array of heights, axis 0 = y,
   axis 1 = x (:func:`read_npy`); the spacing comes from the configuration.
 - ``text``: a grid of heights as text, one row of the file per y, one column
@@ -55,6 +59,12 @@ HEIGHT_UNITS = {"nm": 1e-9, "um": 1e-6, "mm": 1e-3, "m": 1.0}
 #: Units SurfaceTopography reports for a file's heights and lengths, in metres.
 INSTRUMENT_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "\u00b5m": 1e-6, "\u03bcm": 1e-6,
                     "nm": 1e-9, "pm": 1e-12, "\u00c5": 1e-10, "A": 1e-10}
+#: SurfaceTopography's formats without a signature at the start of the file: their
+#: readers take any file of the right size (``hgt``: any 2 n^2 bytes, as a map of
+#: n x n 16-bit heights), so they read only files named for them.
+UNSIGNED_FORMATS = ("hgt", "nms")
+#: SurfaceTopography's plain-text formats: a suffix either claims admits both.
+TEXT_FORMATS = ("xyz", "asc")
 #: Decimal separators of text grids.
 DECIMALS = ("auto", ".", ",")
 #: A length the configuration gives for a file that carries its own must agree to this.
@@ -321,29 +331,82 @@ class InstrumentData:
     channels: tuple[str, ...]
 
 
-def read_instrument(path: str | os.PathLike, channel: int | str | None = None) -> InstrumentData:
-    """Read an instrument's file through SurfaceTopography (format by content).
+def _reader_formats(path, by_content: bool) -> tuple[list, str]:
+    """SurfaceTopography's reader classes that may read ``path``, in the library's order,
+    and what chose them (for messages).
 
-    ``channel``: index or name of the data channel (default: the file's
-    default channel, the height channel of most instruments). Line scans
-    (1-D profiles) are refused: the contact study needs a height map.
+    By name (``by_content`` False, ``format: auto``): the readers whose formats
+    claim the file's suffix (:meth:`file_extensions`; a plain-text suffix
+    admits both plain-text readers, :data:`TEXT_FORMATS`). By content (``format:
+    instrument``, or a suffix no format claims): every reader but the formats
+    without a signature (:data:`UNSIGNED_FORMATS`), which would take any file
+    of the right size, unless the file is named for them.
     """
-    # SurfaceTopography takes 1-3 s to import: only runs that read instrument files pay it
-    from SurfaceTopography import open_topography
-    from SurfaceTopography.Exceptions import CannotDetectFileFormat
+    from SurfaceTopography.IO import readers
 
-    try:
-        reader = open_topography(str(path))
-    except CannotDetectFileFormat:
+    suffix = Path(path).suffix.lower().lstrip(".")
+    named = {r.format() for r in readers if suffix and suffix in r.file_extensions()}
+    if named & set(TEXT_FORMATS):
+        named |= set(TEXT_FORMATS)
+    if named and not by_content:
+        return [r for r in readers if r.format() in named], f"its suffix .{suffix}"
+    return ([r for r in readers if r.format() not in UNSIGNED_FORMATS or r.format() in named],
+            "its content")
+
+
+def _open_instrument(path, by_content: bool):
+    """The reader object of :func:`read_instrument`: the first of :func:`_reader_formats`
+    that opens the file (readers whose signature the file's first bytes rule out are
+    skipped), or a MeasurementError naming the file, the formats tried and why."""
+    from SurfaceTopography.IO import _instantiate_reader
+    from SurfaceTopography.IO.Reader import MagicMatch
+
+    candidates, chosen_by = _reader_formats(path, by_content)
+    with open(path, "rb") as f:
+        head = f.read(512)
+    failures = []
+    for reader in candidates:
+        if reader.can_read(head) == MagicMatch.NO:
+            failures.append((reader, "its signature is not at the start of the file"))
+            continue
+        try:
+            opened = _instantiate_reader(reader, str(path), None)
+        except Exception as err:  # the reader's own reasons, quoted in the message
+            failures.append((reader, " ".join(str(err).split())[:160] or type(err).__name__))
+            continue
+        if opened.channels:
+            return opened
+        failures.append((reader, "it holds no data channel"))
+    if chosen_by == "its content":
         raise MeasurementError(
-            f"{path}: not a format SurfaceTopography recognises (it reads x3p, sur, opd, "
-            "plu, datx, MetroPro dat, al3d, frt, di, Gwyddion, ... by content). For a text "
-            "grid use format: text, for a point list format: xyz, for a NumPy array "
-            "format: npy.", path,
-        ) from None
-    except Exception as err:  # a reader that recognised the file but failed to parse it
-        raise MeasurementError(f"{path}: SurfaceTopography could not read it ({err})",
-                               path) from err
+            f"{path}: not a format SurfaceTopography recognises by its content (it reads x3p, "
+            "sur, opd, plu, datx, MetroPro dat, al3d, frt, di, Gwyddion, ...; formats "
+            f"without a signature ({', '.join(UNSIGNED_FORMATS)}) only from files named for "
+            "them). For a text grid use format: text, for a point list format: xyz, for a "
+            "NumPy array format: npy.", path)
+    tried = "; ".join(f"{r.name()} ({r.format()}): {why}" for r, why in failures)
+    which = ("the format" if len(failures) == 1 else "any of the formats")
+    raise MeasurementError(
+        f"{path}: not readable as {which} {chosen_by} names ({tried}). The file is damaged, "
+        "or in another format: re-export it from the instrument's software, or, if it is "
+        "in another format, give it that format's suffix or set format: instrument (the "
+        "format recognised by the file's content).", path)
+
+
+def read_instrument(path: str | os.PathLike, channel: int | str | None = None, *,
+                    by_content: bool = False) -> InstrumentData:
+    """Read an instrument's file through SurfaceTopography, in the format its name says.
+
+    The reader is chosen by the file's suffix (:func:`_reader_formats`: ``.sur``
+    the Digital Surf reader, ``.x3p`` the X3P reader, ...) and the file must
+    parse as that format; with ``by_content`` (``format: instrument``), or for a
+    suffix no format claims, by the file's content, among the formats that
+    check a signature. ``channel``: index or name of the data channel
+    (default: the file's default channel, the height channel of most
+    instruments). Line scans (1-D profiles) are refused: the contact study
+    needs a height map.
+    """
+    reader = _open_instrument(path, by_content)
     names = tuple(str(c.name) for c in reader.channels)
     if channel is None:
         index = reader.default_channel.index
@@ -395,12 +458,13 @@ def unit_scale(value: str, table: dict, what: str) -> float:
 
 def resolve_format(path, format: str) -> str:
     """The reader of ``path``: ``format``, or for ``auto`` the one its suffix names
-    (:data:`OWN_SUFFIXES`), else ``instrument``."""
+    (:data:`OWN_SUFFIXES`), else ``named``: an instrument's format, the one its suffix
+    says (:func:`read_instrument`)."""
     if format not in FORMATS:
         raise ValueError(f"format must be one of {FORMATS}; got {format!r}")
     if format != "auto":
         return format
-    return OWN_SUFFIXES.get(Path(path).suffix.lower(), "instrument")
+    return OWN_SUFFIXES.get(Path(path).suffix.lower(), "named")
 
 
 def read_heights(path: Path, kind: str, *, height_unit, lateral_unit, spacing, channel, decimal):
@@ -418,8 +482,9 @@ def read_heights(path: Path, kind: str, *, height_unit, lateral_unit, spacing, c
 
 
 def _read_instrument_file(path, kind, *, height_unit, lateral_unit, spacing, channel, decimal):
-    """:func:`read_heights` for an instrument's file: the unit and pixel size from the file."""
-    data = read_instrument(path, channel)
+    """:func:`read_heights` for an instrument's file: the unit and pixel size from the file;
+    its format by its content (``instrument``) or its name (``named``)."""
+    data = read_instrument(path, channel, by_content=kind == "instrument")
     said = {"reader": data.reader, "channel": data.channel, "file_unit": data.unit,
             "masked_points": data.masked}
     if data.unit is not None:
@@ -484,6 +549,7 @@ def _grid_reader(read):
 #: The reader of each format :func:`resolve_format` gives.
 _READERS = {
     "instrument": _read_instrument_file,
+    "named": _read_instrument_file,
     "xyz": _read_xyz_file,
     "npy": _grid_reader(lambda path, decimal: read_npy(path)),
     "text": _grid_reader(read_text_grid),

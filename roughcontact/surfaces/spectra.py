@@ -198,7 +198,8 @@ def filter_kernel(spec: SurfaceSpec) -> FilterKernel:
     R has decayed below 1e-5). With S_x = 1 (white noise of unit variance),
     H = sqrt(S_z) with zero phase (Eq 11), h = IFFT2(H) is real and even.
     Negative values of S_z (from truncating R on a finite grid) are clipped to
-    zero, counted and logged; h is then renormalised to ``sum(h^2) = 1``.
+    zero and counted (``clipped``; :func:`check_domain` warns of them, once per
+    generation); h is then renormalised to ``sum(h^2) = 1``.
 
     Lengths in ``spec`` are in metres; ``spec.sigma`` does not enter (the
     kernel is normalised to unit variance, sigma scales the output).
@@ -253,20 +254,24 @@ def _acf_kernel(spec: SurfaceSpec) -> FilterKernel:
     clipped = int(negative.sum())
     clipped_fraction = float(-spectrum[negative].sum() / np.abs(spectrum).sum()) if clipped else 0.0
     if clipped:
-        log.warning(
-            "filter_kernel: %d negative spectral values (%.3g %% of the spectral power) "
-            "clipped to zero for b = (%.3g, %.3g) m on a %.3g x %.3g m %s lag grid; "
-            "the realised ACF deviates from Eq 1. Use a larger surface or a shorter "
-            "correlation length to avoid this.",
-            clipped,
-            100 * clipped_fraction,
-            *spec.corr_length,
-            kx * dx,
-            ky * dy,
-            "periodic" if spec.periodic else "padded",
-        )
         spectrum = np.where(negative, 0.0, spectrum)
     return _normalised_kernel(spectrum, clipped, clipped_fraction)
+
+
+def _check_clipping(spec: SurfaceSpec) -> None:
+    """Warn when the kernel of an ACF of Eq 1 clips negative spectral values (the
+    realised ACF then deviates from Eq 1): once per generation, here, not in every
+    :func:`filter_kernel` a generation and its calibration compute."""
+    kernel = _acf_kernel(spec)
+    if kernel.clipped:
+        ky, kx = kernel.weights.shape
+        log.warning(
+            "the filter clips %d negative spectral values (%.3g %% of the spectral power) "
+            "to zero for b = (%.3g, %.3g) m on a %.3g x %.3g m %s lag grid: the realised "
+            "ACF deviates from Eq 1. Use a larger surface or a shorter correlation length "
+            "to avoid this.", kernel.clipped, 100 * kernel.clipped_fraction,
+            *spec.corr_length, kx * spec.spacing[0], ky * spec.spacing[1],
+            "periodic" if spec.periodic else "padded")
 
 
 def _normalised_kernel(spectrum: np.ndarray, clipped: int, clipped_fraction: float) -> FilterKernel:
@@ -282,9 +287,13 @@ def check_domain(spec: SurfaceSpec) -> None:
 
     A tabulated PSD with power beyond the grid's Nyquist wavenumber; for the
     other kinds, a correlation length beyond half the domain or shorter than
-    the grid spacing.
+    the grid spacing, and for the ACFs of Eq 1 negative spectral values the
+    filter clips. The generators call it once per call (for every seed they
+    are given), so a warning appears once per generation.
     """
     _DOMAIN_CHECKS.get(spec.acf, _check_corr_length)(spec)
+    if spec.acf in _ACF_SHAPES:
+        _check_clipping(spec)
 
 
 def _check_nyquist(spec: SurfaceSpec) -> None:

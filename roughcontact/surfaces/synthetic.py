@@ -142,7 +142,9 @@ def generate_many(spec: SurfaceSpec, seeds, method: str = "filter", *,
 
 def _exact_surfaces(spec: SurfaceSpec, seeds: list[int], max_bytes: float,
                     **options) -> np.ndarray:
-    """:func:`~roughcontact.surfaces.exact.generate_exact` for each seed, stacked."""
+    """:func:`~roughcontact.surfaces.exact.generate_exact` for each seed, stacked (the
+    domain checked once)."""
+    check_domain(spec)
     return np.stack([generate_exact(spec, s, max_bytes=max_bytes, **options)[0]
                      for s in seeds])
 

@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 from roughcontact.elasticity.influence import ModelTooLarge
 from roughcontact.study.cells import study_plan
@@ -147,12 +148,14 @@ def test_accuracy_preset_sets_mesh_count_and_solver_and_records_its_errors():
 
 def test_a_measured_map_too_large_for_the_dense_model_stops_when_the_plan_is_made(tmp_path):
     path = tmp_path / "big.npy"
-    np.save(path, np.random.default_rng(3).standard_normal((1024, 1024)))
+    # a rough map correlated over a few points (white noise is refused as no surface)
+    np.save(path, ndimage.uniform_filter(np.random.default_rng(3).standard_normal((1024, 1024)),
+                                         4, mode="wrap"))
     surface = {"file": str(path), "format": "npy", "height_unit": "um",
                "spacing_mm": [0.01, 0.01]}
     config = {"study_seed": 0, "figures": {},
               "surfaces": {"grid": 8, "size_mm": 1.0, "count": 1},
-              "body": {"thickness_mm": 10.0, "E_MPa": 511.0, "nu": 0.0},
+              "body": {"thickness_mm": 0.5, "E_MPa": 511.0, "nu": 0.0},
               "sweeps": {"big": {"surface": surface, "pressure_MPa": [1.0, 5.0]}}}
     with pytest.raises(ConfigProblems) as raised:
         study_plan(validated(config))

@@ -15,21 +15,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from scipy import ndimage
+from topographies import DATA, needs_data
 
 from roughcontact.errors import MeasurementError
 from roughcontact.surfaces import measured
 from roughcontact.surfaces.measured import load_measurement, statistics
 from roughcontact.surfaces.preparation import remove_polynomial
 from roughcontact.surfaces.readers import read_instrument, read_text_grid
-
-#: Real instrument files (SurfaceTopography's test collection), read in place: the folder
-#: ROUGHCONTACT_TOPOGRAPHIES names, else ``shared/data/topographies`` beside the checkout.
-DATA = Path(os.environ.get("ROUGHCONTACT_TOPOGRAPHIES",
-                           Path(__file__).resolve().parents[3] / "shared" / "data"
-                           / "topographies"))
-needs_data = pytest.mark.skipif(
-    not DATA.is_dir(), reason=f"shared instrument files not found at {DATA}"
-)
 
 FILES = ("di-1.di", "frt-1.frt", "matrix-3.txt", "opd-1.opd", "plu-1.plu", "sur-2.sur",
          "x3p-2.x3p")
@@ -390,8 +382,8 @@ REPO = Path(__file__).resolve().parents[2]
 
 def instrument_config(file, grid=24, count=3):
     """A Digital Surf measurement, cropped, form and outliers removed, resampled, beside
-    its synthetic twin on the paper's block (the measured sigma of a few nm: pressures
-    up to P L / (E sigma) of about 4)."""
+    its synthetic twin on the paper's mesh, under a block as thick as the 1.5 mm patch
+    (the measured sigma of a few nm: pressures up to P L / (E sigma) of about 0.3)."""
     return {
         "study_seed": 11,
         "surfaces": {"grid": [grid, grid], "size_mm": [1.5, 1.5], "method": "exact",
@@ -403,7 +395,7 @@ def instrument_config(file, grid=24, count=3):
             "surface": {"file": str(file), "format": "auto", "fill_holes": 0.01,
                         "crop_mm": [0.1, 0.1, 1.5, 1.5], "form_degree": 2,
                         "outliers_sigma": 5, "resample_grid": [grid, grid]},
-            "compare_synthetic": True, "count": count,
+            "compare_synthetic": True, "count": count, "thickness_mm": "patch",
             "pressure_MPa": [5e-5, 5e-4]}},
     }
 
