@@ -74,6 +74,7 @@ from functools import partial
 import numpy as np
 
 from roughcontact.contact.checks import preconditioned_operator
+from roughcontact.contact.free_stencil import FreeSetStencil
 from roughcontact.contact.kkt import gap_scale, kkt_residuals
 from roughcontact.contact.nested import level_operators, nested_solve
 from roughcontact.contact.products import SINGLE_PRECISION, Products
@@ -123,42 +124,6 @@ class Solution:
 def _dot(a: np.ndarray, b: np.ndarray) -> float:
     """``a . b`` without BLAS (a threaded BLAS spin-waits between these small products)."""
     return float(np.einsum("i,i->", a, b))
-
-
-class _Stencil:
-    """``z_F = Pi_F S Pi_F (r - mean r)``, centred: the stencil on the free set only.
-
-    The residual is scattered into a grid with a halo of the stencil's
-    radius (wrapped for a periodic operator, zero otherwise) and gathered
-    back at the 13 offsets: O(13 |F|) per application.
-    """
-
-    def __init__(self, stencil, shape):
-        ny, nx = shape
-        self.radius = r = max(1, int(np.abs(stencil.offsets).max()))
-        self.weights = stencil.weights.tolist()
-        self.periodic = stencil.periodic
-        self.grid = np.zeros((ny + 2 * r, nx + 2 * r))
-        self.flat = self.grid.reshape(-1)
-        self.offsets = (stencil.offsets[:, 0] * (nx + 2 * r) + stencil.offsets[:, 1]).tolist()
-        self.base = None
-
-    def __call__(self, rows, cols, residual):
-        r, g = self.radius, self.grid
-        if self.base is not None:
-            self.flat[self.base] = 0.0
-            if self.periodic:
-                g[:r], g[-r:], g[:, :r], g[:, -r:] = 0.0, 0.0, 0.0, 0.0
-        self.base = (rows + r) * g.shape[1] + (cols + r)
-        self.flat[self.base] = residual - residual.mean()
-        if self.periodic:
-            g[:r], g[-r:] = g[-2 * r:-r], g[r:2 * r]
-            g[:, :r], g[:, -r:] = g[:, -2 * r:-r], g[:, r:2 * r]
-        z = np.zeros(rows.size)
-        for weight, offset in zip(self.weights, self.offsets, strict=True):
-            z += weight * self.flat[self.base + offset]
-        z -= z.mean()
-        return z
 
 
 @dataclass(frozen=True)
@@ -228,7 +193,7 @@ class _Iteration:
         self.approach = approach
         self.total_load = None if mean_pressure is None else float(mean_pressure) * self.n
         self.work = _Products(operator, single)
-        self.stencil = _Stencil(operator.preconditioner(), (ny, nx))
+        self.stencil = FreeSetStencil(operator.preconditioner(), (ny, nx))
         if pressure0 is not None and np.any(pressure0 > 0.0):
             flat = np.flatnonzero(np.asarray(pressure0).reshape(-1) > 0.0)
             p_free = np.asarray(pressure0, dtype=np.float64).reshape(-1)[flat]
@@ -308,7 +273,7 @@ class _Iteration:
         None when the direction vanishes: then only the free set can change.
         """
         r_free = self.r_free
-        z = self.stencil(self.rows, self.cols, r_free)
+        z = self.stencil(self.rows, self.cols, r_free, centred=True)
         if not z.any():  # r is constant on F (its mean is set by the rescaling)
             return None
         zr = _dot(z, r_free)

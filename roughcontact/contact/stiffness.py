@@ -33,6 +33,7 @@ from roughcontact.contact.checks import (
     check_pressure,
     preconditioned_operator,
 )
+from roughcontact.contact.free_stencil import FreeSetStencil
 from roughcontact.contact.kkt import free_set
 from roughcontact.contact.products import Products
 
@@ -60,7 +61,7 @@ def free_set_cg(products: Products, free, start, tol: float, max_iter: int):
     xs, ms = x[surfaces], mask[surfaces]
     limit = (tol * target[surfaces]) ** 2
     grid = preconditioned_operator(products.operator)
-    precondition = None if grid is None else _StencilOnSets(grid)
+    precondition = None if grid is None else _StencilOnSets(grid, free)
     iteration = 0
     while surfaces.size and iteration < max_iter:
         # Exact residual, then CG until its recursive estimate meets tol.
@@ -84,24 +85,22 @@ def free_set_cg(products: Products, free, start, tol: float, max_iter: int):
 
 
 class _StencilOnSets:
-    """``z = Pi_F S Pi_F r`` for residuals (m, n) on free sets ``F`` (masks), ``S`` the
-    operator's stencil (zero beyond the grid, or wrapped for a periodic operator)."""
+    """``z = Pi_F S Pi_F r`` for residuals (k, n) of surfaces on their free sets ``F``
+    (:class:`~roughcontact.contact.free_stencil.FreeSetStencil`, O(13 |F|) each)."""
 
-    def __init__(self, operator):
-        stencil = operator.preconditioner()
-        self.nx, self.ny = operator.grid
-        self.radius = int(np.abs(stencil.offsets).max())
-        self.taps = list(zip(stencil.offsets.tolist(), stencil.weights.tolist(), strict=True))
-        self.mode = "wrap" if stencil.periodic else "constant"
+    def __init__(self, operator, free):
+        nx, ny = operator.grid
+        self.stencil = FreeSetStencil(operator.preconditioner(), (ny, nx))
+        self.free = [np.flatnonzero(row) for row in free]
+        self.cells = [np.divmod(flat, nx) for flat in self.free]
 
-    def __call__(self, residual, mask):
-        m, r, nx, ny = residual.shape[0], self.radius, self.nx, self.ny
-        padded = np.pad((residual * mask).reshape(m, ny, nx), ((0, 0), (r, r), (r, r)),
-                        mode=self.mode)
-        z = np.zeros((m, ny, nx))
-        for (jy, jx), weight in self.taps:
-            z += weight * padded[:, r + jy: r + jy + ny, r + jx: r + jx + nx]
-        return z.reshape(m, -1) * mask
+    def __call__(self, residual, surfaces):
+        """``z`` of the residuals (k, n) of ``surfaces`` (indices into the free sets)."""
+        z = np.zeros_like(residual)
+        for row, j in enumerate(surfaces.tolist()):
+            flat = self.free[j]
+            z[row, flat] = self.stencil(*self.cells[j], residual[row, flat])
+        return z
 
 
 def _inner_cg(products, xs, ms, residual, rr, limit, count, surfaces, iteration, max_iter,
@@ -109,13 +108,14 @@ def _inner_cg(products, xs, ms, residual, rr, limit, count, surfaces, iteration,
     """CG from the exact ``residual`` until its recursive estimate meets ``limit``
     (``xs`` and ``residual`` updated in place), preconditioned when ``precondition``
     is given; returns the iteration count."""
-    z = residual if precondition is None else precondition(residual, ms)
+    z = residual if precondition is None else precondition(residual, surfaces)
     rz = rr if precondition is None else np.einsum("ij,ij->i", residual, z)
     direction = z.copy()
     inner = np.ones(surfaces.size, dtype=bool)
     while inner.any() and iteration < max_iter:
         iteration += 1
-        q = products.search(direction)
+        q = np.zeros_like(direction)  # the rows that met the estimate have t = 0: q = 0
+        q[inner] = products.search(direction[inner])
         q *= ms
         count[surfaces] += inner
         curvature = np.einsum("ij,ij->i", direction, q)
@@ -128,7 +128,7 @@ def _inner_cg(products, xs, ms, residual, rr, limit, count, surfaces, iteration,
         if precondition is None:
             z, rz_new = residual, rr_new
         else:
-            z = precondition(residual, ms)
+            z = precondition(residual, surfaces)
             rz_new = np.einsum("ij,ij->i", residual, z)
         beta = np.divide(rz_new, rz, out=np.zeros_like(rz), where=rz > 0.0)
         direction *= beta[:, None]
