@@ -212,9 +212,11 @@ class BlockOperator(GridOperator):
             py = centre_interpolation(ny, ncy)
             set_(self, "_px", px)
             set_(self, "_py", py)
-            # the interpolations have two taps per row: sparse, in both dtypes
+            # the interpolations have two taps per row: sparse, in both dtypes (the
+            # one back to the fine grid times the fine element area), and as taps
             set_(self, "_interpolations", {t: (scipy.sparse.csr_array(px.astype(t)),
-                                               scipy.sparse.csr_array(py.astype(t)))
+                                               scipy.sparse.csr_array(py.astype(t)),
+                                               scipy.sparse.csr_array((px * dx * dy).astype(t)))
                                            for t in DTYPES})
             diagonal = diagonal + dx * dy * _interpolated_diagonal(prepared.matrix, px, py)
         if not np.all(diagonal > 0):
@@ -240,24 +242,29 @@ class BlockOperator(GridOperator):
         dtype (float32 or float64)."""
         u = self._love(fields)
         if self.correction is not None:
-            u += u.dtype.type(self.element_area) * self._correct(fields.astype(u.dtype,
-                                                                              copy=False))
+            u += self._prolong(self._correction.apply(self._restrict(fields)))
         return u
 
-    def _correct(self, fields: np.ndarray) -> np.ndarray:
-        """``W K W^T p`` [m/m^2 * ...] of fields (m, ny, nx): the interpolations by their
-        two taps per row (sparse), ``K`` by
-        :meth:`~roughcontact.elasticity.coarse_correction.CoarseCorrection.apply`."""
-        nx, ny = self.grid
+    def _restrict(self, fields: np.ndarray) -> np.ndarray:
+        """``W^T p``: fields (m, ny, nx) [Pa] on the coarse grid (m, ncy, ncx), in their
+        dtype, by the sparse interpolation matrices (two taps per row)."""
+        m, ny, nx = fields.shape
         ncx, ncy = self.coarse_grid
-        px, py = self._interpolations[fields.dtype]
-        m = fields.shape[0]
+        px, py, _ = self._interpolations[fields.dtype]
         rows = (fields.reshape(m * ny, nx) @ px).reshape(m, ny, ncx)  # p W_x
         coarse = (py.T @ rows.transpose(1, 0, 2).reshape(ny, m * ncx))  # W_y^T p W_x
-        coarse = self._correction.apply(coarse.reshape(ncy, m, ncx).transpose(1, 0, 2))
+        return coarse.reshape(ncy, m, ncx).transpose(1, 0, 2)
+
+    def _prolong(self, coarse: np.ndarray) -> np.ndarray:
+        """``A_f W c``: coarse fields (m, ncy, ncx) [m/m^2] back on the fine grid times the
+        fine element area (m, ny, nx) [m], in their dtype."""
+        nx, ny = self.grid
+        ncx, ncy = self.coarse_grid
+        m = coarse.shape[0]
+        _, py, px_area = self._interpolations[coarse.dtype]
         back = py @ coarse.transpose(1, 0, 2).reshape(ncy, m * ncx)
         back = back.reshape(ny, m, ncx).transpose(1, 0, 2).reshape(m * ny, ncx)
-        return (back @ px.T).reshape(m, ny, nx)
+        return (back @ px_area.T).reshape(m, ny, nx)
 
     def add_columns(self, target: np.ndarray, rows, cols, values) -> None:
         """``target += E C e`` [m], ``e[rows, cols] = values`` [Pa]: Love's part by kernel
@@ -268,9 +275,9 @@ class BlockOperator(GridOperator):
         values = np.asarray(values, dtype=float)
         coarse = ((self._py[rows] * values[:, None]).T @ self._px[cols]).ravel()  # W_y^T e W_x
         loaded = np.flatnonzero(coarse)  # at most 4 coarse elements per changed one
-        coarse = (coarse[loaded] @ self.correction[loaded]) * self.element_area  # K = K^T
-        px, py = self._interpolations[np.dtype(np.float64)]
-        target += (px @ (py @ coarse.reshape(self._py.shape[1], -1)).T).T
+        coarse = coarse[loaded] @ self.correction[loaded]  # K = K^T
+        ncx, ncy = self.coarse_grid
+        target += self._prolong(coarse.reshape(1, ncy, ncx))[0]
 
     def preconditioner(self):
         """The 13-tap stencil of Love's part, ``E* |q| / 2`` with ``E* = 1 / (1 - nu^2)``
