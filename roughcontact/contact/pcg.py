@@ -60,6 +60,17 @@ solved by the same iteration without preconditioner, coarse levels or
 float32 FFTs (their float32 products come from a float32 copy of the
 matrix).
 
+Batches: the surfaces of a batch are solved together. Each surface's solve
+is a generator (:func:`solve_steps`) that yields every product it needs;
+:func:`run_solves` advances all the solves in flight one product at a time
+and takes the products waiting on the same operator in the same precision
+as one batched product (for the hybrid block one batched FFT for Love's
+part and one GEMM for the finite-body correction, whose product with one
+surface at a time is memory-bound). Free sets, step lengths, iteration
+counts, the drift safeguard and the float64 KKT test stay per surface:
+each surface gets the iterates it gets alone, up to the rounding of the
+batched product. At most :data:`IN_FLIGHT_ELEMENTS` elements are in flight.
+
 References
 ----------
 I. A. Polonsky, L. M. Keer, Wear 231 (1999) 206-219.
