@@ -93,8 +93,8 @@ from roughcontact.contact.result import Batch
 from roughcontact.elasticity.transforms import Stencil
 
 __all__ = ["DRIFT_FACTOR", "EXACT_AT", "IN_FLIGHT_ELEMENTS", "NESTED_MIN_ELEMENTS",
-           "REFRESH_EVERY", "Solution", "constrained_pcg", "default_max_iter", "run_solves",
-           "solve", "solve_load", "solve_steps"]
+           "REFRESH_EVERY", "ProductRequest", "Solution", "constrained_pcg", "default_max_iter",
+           "grid_operator", "run_solves", "solve", "solve_load", "solve_steps"]
 
 #: Residual at which the carried displacement is first recomputed in double.
 EXACT_AT = 1e-5
@@ -138,7 +138,7 @@ def _dot(a: np.ndarray, b: np.ndarray) -> float:
 
 
 @dataclass(frozen=True)
-class _Request:
+class ProductRequest:
     """A product the solve of one surface waits for: ``C e`` [m] on ``operator``'s grid,
     ``e[rows, cols] = values`` [Pa], taken in ``dtype`` (float32 or float64)."""
 
@@ -153,7 +153,7 @@ class _Products:
     """Products of the operator in the working precision, counted; sparse ones by columns.
 
     :meth:`product` and :meth:`exact` are generators: they yield a
-    :class:`_Request` and receive its product from :func:`run_solves`, which
+    :class:`ProductRequest` and receive its product from :func:`run_solves`, which
     takes the products of all the surfaces in flight together.
     """
 
@@ -173,12 +173,12 @@ class _Products:
         """``C e`` for ``e[rows, cols] = values``, in the working precision (a generator)."""
         self.count += 1.0
         dtype = np.float32 if self.single else np.float64
-        return (yield _Request(self.operator, rows, cols, values, dtype))
+        return (yield ProductRequest(self.operator, rows, cols, values, dtype))
 
     def exact(self, rows, cols, values):
         """``C e`` in double precision, as a C-contiguous float64 array (a generator)."""
         self.count += 1.0
-        product = yield _Request(self.operator, rows, cols, values, np.float64)
+        product = yield ProductRequest(self.operator, rows, cols, values, np.float64)
         return np.array(product, dtype=np.float64, order="C")
 
     def add(self, target, rows, cols, values):
@@ -377,7 +377,7 @@ def solve_steps(operator, gap0, *, approach=None, mean_pressure=None, tol=1e-8, 
                 max_iter=None, single=True):
     """:func:`constrained_pcg` as a generator of its products, for :func:`run_solves`.
 
-    It yields every product it needs (a :class:`_Request`), is sent the
+    It yields every product it needs (a :class:`ProductRequest`), is sent the
     product, and returns the :class:`Solution`. The arguments are those of
     :func:`constrained_pcg`, checked here (before the first product).
     """
@@ -519,8 +519,10 @@ class _Unpreconditioned:
         target += np.asarray(values) @ self.products.operator.matrix[cols]
 
 
-def _grid(products: Products):
-    """The grid operator behind ``products``, or the unpreconditioned view of any other."""
+def grid_operator(products: Products):
+    """The grid operator behind ``products``, or the unpreconditioned view of any other
+    (one row of ``n`` elements, the identity as stencil) that :func:`run_solves` takes
+    the products of alike."""
     operator = preconditioned_operator(products.operator)
     return _Unpreconditioned(products) if operator is None else operator
 
@@ -536,7 +538,7 @@ def _solve_rows(products: Products, gaps, key: str, controls, pressure, tol: flo
     """Every row of ``gaps`` by :func:`constrained_pcg` at its control, the rows solved
     together (:func:`run_solves`); the batch and the approaches [m]."""
     _check_uncapped(hardness)
-    operator = _grid(products)
+    operator = grid_operator(products)
     nx, ny = operator.grid
     single = SINGLE_PRECISION[products.precision]
     m, n = gaps.shape
