@@ -12,7 +12,9 @@ tangent stiffness at every step), as the study's contact job runs it.
 
 Variants ``TREE:METHOD``: ``before`` is the library at ``--before`` (a git
 revision, default ``e109424``: pcg one surface at a time), ``after`` the
-working tree; the method is ``pcg`` or ``cg``. Every run is a fresh Python
+working tree or, with ``--after REV``, the library at that revision (so
+that edits made while the benchmark runs do not enter it); the method is
+``pcg`` or ``cg``. Every run is a fresh Python
 process (``PYTHONPATH`` set to its tree, one BLAS thread) that times the
 sweep alone (CPU ``time.process_time``; the finite-element model is built
 once, before, and passed to every run). Rounds alternate the variants (each
@@ -155,7 +157,8 @@ def measure(args) -> list[dict]:
     with tempfile.TemporaryDirectory() as scratch:
         scratch = Path(scratch)
         build_s = build_correction(args.grid, scratch / "correction.npz")
-        trees = {"after": ROOT}
+        trees = {"after": ROOT if args.after is None else checkout(args.after,
+                                                                    scratch / "after")}
         if any(v.startswith("before:") for v in args.variants):
             trees["before"] = checkout(args.before, scratch / "before")
         runs = {variant: [] for variant in args.variants}
@@ -215,6 +218,7 @@ def main(argv=None) -> None:
     parser.add_argument("--steps", type=int, default=30)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--before", default="e109424")
+    parser.add_argument("--after", default=None, help="a git revision (default: this tree)")
     parser.add_argument("--variants", nargs="+",
                         default=["before:pcg", "after:pcg", "after:cg"])
     args = parser.parse_args(argv)
