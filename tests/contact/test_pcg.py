@@ -14,7 +14,7 @@ import scipy.linalg
 import scipy.optimize
 
 from roughcontact import contact
-from roughcontact.contact import pcg
+from roughcontact.contact import pcg, stiffness
 from roughcontact.contact.nondim import dimensionless_operator
 from roughcontact.contact.products import Products
 from roughcontact.elasticity import operators
@@ -231,3 +231,26 @@ def test_surfaces_solved_together_equal_surfaces_solved_alone():
         np.testing.assert_array_equal(together.pressure[j] > 0, alone.pressure[0] > 0)
         assert np.abs(together.pressure[j] - alone.pressure[0]).max() <= \
             1e-12 * alone.pressure[0].max()
+
+
+def test_free_set_cg_keeps_each_surface_s_own_test():
+    """The stiffness CG solves C_FF x = 1 on each surface's free set, the surfaces
+    together: each surface meets tol against the dense solve or, out of iterations,
+    reports that it did not; an empty free set has x = 0 and counts as met."""
+    op = operators.halfspace_operator((24, 20), SIZE, NU)
+    dense = op.to_dense()
+    rng = np.random.default_rng(7)
+    free = np.zeros((3, op.shape[0]), dtype=bool)
+    free[0, rng.choice(op.shape[0], 60, replace=False)] = True
+    free[1, 5] = True  # one element: x = 1 / C_ii in one step
+    products = Products.of(op, "mixed")
+    x, converged, count = stiffness.free_set_cg(products, free, np.zeros(free.shape), 1e-9,
+                                                1000)
+    assert converged.all() and count[2] == 0 and not x[2].any()
+    for j in range(2):
+        cells = np.flatnonzero(free[j])
+        expected = np.linalg.solve(dense[np.ix_(cells, cells)], np.ones(cells.size))
+        assert np.abs(x[j, cells] - expected).max() <= 1e-7 * np.abs(expected).max()
+        assert not x[j, ~free[j]].any()
+    x, converged, count = stiffness.free_set_cg(products, free, np.zeros(free.shape), 1e-9, 2)
+    assert list(converged) == [False, True, True] and count[0] <= 4
