@@ -23,21 +23,17 @@ Cases
 
     Reported: CPU s, iterations, products (``matvecs``), the operator's
     memory, contact sets (elements that differ) and ``max |dp| / max p``.
-``hybrid``
-    The finite block of ``config/large.yaml`` (9 mm x 9 mm x 10 mm, nu 0,
-    clamped, "refined" coarse model 64 x 64, hybrid operator at 256 x 256),
-    ``--surfaces`` surfaces x ``--steps`` approaches to P L / (E sigma) of
-    5 MPa (sigma 24.5 um), :func:`roughcontact.contact.cell.sweep_cell` with
-    tol 1e-8, precision "mixed", tangent stiffness at every step: method
-    ``"cg"`` against ``"auto"`` (``"pcg"``), one run each (CPU s), and the
-    largest relative difference of k_P, real area and peak pressure.
+
+The study cell on the finite block with the hybrid operator (pcg before and
+after solving the surfaces of a batch together, and cg) is
+``benchmarks/bench_hybrid_cell.py``.
 
 Writes ``results/benchmarks/solver_large.csv`` and ``solver_large.md``.
 
 Usage::
 
-    .venv/bin/python benchmarks/bench_solver_large.py                      # large, 512^2
-    .venv/bin/python benchmarks/bench_solver_large.py --only hybrid --surfaces 20 --steps 30
+    .venv/bin/python benchmarks/bench_solver_large.py                      # 512^2
+    .venv/bin/python benchmarks/bench_solver_large.py --grid 1024
 """
 
 from __future__ import annotations
@@ -48,7 +44,6 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_name, "1")
 
 import argparse  # noqa: E402
-import resource  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -64,9 +59,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from bench_contact import gaussian_surfaces  # noqa: E402
 
 from roughcontact import contact  # noqa: E402
-from roughcontact.contact import cell  # noqa: E402
 from roughcontact.elasticity.halfspace import SpectralHalfSpace, _element_kernel  # noqa: E402
-from roughcontact.elasticity.operators import block_operator, halfspace_operator  # noqa: E402
+from roughcontact.elasticity.operators import halfspace_operator  # noqa: E402
 
 E = 5.11e8  # Young's modulus [Pa]
 NU = 0.0
@@ -181,36 +175,6 @@ def case_large(grid: int, repeats: int) -> list[dict]:
     return rows
 
 
-def case_hybrid(surfaces: int, steps: int) -> list[dict]:
-    from roughcontact.elasticity.influence import BlockGeometry
-
-    geometry = BlockGeometry(size=(9e-3, 9e-3), thickness=10e-3, grid=(256, 256), E=E, nu=NU,
-                             mesh="refined")
-    build, op = timed(block_operator, geometry)  # the coarse finite-element model, 64 x 64
-    heights = gaussian_surfaces(surfaces, 256, 9e-3, seed=20061)
-    heights /= heights.std(axis=(1, 2), keepdims=True)
-    sigma = 24.5e-6
-    end = cell.nondim_pressure(5e6, thickness=geometry.thickness, E=E, sigma=sigma)
-    rows, sweeps = [], {}
-    for method in ("cg", "auto"):
-        t, sweeps[method] = timed(cell.sweep_cell, op, heights, geometry, end, steps,
-                                  method=method, tol=1e-8, precision="mixed", profile=False)
-        s = sweeps[method]
-        rows.append(dict(case="hybrid", operator="hybrid", grid=256, path=method,
-                         method=s.method, surfaces=surfaces, steps=steps, cpu_s=t,
-                         build_s=build, iterations=int(s.iterations.sum()),
-                         matvecs=int(s.matvecs.sum()), converged=bool(s.converged.all()),
-                         operator_MB=op.nbytes() / 1e6,
-                         peak_rss_MB=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3))
-        print(rows[-1], flush=True)
-    a, b = sweeps["cg"], sweeps["auto"]
-    for name in ("real_area_fraction", "max_pressure", "normalized_stiffness"):
-        base = getattr(a, name)
-        rows[-1][f"max_rel_diff_{name}"] = float(np.nanmax(np.abs(getattr(b, name) - base)
-                                                           / np.abs(base).clip(1e-300)))
-    return rows
-
-
 def write(rows: list[dict], name: str) -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     frame = pd.DataFrame(rows)
@@ -228,15 +192,10 @@ def write(rows: list[dict], name: str) -> None:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--only", choices=("large", "hybrid"), default="large")
     parser.add_argument("--grid", type=int, default=512)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--surfaces", type=int, default=20)
-    parser.add_argument("--steps", type=int, default=30)
     args = parser.parse_args(argv)
-    rows = (case_large(args.grid, args.repeats) if args.only == "large"
-            else case_hybrid(args.surfaces, args.steps))
-    write(rows, "solver_large")
+    write(case_large(args.grid, args.repeats), "solver_large")
 
 
 if __name__ == "__main__":

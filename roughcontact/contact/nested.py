@@ -67,14 +67,16 @@ def level_operators(operator, coarsest: int = COARSEST) -> list:
 
 def nested_solve(solve_level: Callable, operators, gap0: np.ndarray, *, tol: float,
                  coarse_tol: float = COARSE_TOL):
-    """Solve on the finest grid, started from the coarser grids' solutions.
+    """Solve on the finest grid, started from the coarser grids' solutions (a generator).
 
     Parameters
     ----------
     solve_level : callable
-        ``solve_level(operator, gap0, tol, pressure0) -> solution`` with the
-        control (approach or mean pressure) bound; ``solution.pressure`` is
-        the ``(ny, nx)`` pressure [Pa] and ``solution.products`` its work.
+        ``solve_level(operator, gap0, tol, pressure0)`` with the control
+        (approach or mean pressure) bound: a generator solve
+        (:func:`roughcontact.contact.pcg.solve_steps`) whose requests are
+        passed through and whose solution has the ``(ny, nx)`` pressure [Pa]
+        ``pressure`` and its work ``products``.
     operators : list of PreconditionedOperator
         The fine operator and its coarser copies (:func:`level_operators`).
     gap0 : ndarray (ny, nx)
@@ -87,15 +89,16 @@ def nested_solve(solve_level: Callable, operators, gap0: np.ndarray, *, tol: flo
     Returns
     -------
     (solution, float)
-        The fine solution and the products of the coarse levels, each
-        weighted by its grid's size relative to the fine grid.
+        The generator's value: the fine solution and the products of the
+        coarse levels, each weighted by its grid's size relative to the fine
+        grid.
     """
     gaps = [np.asarray(gap0, dtype=float)]
     for _ in operators[1:]:
         gaps.append(restrict(gaps[-1]))
     start, coarse_work = None, 0.0
     for depth in range(len(operators) - 1, 0, -1):
-        level = solve_level(operators[depth], gaps[depth], coarse_tol, start)
+        level = yield from solve_level(operators[depth], gaps[depth], coarse_tol, start)
         coarse_work += level.products / 4.0**depth
         start = prolong(level.pressure)
-    return solve_level(operators[0], gaps[0], tol, start), coarse_work
+    return (yield from solve_level(operators[0], gaps[0], tol, start)), coarse_work

@@ -60,6 +60,17 @@ solved by the same iteration without preconditioner, coarse levels or
 float32 FFTs (their float32 products come from a float32 copy of the
 matrix).
 
+Batches: the surfaces of a batch are solved together. Each surface's solve
+is a generator (:func:`solve_steps`) that yields every product it needs;
+:func:`run_solves` advances all the solves in flight one product at a time
+and takes the products waiting on the same operator in the same precision
+as one batched product (for the hybrid block one batched FFT for Love's
+part and one GEMM for the finite-body correction, whose product with one
+surface at a time is memory-bound). Free sets, step lengths, iteration
+counts, the drift safeguard and the float64 KKT test stay per surface:
+each surface gets the iterates it gets alone, up to the rounding of the
+batched product. At most :data:`IN_FLIGHT_ELEMENTS` elements are in flight.
+
 References
 ----------
 I. A. Polonsky, L. M. Keer, Wear 231 (1999) 206-219.
@@ -69,18 +80,21 @@ V. A. Yastrebov, ASPHER 0.1.3 (2025), src/contact_solver.cpp.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from roughcontact.contact.checks import preconditioned_operator
+from roughcontact.contact.free_stencil import FreeSetStencil
 from roughcontact.contact.kkt import gap_scale, kkt_residuals
 from roughcontact.contact.nested import level_operators, nested_solve
 from roughcontact.contact.products import SINGLE_PRECISION, Products
 from roughcontact.contact.result import Batch
 from roughcontact.elasticity.transforms import Stencil
 
-__all__ = ["DRIFT_FACTOR", "EXACT_AT", "NESTED_MIN_ELEMENTS", "REFRESH_EVERY", "Solution",
-           "constrained_pcg", "default_max_iter", "solve", "solve_load"]
+__all__ = ["DRIFT_FACTOR", "EXACT_AT", "IN_FLIGHT_ELEMENTS", "NESTED_MIN_ELEMENTS",
+           "REFRESH_EVERY", "ProductRequest", "Solution", "constrained_pcg", "default_max_iter",
+           "grid_operator", "run_solves", "solve", "solve_load", "solve_steps"]
 
 #: Residual at which the carried displacement is first recomputed in double.
 EXACT_AT = 1e-5
@@ -90,6 +104,9 @@ REFRESH_EVERY = 200
 DRIFT_FACTOR = 10.0
 #: Cold solves on grids of more elements start from coarser grids (nested continuation).
 NESTED_MIN_ELEMENTS = 128 * 128
+#: Elements of the surfaces solved together (64 surfaces at 256^2, 4 at 1024^2): bounds
+#: the memory of the batched products and of the solves in flight.
+IN_FLIGHT_ELEMENTS = 2**22
 
 
 def default_max_iter(n: int) -> int:
@@ -120,93 +137,58 @@ def _dot(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.einsum("i,i->", a, b))
 
 
-class _Scatter:
-    """A persistent zero grid into which values on the free set are scattered."""
+@dataclass(frozen=True)
+class ProductRequest:
+    """A product the solve of one surface waits for: ``C e`` [m] on ``operator``'s grid,
+    ``e[rows, cols] = values`` [Pa], taken in ``dtype`` (float32 or float64)."""
 
-    def __init__(self, shape, dtype):
-        self.grid = np.zeros(shape, dtype=dtype)
-        self.rows = self.cols = np.zeros(0, dtype=np.intp)
-
-    def __call__(self, rows, cols, values):
-        self.grid[self.rows, self.cols] = 0
-        self.grid[rows, cols] = values
-        self.rows, self.cols = rows, cols
-        return self.grid
-
-
-class _Stencil:
-    """``z_F = Pi_F S Pi_F (r - mean r)``, centred: the stencil on the free set only.
-
-    The residual is scattered into a grid with a halo of the stencil's
-    radius (wrapped for a periodic operator, zero otherwise) and gathered
-    back at the 13 offsets: O(13 |F|) per application.
-    """
-
-    def __init__(self, stencil, shape):
-        ny, nx = shape
-        self.radius = r = max(1, int(np.abs(stencil.offsets).max()))
-        self.weights = stencil.weights.tolist()
-        self.periodic = stencil.periodic
-        self.grid = np.zeros((ny + 2 * r, nx + 2 * r))
-        self.flat = self.grid.reshape(-1)
-        self.offsets = (stencil.offsets[:, 0] * (nx + 2 * r) + stencil.offsets[:, 1]).tolist()
-        self.base = None
-
-    def __call__(self, rows, cols, residual):
-        r, g = self.radius, self.grid
-        if self.base is not None:
-            self.flat[self.base] = 0.0
-            if self.periodic:
-                g[:r], g[-r:], g[:, :r], g[:, -r:] = 0.0, 0.0, 0.0, 0.0
-        self.base = (rows + r) * g.shape[1] + (cols + r)
-        self.flat[self.base] = residual - residual.mean()
-        if self.periodic:
-            g[:r], g[-r:] = g[-2 * r:-r], g[r:2 * r]
-            g[:, :r], g[:, -r:] = g[:, -2 * r:-r], g[:, r:2 * r]
-        z = np.zeros(rows.size)
-        for weight, offset in zip(self.weights, self.offsets, strict=True):
-            z += weight * self.flat[self.base + offset]
-        z -= z.mean()
-        return z
+    operator: object
+    rows: np.ndarray
+    cols: np.ndarray
+    values: np.ndarray
+    dtype: type
 
 
 class _Products:
-    """Products of the operator in the working precision, counted; sparse ones by columns."""
+    """Products of the operator in the working precision, counted; sparse ones by columns.
+
+    :meth:`product` and :meth:`exact` are generators: they yield a
+    :class:`ProductRequest` and receive its product from :func:`run_solves`, which
+    takes the products of all the surfaces in flight together.
+    """
 
     def __init__(self, operator, single: bool):
         self.operator = operator
         self.n = operator.grid[0] * operator.grid[1]
-        self.shape = (operator.grid[1], operator.grid[0])
         self.single = single
         # the kernel columns are float32: used only for single-precision corrections
         self.budget = operator.column_budget if single else -1
-        self.scatter = _Scatter(self.shape, np.float32 if single else np.float64)
         self.count = 0.0
 
     def use_double(self) -> None:
         """Continue with double-precision products (drift safeguard)."""
         self.single, self.budget = False, -1
-        self.scatter = _Scatter(self.shape, np.float64)
 
-    def product(self, rows, cols, values) -> np.ndarray:
-        """``C e`` for ``e[rows, cols] = values``, in the working precision."""
+    def product(self, rows, cols, values):
+        """``C e`` for ``e[rows, cols] = values``, in the working precision (a generator)."""
         self.count += 1.0
-        return self.operator.apply(self.scatter(rows, cols, values))
+        dtype = np.float32 if self.single else np.float64
+        return (yield ProductRequest(self.operator, rows, cols, values, dtype))
 
-    def exact(self, rows, cols, values) -> np.ndarray:
-        """``C e`` in double precision, as a C-contiguous float64 array."""
+    def exact(self, rows, cols, values):
+        """``C e`` in double precision, as a C-contiguous float64 array (a generator)."""
         self.count += 1.0
-        grid = np.zeros(self.shape)
-        grid[rows, cols] = values
-        return np.array(self.operator.apply(grid), dtype=np.float64, order="C")
+        product = yield ProductRequest(self.operator, rows, cols, values, np.float64)
+        return np.array(product, dtype=np.float64, order="C")
 
-    def add(self, target, rows, cols, values) -> None:
-        """``target += C e``: kernel columns for a few elements, else one product."""
+    def add(self, target, rows, cols, values):
+        """``target += C e``: kernel columns for a few elements, else one product
+        (a generator)."""
         if rows.size <= self.budget:
             self.count += rows.size / self.n
             self.operator.add_columns(target, rows, cols, values)
         else:
-            target += self.product(rows, cols, values)
+            target += yield from self.product(rows, cols, values)
 
 
 class _Iteration:
@@ -222,7 +204,7 @@ class _Iteration:
         self.approach = approach
         self.total_load = None if mean_pressure is None else float(mean_pressure) * self.n
         self.work = _Products(operator, single)
-        self.stencil = _Stencil(operator.preconditioner(), (ny, nx))
+        self.stencil = FreeSetStencil(operator.preconditioner(), (ny, nx))
         if pressure0 is not None and np.any(pressure0 > 0.0):
             flat = np.flatnonzero(np.asarray(pressure0).reshape(-1) > 0.0)
             p_free = np.asarray(pressure0, dtype=np.float64).reshape(-1)[flat]
@@ -232,8 +214,7 @@ class _Iteration:
         self._set_free(flat, p_free)
         if self.total_load is not None:
             self.p_free *= self.total_load / self.p_free.sum()
-        self.u = self.work.product(self.rows, self.cols, self.p_free).astype(np.float64)
-        self.u = np.ascontiguousarray(self.u)
+        self.u = None  # C p, from :meth:`start`
         self.in_free = np.zeros(self.n, dtype=bool)
         self.in_free[flat] = True
         self.t_free = np.zeros(flat.size)
@@ -246,6 +227,11 @@ class _Iteration:
         self.rows, self.cols = np.divmod(flat, self.nx)
         self.f_free = self.f_flat[flat]
         self.c_free = self.diagonal[flat]
+
+    def start(self):
+        """``u = C p`` of the starting pressure, in the working precision (a generator)."""
+        u = yield from self.work.product(self.rows, self.cols, self.p_free)
+        self.u = np.array(u, dtype=np.float64, order="C")
 
     def residual(self) -> float:
         """Mean mode, residual on ``F``, penetrations; the KKT residual (module docstring)."""
@@ -268,20 +254,21 @@ class _Iteration:
                     -float(self.g_out.min(initial=0.0)))
         return worst / (max(self.alpha - self.f_min, self.f_max - self.alpha) or 1.0)
 
-    def recompute(self) -> None:
-        """``u = C p`` exactly (double precision)."""
-        self.u = self.work.exact(self.rows, self.cols, self.p_free)
+    def recompute(self):
+        """``u = C p`` exactly (double precision; a generator)."""
+        self.u = yield from self.work.exact(self.rows, self.cols, self.p_free)
 
-    def step(self) -> None:
-        """One preconditioned CG step on ``F`` and the update of ``F`` (module docstring)."""
-        descent = self._descend() if self.rows.size >= 2 else None
+    def step(self):
+        """One preconditioned CG step on ``F`` and the update of ``F`` (module docstring;
+        a generator)."""
+        descent = (yield from self._descend()) if self.rows.size >= 2 else None
         if descent is None:  # nothing to descend on F: Jacobi activation of the penetrating
             trial, tau_join = self.p_free, None  # elements (one element, or r = 0 on F)
         else:
             trial, tau_join = descent
         leaving = trial <= 0.0
         if leaving.any() or self.out_flat.size:
-            self._change_set(trial, leaving, tau_join)
+            yield from self._change_set(trial, leaving, tau_join)
         else:
             self.p_free = trial
             self.conjugate = True
@@ -291,12 +278,13 @@ class _Iteration:
             self.u *= s
 
     def _descend(self):
-        """Direction, step length and the carried ``u``; the trial pressures on ``F``.
+        """Direction, step length and the carried ``u``; the trial pressures on ``F``
+        (a generator).
 
         None when the direction vanishes: then only the free set can change.
         """
         r_free = self.r_free
-        z = self.stencil(self.rows, self.cols, r_free)
+        z = self.stencil(self.rows, self.cols, r_free, centred=True)
         if not z.any():  # r is constant on F (its mean is set by the rescaling)
             return None
         zr = _dot(z, r_free)
@@ -308,7 +296,7 @@ class _Iteration:
             if not _dot(r_free, t_free) > 0.0:
                 t_free = z  # not a descent direction: restart
         self.t_free, self.r_prev, self.zr_old = t_free, r_free, zr
-        ct = self.work.product(self.rows, self.cols, t_free)
+        ct = yield from self.work.product(self.rows, self.cols, t_free)
         ct_free = ct[self.rows, self.cols].astype(np.float64)
         ct_free -= ct_free.mean()
         num, den = _dot(r_free, t_free), _dot(ct_free, t_free)
@@ -321,17 +309,18 @@ class _Iteration:
         self.u -= tau * ct
         return self.p_free - tau * t_free, (num * num / (den * rr) if rr > 0.0 else tau)
 
-    def _change_set(self, trial, leaving, tau_join) -> None:
-        """Clip the leaving elements, add the penetrating ones, correct ``u`` for both."""
+    def _change_set(self, trial, leaving, tau_join):
+        """Clip the leaving elements, add the penetrating ones, correct ``u`` for both
+        (a generator)."""
         out_flat = self.out_flat
         if tau_join is None:
             p_join = -self.g_out / self.diagonal[out_flat]
         else:
             p_join = -tau_join * self.g_out
         out_rows, out_cols = np.divmod(out_flat, self.nx)
-        self.work.add(self.u, np.concatenate([self.rows[leaving], out_rows]),
-                      np.concatenate([self.cols[leaving], out_cols]),
-                      np.concatenate([-trial[leaving], p_join]))
+        yield from self.work.add(self.u, np.concatenate([self.rows[leaving], out_rows]),
+                                 np.concatenate([self.cols[leaving], out_cols]),
+                                 np.concatenate([-trial[leaving], p_join]))
         self.in_free[self.flat[leaving]] = False
         self.in_free[out_flat] = True
         kept = ~leaving
@@ -379,14 +368,33 @@ def constrained_pcg(operator, gap0, *, approach=None, mean_pressure=None, tol=1e
         Its ``residual`` is computed on the exact ``u``; it exceeds ``tol``
         only when ``max_iter`` was reached.
     """
+    return run_solves([solve_steps(operator, gap0, approach=approach,
+                                   mean_pressure=mean_pressure, tol=tol, pressure0=pressure0,
+                                   max_iter=max_iter, single=single)])[0]
+
+
+def solve_steps(operator, gap0, *, approach=None, mean_pressure=None, tol=1e-8, pressure0=None,
+                max_iter=None, single=True):
+    """:func:`constrained_pcg` as a generator of its products, for :func:`run_solves`.
+
+    It yields every product it needs (a :class:`ProductRequest`), is sent the
+    product, and returns the :class:`Solution`. The arguments are those of
+    :func:`constrained_pcg`, checked here (before the first product).
+    """
     if (approach is None) == (mean_pressure is None):
         raise ValueError("give exactly one of approach (m) and mean_pressure (Pa)")
     f = np.asarray(gap0, dtype=np.float64)
     max_iter = default_max_iter(f.size) if max_iter is None else int(max_iter)
+    return _iterate(operator, f, None if approach is None else float(approach), mean_pressure,
+                    tol, pressure0, max_iter, single)
+
+
+def _iterate(operator, f, approach, mean_pressure, tol, pressure0, max_iter, single):
+    """The iteration of :func:`constrained_pcg` on checked arguments (a generator)."""
     if mean_pressure is not None and not mean_pressure > 0.0:
         return _unloaded(f, tol)
-    state = _Iteration(operator, f, None if approach is None else float(approach),
-                       mean_pressure, pressure0, single)
+    state = _Iteration(operator, f, approach, mean_pressure, pressure0, single)
+    yield from state.start()
     exact, exact_next, carried = False, EXACT_AT, np.inf
     iteration = since_exact = 0
     while True:
@@ -396,12 +404,12 @@ def constrained_pcg(operator, gap0, *, approach=None, mean_pressure=None, tol=1e
             state.work.use_double()  # the float32 recurrence drifted: continue in double
         if res <= max(tol, exact_next) or iteration >= max_iter or since_exact >= REFRESH_EVERY:
             if not exact:
-                state.recompute()
+                yield from state.recompute()
                 exact, since_exact, exact_next, carried = True, 0, tol, res
                 continue  # the residual again, on the exact u
             if res <= tol or iteration >= max_iter:
                 break
-        state.step()
+        yield from state.step()
         exact = False
         since_exact += 1
         iteration += 1
@@ -417,6 +425,66 @@ def _unloaded(f: np.ndarray, tol: float) -> Solution:
     """Zero load: no pressure, the flat just touching the highest point (``d = min f``)."""
     zero = np.zeros_like(f)
     return Solution(zero, zero.copy(), float(f.min()), 0, 0.0, 0.0)
+
+
+def run_solves(solves, in_flight: int = 1) -> list:
+    """Run generator solves (:func:`solve_steps`) together; their results, in order.
+
+    At most ``in_flight`` solves advance at a time; the next one starts
+    when one ends. Each round every solve in flight waits for one product:
+    the requests on the same operator in the same dtype are scattered into
+    one ``(k, ny, nx)`` batch and taken as one product (for the hybrid block
+    its Love part one batched FFT, its finite-body correction one GEMM), and
+    each solve is sent its own row. Each solve keeps its own free set, step
+    lengths, iteration count and convergence test: the result of every solve
+    is the one it gives alone, up to the rounding of the batched product.
+    """
+    solves = list(solves)
+    results = [None] * len(solves)
+    pending = {}  # index -> (generator, its request)
+
+    def advance(i, generator, product):
+        try:
+            pending[i] = (generator, generator.send(product))
+        except StopIteration as stop:
+            pending.pop(i, None)
+            results[i] = stop.value
+
+    queue = iter(enumerate(solves))
+
+    def refill():
+        for i, generator in queue:
+            advance(i, generator, None)
+            if len(pending) >= limit:
+                return
+
+    limit = max(1, int(in_flight))
+    refill()
+    while pending:
+        for members, product in _batched_products(pending):
+            for j, i in enumerate(members):
+                advance(i, pending[i][0], product[j])
+        if len(pending) < limit:
+            refill()
+    return results
+
+
+def _batched_products(pending: dict):
+    """The products of the pending requests, one per (operator, dtype): ``(members,
+    products)`` pairs, ``products[j]`` that of solve ``members[j]``."""
+    groups = {}
+    for i, (_, request) in pending.items():
+        groups.setdefault((id(request.operator), request.dtype), []).append(i)
+    out = []
+    for members in groups.values():
+        requests = [pending[i][1] for i in members]
+        operator = requests[0].operator
+        nx, ny = operator.grid
+        fields = np.zeros((len(members), ny, nx), dtype=requests[0].dtype)
+        for field, request in zip(fields, requests, strict=True):
+            field[request.rows, request.cols] = request.values
+        out.append((members, operator.apply(fields)))
+    return out
 
 
 class _Unpreconditioned:
@@ -435,10 +503,11 @@ class _Unpreconditioned:
         self.column_budget = max(1, n // 32) if matrix is not None else 0
 
     def apply(self, pressure):
-        flat = pressure.reshape(1, -1)
+        """``C p`` of fields ``(k, 1, n)`` [Pa], float32 ones from the float32 matrix."""
+        flat = pressure.reshape(-1, self.grid[0])
         if pressure.dtype == np.float32 and isinstance(self.products.single, np.ndarray):
-            return flat @ self.products.single
-        return self.products.exact(flat.astype(np.float64))
+            return (flat @ self.products.single).reshape(pressure.shape)
+        return self.products.exact(flat.astype(np.float64)).reshape(pressure.shape)
 
     def diagonal(self):
         return self.products.operator.diagonal()
@@ -450,8 +519,10 @@ class _Unpreconditioned:
         target += np.asarray(values) @ self.products.operator.matrix[cols]
 
 
-def _grid(products: Products):
-    """The grid operator behind ``products``, or the unpreconditioned view of any other."""
+def grid_operator(products: Products):
+    """The grid operator behind ``products``, or the unpreconditioned view of any other
+    (one row of ``n`` elements, the identity as stencil) that :func:`run_solves` takes
+    the products of alike."""
     operator = preconditioned_operator(products.operator)
     return _Unpreconditioned(products) if operator is None else operator
 
@@ -464,31 +535,34 @@ def _check_uncapped(hardness) -> None:
 
 def _solve_rows(products: Products, gaps, key: str, controls, pressure, tol: float,
                 max_iter: int, hardness):
-    """Every row of ``gaps`` by :func:`constrained_pcg` at its control; the batch and the
-    approaches [m]."""
+    """Every row of ``gaps`` by :func:`constrained_pcg` at its control, the rows solved
+    together (:func:`run_solves`); the batch and the approaches [m]."""
     _check_uncapped(hardness)
-    operator = _grid(products)
+    operator = grid_operator(products)
     nx, ny = operator.grid
     single = SINGLE_PRECISION[products.precision]
     m, n = gaps.shape
+    cold = ~pressure.any(axis=1)
+    nested = nx * ny > NESTED_MIN_ELEMENTS and cold.any()
+    levels = level_operators(operator) if nested else None
+
+    def solve_level(level, gap, level_tol, start, j):
+        return solve_steps(level, gap, tol=level_tol, pressure0=start, max_iter=max_iter,
+                           single=single, **{key: float(controls[j])})
+
+    def solve_row(j):
+        gap = gaps[j].reshape(ny, nx)
+        if not cold[j]:  # a warm start (a sweep's previous step)
+            solution = yield from solve_level(operator, gap, tol, pressure[j].reshape(ny, nx), j)
+            return solution, 0.0
+        if nested:
+            return (yield from nested_solve(partial(solve_level, j=j), levels, gap, tol=tol))
+        return (yield from solve_level(operator, gap, tol, None, j)), 0.0
+
     out = Batch.empty(m, n)
     approaches = np.zeros(m)
-    levels = None
-    for j in range(m):
-        def solve_level(level, gap, level_tol, start, j=j):
-            return constrained_pcg(level, gap, tol=level_tol, pressure0=start,
-                                   max_iter=max_iter, single=single,
-                                   **{key: float(controls[j])})
-
-        gap = gaps[j].reshape(ny, nx)
-        coarse_work = 0.0
-        if pressure[j].any():  # a warm start (a sweep's previous step)
-            solution = solve_level(operator, gap, tol, pressure[j].reshape(ny, nx))
-        elif nx * ny > NESTED_MIN_ELEMENTS:
-            levels = level_operators(operator) if levels is None else levels
-            solution, coarse_work = nested_solve(solve_level, levels, gap, tol=tol)
-        else:
-            solution = solve_level(operator, gap, tol, None)
+    solutions = run_solves((solve_row(j) for j in range(m)), max(1, IN_FLIGHT_ELEMENTS // n))
+    for j, (solution, coarse_work) in enumerate(solutions):
         out.store(j, solution.pressure.reshape(-1), solution.displacement.reshape(-1),
                   solution.iterations, solution.products + coarse_work, solution.residual, tol)
         approaches[j] = solution.approach
@@ -503,7 +577,7 @@ def solve(products: Products, gaps, d, pressure, tol: float, max_iter: int,
     start on a grid of more than :data:`NESTED_MIN_ELEMENTS` elements starts from the
     coarser grids' solutions (:func:`roughcontact.contact.nested.nested_solve`;
     ``iterations`` are the fine grid's, ``matvecs`` count the coarse levels' products
-    by their share of a fine one)."""
+    by their share of a fine one). The rows are solved together (:func:`run_solves`)."""
     return _solve_rows(products, gaps, "approach", d, pressure, tol, max_iter, hardness)[0]
 
 

@@ -9,8 +9,9 @@ On a fixed free set ``F`` (the elements with ``p > 0``; with a cap ``H``,
 
 It is the derivative of the load-approach curve between changes of the
 contact set, and it feeds the normalized stiffness ``k_P = (L / A_n) dF/dd``
-of Eq 33. :func:`free_set_cg` solves ``C_FF x = 1`` for many surfaces at
-once (the sweeps of :mod:`roughcontact.contact.sweeps`), preconditioned on
+of Eq 33. :func:`free_set_cg` solves ``C_FF x = 1`` for many surfaces
+together (the sweeps of :mod:`roughcontact.contact.sweeps`), each on its
+free elements only, their products batched, preconditioned on
 a grid FFT operator by the 13-tap |q| stencil of its
 :meth:`~roughcontact.elasticity.protocol.PreconditionedOperator.preconditioner`
 restricted to ``F`` (symmetric positive definite: the stencil's symbol is
@@ -31,9 +32,10 @@ from roughcontact.contact.checks import (
     check_max_iter,
     check_positive,
     check_pressure,
-    preconditioned_operator,
 )
+from roughcontact.contact.free_stencil import FreeSetStencil
 from roughcontact.contact.kkt import free_set
+from roughcontact.contact.pcg import IN_FLIGHT_ELEMENTS, ProductRequest, grid_operator, run_solves
 from roughcontact.contact.products import Products
 
 __all__ = ["free_set_cg", "tangent_stiffness"]
@@ -42,100 +44,79 @@ logger = logging.getLogger("roughcontact.contact")
 
 
 def free_set_cg(products: Products, free, start, tol: float, max_iter: int):
-    """Solve ``C_FF x = 1`` on each surface's free set ``F`` by CG.
+    """Solve ``C_FF x = 1`` on each surface's free set ``F`` by CG, the surfaces together.
 
     ``free`` (m, n) bool; ``start`` (m, n) initial guess (used on ``F``).
-    Stops when ``||1 - C_FF x|| <= tol ||1_F||`` (Euclidean), checked on a
-    double-precision residual; with single-precision products
-    (``products.mixed``) the solve restarts from the exact residual
-    (iterative refinement) until it is met. Returns ``(x, converged, products)``.
+    Each surface stops when ``||1 - C_FF x|| <= tol ||1_F||`` (Euclidean),
+    checked on a double-precision residual; with single-precision products
+    (``products.mixed``) its CG restarts from the exact residual (iterative
+    refinement) until it is met, within ``max_iter`` iterations. On a grid
+    FFT operator the CG is preconditioned by its stencil on ``F``
+    (:class:`~roughcontact.contact.free_stencil.FreeSetStencil`). Each
+    surface iterates on its free elements only; the products of the
+    surfaces in flight are taken together
+    (:func:`roughcontact.contact.pcg.run_solves`).
+
+    Returns
+    -------
+    (ndarray (m, n), ndarray (m,) of bool, ndarray (m,) of int)
+        ``x`` [Pa/m] (zero off ``F``), whether each surface met ``tol``, and
+        its products.
     """
     m, n = free.shape
-    mask = free.astype(float)
-    x = start * mask
+    operator = grid_operator(products)
+    nx, ny = operator.grid
+    stencil = FreeSetStencil(operator.preconditioner(), (ny, nx))
+    dtype = np.float32 if products.mixed else np.float64
+    flats = [np.flatnonzero(row) for row in free]
+    solves = (_solve_steps(operator, stencil, np.divmod(flat, nx), start[j, flat], tol,
+                           max_iter, dtype) for j, flat in enumerate(flats))
+    x = np.zeros((m, n))
+    converged = np.zeros(m, dtype=bool)
     count = np.zeros(m, dtype=int)
-    target = np.sqrt(mask.sum(axis=1))
-    converged = target == 0.0
-    surfaces = np.flatnonzero(~converged)
-    xs, ms = x[surfaces], mask[surfaces]
-    limit = (tol * target[surfaces]) ** 2
-    grid = preconditioned_operator(products.operator)
-    precondition = None if grid is None else _StencilOnSets(grid)
-    iteration = 0
-    while surfaces.size and iteration < max_iter:
-        # Exact residual, then CG until its recursive estimate meets tol.
-        residual = ms - ms * products.exact(xs)
-        count[surfaces] += 1
-        rr = np.einsum("ij,ij->i", residual, residual)
-        done = rr <= limit
-        if done.any():
-            x[surfaces[done]] = xs[done]
-            converged[surfaces[done]] = True
-            keep = ~done
-            surfaces, xs, ms, residual, rr, limit = (
-                a[keep] for a in (surfaces, xs, ms, residual, rr, limit)
-            )
-            if not surfaces.size:
-                break
-        iteration = _inner_cg(products, xs, ms, residual, rr, limit, count, surfaces,
-                              iteration, max_iter, precondition)
-    x[surfaces] = xs
+    for j, (x_free, ok, products_j) in enumerate(run_solves(solves,
+                                                             IN_FLIGHT_ELEMENTS // n)):
+        x[j, flats[j]] = x_free
+        converged[j], count[j] = ok, products_j
     return x, converged, count
 
 
-class _StencilOnSets:
-    """``z = Pi_F S Pi_F r`` for residuals (m, n) on free sets ``F`` (masks), ``S`` the
-    operator's stencil (zero beyond the grid, or wrapped for a periodic operator)."""
-
-    def __init__(self, operator):
-        stencil = operator.preconditioner()
-        self.nx, self.ny = operator.grid
-        self.radius = int(np.abs(stencil.offsets).max())
-        self.taps = list(zip(stencil.offsets.tolist(), stencil.weights.tolist(), strict=True))
-        self.mode = "wrap" if stencil.periodic else "constant"
-
-    def __call__(self, residual, mask):
-        m, r, nx, ny = residual.shape[0], self.radius, self.nx, self.ny
-        padded = np.pad((residual * mask).reshape(m, ny, nx), ((0, 0), (r, r), (r, r)),
-                        mode=self.mode)
-        z = np.zeros((m, ny, nx))
-        for (jy, jx), weight in self.taps:
-            z += weight * padded[:, r + jy: r + jy + ny, r + jx: r + jx + nx]
-        return z.reshape(m, -1) * mask
-
-
-def _inner_cg(products, xs, ms, residual, rr, limit, count, surfaces, iteration, max_iter,
-              precondition=None):
-    """CG from the exact ``residual`` until its recursive estimate meets ``limit``
-    (``xs`` and ``residual`` updated in place), preconditioned when ``precondition``
-    is given; returns the iteration count."""
-    z = residual if precondition is None else precondition(residual, ms)
-    rz = rr if precondition is None else np.einsum("ij,ij->i", residual, z)
-    direction = z.copy()
-    inner = np.ones(surfaces.size, dtype=bool)
-    while inner.any() and iteration < max_iter:
-        iteration += 1
-        q = products.search(direction)
-        q *= ms
-        count[surfaces] += inner
-        curvature = np.einsum("ij,ij->i", direction, q)
-        alpha = np.divide(rz, curvature, out=np.zeros_like(rz),
-                          where=inner & (curvature > 0.0))
-        xs += alpha[:, None] * direction
-        residual -= alpha[:, None] * q
-        rr_new = np.einsum("ij,ij->i", residual, residual)
-        inner &= (rr_new > limit) & (alpha > 0.0)
-        if precondition is None:
-            z, rz_new = residual, rr_new
-        else:
-            z = precondition(residual, ms)
-            rz_new = np.einsum("ij,ij->i", residual, z)
-        beta = np.divide(rz_new, rz, out=np.zeros_like(rz), where=rz > 0.0)
-        direction *= beta[:, None]
-        direction += z
-        direction[~inner] = 0.0
-        rz = rz_new
-    return iteration
+def _solve_steps(operator, stencil, cells, x, tol: float, max_iter: int, dtype):
+    """:func:`free_set_cg` of one surface on its free elements ``cells = (rows, cols)``
+    from ``x``, as a generator of its products; returns ``(x, converged, products)``."""
+    rows, cols = cells
+    x = np.array(x, dtype=float)
+    limit = tol * tol * rows.size
+    count = iteration = 0
+    while rows.size:
+        # Exact residual, then CG until its recursive estimate meets tol.
+        product = yield ProductRequest(operator, rows, cols, x, np.float64)
+        count += 1
+        residual = 1.0 - product[rows, cols]
+        rr = residual @ residual
+        if rr <= limit:
+            return x, True, count
+        if iteration >= max_iter:
+            break
+        z = stencil(rows, cols, residual)
+        rz, direction = z @ residual, z
+        while iteration < max_iter:
+            iteration += 1
+            product = yield ProductRequest(operator, rows, cols, direction, dtype)
+            count += 1
+            q = product[rows, cols].astype(float)
+            curvature = direction @ q
+            if not curvature > 0.0:
+                break
+            alpha = rz / curvature
+            x += alpha * direction
+            residual -= alpha * q
+            if residual @ residual <= limit:
+                break
+            z = stencil(rows, cols, residual)
+            rz, rz_old = z @ residual, rz
+            direction = z + (rz / rz_old if rz_old > 0.0 else 0.0) * direction
+    return x, not rows.size, count
 
 
 def tangent_stiffness(operator, pressure, *, element_area=None, tol=1e-10, max_iter=None,

@@ -52,6 +52,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse
 
+from roughcontact.elasticity.coarse_correction import CoarseCorrection
 from roughcontact.elasticity.halfspace import _check_grid, _element_kernel
 from roughcontact.elasticity.hybrid import centre_interpolation, finite_body_correction
 from roughcontact.elasticity.influence import estimate_cost, unit_modulus_influence
@@ -60,6 +61,7 @@ from roughcontact.elasticity.transforms import DTYPES, ColumnTable, PaddedConvol
 
 __all__ = [
     "COARSE_MAX",
+    "COLUMN_BUDGET",
     "DENSE_MAX_ELEMENTS",
     "HYBRID_MESHES",
     "OPERATORS",
@@ -86,9 +88,10 @@ COARSE_MAX = 64
 #: up to 64 x 64 its product (BLAS) is as fast as the FFT operator and its
 #: entries are the finite-element model's own (benchmarks/bench_operators.py).
 DENSE_MAX_ELEMENTS = 64 * 64
-#: Share of loaded coarse elements below which the correction's product uses only
-#: the rows of K they load.
-SPARSE_COARSE = 0.5
+#: Changed elements whose displacement is summed by kernel columns rather than taken
+#: by one product (a column costs about 1/25 of a single-precision product at 512^2
+#: and 1024^2; the hybrid adds its correction, about a quarter of a product, once).
+COLUMN_BUDGET = 24
 
 
 def default_coarse_grid(grid, coarse_max: int | None = None) -> tuple[int, int]:
@@ -133,9 +136,12 @@ class BlockOperator(GridOperator):
         Nominal contact area ``(Lx, Ly)`` [m].
     nu : float
         Poisson's ratio [-].
-    correction : ndarray (nc, nc) or None
+    correction : ndarray (nc, nc), CoarseCorrection or None
         Finite-body correction ``K`` per unit loaded area [1/m] on the coarse
-        grid (symmetric), or None for the half-space alone.
+        grid (symmetric; or prepared as a
+        :class:`~roughcontact.elasticity.coarse_correction.CoarseCorrection`),
+        or None for the half-space alone. The attribute holds ``K``
+        symmetrized (float64).
     coarse_grid : (int, int) or None
         Coarse contact elements ``(ncx, ncy)`` of ``correction``.
     workers : int
@@ -145,13 +151,15 @@ class BlockOperator(GridOperator):
     -----
     Products: the Love part by the pruned zero-padded FFT of
     :class:`roughcontact.elasticity.transforms.PaddedConvolution`, the
-    correction by the interpolations and the dense ``nc x nc`` product,
-    both in the dtype of the pressure (:meth:`apply`: float32 or float64).
-    The half-space alone (no correction) also sums kernel columns
-    (:meth:`add_columns`, ``column_budget`` 24); both offer the stencil of
-    Love's part as preconditioner (:meth:`preconditioner`) and a copy on
-    the grid coarser by 2 (:meth:`coarsened`, the same correction), so
-    they are :class:`roughcontact.elasticity.protocol.PreconditionedOperator`.
+    correction by the interpolations and the dense ``nc x nc`` product
+    (by the block's mirror classes when ``K`` has its symmetry,
+    :mod:`roughcontact.elasticity.coarse_correction`), both in the dtype of
+    the pressure (:meth:`apply`: float32 or float64), for a batch of fields
+    at once. Both kinds also sum kernel columns (:meth:`add_columns`,
+    ``column_budget`` :data:`COLUMN_BUDGET`), offer the stencil of Love's
+    part as preconditioner (:meth:`preconditioner`) and a copy on the grid
+    coarser by 2 (:meth:`coarsened`, the same prepared correction), so they
+    are :class:`roughcontact.elasticity.protocol.PreconditionedOperator`.
 
     It is an :class:`roughcontact.elasticity.protocol.InfluenceOperator`
     (matrix-free: ``matrix`` is None; it fixes no common row sum, so
@@ -168,7 +176,8 @@ class BlockOperator(GridOperator):
     _columns: ColumnTable | None = field(init=False, repr=False, compare=False)
     _px: np.ndarray | None = field(init=False, repr=False, compare=False)
     _py: np.ndarray | None = field(init=False, repr=False, compare=False)
-    _coarse: dict = field(init=False, repr=False, compare=False)
+    _interpolations: dict | None = field(init=False, repr=False, compare=False)
+    _correction: CoarseCorrection | None = field(init=False, repr=False, compare=False)
     _diagonal: np.ndarray = field(init=False, repr=False, compare=False)
     mean_compliance = None
 
@@ -185,40 +194,33 @@ class BlockOperator(GridOperator):
         kernel = _element_kernel(nx, ny, dx, dy, 1.0, nu)
         set_(self, "_love", PaddedConvolution(kernel, int(self.workers)))
         diagonal = np.full(nx * ny, kernel[0, 0])
-        set_(self, "_coarse", {})
+        set_(self, "_columns", ColumnTable.even(kernel))
         if self.correction is None:
             if self.coarse_grid is not None:
                 raise ValueError("coarse_grid is given but correction is None")
-            set_(self, "_px", None)
-            set_(self, "_py", None)
-            set_(self, "_columns", ColumnTable.even(kernel))
+            for name in ("_px", "_py", "_interpolations", "_correction"):
+                set_(self, name, None)
         else:
             if self.coarse_grid is None:
                 raise ValueError("correction needs its coarse_grid (ncx, ncy)")
             ncx, ncy, _, _ = _check_grid(self.coarse_grid, self.size)
             set_(self, "coarse_grid", (ncx, ncy))
-            nc = ncx * ncy
-            correction = np.ascontiguousarray(self.correction, dtype=float)
-            if correction.shape != (nc, nc):
-                raise ValueError(f"correction must have shape ({nc}, {nc}) for coarse grid "
-                                 f"{self.coarse_grid}, got {correction.shape}")
-            if not np.isfinite(correction).all():
-                raise ValueError("correction has non-finite entries")
-            correction = 0.5 * (correction + correction.T)
-            correction.setflags(write=False)
-            set_(self, "correction", correction)
+            prepared = self.correction
+            if not isinstance(prepared, CoarseCorrection) or prepared.coarse_grid != (ncx, ncy):
+                prepared = CoarseCorrection.of(self.correction, (ncx, ncy))
+            set_(self, "_correction", prepared)
+            set_(self, "correction", prepared.matrix)
             px = centre_interpolation(nx, ncx)
             py = centre_interpolation(ny, ncy)
             set_(self, "_px", px)
             set_(self, "_py", py)
-            set_(self, "_columns", None)
-            # the correction's product in the dtype of the pressure; the
-            # interpolations have two taps per row: sparse
-            self._coarse.update({t: (scipy.sparse.csr_array(px.astype(t)),
-                                     scipy.sparse.csr_array(py.astype(t)),
-                                     correction.astype(t, copy=False))
-                                 for t in DTYPES})
-            diagonal = diagonal + dx * dy * _interpolated_diagonal(correction, px, py)
+            # the interpolations have two taps per row: sparse, in both dtypes (the
+            # one back to the fine grid times the fine element area), and as taps
+            set_(self, "_interpolations", {t: (scipy.sparse.csr_array(px.astype(t)),
+                                               scipy.sparse.csr_array(py.astype(t)),
+                                               scipy.sparse.csr_array((px * dx * dy).astype(t)))
+                                           for t in DTYPES})
+            diagonal = diagonal + dx * dy * _interpolated_diagonal(prepared.matrix, px, py)
         if not np.all(diagonal > 0):
             raise ValueError("operator has a non-positive self-compliance: the correction "
                              "is inconsistent with the grid")
@@ -234,38 +236,50 @@ class BlockOperator(GridOperator):
         """Self-compliances ``E C_ii`` [m], shape (n,)."""
         return self._diagonal
 
-    @property
-    def column_budget(self) -> int:
-        """Changed elements summed by kernel columns rather than a product (0: hybrid)."""
-        return 24 if self.correction is None else 0
+    #: Changed elements summed by kernel columns rather than a product.
+    column_budget = COLUMN_BUDGET
 
     def _apply(self, fields: np.ndarray) -> np.ndarray:
         """``E C p`` [m * Pa / Pa = m] of pressure fields of shape (m, ny, nx), in their
         dtype (float32 or float64)."""
         u = self._love(fields)
         if self.correction is not None:
-            u = u + u.dtype.type(self.element_area) * self._correct(fields.astype(u.dtype))
+            u += self._prolong(self._correction.apply(self._restrict(fields)))
         return u
 
-    def _correct(self, fields: np.ndarray) -> np.ndarray:
-        """``W K W^T p`` [m/m^2 * ...] of fields (m, ny, nx): the interpolations by their
-        two taps per row (sparse), ``K`` only on the coarse elements the fields load
-        (a contact set loads few of them)."""
-        nx, ny = self.grid
+    def _restrict(self, fields: np.ndarray) -> np.ndarray:
+        """``W^T p``: fields (m, ny, nx) [Pa] on the coarse grid (m, ncy, ncx), in their
+        dtype, by the sparse interpolation matrices (two taps per row)."""
+        m, ny, nx = fields.shape
         ncx, ncy = self.coarse_grid
-        px, py, correction = self._coarse[fields.dtype]
-        m = fields.shape[0]
+        px, py, _ = self._interpolations[fields.dtype]
         rows = (fields.reshape(m * ny, nx) @ px).reshape(m, ny, ncx)  # p W_x
         coarse = (py.T @ rows.transpose(1, 0, 2).reshape(ny, m * ncx))  # W_y^T p W_x
-        coarse = coarse.reshape(ncy, m, ncx).transpose(1, 0, 2).reshape(m, ncx * ncy)
-        loaded = np.flatnonzero(coarse.any(axis=0))
-        if loaded.size < SPARSE_COARSE * coarse.shape[1]:
-            coarse = coarse[:, loaded] @ correction[loaded]  # K symmetric: rows = columns
-        else:
-            coarse = coarse @ correction
-        back = py @ coarse.reshape(m, ncy, ncx).transpose(1, 0, 2).reshape(ncy, m * ncx)
+        return coarse.reshape(ncy, m, ncx).transpose(1, 0, 2)
+
+    def _prolong(self, coarse: np.ndarray) -> np.ndarray:
+        """``A_f W c``: coarse fields (m, ncy, ncx) [m/m^2] back on the fine grid times the
+        fine element area (m, ny, nx) [m], in their dtype."""
+        nx, ny = self.grid
+        ncx, ncy = self.coarse_grid
+        m = coarse.shape[0]
+        _, py, px_area = self._interpolations[coarse.dtype]
+        back = py @ coarse.transpose(1, 0, 2).reshape(ncy, m * ncx)
         back = back.reshape(ny, m, ncx).transpose(1, 0, 2).reshape(m * ny, ncx)
-        return (back @ px.T).reshape(m, ny, nx)
+        return (back @ px_area.T).reshape(m, ny, nx)
+
+    def add_columns(self, target: np.ndarray, rows, cols, values) -> None:
+        """``target += E C e`` [m], ``e[rows, cols] = values`` [Pa]: Love's part by kernel
+        columns (float32), the correction by the coarse elements ``e`` loads."""
+        self._columns.add(target, rows, cols, values)
+        if self.correction is None:
+            return
+        values = np.asarray(values, dtype=float)
+        coarse = ((self._py[rows] * values[:, None]).T @ self._px[cols]).ravel()  # W_y^T e W_x
+        loaded = np.flatnonzero(coarse)  # at most 4 coarse elements per changed one
+        coarse = coarse[loaded] @ self.correction[loaded]  # K = K^T
+        ncx, ncy = self.coarse_grid
+        target += self._prolong(coarse.reshape(1, ncy, ncx))[0]
 
     def preconditioner(self):
         """The 13-tap stencil of Love's part, ``E* |q| / 2`` with ``E* = 1 / (1 - nu^2)``
@@ -279,7 +293,7 @@ class BlockOperator(GridOperator):
         nx, ny = self.grid
         if nx % 2 or ny % 2:
             raise ValueError(f"grid {self.grid} cannot be halved")
-        return dataclasses.replace(self, grid=(nx // 2, ny // 2))
+        return dataclasses.replace(self, grid=(nx // 2, ny // 2), correction=self._correction)
 
     def to_dense(self, max_elements: int = 6000) -> np.ndarray:
         """The (n, n) matrix, for small grids (checks and the exact solver)."""
@@ -294,8 +308,7 @@ class BlockOperator(GridOperator):
         if self._columns is not None:
             held += self._columns.nbytes()
         if self.correction is not None:
-            held += self.correction.nbytes + self._px.nbytes + self._py.nbytes
-            held += self._coarse[DTYPES[0]][2].nbytes
+            held += self._correction.nbytes() + self._px.nbytes + self._py.nbytes
         return int(held)
 
 

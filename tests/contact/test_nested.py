@@ -49,13 +49,14 @@ def test_nested_and_cold_solves_agree(build, control):
         value = pcg.constrained_pcg(op, gap, approach=0.5 * gap.mean(), tol=1e-6).pressure.mean()
 
     def solve_level(level, level_gap, level_tol, start):
-        return pcg.constrained_pcg(level, level_gap, tol=level_tol, pressure0=start,
-                                   **{control: value})
+        return pcg.solve_steps(level, level_gap, tol=level_tol, pressure0=start,
+                               **{control: value})
 
-    cold = solve_level(op, gap, 1e-10, None)
+    cold = pcg.run_solves([solve_level(op, gap, 1e-10, None)])[0]
     levels = nested.level_operators(op, coarsest=24)
     assert [level.grid for level in levels] == [(128, 96), (64, 48), (32, 24)]
-    warm, coarse_work = nested.nested_solve(solve_level, levels, gap, tol=1e-10)
+    warm, coarse_work = pcg.run_solves([nested.nested_solve(solve_level, levels, gap,
+                                                            tol=1e-10)])[0]
     assert coarse_work > 0.0 and cold.residual <= 1e-10 and warm.residual <= 1e-10
     assert 0.01 < np.mean(cold.pressure > 0) < 0.5
     np.testing.assert_array_equal(warm.pressure > 0, cold.pressure > 0)

@@ -14,10 +14,16 @@ import scipy.linalg
 import scipy.optimize
 
 from roughcontact import contact
-from roughcontact.contact import pcg
+from roughcontact.contact import pcg, stiffness
 from roughcontact.contact.nondim import dimensionless_operator
+from roughcontact.contact.products import Products
 from roughcontact.elasticity import operators
-from roughcontact.elasticity.halfspace import PeriodicHalfSpace, SpectralHalfSpace
+from roughcontact.elasticity.halfspace import (
+    PeriodicHalfSpace,
+    SpectralHalfSpace,
+    halfspace_influence,
+)
+from roughcontact.elasticity.protocol import DenseInfluence
 
 E, NU = 1.0e9, 0.3
 E_STAR = E / (1.0 - NU**2)
@@ -164,3 +170,87 @@ def test_preconditioned_tangent_stiffness_equals_the_dense_solve(name):
     dense = op.matvec(np.eye(op.shape[0]))[np.ix_(contact_set, contact_set)]
     expected = op.element_area * np.linalg.solve(dense, np.ones(contact_set.size)).sum()
     assert stiffness == pytest.approx(expected, rel=1e-9)
+
+
+def _dense_products(grid=(8, 8), precision="double"):
+    """The dense Love matrix (exactly symmetric, equal diagonal) and its products."""
+    matrix = halfspace_influence(grid, SIZE[:1] * 2, E, NU)
+    area = (SIZE[0] / grid[0]) ** 2
+    return matrix, Products.of(DenseInfluence(matrix, area, grid), precision)
+
+
+@pytest.mark.parametrize("precision", ["double", "mixed"])
+def test_degenerate_steps_in_a_batch_end_at_the_nnls_solution(precision, monkeypatch):
+    """A batch whose first surface starts on two equal summits with equal pressures (the
+    residual is constant on the free set: the preconditioned residual z vanishes and the
+    step only activates the penetrating elements), whose second starts from one element
+    (a one-element free set) and whose third is a plain warm start: every surface ends
+    converged at the NNLS solution."""
+    matrix, products = _dense_products(precision=precision)
+    gaps = np.stack([rough_gap((8, 8), seed=s) for s in (11, 12, 13)])
+    summits = [(2, 2), (5, 5)]  # the two highest points, exactly as high
+    for iy, ix in summits:
+        gaps[0, iy, ix] = 0.0
+    d = 0.5 * gaps.mean(axis=(1, 2))
+    start = np.zeros((3, 64))
+    start[0, [8 * iy + ix for iy, ix in summits]] = 1.0
+    start[1, int(np.argmin(gaps[1]))] = 1.0
+    start[2] = nnls_reference(matrix, gaps[2], 0.9 * d[2])  # the solution at a lower approach
+    vanished = []
+    descend = pcg._Iteration._descend
+
+    def recorded(self):
+        out = yield from descend(self)
+        vanished.append(out is None)
+        return out
+
+    monkeypatch.setattr(pcg._Iteration, "_descend", recorded)
+    batch = pcg.solve(products, gaps.reshape(3, -1), d, start, 1e-11, 1000)
+    assert any(vanished)  # the degenerate step was taken
+    assert batch.converged.all() and (batch.residual <= 1e-11).all()
+    for j in range(3):
+        reference = nnls_reference(matrix, gaps[j], d[j])
+        np.testing.assert_array_equal(batch.pressure[j] > 0, reference > 0)
+        assert np.abs(batch.pressure[j] - reference).max() <= 1e-7 * reference.max()
+        assert (reference > 0).sum() > 2  # contact spread beyond the starting elements
+
+
+def test_surfaces_solved_together_equal_surfaces_solved_alone():
+    """The batched products change nothing per surface: each keeps its iterations,
+    products, residual and contact set, and the pressures agree to rounding."""
+    op = operators.halfspace_operator((24, 20), SIZE, NU)
+    products = Products.of(op, "mixed")
+    gaps = np.stack([rough_gap((20, 24), seed=s).ravel() for s in (21, 22, 23, 24)])
+    d = np.array([0.2, 0.4, 0.6, 0.8]) * gaps.mean(axis=1)
+    start = np.zeros_like(gaps)
+    together = pcg.solve(products, gaps, d, start, 1e-10, 1000)
+    for j in range(4):
+        alone = pcg.solve(products, gaps[j:j + 1], d[j:j + 1], start[j:j + 1], 1e-10, 1000)
+        assert together.iterations[j] == alone.iterations[0]
+        assert together.matvecs[j] == alone.matvecs[0] and together.converged[j]
+        np.testing.assert_array_equal(together.pressure[j] > 0, alone.pressure[0] > 0)
+        assert np.abs(together.pressure[j] - alone.pressure[0]).max() <= \
+            1e-12 * alone.pressure[0].max()
+
+
+def test_free_set_cg_keeps_each_surface_s_own_test():
+    """The stiffness CG solves C_FF x = 1 on each surface's free set, the surfaces
+    together: each surface meets tol against the dense solve or, out of iterations,
+    reports that it did not; an empty free set has x = 0 and counts as met."""
+    op = operators.halfspace_operator((24, 20), SIZE, NU)
+    dense = op.to_dense()
+    rng = np.random.default_rng(7)
+    free = np.zeros((3, op.shape[0]), dtype=bool)
+    free[0, rng.choice(op.shape[0], 60, replace=False)] = True
+    free[1, 5] = True  # one element: x = 1 / C_ii in one step
+    products = Products.of(op, "mixed")
+    x, converged, count = stiffness.free_set_cg(products, free, np.zeros(free.shape), 1e-9,
+                                                1000)
+    assert converged.all() and count[2] == 0 and not x[2].any()
+    for j in range(2):
+        cells = np.flatnonzero(free[j])
+        expected = np.linalg.solve(dense[np.ix_(cells, cells)], np.ones(cells.size))
+        assert np.abs(x[j, cells] - expected).max() <= 1e-7 * np.abs(expected).max()
+        assert not x[j, ~free[j]].any()
+    x, converged, count = stiffness.free_set_cg(products, free, np.zeros(free.shape), 1e-9, 2)
+    assert list(converged) == [False, True, True] and count[0] <= 4
