@@ -370,7 +370,8 @@ def _hybrid_model(fe, geom, model, key: str) -> tuple:
 
 def _halfspace_model(fe, geom, model, key: str) -> tuple:
     unit = operators.halfspace_operator(geom.grid, geom.size, geom.nu)
-    return unit, _operator_checks(unit, geom, key), {} if fe is None else {"coarse_mesh": model.mesh}
+    extra = {} if fe is None else {"coarse_mesh": model.mesh}
+    return unit, _operator_checks(unit, geom, key), extra
 
 
 #: How each influence model is made from the finite-element model's E * C:
