@@ -206,17 +206,18 @@ def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels
 def _plausibility_check(row: dict, cell: dict, stored, levels: int) -> list[str]:
     """The cell's results at its pressure levels against physical plausibility
     (:func:`roughcontact.contact.plausibility.implausible`: p_max beyond a multiple of
-    E*, too few elements in contact), a flag per reason; ``max_pressure_over_E_star``
-    and ``contact_elements_at_P_max`` (at the highest level with values) in the row."""
+    E*, too few elements in contact), a flag per reason; in the row
+    ``max_pressure_over_contact_modulus`` (p_max / E*) and ``contact_elements_at_P_max``
+    (at the highest level with values)."""
     study_cell = StudyCell.from_params(cell)
     axis = pressure_axis(*study_cell.pressure_range, levels)
     _, frame = aggregate_sweep(stored, study_cell.sigma, study_cell.E, axis,
                                hardness=study_cell.hardness)
     (nx, ny), nu = study_cell.geometry.grid, study_cell.geometry.nu
     valued = frame[frame["real_area_fraction_count"] > 0]
-    row["max_pressure_over_E_star"] = (float(np.nanmax(frame["max_pressure_mean"]))
-                                       * (1.0 - nu * nu) / study_cell.E
-                                       if len(valued) else float("nan"))
+    row["max_pressure_over_contact_modulus"] = (
+        float(np.nanmax(frame["max_pressure_mean"])) * (1.0 - nu * nu) / study_cell.E
+        if len(valued) else float("nan"))
     row["contact_elements_at_P_max"] = (float(valued["real_area_fraction_mean"].iloc[-1])
                                         * nx * ny if len(valued) else float("nan"))
     return [f"implausible: {reason}"

@@ -40,7 +40,7 @@ import numpy as np
 from roughcontact.errors import MeasurementError
 from roughcontact.hashes import file_sha256
 from roughcontact.surfaces import johnson
-from roughcontact.surfaces.preparation import prepare, remove_polynomial
+from roughcontact.surfaces.preparation import decimate, prepare, remove_polynomial
 from roughcontact.surfaces.readers import HEIGHT_UNITS, read_heights, resolve_format, unit_scale
 from roughcontact.surfaces.spec import check_psd_table
 from roughcontact.surfaces.statistics import correlation_length, height_stats, spectral_moments
@@ -256,6 +256,10 @@ def statistics(measurement: Measurement, spectral: bool = False) -> dict:
     return stats
 
 
+#: Largest map :func:`finite_form_degree` searches point by point.
+FORM_SEARCH_POINTS = 1_000_000
+
+
 def finite_form_degree(measurement: Measurement) -> tuple[int, tuple[float, float]] | None:
     """The smallest ``form_degree`` above the measurement's (up to 6) whose heights
     have finite correlation lengths, with them (bx, by) [m]; None if none has.
@@ -263,11 +267,17 @@ def finite_form_degree(measurement: Measurement) -> tuple[int, tuple[float, floa
     The polynomial of that degree is removed from the prepared heights: the
     same heights as an import with that degree (least squares onto nested
     polynomial spaces), but for the points an outlier step removes and the
-    interpolation of a resampled grid.
+    interpolation of a resampled grid. Maps of more than
+    :data:`FORM_SEARCH_POINTS` points are searched on means of k x k blocks
+    (the least-squares fit of degree 6 holds 28 numbers per point).
     """
+    heights, spacing = measurement.heights, measurement.spacing
+    block = max(1, math.ceil(math.sqrt(heights.size / FORM_SEARCH_POINTS)))
+    if block > 1:
+        heights, spacing = decimate(heights, block), (spacing[0] * block, spacing[1] * block)
     for degree in range(int(measurement.options["form_degree"]) + 1, 7):
-        heights, _ = remove_polynomial(measurement.heights, measurement.spacing, degree)
-        lags = correlation_length(heights, measurement.spacing, periodic=False)
+        residual, _ = remove_polynomial(heights, spacing, degree)
+        lags = correlation_length(residual, spacing, periodic=False)
         if all(math.isfinite(b) for b in lags):
             return degree, (float(lags[0]), float(lags[1]))
     return None
