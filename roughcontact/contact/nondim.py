@@ -282,6 +282,20 @@ def dimensionless_operator(unit_influence, thickness: float):
     return scaled
 
 
+def _certified(unit_influence, element_area: float):
+    """``E C`` checked and certified positive definite once, in its own unit [m].
+
+    A dense matrix comes back as the checked
+    :class:`~roughcontact.elasticity.protocol.DenseInfluence` that keeps the
+    certificate, any other operator as given (the certificate kept on it):
+    :func:`dimensionless_operator` carries it to ``K``, so that no batch of
+    the sweep takes it again.
+    """
+    checked = as_operator(unit_influence, element_area)
+    definiteness.certify(checked, name="the unit-modulus influence operator E C", unit="m")
+    return checked if checked.matrix is not None else unit_influence
+
+
 def _check_steps(approaches, m: int) -> np.ndarray:
     steps = approach_steps(approaches, m, "units of sigma")
     if (np.diff(steps, axis=1) <= 0.0).any():
@@ -366,8 +380,8 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
     m, n = gaps.shape
     steps = _check_steps(approaches, m)
     batch_size = _check_batch_size(batch_size, m)
-    # checked once for every batch: a certificate of definiteness stays on it
-    operator = as_operator(dimensionless_operator(unit_influence, thickness), 1.0 / n)
+    operator = as_operator(dimensionless_operator(_certified(unit_influence, element_area),
+                                                  thickness), 1.0 / n)
     hardness = (None if nondim_hardness is None
                 else check_positive(nondim_hardness, "nondim_hardness (H L / (E sigma))"))
     method = resolve_method(method, operator, hardness)  # recorded as solved

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from roughcontact import contact
+from roughcontact.contact import nondim
 from roughcontact.contact.methods import METHODS, REGISTRY
 from roughcontact.contact.nondim import dimensionless_operator
 from roughcontact.contact.products import Products
@@ -241,3 +242,25 @@ def test_a_dense_influence_keeps_its_certificate_under_another_element_area():
     other = contact.checks.as_operator(dense, 2 * AREA)
     assert other.element_area == 2 * AREA and other.spd_certificate is first
     assert dataclasses.replace(dense, element_area=2 * AREA).spd_certificate is None
+
+
+def test_a_cell_sweep_refuses_an_indefinite_unit_influence_in_its_unit():
+    matrix, _ = indefinite_problem()  # E = 1: E C [m]
+    smallest = np.linalg.eigvalsh(matrix)[0]
+    heights = np.random.default_rng(3).standard_normal((2, 10, 10))
+    with pytest.raises(IndefiniteOperator, match="unit-modulus influence operator E C") as info:
+        nondim.solve_cell(matrix, heights, thickness=2e-3, element_area=AREA,
+                          approaches=[0.5, 1.0])
+    assert f"smallest about {smallest:.4g} m," in str(info.value)
+
+
+def test_a_periodic_operator_is_certified_by_its_spectrum_exactly():
+    periodic = SpectralHalfSpace((8, 8), SIZE, 1.0, 0.3)
+    spectrum = periodic.spectrum.copy()
+    assert definiteness.certify(periodic).smallest == pytest.approx(spectrum.ravel()[1:].min())
+    broken = SpectralHalfSpace((8, 8), SIZE, 1.0, 0.3)
+    spectrum[2, 3] = -0.5 * spectrum.max()  # one negative eigenvalue
+    object.__setattr__(broken, "spectrum", spectrum)
+    with pytest.raises(IndefiniteOperator, match="its spectrum") as info:
+        definiteness.certify(broken)
+    assert info.value.smallest == spectrum[2, 3]
