@@ -24,7 +24,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as sp_fft
+from scipy import signal
 
 from roughcontact.surfaces.spec import Q_RTOL, SurfaceSpec, mm_text
 from roughcontact.surfaces.statistics import SpectralMoments
@@ -365,12 +365,8 @@ def apply_filter(spec: SurfaceSpec, kern: FilterKernel, x: np.ndarray) -> np.nda
         nx = x.shape[-1]
         half = kern.transfer[:, : nx // 2 + 1]
         return np.fft.irfft2(np.fft.rfft2(x) * half, s=x.shape[-2:])
-    # the 'valid' part of the linear convolution equals the circular convolution
-    # on the noise's own (fast) length: no index of it wraps around
-    ky, kx = kern.weights.shape
-    shape = tuple(sp_fft.next_fast_len(n, real=True) for n in x.shape[-2:])
-    spectrum = sp_fft.rfft2(np.fft.fftshift(kern.weights), s=shape)
-    full = sp_fft.irfft2(sp_fft.rfft2(x, s=shape) * spectrum, s=shape)
-    return np.ascontiguousarray(full[..., ky - 1 : x.shape[-2], kx - 1 : x.shape[-1]])
+    centred = np.fft.fftshift(kern.weights)
+    centred = centred.reshape((1,) * (x.ndim - 2) + centred.shape)
+    return signal.fftconvolve(x, centred, mode="valid", axes=(-2, -1))
 
 
