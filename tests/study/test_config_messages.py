@@ -3,6 +3,7 @@ and what is expected (not the schema's own text), and no refusal of a valid conf
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 from roughcontact.study.cells import study_plan
 from roughcontact.study.config import ConfigError, schema_errors, validated
@@ -26,10 +27,14 @@ def measured_sweep(surface):
 
 def test_an_npy_map_with_its_spacing_and_no_format_is_accepted(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    heights = np.random.default_rng(4).standard_normal((12, 16)) * 1e-6
+    # a correlated map (white noise is refused as no height map at all)
+    noise = np.random.default_rng(4).standard_normal((12, 16))
+    heights = ndimage.gaussian_filter(noise, 3.0, mode="wrap") * 1e-6
     np.save(tmp_path / "map.npy", heights)
     surface = {"file": "map.npy", "spacing_mm": [0.01, 0.02], "height_unit": "m"}
-    config = validated(measured_sweep(surface))  # format defaults to auto: not xyz
+    config = measured_sweep(surface)
+    config["sweeps"]["rough"]["thickness_mm"] = "patch"  # a block that fits the 0.16 mm patch
+    config = validated(config)  # format defaults to auto: not xyz
     assert config["sweeps"]["rough"]["surface"]["format"] == "auto"
     plan = study_plan(config)
     (cell,) = (c for c in plan.surfaces.values() if isinstance(c, MeasuredCell))

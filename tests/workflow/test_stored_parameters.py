@@ -71,7 +71,8 @@ def test_the_audit_and_the_reverification_refuse_a_copy_that_keeps_the_mtime(swa
     flags = audit["flags"].fillna("")
     assert flags[on_refined].str.contains(
         f'{refined.name}: made for other parameters.*mesh = "paper" in the file').all()
-    assert (flags[~on_refined] == "").all()  # the paper cells are sound
+    # the paper cells are sound (this tiny study's plausibility flags aside)
+    assert not flags[~on_refined].str.contains("made for other parameters").any()
     # the cells solved on the swapped name get no mesh error of the refined mesh
     assert audit.loc[on_refined, "mesh_diagonal_error"].isna().all()
     proc = run(workdir, "audit_verify", "--forcerun", "audit_verify")
@@ -87,4 +88,4 @@ def test_the_audit_and_the_reverification_refuse_a_copy_that_keeps_the_mtime(swa
     verify = pd.read_csv(workdir / "results" / "audit" / "verify.csv")
     assert verify["ok"].all()
     audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv", dtype={"flags": str})
-    assert (audit["flags"].fillna("") == "").all()
+    assert not audit["flags"].fillna("").str.contains("made for other parameters").any()
