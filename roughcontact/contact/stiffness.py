@@ -88,11 +88,15 @@ def _solve_steps(operator, stencil, cells, x, tol: float, max_iter: int, dtype):
     x = np.array(x, dtype=float)
     limit = tol * tol * rows.size
     count = iteration = 0
+    start = not x.any()  # from zero the residual is 1, exactly, without a product
     while rows.size:
         # Exact residual, then CG until its recursive estimate meets tol.
-        product = yield ProductRequest(operator, rows, cols, x, np.float64)
-        count += 1
-        residual = 1.0 - product[rows, cols]
+        if start:
+            residual, start = np.ones(rows.size), False
+        else:
+            product = yield ProductRequest(operator, rows, cols, x, np.float64)
+            count += 1
+            residual = 1.0 - product[rows, cols]
         rr = residual @ residual
         if rr <= limit:
             return x, True, count
