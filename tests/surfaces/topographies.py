@@ -9,9 +9,8 @@ from pathlib import Path
 
 import pytest
 
-DATA = Path(os.environ.get("ROUGHCONTACT_TOPOGRAPHIES",
-                           Path(__file__).resolve().parents[3] / "shared" / "data"
-                           / "topographies"))
+DATA = Path(os.environ.get("ROUGHCONTACT_TOPOGRAPHIES")  # unset or empty: beside the checkout
+            or Path(__file__).resolve().parents[3] / "shared" / "data" / "topographies")
 needs_data = pytest.mark.skipif(
     not DATA.is_dir(), reason=f"shared instrument files not found at {DATA}"
 )
