@@ -30,7 +30,7 @@ from roughcontact.contact import halfspace_criterion
 from roughcontact.elasticity import definiteness, influence, operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence
-from roughcontact.errors import MeasurementError
+from roughcontact.errors import FactorizationError, MeasurementError
 from roughcontact.study import sources
 from roughcontact.study.checks import memory_message
 from roughcontact.study.config import BuildSettings, ContactSettings, in_unit
@@ -419,7 +419,13 @@ def _finite_element_matrix(geometry: Geometry, build: BuildSettings, model) -> t
         "%.2f GB (limit %.1f GB)", geometry.key, geometry.operator.value, model.mesh,
         model.grid, cost.dofs, cost.peak_bytes / GB, in_unit(build.max_bytes, GB),
     )
-    fe = influence.unit_modulus_influence(model, solver=build.solver, max_bytes=build.max_bytes)
+    try:
+        fe = influence.unit_modulus_influence(model, solver=build.solver,
+                                              max_bytes=build.max_bytes)
+    except FactorizationError as err:  # name the geometry and its mesh
+        raise FactorizationError(f"geometry {geometry.key} (body.mesh {model.mesh}, grid "
+                                 f"{model.grid[0]} x {model.grid[1]}): {err}", err.solver,
+                                 err.code) from err
     if not np.isfinite(fe).all():
         raise FloatingPointError(f"geometry {geometry.key}: the influence matrix has "
                                  "non-finite entries")
