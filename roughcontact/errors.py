@@ -38,6 +38,21 @@ class StoredFileError(RuntimeError):
         self.path = None if path is None else str(path)
 
 
+class FactorizationError(RuntimeError):
+    """The sparse factorization of a finite-element model failed (or had to perturb
+    pivots, so its stiffness matrix is not definite).
+
+    The message names the solver, its error code and what the code means, and
+    what to change; ``solver`` and ``code`` are kept as attributes. The study's
+    influence build adds the geometry and the config keys.
+    """
+
+    def __init__(self, message: str, solver: str | None = None, code: int | None = None):
+        super().__init__(message)
+        self.solver = solver
+        self.code = code
+
+
 class IndefiniteOperator(ValueError):
     """An influence operator is not positive definite (Eq 39), so Eq 27 is not a
     convex problem and a converged solve proves nothing.

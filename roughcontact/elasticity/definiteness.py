@@ -83,6 +83,7 @@ __all__ = [
     "certificate_of",
     "certify",
     "check_symmetric",
+    "from_eigenvalues",
 ]
 
 #: Largest dense matrix (elements) certified by its Cholesky factorization;
@@ -229,6 +230,20 @@ def _measure(operator, name: str, unit: str, advice: str | None) -> Certificate:
             _refuse(name, found.smallest, found.largest, unit, "its spectrum", advice)
         return found
     return _lanczos_certificate(_products(operator, matrix, name), name, unit, advice)
+
+
+def from_eigenvalues(matrix: np.ndarray, values: np.ndarray, *,
+                     name: str = "the influence operator", unit: str = "m/Pa",
+                     advice: str | None = None) -> Certificate:
+    """The certificate of a dense matrix whose eigenvalues are already known (ascending,
+    from ``eigvalsh``): symmetry checked as by :func:`certify`, then ``"spectrum"``,
+    or refused as :func:`certify` refuses. Spares the Cholesky factorization of a
+    caller that computed the spectrum anyway."""
+    check_symmetric(matrix, name)
+    found = Certificate("spectrum", float(values[0]), float(values[-1]))
+    if not found.smallest > DEFINITE_RTOL * found.largest:
+        _refuse(name, found.smallest, found.largest, unit, "its spectrum", advice)
+    return found
 
 
 def check_symmetric(matrix: np.ndarray, name: str = "the influence operator") -> None:

@@ -20,6 +20,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from roughcontact.errors import FactorizationError
+
 
 def pardiso_available() -> bool:
     """True when MKL PARDISO loads (PyPI package ``mkl``, a dependency of ``pypardiso``)."""
@@ -127,15 +129,45 @@ def _pardiso_schur(
     try:
         call(12)
         if error.value != 0:
-            raise RuntimeError(f"PARDISO factorization failed with error {error.value}")
+            raise _pardiso_error(int(error.value))
         if iparm[13] != 0:
-            raise RuntimeError(f"PARDISO perturbed {iparm[13]} pivots: stiffness not definite")
+            raise FactorizationError(
+                f"PARDISO perturbed {iparm[13]} pivots of the stiffness matrix: it is not "
+                f"definite, so the finite-element model does not resolve the body. "
+                f"{SINGULAR_ADVICE}", "pardiso", 0)
         if stats is not None:
             stats.update(factor_nonzeros=int(iparm[17]), gflop=float(iparm[18]) / 1e3,
                          peak_kb=int(max(iparm[14], iparm[15] + iparm[16])))
     finally:
         call(-1)
     return np.negative(schur, out=schur)
+
+
+#: What MKL PARDISO's error codes mean (its reference manual).
+PARDISO_ERRORS = MappingProxyType({
+    -1: "input inconsistent", -2: "not enough memory", -3: "reordering problem",
+    -4: "zero pivot (numerical factorization)", -5: "unclassified internal error",
+    -6: "reordering failed", -7: "diagonal matrix is singular",
+    -8: "32-bit integer overflow", -9: "not enough memory for out-of-core",
+    -10: "cannot open out-of-core files", -11: "out-of-core read/write error",
+})
+#: What to change when the stiffness matrix is singular or not definite.
+SINGULAR_ADVICE = ("A mesh that does not resolve the block gives such a matrix: set body.mesh "
+                   "to refined or converged, or make the block thinner next to the patch "
+                   "(thickness_mm).")
+#: What to change when the factorization runs out of memory or integers.
+MEMORY_ADVICE = ("Lower the finite-element model's size (a coarser contact grid, or "
+                 "body.mesh: refined rather than converged), or set body.solver: superlu "
+                 "(slower, a different memory profile).")
+
+
+def _pardiso_error(code: int) -> FactorizationError:
+    """The error of a failed PARDISO factorization: the code, its meaning, the advice."""
+    meaning = PARDISO_ERRORS.get(code, "unknown error")
+    advice = SINGULAR_ADVICE if code in (-4, -7) else MEMORY_ADVICE if code in (-2, -8, -9) \
+        else "Try body.solver: superlu, which factorizes the same model another way."
+    return FactorizationError(f"PARDISO factorization failed with error {code} ({meaning}). "
+                              f"{advice}", "pardiso", code)
 
 
 def full_from_upper(upper: sp.csr_array) -> sp.csc_array:
@@ -166,7 +198,11 @@ def _superlu_schur(stiffness_upper: sp.csr_array, coupling: sp.csr_array) -> np.
     """
     full = full_from_upper(stiffness_upper)
     options = {"SymmetricMode": True}
-    first = splu(full, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=options)
+    try:
+        first = splu(full, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=options)
+    except RuntimeError as err:  # "Factor is exactly singular"
+        raise FactorizationError(f"SuperLU factorization failed ({err}). {SINGULAR_ADVICE}",
+                                 "superlu") from err
     position = first.perm_c.copy()
     del first
     n, nb = full.shape[0], coupling.shape[1]
@@ -174,7 +210,11 @@ def _superlu_schur(stiffness_upper: sp.csr_array, coupling: sp.csr_array) -> np.
     bordered = sp.bmat([[full, coupling], [coupling.T, None]], format="csr")
     del full
     bordered = bordered[order][:, order].tocsc()
-    lu = splu(bordered, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=options)
+    try:
+        lu = splu(bordered, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=options)
+    except RuntimeError as err:
+        raise FactorizationError(f"SuperLU factorization failed ({err}). {SINGULAR_ADVICE}",
+                                 "superlu") from err
     del bordered
     tail = np.arange(n, n + nb)
     if not (np.array_equal(lu.perm_c[n:], tail) and np.array_equal(lu.perm_r[n:], tail)):

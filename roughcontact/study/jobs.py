@@ -30,7 +30,7 @@ from roughcontact.contact import halfspace_criterion
 from roughcontact.elasticity import definiteness, influence, operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence
-from roughcontact.errors import MeasurementError
+from roughcontact.errors import FactorizationError, MeasurementError
 from roughcontact.study import sources
 from roughcontact.study.checks import memory_message
 from roughcontact.study.config import BuildSettings, ContactSettings, in_unit
@@ -328,11 +328,17 @@ def certified_influence(unit, path, geometry: Geometry):
     return unit
 
 
+#: Dense models up to this many elements get their whole spectrum at the build (the
+#: smallest eigenvalue is stored; the same spectrum certifies them).
+SPECTRUM_MAX_ELEMENTS = 4000
+
+
 def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
     n = unit.shape[0]
     nx, ny = geom.grid
     diag = np.diag(unit)
-    eigmin = float(np.linalg.eigvalsh(unit)[0]) if n <= 4000 else float("nan")
+    values = np.linalg.eigvalsh(unit) if n <= SPECTRUM_MAX_ELEMENTS else None
+    eigmin = float(values[0]) if values is not None else float("nan")
     rows = unit.sum(axis=1)
     checks = {
         "asymmetry": float(np.abs(unit - unit.T).max() / np.abs(unit).max()),
@@ -341,7 +347,12 @@ def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
         "row_sum_max_m": float(rows.max()),
         "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
     }
-    checks["positive_definite"] = _certify_built(unit, key).method
+    if values is None:
+        checks["positive_definite"] = _certify_built(unit, key).method
+    else:
+        checks["positive_definite"] = definiteness.from_eigenvalues(
+            unit, values, unit="m", advice=BUILD_ADVICE,
+            name=f"the influence model E * C of geometry {key}").method
     return checks
 
 
@@ -408,7 +419,13 @@ def _finite_element_matrix(geometry: Geometry, build: BuildSettings, model) -> t
         "%.2f GB (limit %.1f GB)", geometry.key, geometry.operator.value, model.mesh,
         model.grid, cost.dofs, cost.peak_bytes / GB, in_unit(build.max_bytes, GB),
     )
-    fe = influence.unit_modulus_influence(model, solver=build.solver, max_bytes=build.max_bytes)
+    try:
+        fe = influence.unit_modulus_influence(model, solver=build.solver,
+                                              max_bytes=build.max_bytes)
+    except FactorizationError as err:  # name the geometry and its mesh
+        raise FactorizationError(f"geometry {geometry.key} (body.mesh {model.mesh}, grid "
+                                 f"{model.grid[0]} x {model.grid[1]}): {err}", err.solver,
+                                 err.code) from err
     if not np.isfinite(fe).all():
         raise FloatingPointError(f"geometry {geometry.key}: the influence matrix has "
                                  "non-finite entries")

@@ -264,3 +264,23 @@ def test_a_periodic_operator_is_certified_by_its_spectrum_exactly():
     with pytest.raises(IndefiniteOperator, match="its spectrum") as info:
         definiteness.certify(broken)
     assert info.value.smallest == spectrum[2, 3]
+
+
+def test_a_known_spectrum_certifies_as_cholesky_does_and_refuses_alike():
+    """from_eigenvalues (the build's spectrum, no second factorization): a definite
+    matrix passes with numpy's extreme eigenvalues; the indefinite one and an
+    asymmetric one are refused as certify refuses them."""
+    matrix = halfspace_influence((10, 10), SIZE, 1.0, 0.0)
+    values = np.linalg.eigvalsh(matrix)
+    found = definiteness.from_eigenvalues(matrix, values)
+    assert found.method == "spectrum" and found.smallest == values[0] > 0
+    assert definiteness.certify(matrix).method == "cholesky"
+    bad, _ = indefinite_problem()
+    bad_values = np.linalg.eigvalsh(bad)
+    with pytest.raises(IndefiniteOperator, match="its spectrum") as info:
+        definiteness.from_eigenvalues(bad, bad_values, name="model X")
+    assert "model X" in str(info.value) and info.value.smallest == bad_values[0] < 0
+    lopsided = matrix.copy()
+    lopsided[3, 40] *= 1.01
+    with pytest.raises(ValueError, match="operator must be symmetric"):
+        definiteness.from_eigenvalues(lopsided, values)

@@ -347,3 +347,39 @@ def test_hybrid_checks_the_coarsening():
     geom = small_block(grid=(6, 6), mesh="paper")
     with pytest.raises(ValueError, match="coarsening"):
         hybrid_unit_modulus_influence(geom, coarsening=4)
+
+
+@pytest.mark.parametrize("solver", ["superlu", "pardiso"])
+def test_a_singular_stiffness_matrix_is_refused_with_its_cause_and_advice(solver):
+    """A stiffness matrix with a free rigid mode (a chain of springs held nowhere) is
+    singular: both solvers raise FactorizationError naming the solver and the mesh
+    advice, not a bare RuntimeError."""
+    from roughcontact.errors import FactorizationError
+
+    if solver == "pardiso" and not sparse_solve.pardiso_available():
+        pytest.skip("MKL PARDISO does not load here")
+    n = 12  # springs between consecutive dofs, none to ground: K 1 = 0
+    main = np.full(n, 2.0)
+    main[[0, -1]] = 1.0
+    stiffness = sp.diags([main, -np.ones(n - 1), -np.ones(n - 1)], [0, 1, -1], format="csr")
+    upper = sp.csr_array(sp.triu(stiffness))
+    load = sp.csr_array(np.eye(n)[:2])
+    with pytest.raises(FactorizationError) as info:
+        sparse_solve.condensed_flexibility(upper, load, solver=solver)
+    assert info.value.solver == solver
+    assert "body.mesh" in str(info.value) or "body.solver" in str(info.value)
+    # the same chain held at one end factorizes
+    main[0] = 2.0
+    held = sp.diags([main, -np.ones(n - 1), -np.ones(n - 1)], [0, 1, -1], format="csr")
+    flexibility = sparse_solve.condensed_flexibility(sp.csr_array(sp.triu(held)), load,
+                                                     solver=solver)
+    assert np.allclose(flexibility, np.linalg.inv(held.toarray())[:2, :2])
+
+
+def test_pardiso_error_codes_are_named_with_advice_that_fits():
+    memory = sparse_solve._pardiso_error(-2)
+    assert memory.code == -2 and "not enough memory" in str(memory)
+    assert "body.solver: superlu" in str(memory)
+    singular = sparse_solve._pardiso_error(-4)
+    assert "zero pivot" in str(singular) and "body.mesh" in str(singular)
+    assert "unknown error" in str(sparse_solve._pardiso_error(-99))

@@ -97,4 +97,25 @@ def test_a_build_that_is_not_positive_definite_is_refused_and_its_advice_works(
     refined = body_geometry({**config, "body": {**config["body"], "mesh": "refined"}})
     assert refined.mesh == "refined"
     attrs = _build(config, refined, path)
-    assert attrs["check_positive_definite"] == "cholesky"
+    assert attrs["check_positive_definite"] == "spectrum"  # from the stored eigmin's spectrum
+
+
+def test_a_failed_factorization_names_the_geometry_and_its_mesh(small_study, tmp_path,
+                                                                 monkeypatch):
+    from roughcontact.elasticity import sparse_solve
+    from roughcontact.errors import FactorizationError
+
+    config, _ = small_study
+
+    def failing(model, **options):
+        raise sparse_solve._pardiso_error(-2)
+
+    monkeypatch.setattr(jobs.influence, "unit_modulus_influence", failing)
+    geometry = body_geometry(config)
+    path = tmp_path / "g.h5"
+    with pytest.raises(FactorizationError) as info:
+        _build(config, geometry, path)
+    message = str(info.value)
+    assert message.startswith(f"geometry {geometry.key} (body.mesh paper")
+    assert "not enough memory" in message and info.value.code == -2
+    assert not path.exists()
