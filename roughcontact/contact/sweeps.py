@@ -48,13 +48,15 @@ def predict(pressure, approach, last_approach, rate, hardness=None) -> np.ndarra
 
 def _tangent(products: Products, pressure, tangent, options: SweepOptions, step: int,
              table: SweepTable):
-    """The tangent ``(C_FF)^-1 1`` [Pa/m] of every surface at ``step`` (warm-started from
-    the last one), recorded as ``dF/dd``."""
-    tangent, ok, _ = free_set_cg(products, free_set(pressure, options.hardness), tangent,
-                                 options.stiffness_tol,
-                                 cg.default_max_iter(products.operator.shape[0]))
-    table.record_stiffness(slice(None), step,
-                           products.operator.element_area * tangent.sum(axis=1), ok)
+    """The tangent ``(C_FF)^-1 1`` [Pa/m] of every surface at ``step``, recorded as
+    ``dF/dd``. Solved from zero: a warm start from the last step's tangent costs its
+    residual's product and loses the CG's Galerkin property, and took more products."""
+    solution = free_set_cg(products, free_set(pressure, options.hardness),
+                           np.zeros_like(tangent), options.stiffness_tol,
+                           cg.default_max_iter(products.operator.shape[0]))
+    tangent, ok = solution.x, solution.converged
+    table.record_stiffness(slice(None), step, products.operator.element_area * solution.total,
+                           ok)
     if not ok.all():
         logger.warning(
             "tangent stiffness: free-set CG did not reach tol %.3g for %d surfaces "
@@ -150,12 +152,11 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
     ``(C_AA)^-1 1`` of the stiffness solve when ``stiffness`` is on, else the
     secant of the last two steps. On an unchanged contact set the solution is
     linear in ``d`` (Eq 27), so the prediction is then exact up to the
-    stiffness tolerance and the contact solve only corrects the elements
+    stiffness CG's error and the contact solve only corrects the elements
     that enter or leave contact. With ``stiffness`` the tangent stiffness
     ``dF/dd = dA 1^T (C_AA)^-1 1`` (see
     :func:`~roughcontact.contact.tangent_stiffness`) is found at every step
-    by CG on the contact set, warm-started from the previous step's
-    ``(C_AA)^-1 1``.
+    by CG on the contact set, started from zero.
 
     Parameters
     ----------
@@ -181,8 +182,8 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
     stiffness : bool
         Compute ``contact_stiffness`` (otherwise NaN).
     stiffness_tol : float
-        Relative residual of the free-set CG for the stiffness; the
-        relative error of ``dF/dd`` is of the same order or smaller.
+        Estimated relative error of ``dF/dd`` at which the free-set CG of the
+        stiffness stops (:mod:`roughcontact.contact.stiffness`).
     extrapolate : bool
         Start each step from the extrapolated pressure (above) instead of the
         previous solution. Only the starting point changes: every solution
