@@ -30,7 +30,12 @@ import numpy as np
 from roughcontact.errors import InfeasibleMoments
 from roughcontact.surfaces import johnson
 from roughcontact.surfaces.spec import SurfaceSpec, mm_text
-from roughcontact.surfaces.spectra import apply_filter, filter_kernel, noise_shape
+from roughcontact.surfaces.spectra import (
+    CircularValidFilter,
+    apply_filter,
+    filter_kernel,
+    noise_shape,
+)
 from roughcontact.surfaces.statistics import height_stats
 
 log = logging.getLogger(__name__)
@@ -215,6 +220,9 @@ class _SampleMoments:
         self.kernel = filter_kernel(self.spec)
         self.noise_shape = noise_shape(self.spec, self.kernel.weights)
         self.batch = max(1, CALIBRATION_BATCH_POINTS // math.prod(self.noise_shape))
+        # padded noise: the circular form of the filter (equal to rounding, 3-5x faster)
+        self.filter = functools.partial(apply_filter, self.spec, self.kernel) \
+            if self.spec.periodic else CircularValidFilter(self.kernel, self.noise_shape)
         self.s3, self.s4 = moment_transfer(self.spec)
         self._cache = None
 
@@ -238,8 +246,7 @@ class _SampleMoments:
             for k in range(have, batches):
                 eta = np.random.default_rng([self.seed, k]).standard_normal(
                     (self.batch, *self.noise_shape))
-                z = apply_filter(self.spec, self.kernel,
-                                  (curve.transform(eta) - mean_x) / std_x)
+                z = self.filter((curve.transform(eta) - mean_x) / std_x)
                 axes = (-2, -1)
                 z2 = z * z
                 raw = np.stack([(z2 * z).mean(axis=axes), (z2 * z2).mean(axis=axes),

@@ -60,8 +60,11 @@ def estimate_generation_bytes(spec: SurfaceSpec, count: int = 1, method: str = "
       product and the output ``32 F`` when padded).
 
     ``method="filter"`` first calibrates (:func:`calibration.calibrate_filter`)
-    on batches of about 2^19 noise points ``B``: ``16 K + 60 B`` (periodic) or
-    ``16 K + 90 B`` (padded), if larger than the generation's peak.
+    on batches of about 2^19 noise points ``B``: ``16 K + 60 B`` (periodic) or,
+    padded, ``16 K + 45 L`` with ``L`` the batch's points on the fast FFT grid
+    of its noise (:class:`spectra.CircularValidFilter`; 2-8 % above the traced
+    peak on four grids of 60 x 60 to 128 x 128), if larger than the
+    generation's peak.
 
     ``method="exact"`` (:func:`exact.generate_exact`, periodic): ``120 N`` (the
     filter's 65 N, the moment correction of the height set and the
@@ -111,8 +114,13 @@ def _filter_bytes(spec: SurfaceSpec, count: int, calibrated: bool = False) -> in
     per_surface = 8 * count * points + 16 * kernel + max(32 * noise, 8 * noise + convolution)
     peak = max(81 * kernel, per_surface)
     if calibrated:  # the calibration runs first, on batches of surfaces
-        batch = max(1, CALIBRATION_BATCH_POINTS // noise) * noise
-        peak = max(peak, 16 * kernel + (60 if spec.periodic else 90) * batch)
+        fields = max(1, CALIBRATION_BATCH_POINTS // noise)
+        if spec.periodic:
+            peak = max(peak, 16 * kernel + 60 * fields * noise)
+        else:  # the circular filter on the noise's fast grid (spectra.CircularValidFilter)
+            fast = (fft.next_fast_len(ny + ky - 1, True)
+                    * fft.next_fast_len(nx + kx - 1, True))
+            peak = max(peak, 16 * kernel + 45 * fields * fast)
     return peak
 
 

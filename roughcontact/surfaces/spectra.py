@@ -24,7 +24,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
+from scipy import fft, signal
 
 from roughcontact.surfaces.spec import Q_RTOL, SurfaceSpec, mm_text
 from roughcontact.surfaces.statistics import SpectralMoments
@@ -353,6 +353,38 @@ def noise_shape(spec: SurfaceSpec, kernel: np.ndarray) -> tuple[int, int]:
         return (ny, nx)
     ky, kx = kernel.shape
     return (ny + ky - 1, nx + kx - 1)
+
+
+class CircularValidFilter:
+    """The padded branch of :func:`apply_filter` for noise of one shape, by circular FFTs.
+
+    ``fftconvolve(x, centred, mode="valid")`` on noise of shape ``M = N + K - 1``
+    equals the circular convolution, on any grid ``L >= M``, of ``x`` (zero
+    beyond ``M``) with the centred kernel placed at ``[0, K)``, cropped to
+    ``[K - 1, M)``: those outputs do not wrap. With ``L`` the next fast length
+    of ``M`` and the kernel's spectrum computed once, a batch costs one
+    forward and one inverse real FFT of ``L`` points, where ``fftconvolve``
+    transforms the kernel again and pads to a fast length of ``M + K - 1``
+    (equal to 1e-15). The calibration draws through it
+    (:mod:`roughcontact.surfaces.calibration`); generation keeps
+    :func:`apply_filter`.
+    """
+
+    def __init__(self, kern: FilterKernel, shape):
+        my, mx = (int(v) for v in shape)
+        centred = np.fft.fftshift(kern.weights)
+        ky, kx = centred.shape
+        self.grid = (fft.next_fast_len(my, True), fft.next_fast_len(mx, True))
+        self.rows = slice(ky - 1, my)
+        self.cols = slice(kx - 1, mx)
+        self.spectrum = fft.rfft2(centred, s=self.grid)
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        """``h * x`` (valid part, a view) of noise fields ``x`` (..., my, mx)."""
+        spectrum = fft.rfft2(x, s=self.grid)
+        spectrum *= self.spectrum
+        y = fft.irfft2(spectrum, s=self.grid, overwrite_x=True)
+        return y[..., self.rows, self.cols]
 
 
 def apply_filter(spec: SurfaceSpec, kern: FilterKernel, x: np.ndarray) -> np.ndarray:

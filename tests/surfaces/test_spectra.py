@@ -168,3 +168,24 @@ def test_default_calibration_makes_a_self_affine_surface_without_rolloff_non_gau
     rolloff = calibrate_filter(self_affine(rolloff_wavelength=SIZE / 4, **base), rse=1e-2)
     assert rolloff.kurt == pytest.approx(3.0, abs=0.1)
     assert rolloff.paper_kurt > 2.9
+
+
+@pytest.mark.parametrize("grid", [(60, 60), (64, 48), (37, 53)])
+def test_the_circular_valid_filter_equals_fftconvolve(grid):
+    """The calibration's padded filter (circular FFTs on the noise's fast grid, cropped)
+    equals scipy's fftconvolve 'valid' of the same noise and centred kernel, for
+    square, rectangular and prime-sized noise."""
+    from scipy import signal
+
+    from roughcontact.surfaces.spectra import CircularValidFilter, filter_kernel, noise_shape
+
+    spec = SurfaceSpec(grid=grid, size=(grid[0] * 1e-5, grid[1] * 1e-5), corr_length=1e-4,
+                       periodic=False)
+    kern = filter_kernel(spec)
+    shape = noise_shape(spec, kern.weights)
+    noise = np.random.default_rng(3).standard_normal((4, *shape))
+    expected = signal.fftconvolve(noise, np.fft.fftshift(kern.weights)[None], mode="valid",
+                                  axes=(-2, -1))
+    found = CircularValidFilter(kern, shape)(noise)
+    assert found.shape == expected.shape == (4, grid[1], grid[0])
+    assert np.abs(found - expected).max() <= 1e-13 * np.abs(expected).max()
