@@ -172,7 +172,7 @@ def test_preconditioned_tangent_stiffness_equals_the_dense_solve(name):
     assert stiffness == pytest.approx(expected, rel=1e-9)
 
 
-@pytest.mark.parametrize("name", ["halfspace", "hybrid", "dense"])
+@pytest.mark.parametrize("name", ["halfspace", "hybrid", "periodic", "spectral", "dense"])
 @pytest.mark.parametrize("tol", [1e-3, 1e-5, 1e-7])
 def test_stiffness_tol_bounds_the_stiffness_error(name, tol):
     """stiffness_tol is the relative error of dF/dd: at each tol the tangent stiffness
