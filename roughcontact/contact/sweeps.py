@@ -46,15 +46,15 @@ def predict(pressure, approach, last_approach, rate, hardness=None) -> np.ndarra
     return np.maximum(predicted, 0.0, out=predicted)
 
 
-def _tangent(products: Products, pressure, tangent, options: SweepOptions, step: int,
+def _tangent(products: Products, pressure, options: SweepOptions, step: int,
              table: SweepTable):
     """The tangent ``(C_FF)^-1 1`` [Pa/m] of every surface at ``step``, recorded as
     ``dF/dd``. Solved from zero: a warm start from the last step's tangent costs its
     residual's product and loses the CG's Galerkin property, and took more products."""
     solution = free_set_cg(products, free_set(pressure, options.hardness),
-                           np.zeros_like(tangent), options.stiffness_tol,
+                           np.zeros_like(pressure), options.stiffness_tol,
                            cg.default_max_iter(products.operator.shape[0]))
-    tangent, ok = solution.x, solution.converged
+    ok = solution.converged
     table.record_stiffness(slice(None), step, products.operator.element_area * solution.total,
                            ok)
     if not ok.all():
@@ -62,7 +62,7 @@ def _tangent(products: Products, pressure, tangent, options: SweepOptions, step:
             "tangent stiffness: free-set CG did not reach tol %.3g for %d surfaces "
             "at step %d", options.stiffness_tol, int((~ok).sum()), step,
         )
-    return tangent
+    return solution.x
 
 
 def approach_loop(method: Method, products: Products, gaps, steps, options: SweepOptions,
@@ -75,7 +75,6 @@ def approach_loop(method: Method, products: Products, gaps, steps, options: Swee
     """
     m, n = gaps.shape
     pressure = np.zeros((m, n))
-    tangent = np.zeros((m, n))
     rate = np.full((m, n), np.nan)
     for step in range(steps.shape[1]):
         start = pressure
@@ -89,20 +88,20 @@ def approach_loop(method: Method, products: Products, gaps, steps, options: Swee
             with np.errstate(invalid="ignore", divide="ignore"):
                 rate = (batch.pressure - pressure) / delta[:, None]
         pressure = batch.pressure
-        tangent = _record(products, batch, tangent, options, step, table)
+        tangent = _record(products, batch, options, step, table)
         if options.stiffness:
             rate = tangent
 
 
-def _record(products: Products, batch, tangent, options: SweepOptions, step: int,
-            table: SweepTable):
-    """A step's solutions, work and (with ``stiffness``) tangent in ``table``; the tangent."""
+def _record(products: Products, batch, options: SweepOptions, step: int, table: SweepTable):
+    """A step's solutions, work and (with ``stiffness``) tangent in ``table``; the tangent
+    (None without ``stiffness``)."""
     table.record(slice(None), step, batch.pressure, batch.displacement, batch.residual,
                  products.operator.element_area, options.hardness)
     table.record_work(slice(None), step, batch.iterations, batch.matvecs, batch.converged)
     if options.stiffness:
-        tangent = _tangent(products, batch.pressure, tangent, options, step, table)
-    return tangent
+        return _tangent(products, batch.pressure, options, step, table)
+    return None
 
 
 def load_loop(method: Method, products: Products, gaps, loads, options: SweepOptions,
@@ -113,14 +112,13 @@ def load_loop(method: Method, products: Products, gaps, loads, options: SweepOpt
     approaches found (m, k) [m]."""
     m, n = gaps.shape
     pressure = np.zeros((m, n))
-    tangent = np.zeros((m, n))
     approaches = np.zeros(loads.shape)
     for step in range(loads.shape[1]):
         batch, approaches[:, step] = run_loads(method, products, gaps, loads[:, step].copy(),
                                                pressure, options.tol, options.max_iter,
                                                options.hardness)
         pressure = batch.pressure
-        tangent = _record(products, batch, tangent, options, step, table)
+        _record(products, batch, options, step, table)
     return approaches
 
 

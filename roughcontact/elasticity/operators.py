@@ -63,7 +63,6 @@ __all__ = [
     "COARSE_MAX",
     "COLUMN_BUDGET",
     "DENSE_MAX_ELEMENTS",
-    "DENSE_RESTRICTION",
     "HYBRID_MESHES",
     "OPERATORS",
     "BlockOperator",
@@ -93,9 +92,6 @@ DENSE_MAX_ELEMENTS = 64 * 64
 #: by one product (a column costs about 1/25 of a single-precision product at 512^2
 #: and 1024^2; the hybrid adds its correction, about a quarter of a product, once).
 COLUMN_BUDGET = 24
-#: Widest coarse grid (elements along x) restricted to by a dense GEMM: its cost grows
-#: with the coarse width, the sparse product's does not (break-even near 200 at 256^2).
-DENSE_RESTRICTION = 128
 
 
 def default_coarse_grid(grid, coarse_max: int | None = None) -> tuple[int, int]:
@@ -218,13 +214,12 @@ class BlockOperator(GridOperator):
             py = centre_interpolation(ny, ncy)
             set_(self, "_px", px)
             set_(self, "_py", py)
-            # the interpolations in both dtypes: to the coarse grid dense (x: a GEMM
-            # while the coarse grid is narrow, else sparse; y: a batched product on
-            # fields already narrowed to ncx), back to the fine grid sparse (two taps
-            # per row; the x one times the fine element area)
+            # the interpolations in both dtypes: to the coarse grid dense (x: a GEMM,
+            # y: a batched product on fields already narrowed to ncx <= COARSE_MAX),
+            # back to the fine grid sparse (two taps per row; the x one times the
+            # fine element area)
             set_(self, "_interpolations", {t: (
-                px.astype(t) if ncx <= DENSE_RESTRICTION else scipy.sparse.csr_array(px.astype(t)),
-                np.ascontiguousarray(py.T, dtype=t),
+                px.astype(t), np.ascontiguousarray(py.T, dtype=t),
                 scipy.sparse.csr_array(py.astype(t)),
                 scipy.sparse.csr_array((px * dx * dy).astype(t))) for t in DTYPES})
             diagonal = diagonal + dx * dy * _interpolated_diagonal(prepared.matrix, px, py)
@@ -256,9 +251,9 @@ class BlockOperator(GridOperator):
 
     def _restrict(self, fields: np.ndarray) -> np.ndarray:
         """``W^T p``: fields (m, ny, nx) [Pa] on the coarse grid (m, ncy, ncx), in their
-        dtype: along x by one GEMM with ``W_x`` (dense up to :data:`DENSE_RESTRICTION`
-        coarse columns: 4x faster than the sparse product at 256^2, which transposes
-        the fields), then ``W_y^T`` on the narrowed fields."""
+        dtype: along x by one GEMM with a dense ``W_x`` (4x faster than the sparse
+        product at 256^2 with 64 coarse columns, which transposes the fields), then
+        ``W_y^T`` on the narrowed fields."""
         m, ny, nx = fields.shape
         ncx, _ = self.coarse_grid
         px, py_t, _, _ = self._interpolations[fields.dtype]

@@ -258,11 +258,12 @@ def _acf_kernel(spec: SurfaceSpec) -> FilterKernel:
     return _normalised_kernel(spectrum, clipped, clipped_fraction)
 
 
-def _check_clipping(spec: SurfaceSpec) -> None:
+def _check_clipping(spec: SurfaceSpec, kernel: FilterKernel | None) -> None:
     """Warn when the kernel of an ACF of Eq 1 clips negative spectral values (the
     realised ACF then deviates from Eq 1): once per generation, here, not in every
-    :func:`filter_kernel` a generation and its calibration compute."""
-    kernel = _acf_kernel(spec)
+    :func:`filter_kernel` a generation and its calibration compute. ``kernel``: the
+    spec's, if the caller has it (else it is computed)."""
+    kernel = _acf_kernel(spec) if kernel is None else kernel
     if kernel.clipped:
         ky, kx = kernel.weights.shape
         log.warning(
@@ -282,18 +283,19 @@ def _normalised_kernel(spectrum: np.ndarray, clipped: int, clipped_fraction: flo
     return FilterKernel(weights / norm, transfer / norm, clipped, clipped_fraction)
 
 
-def check_domain(spec: SurfaceSpec) -> None:
+def check_domain(spec: SurfaceSpec, kernel: FilterKernel | None = None) -> None:
     """Log warnings when the spectrum does not suit the grid (nothing is changed).
 
     A tabulated PSD with power beyond the grid's Nyquist wavenumber; for the
     other kinds, a correlation length beyond half the domain or shorter than
     the grid spacing, and for the ACFs of Eq 1 negative spectral values the
-    filter clips. The generators call it once per call (for every seed they
+    filter clips (counted on ``kernel``, the spec's :func:`filter_kernel`, when the
+    caller has it). The generators call it once per call (for every seed they
     are given), so a warning appears once per generation.
     """
     _DOMAIN_CHECKS.get(spec.acf, _check_corr_length)(spec)
     if spec.acf in _ACF_SHAPES:
-        _check_clipping(spec)
+        _check_clipping(spec, kernel)
 
 
 def _check_nyquist(spec: SurfaceSpec) -> None:

@@ -159,12 +159,12 @@ def _filter_surfaces(spec: SurfaceSpec, seeds: list[int], max_bytes: float, *, m
     """
     if options:
         raise TypeError(f"unexpected options for method={method!r}: {sorted(options)}")
-    check_domain(spec)
+    kern = filter_kernel(spec)
+    check_domain(spec, kern)
     process = spec
     if calibrated:
         cal = calibrate_filter(spec)
         process = replace(spec, skew=cal.skew, kurt=cal.kurt)
-    kern = filter_kernel(spec)
     curve = fit_input(process)
     mean_x, std_x, _, _ = curve.moments()
     shape = noise_shape(spec, kern.weights)
