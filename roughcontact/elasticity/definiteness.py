@@ -225,25 +225,28 @@ def _measure(operator, name: str, unit: str, advice: str | None) -> Certificate:
             return _cholesky(matrix, operator, name, unit, advice)
     spectrum = _spectrum_without_zero_mode(operator)
     if spectrum is not None:
-        found = Certificate("spectrum", float(spectrum.min()), float(spectrum.max()))
-        if not found.smallest > DEFINITE_RTOL * found.largest:
-            _refuse(name, found.smallest, found.largest, unit, "its spectrum", advice)
-        return found
+        return _spectrum_certificate(spectrum, name, unit, advice)
     return _lanczos_certificate(_products(operator, matrix, name), name, unit, advice)
+
+
+def _spectrum_certificate(values: np.ndarray, name: str, unit: str,
+                          advice: str | None) -> Certificate:
+    """``"spectrum"`` from an operator's eigenvalues, or the refusal of a non-positive one."""
+    found = Certificate("spectrum", float(values.min()), float(values.max()))
+    if not found.smallest > DEFINITE_RTOL * found.largest:
+        _refuse(name, found.smallest, found.largest, unit, "its spectrum", advice)
+    return found
 
 
 def from_eigenvalues(matrix: np.ndarray, values: np.ndarray, *,
                      name: str = "the influence operator", unit: str = "m/Pa",
                      advice: str | None = None) -> Certificate:
-    """The certificate of a dense matrix whose eigenvalues are already known (ascending,
-    from ``eigvalsh``): symmetry checked as by :func:`certify`, then ``"spectrum"``,
+    """The certificate of a dense matrix whose eigenvalues are already known (e.g. from
+    ``eigvalsh``): symmetry checked as by :func:`certify`, then ``"spectrum"``,
     or refused as :func:`certify` refuses. Spares the Cholesky factorization of a
     caller that computed the spectrum anyway."""
     check_symmetric(matrix, name)
-    found = Certificate("spectrum", float(values[0]), float(values[-1]))
-    if not found.smallest > DEFINITE_RTOL * found.largest:
-        _refuse(name, found.smallest, found.largest, unit, "its spectrum", advice)
-    return found
+    return _spectrum_certificate(np.asarray(values), name, unit, advice)
 
 
 def check_symmetric(matrix: np.ndarray, name: str = "the influence operator") -> None:

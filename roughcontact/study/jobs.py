@@ -300,10 +300,14 @@ LOAD_ADVICE = ("Delete the file: the workflow rebuilds it, and the build refuses
                "that is not positive definite, naming the config keys to change.")
 
 
-def _certify_built(unit, key: str) -> definiteness.Certificate:
-    """Certify the model of geometry ``key`` positive definite before it is written."""
-    return definiteness.certify(unit, unit="m", advice=BUILD_ADVICE,
-                                name=f"the influence model E * C of geometry {key}")
+def _certify_built(unit, key: str, eigenvalues=None) -> definiteness.Certificate:
+    """Certify the model of geometry ``key`` positive definite before it is written (from
+    its ``eigenvalues`` when the build computed them)."""
+    name = f"the influence model E * C of geometry {key}"
+    if eigenvalues is not None:
+        return definiteness.from_eigenvalues(unit, eigenvalues, unit="m", advice=BUILD_ADVICE,
+                                             name=name)
+    return definiteness.certify(unit, unit="m", advice=BUILD_ADVICE, name=name)
 
 
 def certified_influence(unit, path, geometry: Geometry):
@@ -347,12 +351,7 @@ def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
         "row_sum_max_m": float(rows.max()),
         "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
     }
-    if values is None:
-        checks["positive_definite"] = _certify_built(unit, key).method
-    else:
-        checks["positive_definite"] = definiteness.from_eigenvalues(
-            unit, values, unit="m", advice=BUILD_ADVICE,
-            name=f"the influence model E * C of geometry {key}").method
+    checks["positive_definite"] = _certify_built(unit, key, values).method
     return checks
 
 
