@@ -185,6 +185,15 @@ def full_from_upper(upper: sp.csr_array) -> sp.csc_array:
     return sp.coo_array((vals, (rows, cols)), shape=upper.shape).tocsc()
 
 
+def _splu(matrix, **options):
+    """scipy's ``splu``, its failure ("Factor is exactly singular") as FactorizationError."""
+    try:
+        return splu(matrix, **options)
+    except RuntimeError as err:
+        raise FactorizationError(f"SuperLU factorization failed ({err}). {SINGULAR_ADVICE}",
+                                 "superlu") from err
+
+
 def _superlu_schur(stiffness_upper: sp.csr_array, coupling: sp.csr_array) -> np.ndarray:
     """``B^T K^-1 B`` with scipy's SuperLU, as the Schur complement of ``[[K, B], [B^T, 0]]``.
 
@@ -198,11 +207,7 @@ def _superlu_schur(stiffness_upper: sp.csr_array, coupling: sp.csr_array) -> np.
     """
     full = full_from_upper(stiffness_upper)
     options = {"SymmetricMode": True}
-    try:
-        first = splu(full, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=options)
-    except RuntimeError as err:  # "Factor is exactly singular"
-        raise FactorizationError(f"SuperLU factorization failed ({err}). {SINGULAR_ADVICE}",
-                                 "superlu") from err
+    first = _splu(full, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=options)
     position = first.perm_c.copy()
     del first
     n, nb = full.shape[0], coupling.shape[1]
@@ -210,11 +215,7 @@ def _superlu_schur(stiffness_upper: sp.csr_array, coupling: sp.csr_array) -> np.
     bordered = sp.bmat([[full, coupling], [coupling.T, None]], format="csr")
     del full
     bordered = bordered[order][:, order].tocsc()
-    try:
-        lu = splu(bordered, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=options)
-    except RuntimeError as err:
-        raise FactorizationError(f"SuperLU factorization failed ({err}). {SINGULAR_ADVICE}",
-                                 "superlu") from err
+    lu = _splu(bordered, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=options)
     del bordered
     tail = np.arange(n, n + nb)
     if not (np.array_equal(lu.perm_c[n:], tail) and np.array_equal(lu.perm_r[n:], tail)):
