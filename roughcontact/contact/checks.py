@@ -157,7 +157,8 @@ def _dense_operator(operator, matrix, element_area) -> DenseInfluence:
             "operator must be a dense (n, n) matrix or an object with matvec"
         ) from None
     _check_dense(matrix)
-    dense = DenseInfluence(matrix, area, _grid(operator, matrix.shape[0]))
+    dense = DenseInfluence(matrix, area, _grid(operator, matrix.shape[0]),
+                           getattr(operator, "mean_compliance", None))
     definiteness.carry(operator, dense)
     return dense
 

@@ -272,8 +272,10 @@ def dimensionless_operator(unit_influence, thickness: float):
     if isinstance(unit_influence, np.ndarray) or not hasattr(unit_influence, "matvec"):
         return np.asarray(unit_influence, dtype=float) / thickness
     if isinstance(unit_influence, DenseInfluence):
+        mean_compliance = unit_influence.mean_compliance
         scaled = DenseInfluence(given_matrix(unit_influence) / thickness,
-                                unit_influence.element_area, unit_influence.grid)
+                                unit_influence.element_area, unit_influence.grid,
+                                None if mean_compliance is None else mean_compliance / thickness)
     elif preconditioned_operator(unit_influence) is not None:
         scaled = _ScaledGridOperator(unit_influence, thickness)
     else:

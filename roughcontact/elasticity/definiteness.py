@@ -14,8 +14,15 @@ do not pay again:
 - a dense matrix (``matrix``) of at most :data:`CHOLESKY_MAX_ELEMENTS`
   elements: symmetric to ``max|C - C^T| <= SYMMETRY_RTOL max|C|`` and its
   Cholesky factorization exists (LAPACK ``dpotrf``, n^3 / 3 flops and one
-  copy of the matrix: 0.5-1 s at 60 x 60 on one core). That is a proof, to
-  rounding. A larger dense matrix is certified like a matrix-free operator.
+  copy of the matrix: 0.5-1 s at 60 x 60 on one core) with no squared pivot
+  below :data:`DEFINITE_RTOL` of the largest diagonal entry. That is a proof,
+  to rounding; a matrix singular to rounding is refused on every CPU,
+  whatever the sign its last pivot happens to take. A dense matrix declared
+  to have the uniform pressure as its zero mode (``mean_compliance = 0``,
+  e.g. the dense form of a periodic half-space) is factored with that mode
+  shifted into the spectrum, so the certificate holds on its complement,
+  as for the circulant itself. A larger dense matrix is certified like a
+  matrix-free operator.
 - a circulant operator (``spectrum``: the periodic half-spaces of
   :mod:`roughcontact.elasticity.halfspace`): its spectrum *is* its
   eigenvalues, so the certificate is exact. With ``mean_compliance = 0`` the
@@ -105,6 +112,9 @@ EXACT_EIGENVALUES_MAX = 1024
 #: A Lanczos step whose new direction is this small next to the operator's scale
 #: ends the run: the Krylov space is invariant (to rounding).
 INVARIANT_RTOL = 1e-10
+#: A dense matrix declared to have the uniform pressure as its zero mode must have
+#: row sums within this share of its largest absolute row sum.
+ZERO_MODE_RTOL = 1e-8
 #: The attribute that holds an operator's certificate.
 ATTRIBUTE = "spd_certificate"
 #: The seed of the random start vectors, so that a certificate is reproducible.
@@ -222,6 +232,8 @@ def _measure(operator, name: str, unit: str, advice: str | None) -> Certificate:
         matrix = np.asarray(matrix, dtype=float)
         check_symmetric(matrix, name)
         if matrix.shape[0] <= CHOLESKY_MAX_ELEMENTS:
+            if getattr(operator, "mean_compliance", None) == 0.0 and matrix.shape[0] > 1:
+                matrix = _without_zero_mode(matrix, name)
             return _cholesky(matrix, operator, name, unit, advice)
     spectrum = _spectrum_without_zero_mode(operator)
     if spectrum is not None:
@@ -272,15 +284,57 @@ def asymmetry(matrix: np.ndarray, block: int = 128) -> float:
     return worst
 
 
+def _without_zero_mode(matrix: np.ndarray, name: str) -> np.ndarray:
+    """``C + (s / n) 1 1^T`` for a matrix declared to have the uniform pressure as its
+    zero mode (``mean_compliance = 0``), ``s`` its largest diagonal entry.
+
+    The rows of ``C`` must sum to zero (to :data:`ZERO_MODE_RTOL` of the largest
+    absolute row sum), so that ``1`` is an eigenvector with eigenvalue 0 to
+    rounding; the shift moves that eigenvalue to ``s``, inside the spectrum,
+    and leaves every other eigenvector (orthogonal to ``1``) and eigenvalue as
+    it is. A Cholesky factorization of the shifted matrix then proves ``C``
+    positive definite on the complement of the uniform pressure, the space
+    displacement control solves in (:func:`roughcontact.contact.checks.check_bounded`)
+    whatever the sign of the rounding in the zero eigenvalue, which differs
+    between CPUs (FFT and BLAS kernels).
+    """
+    n = matrix.shape[0]
+    row_sums = matrix.sum(axis=1)
+    scale = float(np.abs(matrix).sum(axis=1).max())
+    worst = float(np.abs(row_sums).max())
+    if not worst <= ZERO_MODE_RTOL * scale:
+        raise ValueError(
+            f"{name} is declared to have the uniform pressure as its zero mode "
+            f"(mean_compliance = 0), but its rows sum to up to {worst:.3g} against "
+            f"{scale:.3g} for their absolute values; give the operator's own "
+            f"mean_compliance (its row sum), or None if the rows differ")
+    return matrix + float(np.diag(matrix).max()) / n
+
+
 def _cholesky(matrix, operator, name, unit, advice) -> Certificate:
     """Cholesky of the lower triangle (the transpose of a C-ordered matrix is Fortran
-    ordered, so LAPACK reads it in place and factors a copy)."""
+    ordered, so LAPACK reads it in place and factors a copy).
+
+    The smallest squared pivot bounds the smallest eigenvalue from above (each
+    is a diagonal entry of a Schur complement of ``C``, whose eigenvalues are
+    at least ``C``'s smallest), so a factorization whose smallest squared pivot is at most
+    :data:`DEFINITE_RTOL` of the largest diagonal entry is refused like a
+    failed one: the matrix is singular to rounding, and whether LAPACK's last
+    pivot came out positive or negative is the sign of a rounding error,
+    which differs between CPUs.
+    """
     factor, info = lapack.dpotrf(matrix.T, lower=False, clean=False, overwrite_a=False)
+    largest = float(np.diag(matrix).max())
     if info == 0:
-        pivots = np.diag(factor)
-        return Certificate("cholesky", float(pivots.min()) ** 2, float(np.diag(matrix).max()))
+        smallest = float(np.diag(factor).min()) ** 2
+        if smallest > DEFINITE_RTOL * largest:
+            return Certificate("cholesky", smallest, largest)
+        info = int(np.argmin(np.abs(np.diag(factor)))) + 1
+        evidence = (f"its Cholesky factorization has a pivot of {smallest:.3g} {unit} at row "
+                    f"{info}, zero to rounding against {largest:.3g} {unit}")
+    else:
+        evidence = f"its Cholesky factorization fails at row {info}"
     del factor
-    evidence = f"its Cholesky factorization fails at row {info}"
     if info < 0 or matrix.shape[0] <= EXACT_EIGENVALUES_MAX:
         values = scipy.linalg.eigvalsh(matrix)
         smallest, largest = float(values[0]), float(values[-1])

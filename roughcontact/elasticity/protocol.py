@@ -154,12 +154,19 @@ class DenseInfluence:
         Contact element area [m^2].
     grid : (int, int), optional
         ``(nx, ny)`` of the elements, when known.
+    mean_compliance : float, optional
+        The row sum of ``C`` [m/Pa] when it is known to be the same for every
+        row (``C 1 = mean_compliance 1``), e.g. the dense form of a periodic
+        half-space; ``0.0`` declares the uniform pressure a zero mode (the
+        mean displacement fixed to zero), which the certificate leaves out
+        and the contact solver bounds the approach for, as for the periodic
+        operator itself. None (the default): not known.
     """
 
     matrix: np.ndarray = field(repr=False)
     element_area: float
     grid: tuple[int, int] | None = None
-    mean_compliance = None
+    mean_compliance: float | None = None
     #: Its :class:`~roughcontact.elasticity.definiteness.Certificate`, once certified.
     spd_certificate = None
 

@@ -284,3 +284,57 @@ def test_a_known_spectrum_certifies_as_cholesky_does_and_refuses_alike():
     lopsided[3, 40] *= 1.01
     with pytest.raises(ValueError, match="operator must be symmetric"):
         definiteness.from_eigenvalues(lopsided, values)
+
+
+def test_a_singular_dense_matrix_is_refused_whatever_the_sign_of_its_last_pivot():
+    """A matrix singular to rounding: the Cholesky factorization may succeed with a
+    last pivot of either sign (it depends on the CPU's BLAS and FFT kernels); both
+    are refused, with the same message. Built here with a zero mode of either sign
+    of rounding size, so that both paths run on every CPU."""
+    rng = np.random.default_rng(1)
+    basis, _ = np.linalg.qr(rng.standard_normal((40, 40)))
+    values = np.linspace(1.0, 2.0, 40)
+    for last in (1e-14, -1e-14, 0.0):
+        values[0] = last
+        matrix = (basis * values) @ basis.T
+        matrix = 0.5 * (matrix + matrix.T)
+        with pytest.raises(IndefiniteOperator, match="Cholesky factorization") as info:
+            definiteness.certify(matrix)
+        assert abs(info.value.smallest) <= 1e-12 * info.value.largest
+
+
+def periodic_dense(grid=(12, 10)):
+    op = PeriodicHalfSpace(grid, SIZE, 1.0, 0.3, images=1)
+    return op, op.matvec(np.eye(op.shape[0]))
+
+
+def test_the_dense_form_of_a_periodic_operator_is_certified_without_its_zero_mode():
+    """C 1 = 0 for the periodic half-space: its dense form is singular and refused
+    as a plain matrix, but certified when it declares its zero mode
+    (mean_compliance = 0), with the smallest eigenvalue on the complement of the
+    uniform pressure (numpy's second smallest) as the bound from Cholesky."""
+    op, matrix = periodic_dense()
+    values = np.linalg.eigvalsh(matrix)
+    assert abs(values[0]) <= 1e-12 * values[-1] < values[1]  # one zero mode, the rest > 0
+    with pytest.raises(IndefiniteOperator):
+        definiteness.certify(matrix)
+    declared = DenseInfluence(matrix, op.element_area, mean_compliance=0.0)
+    found = definiteness.certify(declared)
+    assert found.method == "cholesky"
+    assert values[1] * (1 - 1e-9) <= found.smallest  # the squared pivots bound it from above
+    assert found.largest <= values[-1]
+
+
+def test_a_declared_zero_mode_that_is_not_one_is_refused():
+    matrix = halfspace_influence((6, 6), SIZE, 1.0, 0.0)  # rows sum to > 0
+    with pytest.raises(ValueError, match="declared to have the uniform pressure as its zero"):
+        definiteness.certify(DenseInfluence(matrix, AREA, mean_compliance=0.0))
+    # an indefinite matrix whose rows do sum to zero stays refused: P - t v v^T with
+    # v = e0 - e1 orthogonal to the uniform pressure, t beyond v.P v / |v|^4
+    op, periodic = periodic_dense()
+    v = np.zeros(periodic.shape[0])
+    v[:2] = 1.0, -1.0
+    bad = periodic - (v @ periodic @ v) * np.outer(v, v)
+    assert np.linalg.eigvalsh(bad)[0] < -0.1 * np.abs(bad).max()
+    with pytest.raises(IndefiniteOperator):
+        definiteness.certify(DenseInfluence(bad, op.element_area, mean_compliance=0.0))
