@@ -299,10 +299,29 @@ def test_a_single_figure_builds_only_its_cells(tmp_path):
                                        "aggregate": "1", "figure": "1", "total": "8"}, proc.stdout
 
 
+#: Loaded at the start of every Python process of the interrupted run (PYTHONPATH):
+#: the contact job stops at its first progress line, touches the file
+#: HOLD_STARTED names and waits there until it is interrupted, so the signal
+#: always finds it running, however fast it or the machine is.
+HOLD_AT_FIRST_PROGRESS_LINE = """
+import logging, os, pathlib, time
+
+
+class _Hold(logging.Handler):
+    def emit(self, record):
+        if "surfaces x" in record.getMessage():
+            pathlib.Path(os.environ["HOLD_STARTED"]).touch()
+            while True:
+                time.sleep(0.05)
+
+
+logging.getLogger("roughcontact.study.jobs").addHandler(_Hold())
+"""
+
+
 def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path):
     config = quick_config()
-    config["contact"].update(method="steepest", tol=1e-10, steps=60)
-    path = tmp_path / "slow.yaml"
+    path = tmp_path / "study.yaml"
     path.write_text(yaml.safe_dump(config))
     cell = contact_cells(config, "fig14")[0]
     key = cell.contact_key
@@ -311,19 +330,24 @@ def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path)
                           f"results/influence/{cell.geometry.key}.h5", config=path)
     assert first.returncode == 0, first.stderr[-3000:]
     done = {p: p.stat().st_mtime_ns for p in (tmp_path / "results").rglob("*.h5")}
-    log = tmp_path / "results" / "logs" / "contact" / f"{key}.log"
+    hold = tmp_path / "hold"
+    hold.mkdir()
+    (hold / "sitecustomize.py").write_text(HOLD_AT_FIRST_PROGRESS_LINE)
+    started = tmp_path / "started"
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", HOLD_STARTED=str(started),
+               PYTHONPATH=os.pathsep.join(filter(None, [str(hold),
+                                                        os.environ.get("PYTHONPATH")])))
     proc = subprocess.Popen(
         [*SNAKEMAKE, "--snakefile", str(REPO / "Snakefile"), "--directory", str(tmp_path),
          "--configfile", str(path), "--cores", "2", target],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
-        env=dict(os.environ, OPENBLAS_NUM_THREADS="1"),
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True, env=env,
     )
-    deadline = time.time() + 120
-    while not (log.exists() and "surfaces x" in log.read_text()):
+    deadline = time.time() + 300
+    while not started.exists():
         assert time.time() < deadline and proc.poll() is None, "contact job did not start"
         time.sleep(0.05)
     os.killpg(proc.pid, signal.SIGINT)
-    assert proc.wait(timeout=120) != 0  # interrupted mid-solve
+    assert proc.wait(timeout=120) != 0  # interrupted while the contact job runs
     assert not (tmp_path / target).exists()  # no partial result under the final name
     again = run_snakemake(tmp_path, target, config=path)
     assert again.returncode == 0, again.stderr[-3000:]
