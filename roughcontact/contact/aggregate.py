@@ -24,13 +24,15 @@ holds at every level too. A pressure level outside a surface's solved range
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-import pandas as pd
-import scipy.stats
+import scipy.special
 
 from roughcontact.contact.curves import PhysicalSweep
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "COVERAGE",
@@ -210,7 +212,8 @@ def statistics(samples: np.ndarray, confidence: float = 0.95):
         mean = np.where(count > 0, filled.sum(axis=0) / count, np.nan)
         deviation = np.where(finite, samples - mean, 0.0)
         variance = np.where(count > 1, (deviation**2).sum(axis=0) / (count - 1), np.nan)
-        t = scipy.stats.t.ppf(0.5 * (1.0 + confidence), np.maximum(count - 1, 1))
+        # Student-t quantile (what scipy.stats.t.ppf computes, without importing scipy.stats)
+        t = scipy.special.stdtrit(np.maximum(count - 1, 1), 0.5 * (1.0 + confidence))
         half_width = np.where(count > 1, t * np.sqrt(variance / count), np.nan)
     return mean, half_width, count
 
@@ -283,6 +286,8 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
         levels.size, int((sweep.converged & ~sweep.stiffness_converged).sum()))
     units.update(coverage="-", surfaces="1", unconverged_steps="1",
                  unconverged_stiffness_steps="1")
+    import pandas as pd
+
     frame = pd.DataFrame(columns)
     frame.attrs.update(units=units, confidence=confidence, interpolation=INTERPOLATION,
                        sigma=sweep.sigma, E=sweep.E, thickness=sweep.thickness,
@@ -376,6 +381,8 @@ def mean_plane_modulus(sweep_physical: PhysicalSweep,
         slope = (P * d_b).sum() / (d_b**2).sum()
         modulus[j] = slope * length
         residual[j] = np.abs(P - slope * d_b).max() / P.max()
+    import pandas as pd
+
     frame = pd.DataFrame({"surface": np.arange(m), "mean_plane_modulus": modulus,
                           "linearity_residual": residual, "steps_used": usable.sum(axis=1)})
     frame.attrs.update(units={"mean_plane_modulus": "Pa", "linearity_residual": "1"},
@@ -398,6 +405,8 @@ def modulus_summary(per_surface: pd.DataFrame, E: float) -> pd.Series:
     values = values[np.isfinite(values)]
     if values.size == 0:
         raise ValueError("no surface has a finite mean-plane modulus")
+    import pandas as pd
+
     return pd.Series({
         "surfaces": values.size,
         "mean": values.mean(),

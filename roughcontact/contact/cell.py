@@ -19,12 +19,15 @@ the same way:
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from roughcontact.contact import aggregate, nondim, validity
 from roughcontact.contact.curves import NondimSweep, PhysicalSweep
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "APPROACH_RANGE",
@@ -187,6 +190,8 @@ def validity_table(sweep: NondimSweep, sigma: float, E: float, hardness: float,
         mean, half_width, count = aggregate.statistics(samples, confidence)
         columns.update({f"{name}_mean": mean, f"{name}_half_width": half_width,
                         f"{name}_count": count})
+    import pandas as pd
+
     return pd.DataFrame(columns)
 
 

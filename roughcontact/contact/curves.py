@@ -19,12 +19,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from roughcontact.contact.checks import check_positive
 from roughcontact.contact.result import SweepResult, zero_plastic_area
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "DIAGNOSTICS",
@@ -230,6 +233,8 @@ class PhysicalSweep(CellSweep):
         }
         for name in _PHYSICAL_UNITS:
             columns[name] = np.asarray(getattr(self, name)).ravel()
+        import pandas as pd
+
         frame = pd.DataFrame(columns)
         frame.attrs.update(units=dict(_PHYSICAL_UNITS), sigma=self.sigma, E=self.E,
                            thickness=self.thickness, nominal_area=self.nominal_area)

@@ -23,10 +23,14 @@ audit flags a cell with it.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
 
 from roughcontact.units import MPA
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "MAX_PRESSURE_OVER_E_STAR",

@@ -36,7 +36,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.fft
+import scipy  # its submodules load on first use (scipy's lazy attributes)
 
 from roughcontact.elasticity.protocol import GridOperator
 from roughcontact.elasticity.transforms import CirculantConvolution, ColumnTable, q_stencil

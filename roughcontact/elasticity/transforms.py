@@ -45,7 +45,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.fft
+import scipy  # its submodules load on first use (scipy's lazy attributes)
 
 __all__ = [
     "CHUNK_BYTES",

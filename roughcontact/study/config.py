@@ -19,10 +19,6 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-import jsonschema
-import yaml
-from snakemake.utils import validate
-
 from roughcontact.units import GB, MM, MPA, UM
 
 #: The schema of every configuration (with its defaults).
@@ -147,7 +143,9 @@ def _plain(error) -> str:
         # of the branches, the error of a value of the right type says most
         specific = [e for e in error.context if e.validator != "type"]
         if specific:
-            return _plain(jsonschema.exceptions.best_match(specific))
+            from jsonschema.exceptions import best_match
+
+            return _plain(best_match(specific))
         wanted = " or ".join(_TYPES.get(e.validator_value, str(e.validator_value))
                              for e in error.context)
         return f"{json.dumps(value)} is not {wanted}"
@@ -156,7 +154,14 @@ def _plain(error) -> str:
 
 def schema_errors(config: dict) -> list[str]:
     """``key.path: message`` in plain words of every schema violation of ``config``
-    (none: [])."""
+    (none: []).
+
+    jsonschema and yaml are imported here, not with the module: a job that only
+    reads its typed settings does not pay for them.
+    """
+    import jsonschema
+    import yaml
+
     schema = yaml.safe_load(SCHEMA.read_text())
     validator = jsonschema.validators.validator_for(schema)(schema)
     lines = []
@@ -184,6 +189,8 @@ def apply_schema(config: dict) -> dict:
                           + "\n  ".join(problems)
                           + "\nKeys, units and defaults: config/schema.yaml; a complete "
                             "example: config/config.yaml.")
+    from snakemake.utils import validate
+
     validate(config, str(SCHEMA))  # fills the defaults, as Snakemake does
     return config
 
@@ -208,6 +215,8 @@ def report_section(config: dict, name: str) -> dict:
 
 def load_config(path: str | os.PathLike) -> dict:
     """Read a YAML configuration and return it :func:`validated`."""
+    import yaml
+
     return validated(yaml.safe_load(Path(path).read_text()))
 
 

@@ -300,13 +300,14 @@ LOAD_ADVICE = ("Delete the file: the workflow rebuilds it, and the build refuses
                "that is not positive definite, naming the config keys to change.")
 
 
-def _certify_built(unit, key: str, eigenvalues=None) -> definiteness.Certificate:
-    """Certify the model of geometry ``key`` positive definite before it is written (from
-    its ``eigenvalues`` when the build computed them)."""
+def _certify_built(unit, key: str, smallest_eigenvalue: bool = False):
+    """Certify the model of geometry ``key`` positive definite before it is written; with
+    ``smallest_eigenvalue`` (a dense matrix) return ``(certificate, its smallest
+    eigenvalue [m])``, from the same factorization."""
     name = f"the influence model E * C of geometry {key}"
-    if eigenvalues is not None:
-        return definiteness.from_eigenvalues(unit, eigenvalues, unit="m", advice=BUILD_ADVICE,
-                                             name=name)
+    if smallest_eigenvalue:
+        return definiteness.with_smallest_eigenvalue(unit, unit="m", advice=BUILD_ADVICE,
+                                                     name=name)
     return definiteness.certify(unit, unit="m", advice=BUILD_ADVICE, name=name)
 
 
@@ -332,17 +333,19 @@ def certified_influence(unit, path, geometry: Geometry):
     return unit
 
 
-#: Dense models up to this many elements get their whole spectrum at the build (the
-#: smallest eigenvalue is stored; the same spectrum certifies them).
-SPECTRUM_MAX_ELEMENTS = 4000
+#: Dense models up to this many elements get their smallest eigenvalue at the build (it is
+#: stored), by Lanczos through the Cholesky factor that certifies them.
+SPECTRUM_MAX_ELEMENTS = definiteness.CHOLESKY_MAX_ELEMENTS
 
 
 def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
     n = unit.shape[0]
     nx, ny = geom.grid
     diag = np.diag(unit)
-    values = np.linalg.eigvalsh(unit) if n <= SPECTRUM_MAX_ELEMENTS else None
-    eigmin = float(values[0]) if values is not None else float("nan")
+    if n <= SPECTRUM_MAX_ELEMENTS:
+        certificate, eigmin = _certify_built(unit, key, smallest_eigenvalue=True)
+    else:
+        certificate, eigmin = _certify_built(unit, key), float("nan")
     rows = unit.sum(axis=1)
     checks = {
         "asymmetry": float(np.abs(unit - unit.T).max() / np.abs(unit).max()),
@@ -351,7 +354,7 @@ def _dense_checks(unit: np.ndarray, geom, key: str) -> dict:
         "row_sum_max_m": float(rows.max()),
         "centre_diagonal_m": float(diag[(ny // 2) * nx + nx // 2]),
     }
-    checks["positive_definite"] = _certify_built(unit, key, values).method
+    checks["positive_definite"] = certificate.method
     return checks
 
 

@@ -35,7 +35,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import special, stats
+from scipy import special
 
 from roughcontact.errors import InfeasibleMoments
 from roughcontact.surfaces.johnson_moments import (
@@ -435,7 +435,7 @@ class _TwoPoint:
 
     @staticmethod
     def transform(curve, eta):
-        threshold = stats.norm.isf(curve.delta)
+        threshold = -special.ndtri(curve.delta)  # scipy.stats.norm.isf, without scipy.stats
         return np.where(eta > threshold, curve.lam, curve.xi)[()]
 
     @staticmethod

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import optimize, special
+import scipy  # its submodules load on first use (scipy's lazy attributes)
 
 ETA_MAX = 38.5
 """``|eta|`` beyond which the standard normal density underflows."""
@@ -164,7 +164,7 @@ def lognormal_wm1_from_kurt(kurt):
     """``w - 1`` of the lognormal law with kurtosis ``kurt > 3``."""
     excess = kurt - 3.0
     upper = max(1.0, excess ** 0.25)
-    return optimize.brentq(
+    return scipy.optimize.brentq(
         lambda e: e * (16.0 + e * (15.0 + e * (6.0 + e))) - excess,
         0.0,
         upper,
@@ -274,14 +274,14 @@ def sb_shape_moments(g, d, rtol=_MOMENT_RTOL):
     """
     inv_d = 1.0 / d
     narrow = d >= 0.5
-    level = special.expit(-g * inv_d) if narrow else 0.0
+    level = scipy.special.expit(-g * inv_d) if narrow else 0.0
     denominator = 2.0 * math.cosh(0.5 * g * inv_d) if narrow else 1.0
 
     def deviation_from_level(eta):
         u = (eta - g) * inv_d
         if narrow:
             return np.sinh(0.5 * eta * inv_d) / (denominator * np.cosh(0.5 * u))
-        return special.expit(u)
+        return scipy.special.expit(u)
 
     def first(eta):
         return (deviation_from_level(eta) * INV_SQRT_2PI * np.exp(-0.5 * eta * eta))[None]

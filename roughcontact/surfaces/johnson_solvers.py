@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import optimize
+import scipy  # its submodules load on first use (scipy's lazy attributes)
 
 from roughcontact.surfaces.johnson_moments import (
     ETA_MAX,
@@ -235,7 +235,7 @@ def _brent(func, lo, hi, f_lo=None, f_hi=None, xtol=1e-15, ftol=0.0):
         return value
 
     try:
-        return optimize.brentq(wrapped, lo, hi, xtol=xtol, rtol=4.0 * _EPS, maxiter=200)
+        return scipy.optimize.brentq(wrapped, lo, hi, xtol=xtol, rtol=4.0 * _EPS, maxiter=200)
     except _RootFound as found:
         return found.x
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 
-from scipy import fft
+import scipy  # its submodules load on first use (scipy's lazy attributes)
 
 from roughcontact.surfaces.calibration import CALIBRATION_BATCH_POINTS
 from roughcontact.surfaces.spec import SurfaceSpec, check_method
@@ -108,8 +108,8 @@ def _filter_bytes(spec: SurfaceSpec, count: int, calibrated: bool = False) -> in
         convolution = 48 * points
     else:
         noise = (ny + ky - 1) * (nx + kx - 1)
-        padded = (fft.next_fast_len(ny + 2 * ky - 2, True)
-                  * fft.next_fast_len(nx + 2 * kx - 2, True))
+        padded = (scipy.fft.next_fast_len(ny + 2 * ky - 2, True)
+                  * scipy.fft.next_fast_len(nx + 2 * kx - 2, True))
         convolution = 8 * kernel + 32 * padded
     per_surface = 8 * count * points + 16 * kernel + max(32 * noise, 8 * noise + convolution)
     peak = max(81 * kernel, per_surface)
@@ -118,8 +118,8 @@ def _filter_bytes(spec: SurfaceSpec, count: int, calibrated: bool = False) -> in
         if spec.periodic:
             peak = max(peak, 16 * kernel + 60 * fields * noise)
         else:  # the circular filter on the noise's fast grid (spectra.CircularValidFilter)
-            fast = (fft.next_fast_len(ny + ky - 1, True)
-                    * fft.next_fast_len(nx + kx - 1, True))
+            fast = (scipy.fft.next_fast_len(ny + ky - 1, True)
+                    * scipy.fft.next_fast_len(nx + kx - 1, True))
             peak = max(peak, 16 * kernel + 45 * fields * fast)
     return peak
 

@@ -37,9 +37,7 @@ import logging
 import math
 
 import numpy as np
-from scipy import sparse
-from scipy.interpolate import RegularGridInterpolator
-from scipy.sparse import linalg as sparse_linalg
+import scipy  # its submodules load on first use (scipy's lazy attributes)
 
 from roughcontact.errors import MeasurementError
 from roughcontact.surfaces.defects import (
@@ -203,12 +201,12 @@ def _harmonic_fill(residual: np.ndarray, missing: np.ndarray) -> np.ndarray:
             rows.append(point[neighbour_missing])
             cols.append(neighbour[neighbour_missing])
     rows, cols = np.concatenate(rows), np.concatenate(cols)
-    matrix = sparse.csr_matrix(
+    matrix = scipy.sparse.csr_matrix(
         (np.r_[diagonal, -np.ones(rows.size)],
          (np.r_[np.arange(count), rows], np.r_[np.arange(count), cols])),
         shape=(count, count),
     )
-    return np.atleast_1d(sparse_linalg.spsolve(matrix.tocsc(), rhs))
+    return np.atleast_1d(scipy.sparse.linalg.spsolve(matrix.tocsc(), rhs))
 
 
 def remove_plane(heights: np.ndarray, spacing) -> tuple[np.ndarray, tuple[float, float, float]]:
@@ -287,7 +285,7 @@ def resample(heights: np.ndarray, spacing, grid) -> tuple[np.ndarray, tuple[floa
     old_y = (np.arange(ny) + 0.5) * spacing[1]
     new_x = np.clip((np.arange(gx) + 0.5) * lx / gx, old_x[0], old_x[-1])
     new_y = np.clip((np.arange(gy) + 0.5) * ly / gy, old_y[0], old_y[-1])
-    interpolate = RegularGridInterpolator((old_y, old_x), heights)
+    interpolate = scipy.interpolate.RegularGridInterpolator((old_y, old_x), heights)
     yy, xx = np.meshgrid(new_y, new_x, indexing="ij")
     values = interpolate(np.column_stack([yy.ravel(), xx.ravel()])).reshape(gy, gx)
     return values, (lx / gx, ly / gy)

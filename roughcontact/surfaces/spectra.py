@@ -24,7 +24,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft, signal
+import scipy  # its submodules load on first use (scipy's lazy attributes)
 
 from roughcontact.surfaces.spec import Q_RTOL, SurfaceSpec, mm_text
 from roughcontact.surfaces.statistics import SpectralMoments
@@ -376,16 +376,16 @@ class CircularValidFilter:
         my, mx = (int(v) for v in shape)
         centred = np.fft.fftshift(kern.weights)
         ky, kx = centred.shape
-        self.grid = (fft.next_fast_len(my, True), fft.next_fast_len(mx, True))
+        self.grid = (scipy.fft.next_fast_len(my, True), scipy.fft.next_fast_len(mx, True))
         self.rows = slice(ky - 1, my)
         self.cols = slice(kx - 1, mx)
-        self.spectrum = fft.rfft2(centred, s=self.grid)
+        self.spectrum = scipy.fft.rfft2(centred, s=self.grid)
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         """``h * x`` (valid part, a view) of noise fields ``x`` (..., my, mx)."""
-        spectrum = fft.rfft2(x, s=self.grid)
+        spectrum = scipy.fft.rfft2(x, s=self.grid)
         spectrum *= self.spectrum
-        y = fft.irfft2(spectrum, s=self.grid, overwrite_x=True)
+        y = scipy.fft.irfft2(spectrum, s=self.grid, overwrite_x=True)
         return y[..., self.rows, self.cols]
 
 
@@ -401,6 +401,8 @@ def apply_filter(spec: SurfaceSpec, kern: FilterKernel, x: np.ndarray) -> np.nda
         return np.fft.irfft2(np.fft.rfft2(x) * half, s=x.shape[-2:])
     centred = np.fft.fftshift(kern.weights)
     centred = centred.reshape((1,) * (x.ndim - 2) + centred.shape)
+    from scipy import signal  # here: scipy.signal imports scipy.stats (0.5 s)
+
     return signal.fftconvolve(x, centred, mode="valid", axes=(-2, -1))
 
 
