@@ -99,7 +99,8 @@ def check_studies(config: dict, names) -> list[str]:
         problems += check_measured(config, name, resolve_source(config, name))
         problems += _check_operator(config, name, study)
         problems += _check_hardness(name, study)
-    return problems
+        problems += _check_pressure_below_hardness(config, name, study)
+    return list(dict.fromkeys(problems))  # a study drawn from another: its messages once
 
 
 def _check_hardness(name: str, study: dict) -> list[str]:
@@ -113,6 +114,63 @@ def _check_hardness(name: str, study: dict) -> list[str]:
                 f"body.hardness_MPa (or the study's hardness_MPa) to the hardness "
                 f"[MPa] to cap the pressure at, or cap: false"]
     return []
+
+
+def study_path(config: dict, name: str) -> str:
+    """The configuration path of a figure or sweep: ``figures.<name>`` or ``sweeps.<name>``."""
+    return f"{'sweeps' if name in config['sweeps'] else 'figures'}.{name}"
+
+
+def _numbers(numbers: list[float], like) -> str:
+    """``numbers`` as the configuration writes them: a list if ``like`` is one, else the
+    number (6 significant digits)."""
+    text = [f"{v:.6g}" for v in numbers]
+    return f"[{', '.join(text)}]" if isinstance(like, list) else text[0]
+
+
+#: A hardness typed in GPa into an MPa key: the factor to MPa.
+_HARDNESS_SLIP = ("GPa", 1e3)
+
+
+def _check_pressure_below_hardness(config: dict, name: str, study: dict) -> list[str]:
+    """Refuse a study whose largest nominal pressure exceeds its smallest hardness.
+
+    The cap holds ``0 <= p <= H`` at every point, so the nominal (mean)
+    pressure P of any contact is at most H: a capped cell cannot reach a
+    P_max above H, and an elastic cell checked against H would be beyond it
+    at every such P (the validity share 100 %), so neither result means
+    anything. A hardness below the pressures is a unit slip (H typed in GPa
+    into ``hardness_MPa``, or the pressures in kPa): refused whatever
+    ``cap`` and ``plausibility_check`` say, naming the key the hardness
+    comes from (the study's own ``hardness_MPa``, else ``body.hardness_MPa``).
+    """
+    values = study["hardness_MPa"]
+    if values is None:
+        return []
+    hardness = as_list(values)
+    p_min, p_max = study["pressure_MPa"]
+    if p_max <= min(hardness):
+        return []
+    source = source_name(config, name)
+    where = study_path(config, source)
+    key = (f"{where}.hardness_MPa" if "hardness_MPa" in resolve_source(config, name)
+           else "body.hardness_MPa")
+    elastic, capped = CAP_MODES[study["cap"]]
+    meaningless = ((["cells capped at it cannot reach P_max"] if capped else [])
+                   + (["elastic cells checked against it are beyond it at P_max (their mean "
+                       "contact pressure exceeds it)"] if elastic else []))
+    unit, factor = _HARDNESS_SLIP
+    scaled = [h * factor if h < p_max else h for h in hardness]
+    fixes = [f"give a hardness of at least {p_max:g} MPa"]
+    if min(scaled) >= p_max:
+        fixes.insert(0, f"typed in {unit}? then write {key}: {_numbers(scaled, values)}")
+    if p_min < min(hardness):
+        fixes.append(f"nominal pressures up to it, {where}.pressure_MPa: "
+                     f"[{p_min:g}, {min(hardness):g}]")
+    return [f"{where}: pressure_MPa up to {p_max:g} lies above {key} = "
+            f"{_numbers(hardness, values)}: no contact carries a nominal pressure above the "
+            f"hardness (0 <= p <= H at every point, so P <= H), so "
+            f"{' and '.join(meaningless)}. Fix: " + "; or ".join(fixes)]
 
 
 def check_measured(config: dict, name: str, entry: dict) -> list[str]:
