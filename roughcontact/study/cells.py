@@ -23,6 +23,7 @@ from roughcontact.study.checks import (
     check_plausible,
     check_spectra,
     check_studies,
+    check_windows,
 )
 from roughcontact.study.config import BuildSettings, ContactSettings, as_pair, from_unit
 from roughcontact.study.records import (
@@ -122,6 +123,11 @@ def study_plan(config: dict) -> StudyPlan:
     surfaces = {cell.key: cell for name in SURFACE_FIGURES if name in figure_cells
                 for cell in figure_cells[name]}
     surfaces |= {job.surface.key: job.surface for job in jobs.values()}
+    # by the figure or sweep whose b_mm they have (Fig 5 draws Fig 4's)
+    windows = {name: [c.surface for c in study_cells] for name, study_cells in by_source.items()}
+    windows |= {name: figure_cells[name] for name in SURFACE_FIGURES
+                if name in figure_cells and "b_mm" in config["figures"][name]}
+    _raise("Surfaces shorter than two correlation lengths", check_windows(config, windows))
     _raise("Infeasible surface cells in the config", check_feasible(surfaces))
     asked = influence_geometries(config) | {job.geometry.key: job.geometry
                                             for job in jobs.values()}

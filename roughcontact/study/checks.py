@@ -266,6 +266,89 @@ def check_plausible(cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
 
 
 # ---------------------------------------------------------------------------
+# Generated surfaces too small for their correlation length
+
+#: The longest correlation length a generated surface may have, as a fraction of its
+#: side along the same axis: b <= L / 2, two correlation lengths per window.
+#:
+#: The 10 % lag of Eq 1 is a lag a window can show only up to half its side: the
+#: autocorrelation of a periodic window is symmetric about L / 2, and
+#: :func:`~roughcontact.surfaces.statistics.correlation_length` reads lags up to
+#: L / 2 (NaN beyond). A measured map whose autocorrelation does not fall to 10 %
+#: there is refused a synthetic twin for that reason (:func:`check_measured`), and
+#: the generator warns at this bound when it runs
+#: (:func:`~roughcontact.surfaces.spectra.check_domain`). Measured on 40 Gaussian
+#: surfaces (60 x 60 over 9 mm, method paper, periodic): at b = L / 2 a window's
+#: sigma is 0.88 of the target and 30 % of the windows show no 10 % decay within
+#: L / 2; at b = 20 mm (2.2 L) 0.57 and 45 %. The paper's studies reach b = 0.22 L
+#: (b = 1 mm on 4.5 mm, 2 mm on 9 mm: sigma 0.97 of the target).
+MAX_CORRELATION_FRACTION = 0.5
+
+
+def _pair_text(values) -> str:
+    """A pair as the configuration may write it: one number if both are equal."""
+    return _numbers(list(values), None if values[0] == values[-1] else list(values))
+
+
+def window_message(config: dict, name: str, cell: GeneratedCell) -> str | None:
+    """Why a generated cell of the figure or sweep ``name`` has a correlation length
+    longer than :data:`MAX_CORRELATION_FRACTION` of its side, with the fixes, or None."""
+    b, size = (tuple(in_unit(v, MM) for v in pair) for pair in (cell.corr_length, cell.size))
+    limit = tuple(MAX_CORRELATION_FRACTION * side for side in size)
+    if all(bi <= li for bi, li in zip(b, limit, strict=True)):
+        return None
+    entry = {**config["figures"], **config["sweeps"]}[name]
+    where = study_path(config, name)
+    own_size = entry.get("size_mm") is not None  # a study's own size, else the surfaces'
+    size_key = f"{where}.size_mm" if own_size else "surfaces.size_mm"
+    spacing = [s / n for s, n in zip(size, cell.grid, strict=True)]
+    needed = [math.ceil(bi / MAX_CORRELATION_FRACTION * 1e3 - 1e-9) / 1e3 for bi in b]
+    if own_size:  # a square area on the surfaces' spacing
+        side = max(needed)
+        grid = [max(4, round(side / h)) for h in spacing]
+        larger = (f"{size_key}: {side:g}{_in_place(entry['size_mm'], size)} ({grid[0]} x "
+                  f"{grid[1]} elements at the surfaces' spacing)")
+    else:
+        sides = [max(n, s) for n, s in zip(needed, size, strict=True)]
+        grid = [max(4, round(side / h)) for side, h in zip(sides, spacing, strict=True)]
+        larger = (f"{size_key}: {_pair_text(sides)} with surfaces.grid: {_pair_text(grid)} "
+                  "(the same spacing)")
+    shortest = [min(bi, li) for bi, li in zip(b, limit, strict=True)]
+    return (f"{where}: b_mm = {_pair_text(b)} is longer than half the surface, {size_key} = "
+            f"{_pair_text(size)} (L / 2 = {_pair_text(limit)} mm): fewer than two "
+            "correlation lengths fit in it: the lag at which the autocorrelation falls to "
+            "10 % (Eq 1) lies beyond the L / 2 a window shows, and a window's sigma falls "
+            "short of the target (0.88 of it at b = L / 2, 0.57 at b = 2.2 L). Fix: "
+            f"{where}.b_mm: {_pair_text(shortest)} or shorter"
+            f"{_in_place(entry['b_mm'], b)}; or a larger surface, {larger}")
+
+
+def _in_place(configured, pair) -> str:
+    """`` in place of x`` where a configured list scans values and ``pair`` [mm] (equal
+    along both axes) is one of them, else ''."""
+    if isinstance(configured, list) and pair[0] == pair[-1] and len(configured) > 1:
+        return f" in place of {pair[0]:g}"
+    return ""
+
+
+def check_windows(config: dict, cells) -> list[str]:
+    """Messages for the generated cells whose correlation length exceeds
+    :data:`MAX_CORRELATION_FRACTION` of their side (:func:`window_message`), once per
+    cell; ``cells`` the surface cells by the figure or sweep whose ``b_mm`` they have.
+    Cells with a spectrum (where b only labels them) and measured surfaces and their
+    twins (whose b is measured: :func:`check_measured`) are not judged here."""
+    problems = []
+    for name, surfaces in cells.items():
+        if {**config["figures"], **config["sweeps"]}[name].get("surface") is not None:
+            continue
+        for cell in {c.key: c for c in surfaces}.values():
+            if isinstance(cell, GeneratedCell) and cell.spectrum is None:
+                message = window_message(config, name, cell)
+                problems += [message] if message else []
+    return problems
+
+
+# ---------------------------------------------------------------------------
 # Surface cells the generator cannot make
 
 #: A calibrated cell whose target kurtosis lies within this fraction of
