@@ -226,6 +226,17 @@ _FIGURE_SURFACES = {"fig03": _fig03_surfaces, "fig04": _fig04_surfaces,
                     "measured": _unique_study_surfaces}
 
 
+#: Figures drawn with other figures' settings besides their own: Fig 5 draws the heights
+#: of Fig 4's surfaces in Fig 4's sigma (the schema requires fig04 beside fig05).
+_DRAWN_WITH = {"fig05": ("fig04",)}
+
+
+def drawn_with(config: dict, name: str) -> dict:
+    """The validated settings of the other figures a figure draws with, by figure name
+    (``{"fig04": ...}`` for Fig 5; none for the others): notebook parameters."""
+    return {other: config["figures"][other] for other in _DRAWN_WITH.get(name, ())}
+
+
 def figure_surfaces(config: dict, name: str, cells) -> tuple[SurfaceCell, ...]:
     """The surface cells a figure draws, in its order (none for the others); ``cells``
     the study cells by study name."""
