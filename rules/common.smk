@@ -9,7 +9,12 @@ import re
 from snakemake.exceptions import IncompleteCheckpointException, WorkflowError
 
 from roughcontact.study import grid_convergence, resources
-from roughcontact.study.cells import CONTACT_FIGURES, convergence_presets, study_plan
+from roughcontact.study.cells import (
+    CONTACT_FIGURES,
+    convergence_presets,
+    drawn_with,
+    study_plan,
+)
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import (
     ConvergenceSettings,
@@ -265,7 +270,7 @@ def get_figure_parameters(wildcards):
             "surface_files": get_figure_surfaces(wildcards),
             "aggregate_files": get_figure_aggregates(wildcards),
             "cells": [c.params() for c in cells],
-            "fig04": config["figures"].get("fig04", {}),
+            **drawn_with(config, wildcards.fig),
         }
     )
 

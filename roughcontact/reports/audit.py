@@ -124,7 +124,8 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
     with the file, the field, the value expected and the value found.
     """
     root = Path(root)
-    key = StudyCell.from_params(cell).contact_key
+    study_cell = StudyCell.from_params(cell)
+    key = study_cell.contact_key
     surf_path = root / "results" / "surfaces" / f"{cell['surface_key']}.h5"
     infl_path = root / "results" / "influence" / f"{cell['geometry_key']}.h5"
     cont_path = root / "results" / "contact" / f"{key}.h5"
@@ -135,12 +136,12 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
         "skew": s["skew"], "kurt": s["kurt"], "b_mm": s["b_mm"][0],
         "size_mm": g["size_mm"][0], "grid": f"{g['grid'][0]}x{g['grid'][1]}",
         "nu": g["nu"], "thickness_mm": g["thickness_mm"], "base": g["base"],
-        "mesh": g["mesh"], "accuracy": cell.get("accuracy", "as configured"),
+        "mesh": g["mesh"], "accuracy": study_cell.accuracy.name,
         "surfaces": s["count"],
         "P_min_MPa": cell["pressure_MPa"][0], "P_max_MPa": cell["pressure_MPa"][1],
         "surface_cell": cell["surface_key"], "geometry": cell["geometry_key"],
         "contact_job": key,
-        **{f"expected_{k}": v for k, v in cell.get("expected_error", {}).items()},
+        **{f"expected_{k}": v for k, v in study_cell.accuracy.errors().items()},
     }
     missing = [p.name for p in (surf_path, infl_path, cont_path) if not p.exists()]
     if missing:
@@ -168,7 +169,7 @@ def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels
     # made for this geometry and verified against its content hash
     unit, geometry_attrs = read_influence(infl_path, geometry=g)
     influence_hash = geometry_attrs["content_sha256"]
-    row["operator"] = geometry_attrs.get("operator", "dense")
+    row["operator"] = geometry_attrs["operator"]
     row["influence_sha256"] = influence_hash
     row["mesh_diagonal_error"] = (
         MESH_DIAGONAL_ERROR.get(g["mesh"], float("nan")) if row["operator"] == "dense"

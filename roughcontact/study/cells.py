@@ -23,6 +23,7 @@ from roughcontact.study.checks import (
     check_plausible,
     check_spectra,
     check_studies,
+    check_windows,
 )
 from roughcontact.study.config import BuildSettings, ContactSettings, as_pair, from_unit
 from roughcontact.study.records import (
@@ -122,6 +123,11 @@ def study_plan(config: dict) -> StudyPlan:
     surfaces = {cell.key: cell for name in SURFACE_FIGURES if name in figure_cells
                 for cell in figure_cells[name]}
     surfaces |= {job.surface.key: job.surface for job in jobs.values()}
+    # by the figure or sweep whose b_mm they have (Fig 5 draws Fig 4's)
+    windows = {name: [c.surface for c in study_cells] for name, study_cells in by_source.items()}
+    windows |= {name: figure_cells[name] for name in SURFACE_FIGURES
+                if name in figure_cells and "b_mm" in config["figures"][name]}
+    _raise("Surfaces shorter than two correlation lengths", check_windows(config, windows))
     _raise("Infeasible surface cells in the config", check_feasible(surfaces))
     asked = influence_geometries(config) | {job.geometry.key: job.geometry
                                             for job in jobs.values()}
@@ -218,6 +224,17 @@ def _unique_study_surfaces(config: dict, name: str, cells) -> list:
 _FIGURE_SURFACES = {"fig03": _fig03_surfaces, "fig04": _fig04_surfaces,
                     "fig05": _fig04_surfaces, "fig10": _study_surfaces,
                     "measured": _unique_study_surfaces}
+
+
+#: Figures drawn with other figures' settings besides their own: Fig 5 draws the heights
+#: of Fig 4's surfaces in Fig 4's sigma (the schema requires fig04 beside fig05).
+_DRAWN_WITH = {"fig05": ("fig04",)}
+
+
+def drawn_with(config: dict, name: str) -> dict:
+    """The validated settings of the other figures a figure draws with, by figure name
+    (``{"fig04": ...}`` for Fig 5; none for the others): notebook parameters."""
+    return {other: config["figures"][other] for other in _DRAWN_WITH.get(name, ())}
 
 
 def figure_surfaces(config: dict, name: str, cells) -> tuple[SurfaceCell, ...]:

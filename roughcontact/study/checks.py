@@ -99,7 +99,8 @@ def check_studies(config: dict, names) -> list[str]:
         problems += check_measured(config, name, resolve_source(config, name))
         problems += _check_operator(config, name, study)
         problems += _check_hardness(name, study)
-    return problems
+        problems += _check_pressure_below_hardness(config, name, study)
+    return list(dict.fromkeys(problems))  # a study drawn from another: its messages once
 
 
 def _check_hardness(name: str, study: dict) -> list[str]:
@@ -113,6 +114,63 @@ def _check_hardness(name: str, study: dict) -> list[str]:
                 f"body.hardness_MPa (or the study's hardness_MPa) to the hardness "
                 f"[MPa] to cap the pressure at, or cap: false"]
     return []
+
+
+def study_path(config: dict, name: str) -> str:
+    """The configuration path of a figure or sweep: ``figures.<name>`` or ``sweeps.<name>``."""
+    return f"{'sweeps' if name in config['sweeps'] else 'figures'}.{name}"
+
+
+def _numbers(numbers: list[float], like) -> str:
+    """``numbers`` as the configuration writes them: a list if ``like`` is one, else the
+    number (6 significant digits)."""
+    text = [f"{v:.6g}" for v in numbers]
+    return f"[{', '.join(text)}]" if isinstance(like, list) else text[0]
+
+
+#: A hardness typed in GPa into an MPa key: the factor to MPa.
+_HARDNESS_SLIP = ("GPa", 1e3)
+
+
+def _check_pressure_below_hardness(config: dict, name: str, study: dict) -> list[str]:
+    """Refuse a study whose largest nominal pressure exceeds its smallest hardness.
+
+    The cap holds ``0 <= p <= H`` at every point, so the nominal (mean)
+    pressure P of any contact is at most H: a capped cell cannot reach a
+    P_max above H, and an elastic cell checked against H would be beyond it
+    at every such P (the validity share 100 %), so neither result means
+    anything. A hardness below the pressures is a unit slip (H typed in GPa
+    into ``hardness_MPa``, or the pressures in kPa): refused whatever
+    ``cap`` and ``plausibility_check`` say, naming the key the hardness
+    comes from (the study's own ``hardness_MPa``, else ``body.hardness_MPa``).
+    """
+    values = study["hardness_MPa"]
+    if values is None:
+        return []
+    hardness = as_list(values)
+    p_min, p_max = study["pressure_MPa"]
+    if p_max <= min(hardness):
+        return []
+    source = source_name(config, name)
+    where = study_path(config, source)
+    key = (f"{where}.hardness_MPa" if "hardness_MPa" in resolve_source(config, name)
+           else "body.hardness_MPa")
+    elastic, capped = CAP_MODES[study["cap"]]
+    meaningless = ((["cells capped at it cannot reach P_max"] if capped else [])
+                   + (["elastic cells checked against it are beyond it at P_max (their mean "
+                       "contact pressure exceeds it)"] if elastic else []))
+    unit, factor = _HARDNESS_SLIP
+    scaled = [h * factor if h < p_max else h for h in hardness]
+    fixes = [f"give a hardness of at least {p_max:g} MPa"]
+    if min(scaled) >= p_max:
+        fixes.insert(0, f"typed in {unit}? then write {key}: {_numbers(scaled, values)}")
+    if p_min < min(hardness):
+        fixes.append(f"nominal pressures up to it, {where}.pressure_MPa: "
+                     f"[{p_min:g}, {min(hardness):g}]")
+    return [f"{where}: pressure_MPa up to {p_max:g} lies above {key} = "
+            f"{_numbers(hardness, values)}: no contact carries a nominal pressure above the "
+            f"hardness (0 <= p <= H at every point, so P <= H), so "
+            f"{' and '.join(meaningless)}. Fix: " + "; or ".join(fixes)]
 
 
 def check_measured(config: dict, name: str, entry: dict) -> list[str]:
@@ -205,6 +263,89 @@ def check_plausible(cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
                     "linear elastic model has no meaning; check the units of pressure_MPa and "
                     "E_MPa")
     return sorted(problems)
+
+
+# ---------------------------------------------------------------------------
+# Generated surfaces too small for their correlation length
+
+#: The longest correlation length a generated surface may have, as a fraction of its
+#: side along the same axis: b <= L / 2, two correlation lengths per window.
+#:
+#: The 10 % lag of Eq 1 is a lag a window can show only up to half its side: the
+#: autocorrelation of a periodic window is symmetric about L / 2, and
+#: :func:`~roughcontact.surfaces.statistics.correlation_length` reads lags up to
+#: L / 2 (NaN beyond). A measured map whose autocorrelation does not fall to 10 %
+#: there is refused a synthetic twin for that reason (:func:`check_measured`), and
+#: the generator warns at this bound when it runs
+#: (:func:`~roughcontact.surfaces.spectra.check_domain`). Measured on 40 Gaussian
+#: surfaces (60 x 60 over 9 mm, method paper, periodic): at b = L / 2 a window's
+#: sigma is 0.88 of the target and 30 % of the windows show no 10 % decay within
+#: L / 2; at b = 20 mm (2.2 L) 0.57 and 45 %. The paper's studies reach b = 0.22 L
+#: (b = 1 mm on 4.5 mm, 2 mm on 9 mm: sigma 0.97 of the target).
+MAX_CORRELATION_FRACTION = 0.5
+
+
+def _pair_text(values) -> str:
+    """A pair as the configuration may write it: one number if both are equal."""
+    return _numbers(list(values), None if values[0] == values[-1] else list(values))
+
+
+def window_message(config: dict, name: str, cell: GeneratedCell) -> str | None:
+    """Why a generated cell of the figure or sweep ``name`` has a correlation length
+    longer than :data:`MAX_CORRELATION_FRACTION` of its side, with the fixes, or None."""
+    b, size = (tuple(in_unit(v, MM) for v in pair) for pair in (cell.corr_length, cell.size))
+    limit = tuple(MAX_CORRELATION_FRACTION * side for side in size)
+    if all(bi <= li for bi, li in zip(b, limit, strict=True)):
+        return None
+    entry = {**config["figures"], **config["sweeps"]}[name]
+    where = study_path(config, name)
+    own_size = entry.get("size_mm") is not None  # a study's own size, else the surfaces'
+    size_key = f"{where}.size_mm" if own_size else "surfaces.size_mm"
+    spacing = [s / n for s, n in zip(size, cell.grid, strict=True)]
+    needed = [math.ceil(bi / MAX_CORRELATION_FRACTION * 1e3 - 1e-9) / 1e3 for bi in b]
+    if own_size:  # a square area on the surfaces' spacing
+        side = max(needed)
+        grid = [max(4, round(side / h)) for h in spacing]
+        larger = (f"{size_key}: {side:g}{_in_place(entry['size_mm'], size)} ({grid[0]} x "
+                  f"{grid[1]} elements at the surfaces' spacing)")
+    else:
+        sides = [max(n, s) for n, s in zip(needed, size, strict=True)]
+        grid = [max(4, round(side / h)) for side, h in zip(sides, spacing, strict=True)]
+        larger = (f"{size_key}: {_pair_text(sides)} with surfaces.grid: {_pair_text(grid)} "
+                  "(the same spacing)")
+    shortest = [min(bi, li) for bi, li in zip(b, limit, strict=True)]
+    return (f"{where}: b_mm = {_pair_text(b)} is longer than half the surface, {size_key} = "
+            f"{_pair_text(size)} (L / 2 = {_pair_text(limit)} mm): fewer than two "
+            "correlation lengths fit in it: the lag at which the autocorrelation falls to "
+            "10 % (Eq 1) lies beyond the L / 2 a window shows, and a window's sigma falls "
+            "short of the target (0.88 of it at b = L / 2, 0.57 at b = 2.2 L). Fix: "
+            f"{where}.b_mm: {_pair_text(shortest)} or shorter"
+            f"{_in_place(entry['b_mm'], b)}; or a larger surface, {larger}")
+
+
+def _in_place(configured, pair) -> str:
+    """`` in place of x`` where a configured list scans values and ``pair`` [mm] (equal
+    along both axes) is one of them, else ''."""
+    if isinstance(configured, list) and pair[0] == pair[-1] and len(configured) > 1:
+        return f" in place of {pair[0]:g}"
+    return ""
+
+
+def check_windows(config: dict, cells) -> list[str]:
+    """Messages for the generated cells whose correlation length exceeds
+    :data:`MAX_CORRELATION_FRACTION` of their side (:func:`window_message`), once per
+    cell; ``cells`` the surface cells by the figure or sweep whose ``b_mm`` they have.
+    Cells with a spectrum (where b only labels them) and measured surfaces and their
+    twins (whose b is measured: :func:`check_measured`) are not judged here."""
+    problems = []
+    for name, surfaces in cells.items():
+        if {**config["figures"], **config["sweeps"]}[name].get("surface") is not None:
+            continue
+        for cell in {c.key: c for c in surfaces}.values():
+            if isinstance(cell, GeneratedCell) and cell.spectrum is None:
+                message = window_message(config, name, cell)
+                problems += [message] if message else []
+    return problems
 
 
 # ---------------------------------------------------------------------------

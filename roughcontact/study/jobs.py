@@ -608,7 +608,7 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
     log.info("contact %s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
              "method %s, tol %.1e, precision %s, influence %s, %s", name, m, settings.steps,
              job.pressure_end, settings.method, settings.tol, settings.precision,
-             geometry_attrs.get("operator", "dense"),  # files from before operators: dense
+             geometry_attrs["operator"],
              "elastic" if hardness is None else f"pressure capped at H L / (E sigma) = "
              f"{hardness:.6g}")
     result = cell_module.sweep_cell(unit, heights, job.geometry.block(), job.pressure_end,

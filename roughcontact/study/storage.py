@@ -22,14 +22,16 @@ Layout of a surface file (``results/surfaces/<cell>.h5``)::
     /stats/mean, sigma, skew, kurt   (m,)  realised moments (Eq 2-5), heights / sigma
     /stats/corr_length_x, corr_length_y (m,) [m] lag of 10 % ACF decay
     attributes: cell, study_seed, spec (JSON), every spec field, the filter's
-                S3 and S4, the input moments and Johnson curve, provenance
+                S3 and S4, the input moments and Johnson curve, provenance,
+                format_version
 
 Layout of an influence file (``results/influence/<geometry>.h5``)::
 
     /unit_influence (n, n)  E * C [m] of a dense model, or
     /correction     (nc, nc) the finite-body correction [1/m] of a matrix-free
                     hybrid operator (none for the half-space)
-    attributes: geometry, params, operator, checks, content_sha256, provenance
+    attributes: geometry, params, operator (dense, hybrid or halfspace), checks,
+                content_sha256, provenance, format_version
 
 Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
 
@@ -42,10 +44,17 @@ Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
                 the dimensionless cap ``nondim_hardness`` H L / (E sigma), -1 for an
                 elastic sweep), solver
                 statistics, the content hashes of the contact arrays and of
-                the surface and influence inputs, provenance
+                the surface and influence inputs, provenance, format_version
 
 Arrays are row-major over y then x (axis 0 is y), the element ordering of the
 influence matrices.
+
+Every file carries the layout version it was written in (root attribute
+``format_version``, :data:`FORMAT_VERSION`); a file without one is version 1.
+What a version-1 file may lack, and the value that holds for it, is listed in
+:data:`VERSION_1_LACKED` and filled by the readers in one place
+(:func:`upgraded`); nothing past them repeats such a default. A file of a
+newer version than this package writes is refused.
 """
 
 from __future__ import annotations
@@ -75,6 +84,37 @@ PROFILE_ARRAYS = ("profile_ranks", "pressure_profile", "load_profile")
 #: Scalar settings of NondimSweep, stored as ``sweep_<name>`` attributes.
 SWEEP_SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffness_tol",
                   "precision")
+
+
+#: The layout version of the files this module writes (root attribute ``format_version``).
+#: 2: every influence file names its ``operator`` (a dense matrix too) and every file
+#: carries ``format_version``; 1: the files before (no ``format_version``).
+FORMAT_VERSION = 2
+
+#: Root attributes that a version-1 file of each kind may lack, with the value that holds
+#: for it. Influence files from before the matrix-free operators held the dense
+#: finite-element matrix and named no ``operator``; contact files from before the
+#: hardness cap were elastic sweeps, ``sweep_hardness`` -1 (no cap).
+VERSION_1_LACKED = {
+    "surfaces": {},
+    "influence": {"operator": "dense"},
+    "contact": {"sweep_hardness": -1.0},
+}
+
+
+def upgraded(path, attrs: dict, kind: str) -> dict:
+    """A file's root attributes in the current layout: a version-1 file (no
+    ``format_version``) with what it lacked filled in (:data:`VERSION_1_LACKED` of its
+    ``kind``); a file of a newer version than :data:`FORMAT_VERSION` raises
+    :class:`StoredFileError`."""
+    version = int(attrs["format_version"]) if "format_version" in attrs else 1
+    if version > FORMAT_VERSION:
+        raise StoredFileError(f"{path}: written in file format version {version} by a newer "
+                              f"roughcontact (this one reads up to {FORMAT_VERSION}); update "
+                              f"roughcontact, or {rebuild(path)}", path)
+    if version == 1:
+        return {**VERSION_1_LACKED[kind], **attrs}
+    return attrs
 
 
 def _attr_value(value):
@@ -283,10 +323,12 @@ def write_h5(path: str | os.PathLike, datasets: dict, attrs: dict) -> None:
     ``datasets`` maps a name (``"stats/skew"`` makes a group) to an array or to
     ``(array, {attribute: value})``; nested dicts and lists in attributes are
     stored as JSON text. Without a ``content_sha256`` in ``attrs``, the hash of
-    every dataset (:func:`datasets_sha256`) is added.
+    every dataset (:func:`datasets_sha256`) is added; ``format_version`` is always
+    :data:`FORMAT_VERSION` (the layout written here).
     """
     if "content_sha256" not in attrs:
         attrs = {**attrs, "content_sha256": datasets_sha256(datasets)}
+    attrs = {**attrs, "format_version": FORMAT_VERSION}
     with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as f:
             for name, item in datasets.items():
@@ -320,7 +362,7 @@ def read_surfaces(path: str | os.PathLike, count: int | None = None, *,
     """
     sl = slice(None) if count is None else slice(0, count)
     with open_h5(path) as f:
-        attrs = _decoded(f.attrs)
+        attrs = upgraded(path, _decoded(f.attrs), "surfaces")
         check_attributes(path, attrs, _expected(cell=cell, study_seed=study_seed))
         arrays = _all_datasets(f)
     verify(path, attrs, arrays_sha256(arrays))
@@ -359,7 +401,7 @@ def influence_datasets(unit) -> tuple[dict, dict]:
             "units": "m (E * C: displacement per unit pressure times Young's modulus)",
             "layout": "C[i, j]: displacement at the centre of element i per unit "
                       "pressure on element j; elements row-major over y then x",
-        })}, {}
+        })}, {"operator": "dense"}
     attrs = {"operator": unit.kind, "operator_grid": list(unit.grid),
              "operator_size_m": list(unit.size), "operator_nu": unit.nu}
     datasets = {}
@@ -400,7 +442,7 @@ def read_influence(path: str | os.PathLike, *, geometry: dict | None = None):
     geometry's grid.
     """
     with open_h5(path) as f:
-        attrs = _decoded(f.attrs)
+        attrs = upgraded(path, _decoded(f.attrs), "influence")
         check_attributes(path, attrs, _expected(geometry=geometry))
         if "unit_influence" in f:
             unit = f["unit_influence"][...]
@@ -413,10 +455,11 @@ def read_influence(path: str | os.PathLike, *, geometry: dict | None = None):
     def pair(value):
         return tuple(json.loads(value)) if isinstance(value, str) else tuple(value)
 
-    kind = attrs.get("operator")
+    kind = attrs.get("operator")  # None: not an influence file
     if kind not in ("hybrid", "halfspace"):
-        raise StoredFileError(f"{path}: not an influence file (no unit_influence dataset and "
-                              f"operator attribute {kind!r}); {rebuild(path)}", path)
+        raise StoredFileError(f"{path}: not an influence file (no unit_influence dataset, and "
+                              f"no matrix-free operator: operator attribute {kind!r}); "
+                              f"{rebuild(path)}", path)
     try:
         coarse = pair(attrs["coarse_grid"]) if correction is not None else None
         op = BlockOperator(grid=pair(attrs["operator_grid"]),
@@ -506,7 +549,7 @@ def read_contact(path: str | os.PathLike, *,
     end and cap), one row per surface of the job's cell.
     """
     with open_h5(path) as f:
-        attrs = _decoded(f.attrs)
+        attrs = upgraded(path, _decoded(f.attrs), "contact")
         check_attributes(path, attrs, _expected(job=job))
         missing = [name for name in CONTACT_ARRAYS if name not in f]
         if missing:
@@ -524,7 +567,7 @@ def read_contact(path: str | os.PathLike, *,
     if isinstance(attrs.get("seeds"), str):  # stored as JSON text
         attrs["seeds"] = json.loads(attrs["seeds"])
     max_iter = int(attrs["sweep_max_iter"])
-    hardness = float(attrs.get("sweep_hardness", -1.0))
+    hardness = float(attrs["sweep_hardness"])
     fields = {CONTACT_FIELDS.get(name, name): values for name, values in arrays.items()}
     return NondimSweep(**fields, **settings, max_iter=None if max_iter < 0 else max_iter,
                        nondim_hardness=None if hardness < 0 else hardness), attrs

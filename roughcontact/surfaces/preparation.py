@@ -19,7 +19,9 @@ The steps, in the order :func:`prepare` applies them (each recorded in
    mounting, :func:`remove_plane`), which also leaves heights of zero mean;
    with ``form_degree`` k >= 2, then the least-squares polynomial of total
    degree k in x and y (:func:`remove_polynomial`; k = 2 takes out a
-   sphere's or a cylinder's form to second order).
+   sphere's or a cylinder's form to second order). Heights that are then
+   flat (:data:`FLAT_RELATIVE`: a constant map, or one that is its form)
+   are refused.
 3. ``outliers_sigma``: points farther than k sigma from the mean plane are
    counted, filled as holes and the form removed again.
 4. ``decimate`` (an integer: means of k x k blocks, :func:`decimate`) or
@@ -353,6 +355,31 @@ def _report_spikes(formed: np.ndarray, heights: np.ndarray, spacing, form_degree
     return int(spikes.sum())
 
 
+#: Heights whose standard deviation, with the form removed, is at most this fraction of
+#: their largest magnitude are flat: what is left is the rounding of the least-squares
+#: fit in double precision (4e-16 of the heights of a constant 32 x 32 map), not
+#: roughness. A map stored in single precision resolves 6e-8 of its magnitude, a 16-bit
+#: instrument map 3e-5: any measured roughness lies far above the threshold.
+FLAT_RELATIVE = 1e-12
+
+
+def _refuse_flat(heights: np.ndarray, raw: np.ndarray, form_degree: int, source) -> None:
+    """Raise :class:`MeasurementError` if ``heights`` (``raw`` [m] less its form of degree
+    ``form_degree``) are flat (:data:`FLAT_RELATIVE`): a constant map, or one that is
+    its form. Checked before any statistic is taken, whose values (a correlation length,
+    Sk, Ku of rounding noise) would only mislead."""
+    sigma, magnitude = float(heights.std()), float(np.abs(raw).max())
+    if sigma > FLAT_RELATIVE * magnitude:
+        return
+    form = "plane" if form_degree == 1 else f"polynomial of degree {form_degree}"
+    raise MeasurementError(
+        f"{source}: the heights are flat (a constant or a {form}): with the least-squares "
+        f"{form} removed their standard deviation is {sigma / 1e-6:.3g} um on heights of up "
+        f"to {magnitude / 1e-6:.3g} um, the rounding of the fit, not roughness. Check that "
+        "the file holds the height map meant (in an instrument file, surface.channel "
+        "selects another data channel)", source)
+
+
 def prepare(raw: np.ndarray, spacing, *, source, absent: int = 0, crop=None,
             fill_holes: float = 0.0, form_degree: int = 1, outliers_sigma: float | None = None,
             decimate_by: int | None = None, resample_grid=None):
@@ -372,7 +399,7 @@ def prepare(raw: np.ndarray, spacing, *, source, absent: int = 0, crop=None,
     MeasurementError
         For a grid of fewer than :data:`~roughcontact.surfaces.readers.MIN_POINTS`
         points along an axis, a crop window outside it, too many holes, or
-        heights that are a plane.
+        heights that are flat (:data:`FLAT_RELATIVE`: constant, or their form).
     """
     ny, nx = raw.shape
     if min(nx, ny) < MIN_POINTS:
@@ -389,11 +416,10 @@ def prepare(raw: np.ndarray, spacing, *, source, absent: int = 0, crop=None,
     filled_raw, filled = fill_missing(raw, float(fill_holes), source=str(source), absent=absent,
                                       window=(origin, spacing))
     heights, plane = remove_plane(filled_raw, spacing)
-    if not np.ptp(heights) > 1e-12 * max(np.ptp(filled_raw), np.finfo(float).tiny):
-        raise MeasurementError(f"{source}: the heights are a plane (no roughness left)", source)
     if form_degree > 1:
         heights, coefficients = remove_polynomial(heights, spacing, int(form_degree))
         steps["form_coefficients"] = coefficients
+    _refuse_flat(heights, filled_raw, form_degree, source)
     formed = heights
     if outliers_sigma is not None:
         heights, steps["outliers"] = remove_outliers(heights, spacing, outliers_sigma,

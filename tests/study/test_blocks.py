@@ -127,7 +127,7 @@ def test_generated_surfaces_too_small_for_the_body_are_refused_with_body_keys():
     config = {"study_seed": 0, "figures": {},
               "surfaces": {"grid": 16, "size_mm": 0.5, "count": 2},
               "body": {"thickness_mm": 10.0},
-              "sweeps": {"small": {"sigma_um": 0.1, "pressure_MPa": [0.01, 0.1]}}}
+              "sweeps": {"small": {"sigma_um": 0.1, "b_mm": 0.2, "pressure_MPa": [0.01, 0.1]}}}
     message = refusal(config)
     offered = remedies(message)
     assert offered and all(r.startswith("body.") for r in offered)

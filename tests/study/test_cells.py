@@ -7,7 +7,7 @@ import pytest
 from scipy import ndimage
 
 from roughcontact.elasticity.influence import ModelTooLarge
-from roughcontact.study.cells import study_plan
+from roughcontact.study.cells import drawn_with, study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import BuildSettings, in_unit, load_config, validated
 from roughcontact.study.jobs import build_influence
@@ -98,6 +98,9 @@ def test_the_plan_computes_each_study_once_and_its_jobs_from_its_cells():
         [c.surface.key for c in plan.cells["fig09"]]
     assert plan.figure_surfaces["fig05"] == plan.figure_surfaces["fig04"]
     assert plan.figure_surfaces["fig07"] == ()
+    # and Fig 5 draws them in Fig 4's sigma: its notebook gets Fig 4's validated settings
+    assert drawn_with(config, "fig05") == {"fig04": config["figures"]["fig04"]}
+    assert all(drawn_with(config, name) == {} for name in plan.figures if name != "fig05")
 
 
 def test_a_cells_sweep_end_and_key_follow_its_nondimensional_pressure():

@@ -85,6 +85,9 @@ def test_a_sweep_without_its_pressure_range_names_pressure_MPa():
     (measured_sweep({"file": "a.npy", "decimate": 2, "resample_grid": 32}),
      "sweeps.rough.surface: 'decimate' and 'resample_grid' both set the contact grid: keep "
      "one of them"),
+    ({"figures": {"fig05": {"bins": 20}}},
+     "figures: 'fig05' draws the height distributions of fig04's surfaces: add fig04 "
+     "(sigma_um, b_mm, moments) or remove fig05"),
 ])
 def test_each_kind_of_refusal_names_the_key_in_plain_words(config, line):
     assert errors(config) == [line]

@@ -92,3 +92,47 @@ def test_bad_hardness_values_are_named_by_the_schema():
         config(body={"hardness_MPa": -5.0})
     with pytest.raises(ValueError, match="cap"):
         config(contact={"cap": "yes"})
+
+
+@pytest.mark.parametrize("cap", [False, True, "both"])
+def test_a_hardness_below_the_pressures_is_refused_as_a_unit_slip(cap):
+    """0 <= p <= H everywhere, so no nominal pressure exceeds H: a 0.05 MPa hardness under
+    pressures up to 5 MPa is 0.05 GPa typed into hardness_MPa, whatever the cap mode."""
+    raw = copy.deepcopy(BASE)
+    raw["figures"] = {"fig07": {**STUDY, "pressure_MPa": [0.1, 5.0]},
+                      "fig12": {"from": "fig07"}}
+    raw["body"]["hardness_MPa"] = 0.05
+    raw["contact"] = {"cap": cap}
+    with pytest.raises(ConfigProblems) as raised:
+        study_plan(validated(raw))
+    (problem,) = raised.value.problems  # once, though fig12 draws fig07's cells
+    assert problem.startswith("figures.fig07: pressure_MPa up to 5 lies above "
+                              "body.hardness_MPa = 0.05: no contact carries a nominal pressure "
+                              "above the hardness")
+    assert ("cannot reach P_max" in problem) == (cap is not False)
+    assert ("checked against it" in problem) == (cap is not True)
+    assert problem.endswith("Fix: typed in GPa? then write body.hardness_MPa: 50; or give a "
+                            "hardness of at least 5 MPa")
+    # the advice, followed, plans (P_max = H is allowed: the mean pressure at its bound)
+    raw["body"]["hardness_MPa"] = 50.0
+    assert study_plan(validated(raw)).jobs
+    raw["body"]["hardness_MPa"] = 5.0
+    assert study_plan(validated(raw)).jobs
+
+
+def test_a_studys_own_hardness_list_is_named_and_only_its_slips_are_scaled():
+    raw = copy.deepcopy(BASE)
+    raw["sweeps"] = {"scan": {**STUDY, "pressure_MPa": [0.01, 5.0],
+                              "hardness_MPa": [0.05, 100.0]}}
+    raw["body"]["hardness_MPa"] = 500.0  # the study's own list is the one used
+    with pytest.raises(ConfigProblems) as raised:
+        study_plan(validated(raw))
+    (problem,) = raised.value.problems
+    assert "above sweeps.scan.hardness_MPa = [0.05, 100]" in problem
+    fixes = problem.split("Fix: ")[1].split("; or ")
+    assert fixes == ["typed in GPa? then write sweeps.scan.hardness_MPa: [50, 100]",
+                     "give a hardness of at least 5 MPa",
+                     "nominal pressures up to it, sweeps.scan.pressure_MPa: [0.01, 0.05]"]
+    for scan, pressures in (([50.0, 100.0], [0.01, 5.0]), ([0.05, 100.0], [0.01, 0.05])):
+        raw["sweeps"]["scan"].update(hardness_MPa=scan, pressure_MPa=pressures)
+        assert study_plan(validated(raw)).jobs

@@ -27,10 +27,11 @@ REPO = Path(__file__).resolve().parents[2]
 
 @pytest.fixture(scope="module")
 def small_study():
-    """The quick study on 8 x 8 grids: its config and first contact job."""
+    """The quick study on 8 x 8 grids (2.4 mm: twice its longest b): its config and first
+    contact job."""
     config = load_config(REPO / "config" / "quick.yaml")
     config["surfaces"]["grid"] = [8, 8]
-    config["surfaces"]["size_mm"] = [1.2, 1.2]
+    config["surfaces"]["size_mm"] = [2.4, 2.4]
     job = next(iter(study_plan(config).jobs.values()))
     return config, job
 

@@ -93,6 +93,62 @@ def test_contact_files_round_trip_and_refuse_edits_and_truncation(tmp_path):
 
 
 # ---------------------------------------------------------------------------
+# File format versions: what older files lack is filled by the readers, in one place
+
+
+def as_version_1(path, *lacking):
+    """The file at ``path`` as version 1 wrote it: no ``format_version``, nor ``lacking``
+    (attributes only: the content hash still holds)."""
+    with h5py.File(path, "r+") as f:
+        for name in ("format_version", *lacking):
+            del f.attrs[name]
+
+
+def test_new_files_carry_their_format_version_and_a_dense_file_its_operator(tmp_path):
+    storage.write_influence(tmp_path / "g.h5", np.eye(4), {"geometry": "g"})
+    storage.write_contact(tmp_path / "job.h5", sweep(), {"job": "{}"})
+    surfaces_file(tmp_path / "cell.h5")
+    _, attrs = storage.read_influence(tmp_path / "g.h5")
+    version = storage.FORMAT_VERSION
+    assert attrs["format_version"] == version and attrs["operator"] == "dense"
+    assert storage.read_contact(tmp_path / "job.h5")[1]["format_version"] == version
+    assert storage.read_surfaces(tmp_path / "cell.h5")["attrs"]["format_version"] == version
+
+
+def test_a_version_1_file_reads_with_the_documented_values(tmp_path):
+    assert storage.VERSION_1_LACKED == {"surfaces": {}, "influence": {"operator": "dense"},
+                                        "contact": {"sweep_hardness": -1.0}}
+    # a dense matrix from before the matrix-free operators: no operator attribute
+    path = tmp_path / "g.h5"
+    storage.write_influence(path, np.eye(4) * 2.0, {"geometry": "g"})
+    as_version_1(path, "operator")
+    unit, attrs = storage.read_influence(path)
+    assert attrs["operator"] == "dense" and np.array_equal(unit, np.eye(4) * 2.0)
+    # a version-1 operator file names its own operator: kept
+    op = BlockOperator(grid=(4, 4), size=(2.4e-3, 2.4e-3), nu=0.0)
+    storage.write_influence(path, op, {})
+    as_version_1(path)
+    assert storage.read_influence(path)[1]["operator"] == "halfspace"
+    # a contact sweep from before the hardness cap: elastic
+    path = tmp_path / "job.h5"
+    storage.write_contact(path, sweep(), {"job": "{}"})
+    as_version_1(path, "sweep_hardness")
+    back, attrs = storage.read_contact(path)
+    assert back.nondim_hardness is None and attrs["sweep_hardness"] == -1.0
+
+
+def test_a_file_of_a_newer_format_version_is_refused(tmp_path):
+    path = tmp_path / "job.h5"
+    storage.write_contact(path, sweep(), {"job": "{}"})
+    with h5py.File(path, "r+") as f:
+        f.attrs["format_version"] = storage.FORMAT_VERSION + 1
+    newer = storage.FORMAT_VERSION + 1
+    with pytest.raises(StoredFileError, match=rf"job\.h5: written in file format version "
+                                              rf"{newer} by a newer roughcontact"):
+        storage.read_contact(path)
+
+
+# ---------------------------------------------------------------------------
 # Parameters: a file is never trusted by its name
 
 

@@ -5,9 +5,12 @@ ask for, are refused naming the file and the format; a real file under a
 wrong suffix is refused too, and the advice (``format: instrument``) reads
 it. A map of uncorrelated values is refused by the plausibility check
 without advice towards a height unit; a smooth map read in the wrong unit
-gets the unit that brings it into range, which then plans.
+gets the unit that brings it into range, which then plans. A constant map
+(or one that is its form) is refused as flat, in one message and before any
+statistic of its rounding noise is taken.
 """
 
+import logging
 import shutil
 
 import numpy as np
@@ -117,3 +120,46 @@ def test_a_smooth_map_in_the_wrong_unit_gets_the_unit_that_fits(tmp_path):
     plan = study_plan(sweep_config({**surface, "height_unit": "nm"}))
     (cell,) = plan.cells["s"]
     assert 3e-6 < cell.sigma < 5e-6
+
+
+@pytest.mark.parametrize("compare_synthetic", [False, True])
+@pytest.mark.parametrize(("name", "write"), [
+    ("flat.npy", lambda path, z: np.save(path, z)),
+    ("flat.csv", lambda path, z: np.savetxt(path, z, delimiter=";")),
+])
+def test_a_constant_map_is_refused_alone_as_flat(tmp_path, caplog, compare_synthetic, name,
+                                                 write):
+    path = tmp_path / name
+    write(path, np.full((32, 32), 3.0))  # 3 um everywhere
+    surface = {"file": str(path), "height_unit": "um", "spacing_mm": [0.01, 0.01]}
+    config = sweep_config(surface)
+    config["sweeps"]["s"]["compare_synthetic"] = compare_synthetic
+    with pytest.raises(ConfigProblems) as raised:
+        study_plan(config)
+    (problem,) = raised.value.problems  # alone: no NaN correlation length, no form_degree
+    assert problem.startswith(f"s.surface: {path}: the heights are flat (a constant or a "
+                              "plane): with the least-squares plane removed their standard "
+                              "deviation is ")
+    sigma_um = float(problem.split("standard deviation is ")[1].split(" um")[0])
+    assert 0.0 <= sigma_um < 1e-12 * 3.0
+    assert "heights of up to 3 um" in problem and "surface.channel" in problem
+    assert not any(word in problem for word in ("NaN", "nan", "form_degree", "autocorrelation"))
+    assert not [r for r in caplog.records if r.levelno >= logging.WARNING]  # nothing before it
+    # the advice, followed: the file holds a height map, which plans
+    rough = ndimage.gaussian_filter(np.random.default_rng(5).standard_normal((32, 32)), 2.0,
+                                    mode="wrap")
+    write(path, 3.0 + rough / rough.std())
+    assert study_plan(config).jobs
+
+
+def test_a_map_that_is_its_form_or_zero_is_flat(tmp_path):
+    y, x = np.mgrid[0:24, 0:24] * 0.01
+    maps = {"bowl": (5.0 + 2.0 * x - y + 30.0 * (x - 0.1) ** 2, 2),  # a cylinder's form
+            "zero": (np.zeros((24, 24)), 1)}
+    for name, (heights, degree) in maps.items():
+        np.save(tmp_path / f"{name}.npy", heights)
+        form = "a plane" if degree == 1 else f"a polynomial of degree {degree}"
+        with pytest.raises(MeasurementError, match=f"{name}.npy: the heights are flat "
+                                                   rf"\(a constant or {form}\)"):
+            load_measurement(tmp_path / f"{name}.npy", "npy", height_unit="um",
+                             spacing=(1e-5, 1e-5), form_degree=degree)

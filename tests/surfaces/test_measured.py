@@ -289,7 +289,8 @@ def test_bad_npy_files_and_options(tmp_path):
         measured.load_measurement(path, "npy", height_unit="um", spacing=(1e-4, 1e-4))
     flat = tmp_path / "flat.npy"
     np.save(flat, np.add.outer(np.arange(5.0), np.arange(6.0)))
-    with pytest.raises(MeasurementError, match=r"flat\.npy: the heights are a plane"):
+    with pytest.raises(MeasurementError,
+                       match=r"flat\.npy: the heights are flat \(a constant or a plane\)"):
         measured.load_measurement(flat, "npy", height_unit="um", spacing=(1e-4, 1e-4))
     with pytest.raises(ValueError, match="needs its spacing"):
         measured.load_measurement(flat, "npy", height_unit="um")

@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import h5py
+import numpy as np
 import pandas as pd
 import pytest
 import yaml
@@ -169,6 +170,19 @@ def test_a_value_in_the_wrong_unit_stops_before_any_job(copy):
     assert "sigma_um = 2.45e-05" in proc.stderr and "typed in m? then write 24.5" in proc.stderr
     assert "plausibility_check: false" in proc.stderr
     assert state(copy / "results" / "contact") == before
+
+
+def test_a_constant_height_map_is_refused_alone_before_any_job(tmp_path):
+    np.save(tmp_path / "flat.npy", np.full((32, 32), 3.0))  # 3 um everywhere
+    surface = {"file": "flat.npy", "height_unit": "um", "spacing_mm": [0.01, 0.01]}
+    config = {"sweeps": {"flat": {"surface": surface, "compare_synthetic": True,
+                                  "pressure_MPa": [0.1, 1.0]}}}
+    proc = run(tmp_path, "-n", config=config)
+    assert proc.returncode != 0
+    output = proc.stdout + proc.stderr
+    assert "flat.surface: flat.npy: the heights are flat (a constant or a plane)" in output
+    # nothing of the statistics of its rounding noise, before or after
+    assert not any(word in output for word in ("NaN", "form_degree", "autocorrelation"))
 
 
 def test_a_bad_key_is_named_in_one_line(tmp_path):
