@@ -89,7 +89,6 @@ __all__ = [
     "certify",
     "check_symmetric",
     "from_eigenvalues",
-    "with_smallest_eigenvalue",
 ]
 
 #: Largest dense matrix (elements) certified by its Cholesky factorization;
@@ -114,8 +113,6 @@ INVARIANT_RTOL = 1e-10
 #: A dense matrix declared to have the uniform pressure as its zero mode must have
 #: row sums within this share of its largest absolute row sum.
 ZERO_MODE_RTOL = 1e-8
-#: Relative accuracy of the smallest eigenvalue of :func:`with_smallest_eigenvalue`.
-EIGENVALUE_RTOL = 1e-10
 #: The attribute that holds an operator's certificate.
 ATTRIBUTE = "spd_certificate"
 #: The seed of the random start vectors, so that a certificate is reproducible.
@@ -262,33 +259,6 @@ def from_eigenvalues(matrix: np.ndarray, values: np.ndarray, *,
     return _spectrum_certificate(np.asarray(values), name, unit, advice)
 
 
-def with_smallest_eigenvalue(matrix: np.ndarray, *, name: str = "the influence operator",
-                             unit: str = "m/Pa", advice: str | None = None
-                             ) -> tuple[Certificate, float]:
-    """The certificate of a dense matrix (:func:`certify`: symmetry and Cholesky) and its
-    smallest eigenvalue [unit of C], from the same factorization.
-
-    The smallest eigenvalue of ``C`` is the inverse of the largest of
-    ``C^-1``, which Lanczos (ARPACK's ``eigsh``, from a fixed random start, to
-    :data:`EIGENVALUE_RTOL`) finds with products ``C^-1 x`` by the Cholesky
-    factor: a few dozen triangular solves, against the full spectrum's
-    ``n^3`` (``eigvalsh`` of a 60 x 60 grid's matrix: 6 s on one core,
-    against 0.5 s for the factorization). Refuses as :func:`certify` does.
-    """
-    matrix = np.asarray(matrix, dtype=float)
-    check_symmetric(matrix, name)
-    found, factor = _cholesky(matrix, None, name, unit, advice, keep_factor=True)
-    n = matrix.shape[0]
-    if n <= 3:  # ARPACK needs k < n - 1
-        return found, float(np.linalg.eigvalsh(matrix)[0])
-    inverse = scipy.sparse.linalg.LinearOperator(
-        (n, n), matvec=lambda x: scipy.linalg.cho_solve((factor, False), x), dtype=float)
-    start = np.random.default_rng(SEED).standard_normal(n)
-    largest = scipy.sparse.linalg.eigsh(inverse, k=1, which="LA", v0=start,
-                                        tol=EIGENVALUE_RTOL, return_eigenvectors=False)
-    return found, float(1.0 / largest[0])
-
-
 def check_symmetric(matrix: np.ndarray, name: str = "the influence operator") -> None:
     """Refuse a dense matrix with ``max|C - C^T| > SYMMETRY_RTOL max|C|``, naming it."""
     scale = float(np.abs(matrix).max())
@@ -339,7 +309,7 @@ def _without_zero_mode(matrix: np.ndarray, name: str) -> np.ndarray:
     return matrix + float(np.diag(matrix).max()) / n
 
 
-def _cholesky(matrix, operator, name, unit, advice, keep_factor: bool = False):
+def _cholesky(matrix, operator, name, unit, advice) -> Certificate:
     """Cholesky of the lower triangle (the transpose of a C-ordered matrix is Fortran
     ordered, so LAPACK reads it in place and factors a copy).
 
@@ -349,8 +319,7 @@ def _cholesky(matrix, operator, name, unit, advice, keep_factor: bool = False):
     :data:`DEFINITE_RTOL` of the largest diagonal entry is refused like a
     failed one: the matrix is singular to rounding, and whether LAPACK's last
     pivot came out positive or negative is the sign of a rounding error,
-    which differs between CPUs. With ``keep_factor`` returns ``(certificate,
-    factor)``, the upper triangle of ``factor`` holding ``U`` with ``C = U^T U``.
+    which differs between CPUs.
     """
     factor, info = scipy.linalg.lapack.dpotrf(matrix.T, lower=False, clean=False,
                                               overwrite_a=False)
@@ -358,8 +327,7 @@ def _cholesky(matrix, operator, name, unit, advice, keep_factor: bool = False):
     if info == 0:
         smallest = float(np.diag(factor).min()) ** 2
         if smallest > DEFINITE_RTOL * largest:
-            found = Certificate("cholesky", smallest, largest)
-            return (found, factor) if keep_factor else found
+            return Certificate("cholesky", smallest, largest)
         info = int(np.argmin(np.abs(np.diag(factor)))) + 1
         evidence = (f"its Cholesky factorization has a pivot of {smallest:.3g} {unit} at row "
                     f"{info}, zero to rounding against {largest:.3g} {unit}")

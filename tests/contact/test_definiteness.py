@@ -339,19 +339,3 @@ def test_a_declared_zero_mode_that_is_not_one_is_refused():
     with pytest.raises(IndefiniteOperator):
         definiteness.certify(DenseInfluence(bad, op.element_area, mean_compliance=0.0))
 
-
-def test_the_smallest_eigenvalue_from_the_certifying_factor_is_numpys():
-    """The build stores the smallest eigenvalue: Lanczos on C^-1 through the Cholesky
-    factor gives numpy's eigvalsh value (to 1e-9), on Love's matrix and on a
-    finite-element block's, and refuses an indefinite matrix as certify does."""
-    love = halfspace_influence((20, 20), SIZE, 1.0, 0.3)
-    block = unit_modulus_influence(BlockGeometry(size=(1.2e-3, 1.2e-3), thickness=2e-3,
-                                                 grid=(8, 8), nu=0.0, mesh="paper"))
-    for matrix in (love, block):
-        found, smallest = definiteness.with_smallest_eigenvalue(matrix)
-        assert found.method == "cholesky"
-        assert smallest == pytest.approx(np.linalg.eigvalsh(matrix)[0], rel=1e-9)
-        assert smallest <= found.smallest  # the squared pivots bound it from above
-    bad, _ = indefinite_problem()
-    with pytest.raises(IndefiniteOperator):
-        definiteness.with_smallest_eigenvalue(bad)

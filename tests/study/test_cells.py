@@ -118,7 +118,7 @@ def test_build_influence_writes_rows_summing_to_the_thickness(tmp_path):
     unit, attrs = read_influence(path)
     assert unit.shape == (64, 64)
     assert np.allclose(unit.sum(axis=1), 2e-3, rtol=1e-10)
-    assert attrs["check_min_eigenvalue_m"] > 0
+    assert 0 < attrs["check_certificate_smallest_m"] < attrs["check_certificate_largest_m"]
     assert attrs["geometry"] == geometry().key
 
 

@@ -98,7 +98,7 @@ def test_a_build_that_is_not_positive_definite_is_refused_and_its_advice_works(
     refined = body_geometry({**config, "body": {**config["body"], "mesh": "refined"}})
     assert refined.mesh == "refined"
     attrs = _build(config, refined, path)
-    assert attrs["check_positive_definite"] == "cholesky"  # one factor: certificate, eigmin
+    assert attrs["check_positive_definite"] == "cholesky"
 
 
 def test_a_failed_factorization_names_the_geometry_and_its_mesh(small_study, tmp_path,
