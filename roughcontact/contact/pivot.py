@@ -89,13 +89,6 @@ def _not_positive_definite() -> ValueError:
     )
 
 
-def _capped_rhs(matrix, rhs, idx, top, hardness):
-    """``b_F - C_FU H``: the right-hand side on the free set ``idx`` with ``top`` at the cap."""
-    if hardness is None or not top.size or not idx.size:
-        return rhs
-    return rhs - hardness * matrix[np.ix_(idx, top)].sum(axis=1)
-
-
 def infeasible_set(free, upper, x, w, diagonal, slack, hardness):
     """Infeasible variables of a pivoting guess, and the free ones above the cap.
 
@@ -116,41 +109,78 @@ class PivotState:
 
     ``free`` is the free set (the contact guess), ``upper`` with a cap the
     saturated set (``p = H``; None without a cap); ``step`` the approach step
-    the surface is at (:func:`sweep`), ``rounds`` the rounds of that step.
+    the surface is at (:func:`sweep`), ``rounds`` the rounds of that step;
+    ``priority`` (n,) the expected pressure of each element at this step, by
+    which the factor orders its elements (None: element order).
+
+    The factor keeps its elements in order of decreasing expected pressure:
+    the elements that leave a contact set are mostly those at the edges of
+    its spots, where the pressure is lowest, so they sit at the end of the
+    factor, and a set that lost them keeps the factor up to the first one
+    that left and appends the rest (:meth:`refactor`) instead of factoring
+    ``C_FF`` anew. The order changes the factor's rounding only.
     """
 
     __slots__ = ("step", "free", "upper", "best", "budget", "rounds", "factor", "index",
-                 "members")
+                 "members", "priority", "saturated", "saturated_load")
 
-    def __init__(self, free: np.ndarray, upper: np.ndarray | None = None):
+    def __init__(self, free: np.ndarray, upper: np.ndarray | None = None,
+                 priority: np.ndarray | None = None):
         self.step = 0
-        self.restart(free, upper)
+        self.restart(free, upper, priority)
         # lower Cholesky factor of C on the elements ``index`` (in that order),
         # and the same set as a mask
         self.factor, self.index, self.members = None, None, None
+        # with a cap: C 1_U [unit of C] for the saturated set ``saturated``
+        self.saturated, self.saturated_load = None, None
 
-    def restart(self, free: np.ndarray, upper: np.ndarray | None = None) -> None:
-        """Start a new problem (the next step) from the sets ``free`` and ``upper``."""
-        self.free, self.upper = free, upper
+    def restart(self, free: np.ndarray, upper: np.ndarray | None = None,
+                priority: np.ndarray | None = None) -> None:
+        """Start a new problem (the next step) from the sets ``free`` and ``upper``, with
+        the elements' expected pressures ``priority`` (their order in a new factor)."""
+        self.free, self.upper, self.priority = free, upper, priority
         self.best, self.budget, self.rounds = free.size + 1, BLOCK_TRIES, 0
 
     def refactor(self, operator: InfluenceOperator) -> str:
-        """Bring the factor to the current free set: keep it if the set is unchanged,
-        extend it if elements were only added, else factor ``C_FF`` anew.
-        Returns which of ``"kept"``, ``"extended"``, ``"new"`` it did."""
+        """Bring the factor to the current free set: keep it if the set is unchanged;
+        else keep its leading part up to the first element that left the set (all of
+        it if none left) and append the elements of the set that are not in it
+        (:meth:`_extend`), or factor ``C_FF`` anew if the first element left.
+        Returns which of ``"kept"``, ``"extended"`` (the leading part kept),
+        ``"new"`` it did."""
         if self.members is not None and np.array_equal(self.free, self.members):
             return "kept"
-        grown = (self.members is not None and self.index.size
-                 and not (self.members & ~self.free).any())
+        kept = 0
+        if self.members is not None and self.index.size:
+            left = np.flatnonzero(~self.free[self.index])
+            kept = left[0] if left.size else self.index.size
         try:
-            kind = self._extend(operator) if grown else self._factor(operator)
+            if kept:
+                self._truncate(kept)
+                kind = self._extend(operator)
+            else:
+                kind = self._factor(operator)
         except np.linalg.LinAlgError:
             raise _not_positive_definite() from None
         self.members = self.free.copy()
         return kind
 
+    def _ordered(self, elements: np.ndarray) -> np.ndarray:
+        """``elements`` in order of decreasing :attr:`priority` (ties: element order)."""
+        if self.priority is None or elements.size < 2:
+            return elements
+        return elements[np.argsort(-self.priority[elements], kind="stable")]
+
+    def _truncate(self, size: int) -> None:
+        """Keep the factor's leading ``size`` elements: the factor of their ``C`` block."""
+        if size < self.index.size:
+            self.factor = np.asfortranarray(self.factor[:size, :size])
+            self.index = self.index[:size]
+            self.members = np.zeros_like(self.free)
+            self.members[self.index] = True
+
     def _factor(self, operator: InfluenceOperator) -> str:
-        idx = np.flatnonzero(self.free)
+        idx = self._ordered(np.flatnonzero(self.free))
         self.factor = None
         if idx.size:
             self.factor = scipy.linalg.cholesky(operator.restrict(idx).matrix, lower=True,
@@ -160,7 +190,9 @@ class PivotState:
 
     def _extend(self, operator: InfluenceOperator) -> str:
         """Append the rows of the elements added to the free set to the factor."""
-        added = np.flatnonzero(self.free & ~self.members)
+        added = self._ordered(np.flatnonzero(self.free & ~self.members))
+        if not added.size:
+            return "extended"
         coupling = scipy.linalg.solve_triangular(
             self.factor, operator.matrix[np.ix_(self.index, added)], lower=True,
             check_finite=False)
@@ -168,7 +200,8 @@ class PivotState:
             operator.restrict(added).matrix - coupling.T @ coupling, lower=True,
             check_finite=False)
         size = self.index.size
-        factor = np.zeros((size + added.size, size + added.size))
+        # Fortran order, as LAPACK's: cho_solve would copy a C-ordered factor at every call
+        factor = np.zeros((size + added.size, size + added.size), order="F")
         factor[:size, :size] = self.factor
         factor[size:, :size] = coupling.T
         factor[size:, size:] = corner
@@ -182,13 +215,33 @@ class PivotState:
     def pressure(self, matrix: np.ndarray, rhs: np.ndarray, hardness, out: np.ndarray) -> None:
         """The pressure of the current sets into ``out`` (zeros): ``H`` on the saturated
         set, ``(C_FF)^-1 (b_F - C_FU H)`` on the free set, for ``b = rhs`` (n,)."""
-        top = None
-        if hardness is not None:
-            top = np.flatnonzero(self.upper)
-            out[top] = hardness
-        if self.index.size:
-            idx = self.index
-            out[idx] = self.solve(_capped_rhs(matrix, rhs[idx], idx, top, hardness))
+        idx = self.index
+        if hardness is not None and self.upper.any():
+            out[self.upper] = hardness
+            if idx.size:
+                out[idx] = self.solve(rhs[idx] - hardness * self._saturated_load(matrix)[idx])
+        elif idx.size:
+            out[idx] = self.solve(rhs[idx])
+
+    def _saturated_load(self, matrix: np.ndarray) -> np.ndarray:
+        """``C 1_U`` (n,) for the saturated set ``U``: the rows of ``C`` (symmetric) that
+        entered ``U`` added to, those that left it taken from, the last one, or summed
+        anew when more than half of ``U`` changed. Rows are contiguous, where the
+        columns ``C_FU`` a free set takes would be gathered one by one."""
+        upper = self.upper
+        if self.saturated is not None:
+            entered = np.flatnonzero(upper & ~self.saturated)
+            left = np.flatnonzero(self.saturated & ~upper)
+            if entered.size + left.size <= upper.sum() // 2:
+                if entered.size:
+                    self.saturated_load += matrix[entered].sum(axis=0)
+                if left.size:
+                    self.saturated_load -= matrix[left].sum(axis=0)
+                self.saturated = upper.copy()
+                return self.saturated_load
+        self.saturated_load = matrix[upper].sum(axis=0)
+        self.saturated = upper.copy()
+        return self.saturated_load
 
     def settled(self, x, gap, diagonal, slack: float, hardness, max_iter: int) -> bool:
         """Count a round; exchange the infeasible variables of ``x`` and its ``gap`` and
@@ -233,8 +286,10 @@ def _round(operator: InfluenceOperator, states, rhs: np.ndarray, hardness):
 
 
 def _cold_sets(rigid: np.ndarray, hardness):
-    """First guess without a pressure: the interfering elements ``d > f`` free, none at the cap."""
-    return rigid < 0.0, None if hardness is None else np.zeros(rigid.size, dtype=bool)
+    """First guess without a pressure: the interfering elements ``d > f`` free, none at the
+    cap; the deepest interference first in the factor (priority ``-rigid``)."""
+    return (rigid < 0.0, None if hardness is None else np.zeros(rigid.size, dtype=bool),
+            -rigid)
 
 
 def _clip(x: np.ndarray, hardness) -> np.ndarray:
@@ -261,8 +316,10 @@ def solve(products: Products, gaps, d, pressure, tol: float, max_iter: int,
     for j in range(m):
         loaded = pressure[j].any()
         upper = None if hardness is None or not loaded else pressure[j] >= hardness
-        states.append(PivotState(free_set(pressure[j], hardness), upper) if loaded
-                      else PivotState(*_cold_sets(rigid[j], hardness)))
+        priority = pressure[j] if hardness is None else np.minimum(pressure[j],
+                                                                   hardness - pressure[j])
+        states.append(PivotState(free_set(pressure[j], hardness), upper, priority)
+                      if loaded else PivotState(*_cold_sets(rigid[j], hardness)))
     pending = np.arange(m)
     while pending.size:
         x, gap = _round(operator, [states[j] for j in pending], -rigid[pending], hardness)
@@ -284,7 +341,8 @@ def solve(products: Products, gaps, d, pressure, tol: float, max_iter: int,
 
 def _next_sets(p, rate, delta: float, rigid_next, hardness):
     """The predicted sets of the next step: ``p + delta dp/dd`` positive (free) and,
-    with a cap, at or above ``H`` (saturated); the cold guess if nothing is predicted."""
+    with a cap, at or above ``H`` (saturated), and the prediction itself (the factor's
+    order); the cold guess if nothing is predicted."""
     predicted = p + delta * rate
     start, upper = predicted > 0.0, None
     if hardness is not None:
@@ -292,9 +350,11 @@ def _next_sets(p, rate, delta: float, rigid_next, hardness):
         start &= ~upper
         if not upper.any() and not start.any():
             return _cold_sets(rigid_next, hardness)
-    elif not start.any():
+        # the elements that leave a capped free set are those nearest either bound
+        return start, upper, np.minimum(predicted, hardness - predicted)
+    if not start.any():
         return _cold_sets(rigid_next, hardness)
-    return start, upper
+    return start, upper, predicted
 
 
 def _step_solved(state: PivotState, j: int, x, gap, gaps, steps, operator, diagonal,

@@ -128,3 +128,50 @@ def test_not_positive_definite_is_refused(problem):
     bad[0, 0] = -bad[0, 0]
     with pytest.raises(ValueError, match="positive"):
         sweep(bad, gaps[:1], approaches[:1], method="pivot", element_area=area)
+
+
+def test_a_factor_kept_in_part_and_extended_is_the_cholesky_factor_of_the_new_set():
+    """PivotState keeps its factor up to the first element that left the free set and
+    appends the rest: the result is the Cholesky factor of C on the new set in the
+    factor's order (checked against numpy's), with the elements of highest priority
+    first; when the first element leaves it factors anew."""
+    from roughcontact.contact.pivot import PivotState
+
+    matrix = halfspace_influence((10, 10), (1e-3, 1e-3), 1.0, 0.3)
+    operator = DenseInfluence(matrix, 1e-8)
+    rng = np.random.default_rng(4)
+    priority = rng.random(100)
+    free = priority > 0.4
+    state = PivotState(free.copy(), None, priority)
+    assert state.refactor(operator) == "new"
+    assert (np.diff(priority[state.index]) <= 0).all()  # decreasing priority
+    for _ in range(5):
+        lowest = state.index[-3:]  # the last three of the factor leave, four others enter
+        state.free[lowest] = False
+        state.free[rng.choice(np.flatnonzero(~state.free), 4, replace=False)] = True
+        assert state.refactor(operator) == "extended"
+        block = matrix[np.ix_(state.index, state.index)]
+        np.testing.assert_allclose(state.factor, np.linalg.cholesky(block), rtol=1e-10,
+                                   atol=1e-12 * np.abs(state.factor).max())
+        assert set(state.index) == set(np.flatnonzero(state.free))
+    state.free[state.index[0]] = False
+    assert state.refactor(operator) == "new"
+    np.testing.assert_allclose(state.factor @ state.factor.T,
+                               matrix[np.ix_(state.index, state.index)], rtol=1e-12)
+
+
+def test_the_saturated_load_kept_up_to_date_is_the_sum_of_the_saturated_columns():
+    from roughcontact.contact.pivot import PivotState
+
+    matrix = halfspace_influence((10, 10), (1e-3, 1e-3), 1.0, 0.3)
+    rng = np.random.default_rng(5)
+    state = PivotState(np.zeros(100, dtype=bool), rng.random(100) < 0.3)
+    for _ in range(8):  # a few elements enter and leave: updated, not summed anew
+        load = state._saturated_load(matrix)
+        np.testing.assert_allclose(load, matrix[:, state.upper].sum(axis=1), rtol=1e-13)
+        flip = rng.choice(100, 3, replace=False)
+        state.upper = state.upper.copy()
+        state.upper[flip] = ~state.upper[flip]
+    state.upper = ~state.upper  # all changed: summed anew
+    np.testing.assert_allclose(state._saturated_load(matrix),
+                               matrix[:, state.upper].sum(axis=1), rtol=1e-13)
