@@ -9,8 +9,10 @@ of ``config/quick.yaml`` were about 45 % of its CPU. This engine runs the
 cells in the job's own process: no kernel is started and nothing is
 imported twice. Three of the quick study's figures (fig03, fig07,
 table_Eu), each executed in its own process as its job does, took 8.6 s of
-CPU with a kernel and 6.1 s in-process (0.72 times, 0.8 s less a figure;
-the least of 3 runs each, alternating), with byte-identical PNGs. Papermill
+CPU with a kernel and 6.1 s in-process (the least of 3 runs each,
+alternating; 0.72 times, 0.8 s less a figure; 0.75 and 0.9 s in a second
+measurement on a busier machine), with byte-identical PNGs; the whole quick
+study 98 s of CPU and 58 s with a kernel, 89 s and 50 s in-process. Papermill
 still reads the notebook, injects the parameters cell, records each cell's
 status and times, writes the executed notebook and raises
 :class:`papermill.exceptions.PapermillExecutionError` for a failing cell,
