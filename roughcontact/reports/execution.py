@@ -7,8 +7,8 @@ the out-of-memory killer, a cluster's wall-time limit) cannot remove its
 temporary file, so every writer first removes those that processes no
 longer running left beside its output (:func:`remove_stale_temporaries`):
 the next run of the interrupted job cleans up after it.
-:func:`execute_notebook` runs a papermill-parameterized figure notebook in a
-Jupyter kernel of this interpreter.
+:func:`execute_notebook` runs a papermill-parameterized figure notebook in
+this process (:mod:`roughcontact.reports.notebook_engine`: no Jupyter kernel).
 """
 
 from __future__ import annotations
@@ -16,7 +16,6 @@ from __future__ import annotations
 import logging
 import os
 import re
-import sys
 import time
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -75,38 +74,23 @@ def remove_stale_temporaries(path: str | os.PathLike) -> list[Path]:
     return removed
 
 
-def _kernel_name() -> str:
-    """A Jupyter kernel that runs this interpreter (so it sees this package)."""
-    from jupyter_client.kernelspec import KernelSpecManager, NoSuchKernel
-
-    manager = KernelSpecManager()
-    try:
-        spec = manager.get_kernel_spec("python3")
-        exe = spec.argv[0]
-        if exe in ("python", "python3", "{python}") or os.path.realpath(exe) == os.path.realpath(
-            sys.executable
-        ):
-            return "python3"
-    except NoSuchKernel:
-        pass
-    raise RuntimeError(
-        f"the Jupyter kernel 'python3' does not run {sys.executable}; "
-        "install ipykernel into this environment (make does this)"
-    )
-
-
 def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
     """Execute ``notebook`` with papermill into ``output`` (atomically).
 
     The notebook must have a cell tagged ``parameters``; the entries of
     ``parameters`` that it declares there are injected after it (the workflow
     passes one set to every figure; the others are logged, not passed). The
-    executed notebook is kept so a reader sees the code beside the figure. A
-    failing cell raises with the notebook's traceback. Temporary notebooks
+    executed notebook is kept so a reader sees the code beside the figure. The
+    cells run in this process (:class:`~roughcontact.reports.notebook_engine.InProcessEngine`),
+    in the current working directory. A failing cell raises papermill's
+    ``PapermillExecutionError`` with the cell's traceback, and no notebook is
+    written at ``output``. Temporary notebooks
     that an earlier, killed execution left beside ``output`` are removed
     first (:func:`remove_stale_temporaries`).
     """
     import papermill
+
+    from roughcontact.reports.notebook_engine import ENGINE_NAME
 
     start = time.perf_counter()
     declared = papermill.inspect_notebook(str(notebook))
@@ -120,8 +104,7 @@ def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
             str(notebook),
             str(tmp),
             parameters=parameters,
-            kernel_name=_kernel_name(),
-            cwd=os.getcwd(),
+            engine_name=ENGINE_NAME,
             progress_bar=False,
         )
     log.info("executed %s in %.1f s -> %s", notebook, time.perf_counter() - start, output)

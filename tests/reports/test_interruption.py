@@ -43,13 +43,8 @@ def exited_process() -> int:
 
 @pytest.fixture(scope="module")
 def dead_pid() -> int:
-    """A killed job's PID (the papermill process, or the convergence report)."""
-    return exited_process()
-
-
-@pytest.fixture(scope="module")
-def dead_kernel_pid() -> int:
-    """A killed job's notebook kernel's PID."""
+    """A killed job's PID (a figure job, which runs its notebook itself, or the
+    convergence report)."""
     return exited_process()
 
 
@@ -85,10 +80,10 @@ def test_stale_temporaries_of_dead_writers_are_removed_only(tmp_path, dead_pid, 
     assert remove_stale_temporaries(tmp_path / "missing" / "fig04.ipynb") == []
 
 
-def test_save_figure_removes_the_images_a_killed_kernel_left(tmp_path, dead_kernel_pid):
+def test_save_figure_removes_the_images_a_killed_job_left(tmp_path, dead_pid):
     figures = tmp_path / "results" / "figures"
-    stale = [plant(figures, f".fig04.tmp{dead_kernel_pid}.png"),
-             plant(figures, f".fig04.tmp{dead_kernel_pid}.pdf")]
+    stale = [plant(figures, f".fig04.tmp{dead_pid}.png"),
+             plant(figures, f".fig04.tmp{dead_pid}.pdf")]
     fig, ax = plt.subplots()
     ax.plot([0, 1], [0, 1])
     save_figure(fig, figures / "fig04.png", figures / "fig04.pdf")
@@ -97,14 +92,13 @@ def test_save_figure_removes_the_images_a_killed_kernel_left(tmp_path, dead_kern
     assert sorted(p.name for p in figures.iterdir()) == ["fig04.pdf", "fig04.png"]
 
 
-def test_rendering_a_figure_again_removes_what_a_killed_render_left(tmp_path, dead_pid,
-                                                                    dead_kernel_pid):
+def test_rendering_a_figure_again_removes_what_a_killed_render_left(tmp_path, dead_pid):
     """The ``figure`` job's steps (``execute_notebook`` of a notebook that calls
     ``save_figure``), after a kill that left its notebook, PNG and PDF half-written."""
     figures = tmp_path / "results" / "figures"
     stale = [plant(figures, f".fig99.tmp{dead_pid}.ipynb", "{"),  # papermill's output
-             plant(figures, f".fig99.tmp{dead_kernel_pid}.png"),  # the kernel's images
-             plant(figures, f".fig99.tmp{dead_kernel_pid}.pdf")]
+             plant(figures, f".fig99.tmp{dead_pid}.png"),  # the notebook's images
+             plant(figures, f".fig99.tmp{dead_pid}.pdf")]
     notebook = nbformat.v4.new_notebook()
     parameters = nbformat.v4.new_code_cell('png = "x.png"\npdf = "x.pdf"')
     parameters.metadata["tags"] = ["parameters"]
