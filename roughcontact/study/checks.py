@@ -113,6 +113,11 @@ def _check_hardness(name: str, study: dict) -> list[str]:
         return [f"{name}: contact.cap = {cap!r} but no hardness is given; set "
                 f"body.hardness_MPa (or the study's hardness_MPa) to the hardness "
                 f"[MPa] to cap the pressure at, or cap: false"]
+    meshes, listed = as_list(study["meshes"]), study["cap_meshes"]
+    unknown = [m for m in (listed or []) if m not in meshes]
+    if unknown:
+        return [f"{name}: cap_meshes lists {unknown}, which the study does not solve "
+                f"(its meshes: {meshes}); list some of {meshes}, or null for all"]
     return []
 
 

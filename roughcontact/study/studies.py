@@ -108,6 +108,7 @@ def study_section(config: dict, name: str) -> dict:
         "count": surfaces["count"] if preset is None else preset["surfaces"],
         "nu": body["nu"], "E_MPa": body["E_MPa"], "spectrum": surfaces["spectrum"],
         "hardness_MPa": body["hardness_MPa"], "cap": config["contact"]["cap"],
+        "cap_meshes": config["contact"]["cap_meshes"],
     }
     return {**inherited, **resolve_source(config, name)}
 
@@ -209,16 +210,20 @@ def with_hardness(cells: list[StudyCell], study: dict, threshold: float) -> list
     is checked against every value (``checked_hardness``, no extra solve;
     flagged beyond ``threshold``); ``cap: true`` replaces each cell by one
     capped cell per hardness (solved with 0 <= p <= H), ``cap: both`` adds
-    those beside the elastic cells.
+    those beside the elastic cells; either only for the meshes of
+    ``cap_meshes`` (None: every mesh), the cells of the others staying elastic.
     """
     if study["hardness_MPa"] is None:
         return cells
     values = from_unit(as_list(study["hardness_MPa"]), MPA)
     elastic, capped = CAP_MODES[study["cap"]]
+    meshes = study["cap_meshes"]
+    to_cap = [cell for cell in cells if capped and (meshes is None
+                                                    or cell.geometry.mesh in meshes)]
+    stay = [cell for cell in cells if elastic or cell not in to_cap]
     checked = [dataclasses.replace(cell, checked_hardness=values, hardness_threshold=threshold)
-               for cell in cells] if elastic else []
-    return checked + ([dataclasses.replace(cell, hardness=H) for cell in cells for H in values]
-                      if capped else [])
+               for cell in stay]
+    return checked + [dataclasses.replace(cell, hardness=H) for cell in to_cap for H in values]
 
 
 def contact_cells(config: dict, name: str) -> tuple[StudyCell, ...]:

@@ -136,3 +136,28 @@ def test_a_studys_own_hardness_list_is_named_and_only_its_slips_are_scaled():
     for scan, pressures in (([50.0, 100.0], [0.01, 5.0]), ([0.05, 100.0], [0.01, 0.05])):
         raw["sweeps"]["scan"].update(hardness_MPa=scan, pressure_MPa=pressures)
         assert study_plan(validated(raw)).jobs
+
+
+def test_cap_meshes_caps_only_the_listed_meshes_and_refuses_one_not_solved():
+    two_meshes = {**STUDY, "meshes": ["paper", "refined"]}
+    cfg = config(body={"hardness_MPa": 100.0},
+                 figures={"fig07": {**two_meshes, "cap": "both", "cap_meshes": ["refined"]}})
+    cells = contact_cells(cfg, "fig07")
+    capped = [c for c in cells if c.hardness is not None]
+    elastic = [c for c in cells if c.hardness is None]
+    assert {c.geometry.mesh for c in capped} == {"refined"} and len(capped) == 2
+    assert {c.geometry.mesh for c in elastic} == {"paper", "refined"} and len(elastic) == 4
+    assert all(c.checked_hardness == (100e6,) for c in elastic)  # validity map on both
+    # cap: true replaces the listed meshes' cells only; the others stay elastic
+    replaced = contact_cells(config(body={"hardness_MPa": 100.0}, figures={"fig07": {
+        **two_meshes, "cap": True, "cap_meshes": ["refined"]}}), "fig07")
+    assert sorted((c.geometry.mesh, c.hardness is not None) for c in replaced) == \
+        [("paper", False)] * 2 + [("refined", True)] * 2
+    # the default, null: every mesh capped
+    every = contact_cells(config(body={"hardness_MPa": 100.0},
+                                 figures={"fig07": {**two_meshes, "cap": "both"}}), "fig07")
+    assert {c.geometry.mesh for c in every if c.hardness is not None} == {"paper", "refined"}
+    with pytest.raises(ConfigProblems, match=r"cap_meshes lists \['converged'\], which the "
+                                             r"study does not solve"):
+        study_plan(config(body={"hardness_MPa": 100.0}, figures={"fig07": {
+            **two_meshes, "cap": "both", "cap_meshes": ["converged"]}}))
