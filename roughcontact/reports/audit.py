@@ -13,6 +13,7 @@ with what is stored: bit-identical for the same library versions.
 
 from __future__ import annotations
 
+import json
 import logging
 import time
 from functools import partial
@@ -115,13 +116,17 @@ def _moment_check(stats: dict, target: dict) -> tuple[dict, list[str]]:
 
 
 def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
-               levels: int = HARDNESS_LEVELS, study_seed: int | None = None) -> dict:
+               levels: int = HARDNESS_LEVELS, study_seed: int | None = None,
+               influences: dict | None = None) -> dict:
     """One row of the audit: parameters, provenance, checks and flags of a study cell.
 
     ``levels``: nominal-pressure levels of the hardness check (:func:`_hardness_check`).
     Each file must have been made for the cell (its surface cell and
     ``study_seed``, its geometry, its contact job), else the cell is flagged
     with the file, the field, the value expected and the value found.
+    ``influences``: the attributes of the influence files already read and
+    verified in this audit, by path and geometry (filled here): a matrix that many cells
+    share (100 MB at 60 x 60) is read and hashed once, not once per cell.
     """
     root = Path(root)
     study_cell = StudyCell.from_params(cell)
@@ -148,7 +153,8 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
         row["flags"] = "missing: " + ", ".join(missing)
         return row
     try:
-        return _checked_cell(row, cell, surf_path, infl_path, cont_path, levels, study_seed)
+        return _checked_cell(row, cell, surf_path, infl_path, cont_path, levels, study_seed,
+                             {} if influences is None else influences)
     except StoredFileError as err:  # unreadable, made for another cell, or changed since
         log.warning("%s", err)
         row["flags"] = f"unusable file: {err}"
@@ -156,7 +162,7 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
 
 
 def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels,
-                  study_seed) -> dict:
+                  study_seed, influences: dict) -> dict:
     flags = []
     s, g = cell["surface"], cell["geometry"]
     surfaces = read_surfaces(surf_path, cell=s, study_seed=study_seed)
@@ -166,8 +172,11 @@ def _checked_cell(row: dict, cell: dict, surf_path, infl_path, cont_path, levels
     row.update(moments)
     flags += moment_flags
 
-    # made for this geometry and verified against its content hash
-    unit, geometry_attrs = read_influence(infl_path, geometry=g)
+    # made for this geometry and verified against its content hash (once per file)
+    checked = (str(infl_path), json.dumps(g, sort_keys=True))
+    if checked not in influences:
+        influences[checked] = read_influence(infl_path, geometry=g)[1]
+    geometry_attrs = influences[checked]
     influence_hash = geometry_attrs["content_sha256"]
     row["operator"] = geometry_attrs["operator"]
     row["influence_sha256"] = influence_hash
@@ -253,7 +262,8 @@ def audit_table(studies: dict[str, list[dict]], root: str | Path = ".",
                 levels: int = HARDNESS_LEVELS, study_seed: int | None = None) -> pd.DataFrame:
     """The audit rows of every cell of every study (``{name: contact_cells}``);
     ``levels`` and ``study_seed`` as in :func:`audit_cell`."""
-    rows = [audit_cell(name, i, cell, root, levels, study_seed)
+    influences = {}
+    rows = [audit_cell(name, i, cell, root, levels, study_seed, influences)
             for name, cells in studies.items() for i, cell in enumerate(cells)]
     table = pd.DataFrame(rows)
     table["flagged"] = table["flags"].fillna("") != ""
