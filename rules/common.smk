@@ -239,9 +239,21 @@ def get_surface_params(wildcards):
 
 
 def get_surface_inputs(wildcards):
-    """The measured file of a measured surface cell, the spectrum's file (a PSD
-    table or a measurement) of a generated cell with one; else none."""
-    return list(SURFACE_CELLS[wildcards.cell].input_files)
+    """``files``: the measured file of a measured surface cell, the spectrum's file (a
+    PSD table or a measurement) of a generated cell with one; ``source``: the file of
+    the larger cell whose first surfaces the cell takes (PLAN.surfaces_from), if any."""
+    inputs = {"files": list(SURFACE_CELLS[wildcards.cell].input_files)}
+    source = PLAN.surfaces_from.get(wildcards.cell)
+    if source is not None:
+        inputs["source"] = f"results/surfaces/{source}.h5"
+    return inputs
+
+
+def get_surface_source(wildcards):
+    """The params of the cell whose file the cell's surfaces are taken from (None: it
+    makes its own)."""
+    source = PLAN.surfaces_from.get(wildcards.cell)
+    return None if source is None else SURFACE_CELLS[source].params()
 
 
 def get_figure_surfaces(wildcards):

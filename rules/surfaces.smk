@@ -1,10 +1,12 @@
 # Stage 1: seeded random rough surfaces, one HDF5 file per surface cell; a
-# measured surface (input: its file) is imported into a cell of one surface.
+# measured surface (input: its file) is imported into a cell of one surface. A
+# cell with a larger twin of the same statistics takes its first surfaces from
+# the twin's file (input: source) instead of generating them again.
 
 
 rule surfaces:
     input:
-        get_surface_inputs,
+        unpack(get_surface_inputs),
     output:
         "results/surfaces/{cell}.h5",
     log:
@@ -19,6 +21,7 @@ rule surfaces:
         runtime=get_surfaces_runtime,
     params:
         cell=get_surface_params,
+        source=get_surface_source,
         study_seed=config["study_seed"],
         # version of the stored layout: files of an older layout are rebuilt instead of
         # refused (2: content hashes; 3: `filter` calibrated to the sample moments)

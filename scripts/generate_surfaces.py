@@ -1,4 +1,5 @@
-"""Snakemake entry point of rule `surfaces`: generate (or import, if measured) one surface cell."""
+"""Snakemake entry point of rule `surfaces`: generate (or import, if measured) one surface
+cell, or take its surfaces from a larger cell's file."""
 
 from roughcontact.study.jobs import build_surface_cell
 from roughcontact.study.logs import route_logging
@@ -9,4 +10,6 @@ build_surface_cell(
     snakemake.params.study_seed,
     snakemake.output[0],
     config=snakemake.config,
+    source=snakemake.params.source,
+    source_path=snakemake.input.get("source"),
 )

@@ -27,6 +27,7 @@ from roughcontact.study.checks import (
 )
 from roughcontact.study.config import BuildSettings, ContactSettings, as_pair, from_unit
 from roughcontact.study.records import (
+    SEEDED_PER_SURFACE,
     ContactJob,
     Geometry,
     InfluenceModel,
@@ -73,6 +74,10 @@ class StudyPlan:
     key and file of a geometry configured with that model, so a geometry that
     resolves to the model it had before keeps its files; ``alternatives``
     are the keys built only where a choice picks them (the half-space).
+
+    ``surfaces_from``: surface cell key -> the key of the cell whose file its
+    surfaces are taken from (the largest cell of the same statistics,
+    :func:`surfaces_from`); a cell not listed generates or imports its own.
     """
 
     figures: tuple[str, ...]
@@ -88,6 +93,7 @@ class StudyPlan:
     build: BuildSettings
     choices: Mapping[str, Geometry] = dataclasses.field(default_factory=dict)
     alternatives: frozenset[str] = frozenset()
+    surfaces_from: Mapping[str, str] = dataclasses.field(default_factory=dict)
 
 
 def _raise(title: str, problems: list[str]) -> None:
@@ -142,7 +148,29 @@ def study_plan(config: dict) -> StudyPlan:
                      body=body_geometry(config), contact=contact_settings(config), build=build,
                      choices={k: g for k, g in asked.items()
                               if g.operator is InfluenceModel.AUTO},
-                     alternatives=frozenset(geometries) - planned)
+                     alternatives=frozenset(geometries) - planned,
+                     surfaces_from=surfaces_from(surfaces))
+
+
+def surfaces_from(surfaces: Mapping[str, SurfaceCell]) -> dict[str, str]:
+    """Surface cell key -> the key of the cell its surfaces are taken from.
+
+    A generated cell whose generator makes each surface from its seed alone
+    (:data:`~roughcontact.study.records.SEEDED_PER_SURFACE`) holds the first
+    surfaces of any larger cell of the same statistics key (the seeds derive
+    from that key and the surface's index), bit for bit: its job copies them
+    from the largest such cell's file instead of calibrating and generating
+    again. Measured cells, and cells with no larger twin, are not listed.
+    """
+    largest = {}
+    for cell in surfaces.values():
+        if cell.method in SEEDED_PER_SURFACE:
+            best = largest.get(cell.statistics_key)
+            if best is None or cell.count > best.count:
+                largest[cell.statistics_key] = cell
+    return {cell.key: largest[cell.statistics_key].key for cell in surfaces.values()
+            if cell.method in SEEDED_PER_SURFACE
+            and cell.count < largest[cell.statistics_key].count}
 
 
 def contact_jobs(cells) -> dict[str, ContactJob]:

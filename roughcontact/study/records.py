@@ -67,6 +67,16 @@ class Generator(Enum):
     MEASURED = "measured"
 
 
+#: Generators whose surface i depends only on its seed i (:func:`~roughcontact.surfaces.
+#: synthetic.derive_seeds`: of the statistics key and i) and the cell's spec: the filter,
+#: calibrated or not (the calibration is of the spec alone, over its own fixed seeds; each
+#: seed's white noise is translated and filtered alone, and each surface's mean is taken
+#: alone), and the exact generator (each seed's IAAFT alone). The first k surfaces of any
+#: such cell are those of a larger cell of the same statistics key, bit for bit, and the
+#: workflow takes them from its file (:func:`roughcontact.study.cells.surfaces_from`).
+SEEDED_PER_SURFACE = frozenset({Generator.FILTER, Generator.PAPER, Generator.EXACT})
+
+
 class InfluenceModel(Enum):
     """The influence model of a geometry (``body.operator``): the finite-element matrix
     (``DENSE``, the paper's), the matrix-free ``HYBRID`` or ``HALFSPACE`` operators, or

@@ -23,7 +23,9 @@ Layout of a surface file (``results/surfaces/<cell>.h5``)::
     /stats/corr_length_x, corr_length_y (m,) [m] lag of 10 % ACF decay
     attributes: cell, study_seed, spec (JSON), every spec field, the filter's
                 S3 and S4, the input moments and Johnson curve, provenance,
-                format_version
+                format_version; a cell whose surfaces were taken from a larger
+                cell's file: surfaces_from and surfaces_from_sha256 (its path
+                and content hash)
 
 Layout of an influence file (``results/influence/<geometry>.h5``)::
 
@@ -354,7 +356,8 @@ def read_surfaces(path: str | os.PathLike, count: int | None = None, *,
     """Read a surface file written by the ``surfaces`` rule.
 
     Returns a dict with ``heights`` (m, ny, nx, in units of sigma), ``seeds``,
-    ``stats`` (dict of per-surface arrays), ``spec`` (dict) and ``attrs``.
+    ``stats`` (dict of per-surface arrays), ``spec`` (dict), ``attrs`` and
+    ``dataset_attrs`` (dataset name -> its attributes: units, layout).
     ``count`` limits how many surfaces are read (the first ``count``). With
     the ``cell`` (its ``params()``) and ``study_seed`` the job expects, the
     file must have been made for them (:func:`check_parameters`), its
@@ -365,6 +368,7 @@ def read_surfaces(path: str | os.PathLike, count: int | None = None, *,
         attrs = upgraded(path, _decoded(f.attrs), "surfaces")
         check_attributes(path, attrs, _expected(cell=cell, study_seed=study_seed))
         arrays = _all_datasets(f)
+        dataset_attrs = {name: _decoded(f[name].attrs) for name in arrays}
     verify(path, attrs, arrays_sha256(arrays))
     if cell is not None and "heights" in arrays:
         nx, ny = cell["grid"]
@@ -377,6 +381,7 @@ def read_surfaces(path: str | os.PathLike, count: int | None = None, *,
         "seeds": arrays["seeds"][sl],
         "stats": {k: (v if k.startswith("psd_") else v[sl]) for k, v in stats.items()},
         "attrs": attrs,
+        "dataset_attrs": dataset_attrs,
         "content_sha256": attrs["content_sha256"],
         "spec": json.loads(attrs["spec"]),
     }

@@ -381,6 +381,29 @@ def test_editing_one_cell_reruns_exactly_its_jobs(quick_run, tmp_path):
         "audit": "1", "config_snapshot": "1", "all": "1", "total": "8"}, proc.stdout
 
 
+def test_a_smaller_cell_takes_its_surfaces_from_its_twin_and_reruns_alone(quick_run, tmp_path):
+    workdir, _ = quick_run
+    plan = study_plan(quick_config())
+    for small, large in plan.surfaces_from.items():  # Fig 3's n1 and Fig 9's n3 cells
+        log = (workdir / "results" / "logs" / "surfaces" / f"{small}.log").read_text()
+        assert f"taken from results/surfaces/{large}.h5" in log
+        with h5py.File(workdir / "results" / "surfaces" / f"{small}.h5", "r") as f, \
+                h5py.File(workdir / "results" / "surfaces" / f"{large}.h5", "r") as g:
+            count = f["heights"].shape[0]
+            assert np.array_equal(f["heights"][()], g["heights"][:count])
+    config = quick_config()
+    config["figures"]["fig09"]["count"] = 2
+    path = tmp_path / "edited.yaml"
+    path.write_text(yaml.safe_dump(config))
+    proc = run_snakemake(workdir, "--dry-run", "--quiet", "rules", config=path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    # Fig 9's two new cells (taken from their twins, which stay), their contact jobs,
+    # the fig09 aggregate and Figs 9 and 10, the audit and configuration snapshot
+    assert job_counts(proc.stdout) == {
+        "surfaces": "2", "contact": "2", "aggregate": "1", "figure": "2", "audit": "1",
+        "config_snapshot": "1", "all": "1", "total": "10"}, proc.stdout
+
+
 def test_audit_lists_every_cell_and_flags_a_corrupted_result(quick_run, tmp_path):
     workdir, _ = quick_run
     audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv", dtype={"flags": str})
