@@ -308,6 +308,19 @@ def get_influence_runtime(wildcards, attempt):
     return resources.influence_runtime(geometry, PLAN.build, attempt)
 
 
+#: Scheduling priority of the jobs that need no contact result (builds, surfaces):
+#: above every other job's (0), so that all of them run first.
+EARLY_PRIORITY = 100
+
+
+def get_influence_priority(wildcards):
+    """Builds before every other job, the longest (estimated) first: it starts at once
+    and the jobs that wait on it find it done (Snakemake runs higher priorities first).
+    """
+    geometry = GEOMETRIES[wildcards.geometry]
+    return EARLY_PRIORITY + 1 + resources.influence_seconds(geometry, PLAN.build)
+
+
 def get_influence_mem_mb(wildcards):
     """Estimated peak memory of an influence build [MB], for the scheduler."""
     return resources.influence_mem_mb(GEOMETRIES[wildcards.geometry], PLAN.build)

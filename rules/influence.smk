@@ -10,9 +10,10 @@ rule influence:
         "results/logs/influence/{geometry}.log",
     benchmark:
         "results/benchmarks/rules/influence/{geometry}.tsv"
-    # first: a build needs no input, and the finest one is the longest job of a study
-    # (60 x 60 converged: 75 s), on whose result the longest contact jobs wait
-    priority: 10
+    # first, the longest first: a build needs no input, and the finest one is the
+    # longest job of a study (60 x 60 converged: 75 s), on which the longest contact
+    # jobs wait
+    priority: get_influence_priority
     # one: the sparse factorization is the only multithreaded part of a build (about
     # 40 % of it), and a second reserved core would idle through the rest
     threads: 1

@@ -13,6 +13,8 @@ rule surfaces:
         "results/logs/surfaces/{cell}.log",
     benchmark:
         "results/benchmarks/rules/surfaces/{cell}.tsv"
+    # early, after the builds: a few seconds each, and every contact job waits on one
+    priority: EARLY_PRIORITY
     group:
         "surfaces"
     threads: 1
