@@ -309,8 +309,12 @@ def get_influence_runtime(wildcards, attempt):
 
 
 #: Scheduling priority of the jobs that need no contact result (builds, surfaces):
-#: above every other job's (0), so that all of them run first.
+#: above every other job's, so that all of them run first.
 EARLY_PRIORITY = 100
+#: Scheduling priority of the contact jobs and aggregates: after the builds and
+#: surfaces, before the figures and reports (0), which would otherwise delay the chain
+#: contact -> aggregate -> figure that ends the run.
+CONTACT_PRIORITY = 50
 
 
 def get_influence_priority(wildcards):

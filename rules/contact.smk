@@ -12,6 +12,7 @@ rule contact:
         "results/logs/contact/{job}.log",
     benchmark:
         "results/benchmarks/rules/contact/{job}.tsv"
+    priority: CONTACT_PRIORITY
     threads: 1
     resources:
         mem_mb=get_contact_mem_mb,
@@ -35,6 +36,7 @@ rule aggregate:
         validity="results/aggregates/{study}.validity.csv",
     log:
         "results/logs/aggregates/{study}.log",
+    priority: CONTACT_PRIORITY
     group:
         "summaries"
     threads: 1

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import copy
 import difflib
+import functools
 import json
 import os
 from dataclasses import dataclass
@@ -156,13 +157,12 @@ def schema_errors(config: dict) -> list[str]:
     """``key.path: message`` in plain words of every schema violation of ``config``
     (none: []).
 
-    jsonschema and yaml are imported here, not with the module: a job that only
-    reads its typed settings does not pay for them.
+    jsonschema is imported here, not with the module: a job that only reads its
+    typed settings does not pay for it.
     """
     import jsonschema
-    import yaml
 
-    schema = yaml.safe_load(SCHEMA.read_text())
+    schema = load_schema()
     validator = jsonschema.validators.validator_for(schema)(schema)
     lines = []
     for error in sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.path))):
@@ -189,10 +189,42 @@ def apply_schema(config: dict) -> dict:
                           + "\n  ".join(problems)
                           + "\nKeys, units and defaults: config/schema.yaml; a complete "
                             "example: config/config.yaml.")
-    from snakemake.utils import validate
-
-    validate(config, str(SCHEMA))  # fills the defaults, as Snakemake does
+    _fill_defaults(config)
     return config
+
+
+@functools.lru_cache(maxsize=1)
+def load_schema() -> dict:
+    """The schema (:data:`SCHEMA`), parsed once per process (with libyaml's parser where
+    PyYAML has it): the workflow validates several configurations when it is planned,
+    and pure-Python YAML takes 0.2 s for this file. Read-only: do not change it."""
+    import yaml
+
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    return yaml.load(SCHEMA.read_text(), Loader=loader)
+
+
+def _fill_defaults(config: dict) -> None:
+    """Set every default of the schema that ``config`` (valid) leaves out, in place.
+
+    The recipe of jsonschema's FAQ that ``snakemake.utils.validate`` applies (a
+    validator whose ``properties`` rule sets each property's ``default`` before
+    validating it), run on the schema parsed once (:func:`load_schema`) instead
+    of a parse of the file per call; tests compare the two on every config.
+    """
+    from jsonschema import validators
+
+    schema = load_schema()
+    base = validators.validator_for(schema)
+    check_properties = base.VALIDATORS["properties"]
+
+    def set_defaults(validator, properties, instance, subschema):
+        for name, property_schema in properties.items():
+            if "default" in property_schema:
+                instance.setdefault(name, copy.deepcopy(property_schema["default"]))
+        yield from check_properties(validator, properties, instance, subschema)
+
+    validators.extend(base, {"properties": set_defaults})(schema).validate(config)
 
 
 def validated(config: dict) -> dict:

@@ -1,6 +1,8 @@
 """Schema refusals in plain words: the key's place in the configuration, the value found
 and what is expected (not the schema's own text), and no refusal of a valid config."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy import ndimage
@@ -9,6 +11,8 @@ from roughcontact.study.cells import study_plan
 from roughcontact.study.config import ConfigError, schema_errors, validated
 from roughcontact.study.records import MeasuredCell
 from roughcontact.units import MM
+
+REPO = Path(__file__).resolve().parents[2]
 
 SCHEMA_WORDS = ("is a required property", "should not be valid under", "is not valid under",
                 "{'required'", "'from' is a required")
@@ -103,3 +107,26 @@ def test_an_unknown_key_is_named_with_the_key_it_was_likely_meant_for():
     with pytest.raises(ConfigError, match=r"unknown key 'surfacs'.*\nKeys, units and "
                                           r"defaults: config/schema.yaml"):
         validated({"surfacs": {}})
+
+
+@pytest.mark.parametrize("name", ["config", "quick", "large", "measured", "gridconv",
+                                  "fig11_resolved", "accuracy"])
+def test_the_defaults_filled_are_snakemakes(name):
+    """apply_schema fills the schema's defaults itself, on the schema parsed once: the
+    result equals snakemake.utils.validate's on the same config (each config of
+    config/, and a partial one)."""
+    import copy as copy_module
+
+    import yaml
+    from snakemake.utils import validate
+
+    from roughcontact.study.config import SCHEMA, apply_schema
+
+    path = REPO / "config" / f"{name}.yaml"
+    raw = ({"figures": {"fig07": {"sigma_um": 20.0, "b_mm": 1.0,
+                                  "pressure_MPa": [0.1, 2.0]}}, "accuracy": "fast"}
+           if name == "accuracy" else yaml.safe_load(path.read_text()))
+    ours = apply_schema(copy_module.deepcopy(raw))
+    theirs = copy_module.deepcopy(raw)
+    validate(theirs, str(SCHEMA))
+    assert ours == theirs
