@@ -250,7 +250,10 @@ def test_hardness_study_caps_its_capped_cells_and_checks_its_elastic_ones(quick_
     H = quick_config()["figures"]["hardness"]["hardness_MPa"]
     capped = table[table["cap_MPa"].notna()]
     elastic = table[table["cap_MPa"].isna()]
-    assert len(capped) == len(elastic) > 0
+    # capped on the meshes of cap_meshes only, elastic (with the validity map) on all
+    assert set(capped["mesh"]) == set(quick_config()["figures"]["hardness"]["cap_meshes"])
+    assert len(capped) == (elastic["mesh"].isin(set(capped["mesh"]))).sum() > 0
+    assert set(elastic["mesh"]) == {"paper", "refined"}
     assert (capped["max_pressure_mean"] <= H * 1e6 * (1 + 1e-9)).all()
     assert (elastic["max_pressure_mean"] > H * 1e6).any()  # the cap does matter here
     assert (capped["plastic_area_fraction_mean"] > 0).any()
