@@ -369,19 +369,24 @@ def job_counts(text):
     return dict(re.findall(r"^(\w+)\s+(\d+)\s*$", block.split("\n\n")[0], re.MULTILINE))
 
 
-def test_editing_one_cell_reruns_exactly_its_jobs(quick_run, tmp_path):
-    workdir, _ = quick_run
-    config = quick_config()
-    config["figures"]["fig14"]["size_mm"] = [4.8, 3.0]
+def planned_jobs(workdir, tmp_path, config) -> dict:
+    """The jobs a dry run of ``config`` (written to ``tmp_path``) plans in ``workdir``."""
     path = tmp_path / "edited.yaml"
     path.write_text(yaml.safe_dump(config))
     proc = run_snakemake(workdir, "--dry-run", "--quiet", "rules", config=path)
     assert proc.returncode == 0, proc.stderr[-3000:]
+    return job_counts(proc.stdout)
+
+
+def test_editing_one_cell_reruns_exactly_its_jobs(quick_run, tmp_path):
+    workdir, _ = quick_run
+    config = quick_config()
+    config["figures"]["fig14"]["size_mm"] = [4.8, 3.0]
     # the new area: its surfaces, geometry and contact job; the fig14 aggregate
     # and figure; the audit and configuration snapshot; nothing else
-    assert job_counts(proc.stdout) == {
+    assert planned_jobs(workdir, tmp_path, config) == {
         "surfaces": "1", "influence": "1", "contact": "1", "aggregate": "1", "figure": "1",
-        "audit": "1", "config_snapshot": "1", "all": "1", "total": "8"}, proc.stdout
+        "audit": "1", "config_snapshot": "1", "all": "1", "total": "8"}
 
 
 def test_a_smaller_cell_takes_its_surfaces_from_its_twin_and_reruns_alone(quick_run, tmp_path):
@@ -396,15 +401,11 @@ def test_a_smaller_cell_takes_its_surfaces_from_its_twin_and_reruns_alone(quick_
             assert np.array_equal(f["heights"][()], g["heights"][:count])
     config = quick_config()
     config["figures"]["fig09"]["count"] = 2
-    path = tmp_path / "edited.yaml"
-    path.write_text(yaml.safe_dump(config))
-    proc = run_snakemake(workdir, "--dry-run", "--quiet", "rules", config=path)
-    assert proc.returncode == 0, proc.stderr[-3000:]
     # Fig 9's two new cells (taken from their twins, which stay), their contact jobs,
     # the fig09 aggregate and Figs 9 and 10, the audit and configuration snapshot
-    assert job_counts(proc.stdout) == {
+    assert planned_jobs(workdir, tmp_path, config) == {
         "surfaces": "2", "contact": "2", "aggregate": "1", "figure": "2", "audit": "1",
-        "config_snapshot": "1", "all": "1", "total": "10"}, proc.stdout
+        "config_snapshot": "1", "all": "1", "total": "10"}
 
 
 def test_audit_lists_every_cell_and_flags_a_corrupted_result(quick_run, tmp_path):
