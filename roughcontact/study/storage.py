@@ -64,15 +64,17 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+from typing import TYPE_CHECKING
 
 import h5py
 import numpy as np
 
-from roughcontact.contact.curves import NondimSweep
-from roughcontact.elasticity.operators import BlockOperator
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import array_sha256, arrays_sha256
 from roughcontact.study.provenance import atomic_path
+
+if TYPE_CHECKING:
+    from roughcontact.contact.curves import NondimSweep
 
 #: Arrays of a contact file (the fields of NondimSweep that are stored), by dataset name.
 CONTACT_ARRAYS = ("approach", "nominal_pressure", "mean_plane_deflection",
@@ -391,9 +393,19 @@ def read_surfaces(path: str | os.PathLike, count: int | None = None, *,
 # Influence files: a dense matrix or a matrix-free operator
 
 
+def _is_operator(unit) -> bool:
+    """Whether ``unit`` is a matrix-free
+    :class:`~roughcontact.elasticity.operators.BlockOperator` (imported here: a job that
+    reads only surfaces or contact files, or a figure, does not load the operators and
+    the solvers behind them)."""
+    from roughcontact.elasticity.operators import BlockOperator
+
+    return isinstance(unit, BlockOperator)
+
+
 def influence_sha256(unit) -> str:
     """Content hash of a stored influence model (matrix, or the operator's correction)."""
-    if isinstance(unit, BlockOperator):
+    if _is_operator(unit):
         return array_sha256(unit.correction) if unit.correction is not None else \
             array_sha256(np.asarray(unit.grid + unit.size + (unit.nu,), dtype=float))
     return array_sha256(unit)
@@ -401,7 +413,7 @@ def influence_sha256(unit) -> str:
 
 def influence_datasets(unit) -> tuple[dict, dict]:
     """Datasets and attributes that store ``unit`` (a matrix or a :class:`BlockOperator`)."""
-    if not isinstance(unit, BlockOperator):
+    if not _is_operator(unit):
         return {"unit_influence": (unit, {
             "units": "m (E * C: displacement per unit pressure times Young's modulus)",
             "layout": "C[i, j]: displacement at the centre of element i per unit "
@@ -431,7 +443,7 @@ def write_influence(path: str | os.PathLike, unit, attrs: dict) -> dict:
 def _influence_shape(path, unit, geometry: dict) -> None:
     """The stored model's grid against the ``grid`` of the geometry a reader expects."""
     nx, ny = geometry["grid"]
-    if isinstance(unit, BlockOperator):
+    if _is_operator(unit):
         _check_shape(path, "the operator's grid", unit.grid, (nx, ny), "nx, ny")
     else:
         _check_shape(path, "unit_influence", unit.shape, (nx * ny, nx * ny),
@@ -465,6 +477,8 @@ def read_influence(path: str | os.PathLike, *, geometry: dict | None = None):
         raise StoredFileError(f"{path}: not an influence file (no unit_influence dataset, and "
                               f"no matrix-free operator: operator attribute {kind!r}); "
                               f"{rebuild(path)}", path)
+    from roughcontact.elasticity.operators import BlockOperator
+
     try:
         coarse = pair(attrs["coarse_grid"]) if correction is not None else None
         op = BlockOperator(grid=pair(attrs["operator_grid"]),
@@ -574,5 +588,7 @@ def read_contact(path: str | os.PathLike, *,
     max_iter = int(attrs["sweep_max_iter"])
     hardness = float(attrs["sweep_hardness"])
     fields = {CONTACT_FIELDS.get(name, name): values for name, values in arrays.items()}
+    from roughcontact.contact.curves import NondimSweep
+
     return NondimSweep(**fields, **settings, max_iter=None if max_iter < 0 else max_iter,
                        nondim_hardness=None if hardness < 0 else hardness), attrs

@@ -59,3 +59,14 @@ def test_the_lazy_imports_give_the_same_numbers():
     expected = np.where(eta > scipy.stats.norm.isf(curve.delta), curve.lam, curve.xi)
     assert curve.family == "ST"
     np.testing.assert_array_equal(curve.transform(eta), expected)
+
+
+def test_the_file_readers_load_neither_the_solvers_nor_the_finite_element_model():
+    """A figure or job that reads stored files only (surfaces, tables) does not load the
+    contact solvers or scikit-fem through the readers."""
+    code = ("import sys, roughcontact.study.storage\n"
+            "print(' '.join(m for m in ('roughcontact.contact', 'roughcontact.elasticity',"
+            " 'skfem', 'scipy.sparse', 'scipy.linalg') if m in sys.modules))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    assert proc.stdout.split() == []
