@@ -17,7 +17,8 @@ form and rescales it to any sigma and E (Eq 28-32); ``aggregate`` averages
 a cell's surfaces at equal nominal pressure; ``cell`` is the one
 sweep-then-aggregate recipe the workflow, the reports and the audit share;
 ``halfspace_criterion`` measures, by solving, whether the half-space model
-is enough for a geometry.
+is enough for a geometry; ``interface`` reads off a solution its contact
+spots, perimeter, perimeter-corrected real area and gaps.
 
 The solver's public names are importable from here: ``from roughcontact
 import contact; contact.solve(...)``.

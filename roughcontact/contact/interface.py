@@ -1,0 +1,322 @@
+"""What an engineer reads off a contact interface: spots, perimeter, corrected area, gap.
+
+From a solution's pressure ``p`` and gap ``g = u + f - d`` on a grid of
+``(ny, nx)`` elements of sides ``(dx, dy)`` [m]:
+
+*contact spots*
+    connected clusters of elements in contact (``p > 0``), two elements
+    being connected when they share an edge (4-connectivity: elements that
+    touch only at a corner are separate spots). On a periodic grid (a cell
+    that repeats, e.g. :class:`~roughcontact.elasticity.halfspace.PeriodicHalfSpace`)
+    the last column neighbours the first and the last row the first, so a
+    spot that crosses the boundary is one spot. A finite block's edges are
+    the body's edges: nothing connects across them. Reported: the number of
+    spots, their mean area ``A_c / N_spots`` [m^2] and the spot-area
+    quantiles at :data:`SPOT_PROBABILITIES` (by number of spots; 1.0 is the
+    largest spot).
+*perimeter*
+    the length of the contact/non-contact interface as the grid draws it
+    (the "Manhattan" perimeter ``P'``): every pair of edge-neighbours of
+    which one is in contact and the other not contributes the shared edge,
+    ``dy`` between x-neighbours and ``dx`` between y-neighbours [m]. The
+    edges of a non-periodic grid are not counted.
+*corrected real area*
+    Counting elements in contact overestimates the true area along every
+    contact edge. Yastrebov, Anciaux & Molinari (2017, "On the accurate
+    computation of the true contact-area in mechanical contact of random
+    rough surfaces", Tribology International 114, 161-171; arXiv 1701.02727)
+    correct the count by the perimeter:
+
+        ``A = A' - kappa P' dx``,  ``kappa = (pi - 1 + ln 2) / 24`` (about 0.118),
+
+    with ``A'`` the element count times the element area and ``P'`` the
+    Manhattan perimeter on a grid of square elements of side ``dx``. Each
+    switch between contact and non-contact then removes ``kappa dx^2``; on
+    rectangular elements we remove ``kappa dx dy`` per switch (the same
+    formula, per element area). Reported as a fraction of the nominal area,
+    beside the uncorrected ``real_area_fraction``.
+*gap*
+    the mean interfacial separation ``mean(g)`` [m] (what a seal leaks
+    through) and the gap quantiles at :data:`GAP_PROBABILITIES` over the
+    nominal area (elements in contact have ``g = 0`` to the solver's
+    tolerance, so quantiles below the contact fraction are about zero).
+
+All quantities are computed for a stack of fields at once (leading axes:
+surfaces, steps), in O(n) per field.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "GAP_PROBABILITIES",
+    "SPOT_PROBABILITIES",
+    "YASTREBOV_KAPPA",
+    "InterfaceGrid",
+    "InterfaceSummary",
+    "corrected_area_fraction",
+    "describe",
+    "label_spots",
+    "perimeter_switches",
+]
+
+#: Perimeter correction of the element count, Yastrebov, Anciaux & Molinari (2017).
+YASTREBOV_KAPPA = (math.pi - 1.0 + math.log(2.0)) / 24.0
+#: Probabilities (by number of spots) of the stored spot-area quantiles; 1.0: the largest.
+SPOT_PROBABILITIES = (0.1, 0.25, 0.5, 0.75, 0.9, 1.0)
+#: Probabilities (by area) of the stored gap quantiles; 1.0: the largest gap.
+GAP_PROBABILITIES = (0.05, 0.1, 0.25, 0.5, 0.75, 0.9, 0.95, 0.99, 1.0)
+
+
+@dataclass(frozen=True)
+class InterfaceGrid:
+    """The grid the interface quantities are measured on.
+
+    Parameters
+    ----------
+    spacing : (float, float)
+        Element sides ``(dx, dy)`` [m] (``dx`` along the last axis of a field).
+    periodic : bool
+        The grid repeats (spots connect across its edges, and the edges' switches
+        count in the perimeter).
+    """
+
+    spacing: tuple[float, float]
+    periodic: bool = False
+
+    def __post_init__(self):
+        dx, dy = (float(s) for s in self.spacing)
+        if not (math.isfinite(dx) and math.isfinite(dy) and dx > 0.0 and dy > 0.0):
+            raise ValueError(f"spacing must be two positive element sides (dx, dy) [m], "
+                             f"got {self.spacing!r}")
+        object.__setattr__(self, "spacing", (dx, dy))
+        object.__setattr__(self, "periodic", bool(self.periodic))
+
+    @classmethod
+    def of(cls, operator, size) -> InterfaceGrid:
+        """The grid of ``operator`` (its ``grid`` ``(nx, ny)``) over a surface of ``size``
+        ``(Lx, Ly)`` [m]; periodic when the operator's mean displacement is fixed to
+        zero (``mean_compliance == 0``: a periodic cell carries no uniform mode)."""
+        if operator.grid is None:
+            raise ValueError("the operator does not know its grid (nx, ny): give "
+                             "InterfaceGrid(spacing=(dx, dy), periodic=...) yourself")
+        nx, ny = operator.grid
+        lx, ly = size
+        return cls((lx / nx, ly / ny), operator.mean_compliance == 0.0)
+
+    @property
+    def element_area(self) -> float:
+        """``dx dy`` [m^2]."""
+        return self.spacing[0] * self.spacing[1]
+
+
+@dataclass(frozen=True)
+class InterfaceSummary:
+    """The interface quantities of a stack of solutions (leading axes of the fields).
+
+    Attributes
+    ----------
+    spot_count : ndarray of int
+        Number of contact spots.
+    mean_spot_area : ndarray
+        Contact area over spot count [m^2]; NaN without contact.
+    spot_area_quantiles : ndarray, (..., len(SPOT_PROBABILITIES))
+        Spot areas [m^2] at :data:`SPOT_PROBABILITIES`; NaN without contact.
+    perimeter : ndarray
+        Manhattan perimeter ``P'`` [m].
+    real_area_fraction : ndarray
+        Elements in contact over all elements [-].
+    corrected_real_area_fraction : ndarray
+        ``(A' - kappa P' dx) / A_n`` [-] (Yastrebov et al. 2017).
+    mean_gap : ndarray
+        Mean of the gap field [m].
+    gap_quantiles : ndarray, (..., len(GAP_PROBABILITIES))
+        Gap [m] at :data:`GAP_PROBABILITIES` (by area).
+    """
+
+    spot_count: np.ndarray
+    mean_spot_area: np.ndarray
+    spot_area_quantiles: np.ndarray
+    perimeter: np.ndarray
+    real_area_fraction: np.ndarray
+    corrected_real_area_fraction: np.ndarray
+    mean_gap: np.ndarray
+    gap_quantiles: np.ndarray
+
+
+def _fields(array, name: str) -> np.ndarray:
+    a = np.asarray(array)
+    if a.ndim < 2 or a.shape[-1] < 1 or a.shape[-2] < 1:
+        raise ValueError(f"{name} must hold fields of shape (..., ny, nx), got shape {a.shape}")
+    return a
+
+
+def _neighbour_pairs(shape, periodic: bool, axis: int):
+    """Flat index pairs (a, b) of the edge-neighbours along ``axis`` (-1: x, -2: y) of
+    one field of ``shape`` (ny, nx); with ``periodic`` the wrap-around pairs too."""
+    index = np.arange(shape[0] * shape[1]).reshape(shape)
+    if periodic:
+        return index, np.roll(index, -1, axis=axis)
+    if axis == -1:
+        return index[:, :-1], index[:, 1:]
+    return index[:-1, :], index[1:, :]
+
+
+def label_spots(contact, periodic: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Contact spots of a stack of contact sets (4-connectivity, module docstring).
+
+    Parameters
+    ----------
+    contact : ndarray of bool, (..., ny, nx)
+        Elements in contact.
+    periodic : bool
+        Connect across the grid's edges.
+
+    Returns
+    -------
+    labels : ndarray of int, (..., ny, nx)
+        0 outside contact; spots numbered 1, 2, ... within each field, in the
+        order of their first element (row-major).
+    counts : ndarray of int, (...)
+        Number of spots in each field.
+    """
+    import scipy.sparse
+    import scipy.sparse.csgraph
+
+    mask = _fields(contact, "contact").astype(bool)
+    shape = mask.shape[-2:]
+    stack = mask.shape[:-2]
+    fields = int(np.prod(stack, dtype=np.int64))
+    n = shape[0] * shape[1]
+    flat = mask.reshape(fields, n)
+    rows, cols = [], []
+    for axis in (-1, -2):
+        first, second = _neighbour_pairs(shape, periodic, axis)
+        first, second = first.ravel(), second.ravel()
+        both = flat[:, first] & flat[:, second]
+        field, pair = np.nonzero(both)
+        rows.append(field * n + first[pair])
+        cols.append(field * n + second[pair])
+    nodes = np.flatnonzero(flat.ravel())
+    # compress to the contact elements: the graph's vertices
+    position = np.full(fields * n, -1, dtype=np.int64)
+    position[nodes] = np.arange(nodes.size)
+    row = position[np.concatenate(rows)]
+    col = position[np.concatenate(cols)]
+    graph = scipy.sparse.coo_matrix((np.ones(row.size, dtype=np.int8), (row, col)),
+                                    shape=(nodes.size, nodes.size)).tocsr()
+    _, component = scipy.sparse.csgraph.connected_components(graph, directed=False)
+    # renumber per field in the order of first appearance (nodes are row-major sorted)
+    field_of_node = nodes // n
+    first_seen = np.unique(component, return_index=True)[1]
+    order = np.argsort(first_seen, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)  # component -> global order of first appearance
+    spot_field = field_of_node[first_seen[order]]
+    counts = np.bincount(spot_field, minlength=fields)
+    offsets = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    global_rank = rank[component]
+    local = global_rank - offsets[field_of_node] + 1
+    labels = np.zeros(fields * n, dtype=np.int64)
+    labels[nodes] = local
+    return labels.reshape(mask.shape), counts.reshape(stack)
+
+
+def perimeter_switches(contact, periodic: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Numbers of contact/non-contact switches between x-neighbours and between
+    y-neighbours of each field of ``contact`` (..., ny, nx) (module docstring)."""
+    mask = _fields(contact, "contact").astype(bool)
+    switches = []
+    for axis in (-1, -2):
+        if periodic:
+            differ = mask != np.roll(mask, -1, axis=axis)
+        else:
+            differ = np.diff(mask, axis=axis)
+        switches.append(np.count_nonzero(differ, axis=(-2, -1)))
+    return switches[0], switches[1]
+
+
+def corrected_area_fraction(contact, periodic: bool = False) -> np.ndarray:
+    """``(N_c - kappa (s_x + s_y)) / n``: the element count corrected by its perimeter
+    (Yastrebov, Anciaux & Molinari 2017; module docstring), per field [-]."""
+    mask = _fields(contact, "contact").astype(bool)
+    sx, sy = perimeter_switches(mask, periodic)
+    n = mask.shape[-1] * mask.shape[-2]
+    count = np.count_nonzero(mask, axis=(-2, -1))
+    return (count - YASTREBOV_KAPPA * (sx + sy)) / n
+
+
+def _ranks(probabilities, count):
+    """The 1-based ranks ``max(ceil(q count), 1)`` of the order statistics at ``q``
+    (the lower quantile: no interpolation between elements or spots)."""
+    q = np.asarray(probabilities, dtype=float)
+    return np.maximum(np.ceil(q * np.asarray(count)[..., None] - 1e-9).astype(np.int64), 1)
+
+
+def _order_statistics(values: np.ndarray, count: np.ndarray, probabilities) -> np.ndarray:
+    """The ``ceil(q count)``-th smallest of the first ``count`` entries of each row of
+    ``values`` (sorted ascending, NaN-padded), for each ``q``; NaN where ``count == 0``."""
+    ranks = _ranks(probabilities, count)
+    out = np.take_along_axis(values, np.minimum(ranks, values.shape[1]) - 1, axis=1)
+    out[count == 0] = np.nan
+    return out
+
+
+def describe(pressure, gap, grid: InterfaceGrid) -> InterfaceSummary:
+    """The interface quantities (module docstring) of solutions on ``grid``.
+
+    Parameters
+    ----------
+    pressure : ndarray, (..., ny, nx)
+        Element pressures [Pa] (any unit: only ``p > 0`` is used).
+    gap : ndarray, (..., ny, nx)
+        Gaps ``u + f - d`` [m] of the same solutions.
+    grid : InterfaceGrid
+        Element sides and periodicity.
+
+    Returns
+    -------
+    InterfaceSummary
+    """
+    p = _fields(pressure, "pressure")
+    g = _fields(gap, "gap")
+    if p.shape != g.shape:
+        raise ValueError(f"pressure {p.shape} and gap {g.shape} must have the same shape")
+    contact = p > 0.0
+    dx, dy = grid.spacing
+    stack, shape = p.shape[:-2], p.shape[-2:]
+    n = shape[0] * shape[1]
+    labels, counts = label_spots(contact, grid.periodic)
+    fields = int(np.prod(stack, dtype=np.int64))
+    flat_labels = labels.reshape(fields, n)
+    counts_flat = counts.reshape(fields)
+    # spot sizes (elements), sorted per field, NaN-padded to the largest count
+    widest = max(int(counts_flat.max(initial=0)), 1)
+    sizes = np.full((fields, widest), np.nan)
+    for f in np.flatnonzero(counts_flat):
+        spot = np.bincount(flat_labels[f], minlength=counts_flat[f] + 1)[1:]
+        sizes[f, :spot.size] = np.sort(spot)
+    spot_quantiles = _order_statistics(sizes, counts_flat, SPOT_PROBABILITIES) * grid.element_area
+    in_contact = np.count_nonzero(contact, axis=(-2, -1)).reshape(fields)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_spot = np.where(counts_flat > 0, in_contact * grid.element_area / counts_flat, np.nan)
+    sx, sy = perimeter_switches(contact, grid.periodic)
+    perimeter = sx * dy + sy * dx
+    corrected = (in_contact.reshape(stack) - YASTREBOV_KAPPA * (sx + sy)) / n
+    ranks = _ranks(GAP_PROBABILITIES, n)
+    flat_gap = np.partition(g.reshape(fields, n), ranks - 1, axis=1)
+    gap_quantiles = flat_gap[:, ranks - 1]
+    return InterfaceSummary(
+        spot_count=counts,
+        mean_spot_area=mean_spot.reshape(stack),
+        spot_area_quantiles=spot_quantiles.reshape(*stack, len(SPOT_PROBABILITIES)),
+        perimeter=np.asarray(perimeter, dtype=float),
+        real_area_fraction=(in_contact / n).reshape(stack),
+        corrected_real_area_fraction=np.asarray(corrected, dtype=float),
+        mean_gap=g.reshape(fields, n).mean(axis=1).reshape(stack),
+        gap_quantiles=gap_quantiles.reshape(*stack, len(GAP_PROBABILITIES)),
+    )
