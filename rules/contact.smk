@@ -20,8 +20,9 @@ rule contact:
     params:
         job=get_contact_params,
         solver=canonical(PLAN.contact.params()),
-        # version of the stored layout (2: plastic area and the solutions' pressure profiles)
-        layout=2,
+        # version of the stored layout (2: plastic area and the solutions' pressure profiles;
+        # 3: the interface quantities: spots, perimeter, corrected area, gaps)
+        layout=3,
     script:
         "../scripts/solve_contact.py"
 

@@ -36,6 +36,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COVERAGE",
+    "INTERFACE_QUANTITIES",
     "QUANTITIES",
     "SPACINGS",
     "Quantity",
@@ -46,6 +47,7 @@ __all__ = [
     "mean_plane_modulus",
     "modulus_summary",
     "pressure_axis",
+    "quantities",
     "statistics",
     "surface_curves",
 ]
@@ -80,6 +82,19 @@ QUANTITIES = {
     "plastic_area_fraction": Quantity(
         "1", "elements at the hardness cap / all elements (0 if elastic)"),
     "plastic_load_fraction": Quantity("1", "load on elements at the cap / load (0 if elastic)"),
+}
+#: Aggregated interface quantities (:mod:`roughcontact.contact.interface`), by name: in the
+#: table when the sweep recorded them (every contact job of the study does).
+INTERFACE_QUANTITIES = {
+    "spot_count": Quantity("1", "N_s, contact spots (4-connected clusters of elements in "
+                                "contact)"),
+    "mean_spot_area": Quantity("m^2", "A_c / N_s, mean area of a contact spot"),
+    "perimeter": Quantity("m", "P', contact/non-contact interface length on the grid "
+                               "(Manhattan perimeter)"),
+    "corrected_real_area_fraction": Quantity(
+        "1", "(A' - kappa P' dx) / A_n, real area corrected by its perimeter "
+             "(Yastrebov et al. 2017)"),
+    "mean_gap": Quantity("m", "mean interfacial separation, mean of u + f - d"),
 }
 #: Spacings of :func:`pressure_axis`: name -> ``f(first, last, n)``.
 SPACINGS = {"log": np.geomspace, "linear": np.linspace}
@@ -124,11 +139,19 @@ def _check_sweep(sweep) -> PhysicalSweep:
     return sweep
 
 
+def quantities(sweep: PhysicalSweep) -> dict:
+    """The quantities :func:`aggregate_cell` averages for ``sweep``: :data:`QUANTITIES`, and
+    :data:`INTERFACE_QUANTITIES` when the sweep recorded them."""
+    if sweep.mean_gap is None:
+        return QUANTITIES
+    return {**QUANTITIES, **INTERFACE_QUANTITIES}
+
+
 def _usable(sweep: PhysicalSweep, quantity: str) -> np.ndarray:
     """(m, k) mask of steps a quantity may be interpolated from."""
     P = sweep.nominal_pressure
     mask = np.isfinite(P) & (P > 0.0)
-    for flag in QUANTITIES[quantity].flags:
+    for flag in {**QUANTITIES, **INTERFACE_QUANTITIES}[quantity].flags:
         mask &= getattr(sweep, flag)
     return mask & np.isfinite(getattr(sweep, quantity))
 
@@ -152,9 +175,10 @@ def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> n
     deflection's curves (Eq 45).
     """
     sweep = _check_sweep(sweep_physical)
-    if quantity not in QUANTITIES:
-        raise ValueError(f"quantity must be one of {tuple(QUANTITIES)}, got {quantity!r}")
-    difference = QUANTITIES[quantity].difference
+    known = quantities(sweep)
+    if quantity not in known:
+        raise ValueError(f"quantity must be one of {tuple(known)}, got {quantity!r}")
+    difference = known[quantity].difference
     if difference is not None:  # e.g. d_a = d - d_b (Eq 45) at every level
         first, second = difference
         return (surface_curves(sweep, pressures, first)
@@ -247,7 +271,10 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
         ``approach`` d [m], ``mean_plane_deflection`` d_b [m],
         ``asperity_deflection`` d_a [m], ``real_area_fraction`` [-],
         ``max_pressure`` [Pa], ``plastic_area_fraction`` and
-        ``plastic_load_fraction`` [-], zero without a cap): ``q_mean``,
+        ``plastic_load_fraction`` [-], zero without a cap; and, when the sweep
+        recorded them, the :data:`INTERFACE_QUANTITIES` ``spot_count``,
+        ``mean_spot_area`` [m^2], ``perimeter`` [m],
+        ``corrected_real_area_fraction`` [-] and ``mean_gap`` [m]): ``q_mean``,
         ``q_half_width`` (same unit) and
         ``q_count`` (surfaces used; fewer than ``surfaces`` where the level
         lies outside some surfaces' swept range, 0 with NaN values where it
@@ -271,7 +298,7 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
     m = sweep.nominal_pressure.shape[0]
     columns = {"nominal_pressure": levels}
     units = {"nominal_pressure": "Pa"}
-    for quantity, spec in QUANTITIES.items():
+    for quantity, spec in quantities(sweep).items():
         samples = surface_curves(sweep, levels, quantity)
         mean, half_width, count = statistics(samples, confidence)
         columns[f"{quantity}_mean"] = mean

@@ -25,6 +25,7 @@ import numpy as np
 
 from roughcontact.contact import aggregate, nondim, validity
 from roughcontact.contact.curves import NondimSweep, PhysicalSweep
+from roughcontact.contact.interface import InterfaceGrid
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -35,6 +36,7 @@ __all__ = [
     "VALIDITY_QUANTITIES",
     "aggregate_sweep",
     "approach_grid",
+    "block_interface",
     "nondim_pressure",
     "sweep_and_aggregate",
     "sweep_cell",
@@ -92,13 +94,21 @@ def approach_grid(heights: np.ndarray, pressure_end: float, steps: int,
     return np.geomspace(end / APPROACH_RANGE, end, int(steps))
 
 
+def block_interface(geometry) -> InterfaceGrid:
+    """The :class:`~roughcontact.contact.interface.InterfaceGrid` of a block's contact
+    grid: elements of ``size / grid`` [m]; not periodic (the block's sides are its
+    edges: nothing connects across them)."""
+    (lx, ly), (nx, ny) = geometry.size, geometry.grid
+    return InterfaceGrid((lx / nx, ly / ny), periodic=False)
+
+
 def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: float, steps: int,
                *, method: str = "cg", tol: float = 1e-8, precision: str = "mixed",
                stiffness_tol: float = 1e-6, max_iter: int | None = None,
                batch_size: int | None = None,
                progress: Callable[[nondim.SweepProgress], None] | None = None,
                rows: slice | None = None, nondim_hardness: float | None = None,
-               profile: bool = True) -> NondimSweep:
+               profile: bool = True, interface: bool = True) -> NondimSweep:
     """Sweep every surface of a cell to ``pressure_end`` on :func:`approach_grid`.
 
     Parameters
@@ -122,6 +132,10 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
     profile : bool
         Record the pressure and load profiles of every solution (default),
         from which :func:`validity_table` reads the share above any hardness.
+    interface : bool
+        Record every solution's contact spots, perimeter, corrected area and
+        gaps (default; :mod:`roughcontact.contact.interface`) on the grid of
+        ``geometry`` (:func:`block_interface`: it then needs ``size`` and ``grid``).
     """
     approaches = approach_grid(heights, pressure_end, steps)
     if rows is not None:
@@ -131,7 +145,8 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
                              method=method, tol=tol, max_iter=max_iter,
                              stiffness_tol=stiffness_tol, precision=precision,
                              batch_size=batch_size, progress=progress,
-                             nondim_hardness=nondim_hardness, profile=profile)
+                             nondim_hardness=nondim_hardness, profile=profile,
+                             interface=block_interface(geometry) if interface else None)
 
 
 def aggregate_sweep(sweep: NondimSweep, sigma: float, E: float, pressures,

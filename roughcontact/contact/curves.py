@@ -12,7 +12,8 @@ one name per unit: the cap of a capped sweep is ``hardness`` H [Pa] in a
 PhysicalSweep and ``nondim_hardness`` ``H L / (E sigma)`` [-] in a NondimSweep.
 
 Every array has shape (m, k): surface by approach step; the pressure and load
-profiles of a NondimSweep have shape (m, k, R).
+profiles of a NondimSweep have shape (m, k, R), the spot-area and gap quantiles
+of the interface quantities (m, k, S) and (m, k, G).
 """
 
 from __future__ import annotations
@@ -31,11 +32,13 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DIAGNOSTICS",
+    "INTERFACE",
     "PROFILES",
     "SOLVER_FIELDS",
     "CellSweep",
     "NondimSweep",
     "PhysicalSweep",
+    "interface_arrays",
     "solver_arrays",
 ]
 
@@ -43,6 +46,10 @@ __all__ = [
 DIAGNOSTICS = ("iterations", "matvecs", "residual", "converged", "stiffness_converged")
 #: Per-step solution profiles a NondimSweep may hold, (m, k, R).
 PROFILES = ("pressure_profile", "load_profile")
+#: Interface quantities a record may hold (:mod:`roughcontact.contact.interface`), under
+#: the names of the SweepResult; None when the sweep did not record them.
+INTERFACE = ("spot_count", "mean_spot_area", "perimeter", "corrected_real_area_fraction",
+             "mean_gap", "spot_area_quantiles", "gap_quantiles")
 #: Record field -> SweepResult field, for the arrays both records read from the
 #: solver's :func:`roughcontact.contact.sweep` under the same name.
 SOLVER_FIELDS = {name: name for name in ("approach", "mean_plane_deflection",
@@ -88,6 +95,16 @@ class CellSweep:
     thickness : float
         Block thickness ``L`` [m] (for a half-space, the reference length of
         the scaling).
+    spot_count, mean_spot_area, perimeter, corrected_real_area_fraction : ndarray or None
+        The contact spots (count, mean area [m^2]), the Manhattan perimeter [m] and
+        the perimeter-corrected real area fraction [-]
+        (:mod:`roughcontact.contact.interface`): the same in both forms (lateral
+        lengths do not scale); None when not recorded.
+    mean_gap : ndarray or None
+        Mean interfacial separation [m] (``/ sigma``); None when not recorded.
+    spot_area_quantiles, gap_quantiles : ndarray or None
+        (m, k, S) spot areas [m^2] and (m, k, G) gaps [m] (``/ sigma``) at the
+        probabilities of :mod:`roughcontact.contact.interface`; None when not recorded.
     """
 
     approach: np.ndarray
@@ -103,6 +120,13 @@ class CellSweep:
     stiffness_converged: np.ndarray
     thickness: float
     plastic_area_fraction: np.ndarray | None = None
+    spot_count: np.ndarray | None = None
+    mean_spot_area: np.ndarray | None = None
+    perimeter: np.ndarray | None = None
+    corrected_real_area_fraction: np.ndarray | None = None
+    mean_gap: np.ndarray | None = None
+    spot_area_quantiles: np.ndarray | None = None
+    gap_quantiles: np.ndarray | None = None
 
     def __post_init__(self):
         zero_plastic_area(self)
@@ -209,7 +233,7 @@ class PhysicalSweep(CellSweep):
                                         "nominal_pressure": "nominal_pressure",
                                         "contact_stiffness": "contact_stiffness"},
                                stiffness="contact_stiffness")
-        return cls(**arrays,
+        return cls(**arrays, **interface_arrays(result),
                    normalized_stiffness=thickness / nominal_area * arrays["contact_stiffness"],
                    sigma=float(sigma), E=float(E), thickness=thickness,
                    nominal_area=nominal_area, hardness=result.hardness)
@@ -223,7 +247,10 @@ class PhysicalSweep(CellSweep):
         ``max_pressure`` [Pa], ``contact_stiffness`` [N/m],
         ``normalized_stiffness`` [Pa], ``iterations``, ``matvecs``,
         ``residual`` [-], ``converged``, ``stiffness_converged``,
-        ``plastic_area_fraction``, ``plastic_load_fraction`` [-]. The units
+        ``plastic_area_fraction``, ``plastic_load_fraction`` [-] and, when
+        recorded, the (m, k) interface quantities (``spot_count``,
+        ``mean_spot_area`` [m^2], ``perimeter`` [m], ``corrected_real_area_fraction``
+        [-], ``mean_gap`` [m]). The units
         are also in ``frame.attrs["units"]``, the scales in ``frame.attrs``.
         """
         m, k = self.approach.shape
@@ -231,12 +258,15 @@ class PhysicalSweep(CellSweep):
             "surface": np.repeat(np.arange(m), k),
             "step": np.tile(np.arange(k), m),
         }
-        for name in _PHYSICAL_UNITS:
+        units = dict(_PHYSICAL_UNITS)
+        if self.mean_gap is not None:
+            units.update(_INTERFACE_UNITS)
+        for name in units:
             columns[name] = np.asarray(getattr(self, name)).ravel()
         import pandas as pd
 
         frame = pd.DataFrame(columns)
-        frame.attrs.update(units=dict(_PHYSICAL_UNITS), sigma=self.sigma, E=self.E,
+        frame.attrs.update(units=units, sigma=self.sigma, E=self.E,
                            thickness=self.thickness, nominal_area=self.nominal_area)
         return frame
 
@@ -259,6 +289,23 @@ _PHYSICAL_UNITS = {
     "plastic_area_fraction": "1",
     "plastic_load_fraction": "1",
 }
+
+
+_INTERFACE_UNITS = {
+    "spot_count": "1",
+    "mean_spot_area": "m^2",
+    "perimeter": "m",
+    "corrected_real_area_fraction": "1",
+    "mean_gap": "m",
+}
+
+
+def interface_arrays(result) -> dict:
+    """The interface quantities (:data:`INTERFACE`) of a solver sweep or record, by
+    name; empty when it did not record them."""
+    if getattr(result, "mean_gap", None) is None:
+        return {}
+    return {name: np.asarray(getattr(result, name)) for name in INTERFACE}
 
 
 def solver_arrays(result, names: Mapping[str, str], stiffness: str) -> dict:

@@ -69,10 +69,12 @@ from roughcontact.contact.checks import (
 )
 from roughcontact.contact.curves import (
     DIAGNOSTICS,
+    INTERFACE,
     PROFILES,
     SOLVER_FIELDS,
     NondimSweep,
     PhysicalSweep,
+    interface_arrays,
     solver_arrays,
 )
 from roughcontact.contact.methods import resolve_method
@@ -81,6 +83,7 @@ from roughcontact.elasticity import definiteness
 from roughcontact.elasticity.protocol import DenseInfluence
 
 __all__ = [
+    "INTERFACE_SCALES",
     "SI_SCALES",
     "SweepProgress",
     "dimensionless_operator",
@@ -109,6 +112,10 @@ SI_SCALES = {
     "real_area_fraction": "1",
     "plastic_area_fraction": "1",
 }
+#: The scale of each interface quantity (:mod:`roughcontact.contact.interface`): gaps
+#: are heights (sigma); spots, perimeter and areas are lateral, the same in both forms.
+INTERFACE_SCALES = {name: "1" for name in INTERFACE} | {"mean_gap": "sigma",
+                                                        "gap_quantiles": "sigma"}
 #: SweepResult field of each array of a NondimSweep: the dimensionless problem has
 #: nominal area 1, so the solver's load is ``Phat`` and its tangent stiffness
 #: ``dPhat / ddhat = k_P / E``.
@@ -322,7 +329,8 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
                stiffness_tol: float = 1e-6, precision: str = "double",
                batch_size: int | None = None,
                progress: Callable[[SweepProgress], None] | None = None,
-               nondim_hardness: float | None = None, profile: bool = False) -> NondimSweep:
+               nondim_hardness: float | None = None, profile: bool = False,
+               interface=None) -> NondimSweep:
     """Dimensionless force-deflection sweep of all surfaces of one cell (Eq 27, 33, 35).
 
     Solves ``min 1/2 phat.K phat - phat.(dhat - fhat)`` over ``phat >= 0``
@@ -367,6 +375,11 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         Record every solution's pressure and load profiles
         (:mod:`roughcontact.contact.validity`), from which the share of area
         and load above any hardness is read without another solve.
+    interface : InterfaceGrid, optional
+        The surfaces' element sides [m] and periodicity
+        (:class:`roughcontact.contact.interface.InterfaceGrid`): record every
+        solution's spots, perimeter, corrected area and gaps (gaps in units of
+        sigma, like the heights). None (default): not recorded.
 
     Returns
     -------
@@ -388,9 +401,14 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
                 else check_positive(nondim_hardness, "nondim_hardness (H L / (E sigma))"))
     method = resolve_method(method, operator, hardness)  # recorded as solved
     ranks = validity.rank_grid(n) if profile else None
+    if interface is not None:  # the interface quantities need the fields' (ny, nx)
+        if np.ndim(heights) != 3:
+            raise ValueError(f"interface quantities need heights of shape (m, ny, nx), got "
+                             f"{np.shape(heights)}")
+        gaps = gaps.reshape(np.shape(heights))
     arrays = _sweep_batches(operator, gaps, steps, batch_size, progress, method=method, tol=tol,
                             max_iter=max_iter, stiffness_tol=stiffness_tol, precision=precision,
-                            hardness=hardness, profile=profile)
+                            hardness=hardness, profile=profile, interface=interface)
     _warn_unconverged(arrays, tol, stiffness_tol)
     return NondimSweep(**arrays, thickness=thickness, element_area=element_area, n_elements=n,
                        method=method, tol=float(tol), stiffness_tol=float(stiffness_tol),
@@ -399,11 +417,11 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
 
 
 def _sweep_batches(operator, gaps, steps, batch_size: int, progress, *, method, tol, max_iter,
-                   stiffness_tol, precision, hardness, profile) -> dict:
+                   stiffness_tol, precision, hardness, profile, interface=None) -> dict:
     """:func:`roughcontact.contact.sweep` of ``batch_size`` surfaces at a time
     (:func:`solve_cell`): the (m, k) arrays of a NondimSweep, and with ``profile``
     its (m, k, R) profiles."""
-    m, n = gaps.shape
+    m, n = gaps.shape[0], gaps[0].size
     batches = []
     start = time.perf_counter()
     for first in range(0, m, batch_size):
@@ -411,10 +429,11 @@ def _sweep_batches(operator, gaps, steps, batch_size: int, progress, *, method, 
         result = sweep(operator, gaps[rows], steps[rows], method=method, tol=tol,
                        max_iter=max_iter, element_area=1.0 / n, stiffness=True,
                        stiffness_tol=stiffness_tol, precision=precision,
-                       hardness=hardness, profile=profile)
+                       hardness=hardness, profile=profile, interface=interface)
         batch = solver_arrays(result, FROM_SOLVER, stiffness="normalized_stiffness")
         if profile:
             batch.update({name: getattr(result, name) for name in PROFILES})
+        batch.update(interface_arrays(result))
         _report_batch(batch, rows, m, time.perf_counter() - start, progress)
         batches.append(batch)
     return {name: np.concatenate([batch[name] for batch in batches]) for name in batches[0]}
@@ -495,8 +514,13 @@ def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None
     cap = _check_cap(nd, hardness, scales["E sigma / L"])
     scaled = {name: scales[scale] * np.asarray(getattr(nd, name), dtype=float)
               for name, scale in SI_SCALES.items()}
+    interface = interface_arrays(nd)
+    for name, values in interface.items():
+        interface[name] = (values if INTERFACE_SCALES[name] == "1"
+                           else scales[INTERFACE_SCALES[name]] * values)
     return PhysicalSweep(
         **scaled,
+        **interface,
         **{name: np.array(getattr(nd, name)) for name in DIAGNOSTICS},
         load=scaled["nominal_pressure"] * nd.nominal_area,
         contact_stiffness=scaled["normalized_stiffness"] * nd.nominal_area / length,

@@ -367,7 +367,7 @@ def _step_solved(state: PivotState, j: int, x, gap, gaps, steps, operator, diago
     scale = gap_scale((gaps[j] - d)[None])[0]
     p = _clip(x, hardness)
     residual = kkt_residuals(p[None], gap[None], diagonal, np.array([scale]), hardness)[0]
-    table.record(j, step, p, gap - gaps[j] + d, residual, operator.element_area, hardness)
+    table.record(j, step, p, gap - gaps[j] + d, residual, operator.element_area, hardness, gap)
     table.record_work(j, step, state.rounds, state.rounds, residual <= options.tol)
     rate = np.zeros(p.size)
     if state.index.size and (options.stiffness or step + 1 < k):

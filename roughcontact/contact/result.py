@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughcontact.contact import validity
+from roughcontact.contact import interface, validity
 from roughcontact.contact.kkt import plastic_fraction
 
 __all__ = ["Batch", "ContactResult", "SweepResult", "SweepTable", "zero_plastic_area"]
@@ -141,6 +141,15 @@ class SweepResult:
         at the ranks ``r`` of ``profile_ranks``.
     load_profile : ndarray or None
         (m, k, R): share of the load on the ``r`` most loaded elements [-].
+    spot_count, mean_spot_area, perimeter, corrected_real_area_fraction, mean_gap : ndarray or None
+        (m, k): the interface quantities of :mod:`roughcontact.contact.interface`
+        (number of contact spots, their mean area [m^2], the Manhattan perimeter
+        [m], the perimeter-corrected real area fraction [-] and the mean gap
+        [m]) when an ``interface`` grid was given; None otherwise.
+    spot_area_quantiles, gap_quantiles : ndarray or None
+        (m, k, S) and (m, k, G): spot areas [m^2] at
+        :data:`~roughcontact.contact.interface.SPOT_PROBABILITIES` and gaps [m] at
+        :data:`~roughcontact.contact.interface.GAP_PROBABILITIES`, likewise.
     """
 
     approach: np.ndarray
@@ -163,6 +172,13 @@ class SweepResult:
     profile_ranks: np.ndarray | None = None
     pressure_profile: np.ndarray | None = None
     load_profile: np.ndarray | None = None
+    spot_count: np.ndarray | None = None
+    mean_spot_area: np.ndarray | None = None
+    perimeter: np.ndarray | None = None
+    corrected_real_area_fraction: np.ndarray | None = None
+    mean_gap: np.ndarray | None = None
+    spot_area_quantiles: np.ndarray | None = None
+    gap_quantiles: np.ndarray | None = None
 
     def __post_init__(self):
         zero_plastic_area(self)
@@ -244,16 +260,36 @@ class Batch:
         )
 
 
+#: The (m, k) float columns of the interface quantities (with ``spot_count``, int, and
+#: the quantiles, (m, k, S) and (m, k, G)).
+INTERFACE_COLUMNS = ("mean_spot_area", "perimeter", "corrected_real_area_fraction",
+                     "mean_gap")
+
+
 class SweepTable:
     """The (m, k) columns of a :class:`SweepResult` being filled step by step (mutable).
 
     ``columns`` holds every array field of the result by name; ``fields``
     the pressure fields ``(m, k, *shape)`` or None; ``ranks`` the profile ranks
-    or None.
+    or None; ``interface`` the :class:`~roughcontact.contact.interface.InterfaceGrid`
+    of the interface quantities, or None.
     """
 
-    def __init__(self, m: int, k: int, shape, return_fields: bool, profile: bool):
+    def __init__(self, m: int, k: int, shape, return_fields: bool, profile: bool,
+                 interface_grid: interface.InterfaceGrid | None = None):
         n = int(np.prod(shape))
+        self.shape = tuple(shape)
+        self.interface = interface_grid
+        if interface_grid is not None:
+            if len(self.shape) != 2:
+                raise ValueError(f"interface quantities need surfaces of shape (m, ny, nx) "
+                                 f"or an operator that knows its grid, got {self.shape}")
+            columns = {name: np.zeros((m, k)) for name in INTERFACE_COLUMNS}
+            columns["spot_count"] = np.zeros((m, k), dtype=int)
+            columns["spot_area_quantiles"] = np.zeros((m, k, len(interface.SPOT_PROBABILITIES)))
+            columns["gap_quantiles"] = np.zeros((m, k, len(interface.GAP_PROBABILITIES)))
+        else:
+            columns = {}
         names = ("load", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
                  "max_pressure", "residual", "plastic_area_fraction")
         self.columns = {name: np.zeros((m, k)) for name in names}
@@ -267,14 +303,23 @@ class SweepTable:
         if profile:
             self.columns["pressure_profile"] = np.zeros((m, k, self.ranks.size))
             self.columns["load_profile"] = np.zeros((m, k, self.ranks.size))
+        self.columns.update(columns)
 
     def record(self, rows, step: int, pressure, displacement, residual, element_area: float,
-               hardness=None) -> None:
+               hardness=None, gap=None) -> None:
         """A step's summary columns for ``rows`` (a surface or a slice), from the solved
         pressure [Pa] and displacement [m] (last axis: elements); with profiles, also
-        its pressure and load profiles (:mod:`roughcontact.contact.validity`) and with
-        fields, the pressure field."""
+        its pressure and load profiles (:mod:`roughcontact.contact.validity`); with an
+        interface grid, the interface quantities of the gap ``u + f - d`` [m]
+        (:mod:`roughcontact.contact.interface`); with fields, the pressure field."""
         columns = self.columns
+        if self.interface is not None:
+            summary = interface.describe(
+                np.reshape(pressure, (*np.shape(pressure)[:-1], *self.shape)),
+                np.reshape(gap, (*np.shape(gap)[:-1], *self.shape)), self.interface)
+            for name in (*INTERFACE_COLUMNS, "spot_count", "spot_area_quantiles",
+                         "gap_quantiles"):
+                columns[name][rows, step] = getattr(summary, name)
         n = pressure.shape[-1]
         load = pressure.sum(axis=-1) * element_area
         columns["load"][rows, step] = load

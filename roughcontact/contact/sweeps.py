@@ -88,16 +88,19 @@ def approach_loop(method: Method, products: Products, gaps, steps, options: Swee
             with np.errstate(invalid="ignore", divide="ignore"):
                 rate = (batch.pressure - pressure) / delta[:, None]
         pressure = batch.pressure
-        tangent = _record(products, batch, options, step, table)
+        tangent = _record(products, batch, options, step, table, gaps, steps[:, step])
         if options.stiffness:
             rate = tangent
 
 
-def _record(products: Products, batch, options: SweepOptions, step: int, table: SweepTable):
+def _record(products: Products, batch, options: SweepOptions, step: int, table: SweepTable,
+            gaps, approach):
     """A step's solutions, work and (with ``stiffness``) tangent in ``table``; the tangent
-    (None without ``stiffness``)."""
+    (None without ``stiffness``). ``gaps`` (m, n) [m] and ``approach`` (m,) [m] give the
+    gap ``u + f - d`` of the interface quantities."""
+    gap = (batch.displacement + gaps - approach[:, None]) if table.interface else None
     table.record(slice(None), step, batch.pressure, batch.displacement, batch.residual,
-                 products.operator.element_area, options.hardness)
+                 products.operator.element_area, options.hardness, gap)
     table.record_work(slice(None), step, batch.iterations, batch.matvecs, batch.converged)
     if options.stiffness:
         return _tangent(products, batch.pressure, options, step, table)
@@ -118,7 +121,7 @@ def load_loop(method: Method, products: Products, gaps, loads, options: SweepOpt
                                                pressure, options.tol, options.max_iter,
                                                options.hardness)
         pressure = batch.pressure
-        _record(products, batch, options, step, table)
+        _record(products, batch, options, step, table, gaps, approaches[:, step])
     return approaches
 
 
@@ -136,7 +139,7 @@ def _steps(problem, approaches, mean_pressures) -> np.ndarray:
 def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto", tol=1e-10,
           max_iter=None, element_area=None, return_fields=False, stiffness=True,
           stiffness_tol=1e-6, precision="double", extrapolate=True, hardness=None,
-          profile=False) -> SweepResult:
+          profile=False, interface=None) -> SweepResult:
     """Force-deflection curves of m surfaces over k approaches or loads (Eq 27, 33, 35).
 
     Solves Eq 27 for every surface at every approach, all surfaces at once
@@ -192,6 +195,12 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
         of :func:`~roughcontact.contact.validity.rank_grid`): enough to tell,
         for any hardness chosen later, how much of the contact area and load
         lies above it (:func:`~roughcontact.contact.validity.fractions_above`).
+    interface : InterfaceGrid, optional
+        Element sides and periodicity of the surfaces' grid
+        (:class:`roughcontact.contact.interface.InterfaceGrid`, e.g.
+        ``InterfaceGrid.of(operator, size)``): record every solution's contact
+        spots, perimeter, perimeter-corrected real area, mean gap and gap
+        quantiles (:mod:`roughcontact.contact.interface`). Default None: not recorded.
 
     Returns
     -------
@@ -205,7 +214,8 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
     steps = _steps(problem, approaches, mean_pressures)
     options = SweepOptions(problem.tol, problem.max_iter, problem.hardness, bool(stiffness),
                            stiffness_tol, bool(extrapolate))
-    table = SweepTable(gaps.shape[0], steps.shape[1], problem.shape, return_fields, profile)
+    table = SweepTable(gaps.shape[0], steps.shape[1], problem.shape, return_fields, profile,
+                       interface)
     if mean_pressures is not None:  # load control
         steps = load_loop(problem.method, problem.products, gaps, steps, options, table)
     else:

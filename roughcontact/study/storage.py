@@ -42,6 +42,10 @@ Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
     /profile_ranks (R,) int64, /pressure_profile and /load_profile (m, k, R)
                float32: each solution's pressure and load profiles
                (:mod:`roughcontact.contact.validity`), when recorded
+    /spot_count, /mean_spot_area, /perimeter, /corrected_real_area_fraction,
+    /mean_gap (m, k), /spot_area_quantiles (m, k, S) and /gap_quantiles (m, k, G)
+               float32: the interface quantities (:mod:`roughcontact.contact.interface`;
+               lateral ones in m and m^2, gaps in units of sigma), when recorded
     attributes: job (JSON), the NondimSweep settings (``sweep_*``; ``sweep_hardness``
                 the dimensionless cap ``nondim_hardness`` H L / (E sigma), -1 for an
                 elastic sweep), solver
@@ -85,6 +89,12 @@ CONTACT_FIELDS = {"stiffness": "normalized_stiffness"}
 #: Optional arrays of a contact file: the solutions' profiles, stored in single
 #: precision (7 digits; the shares read from them are interpolated to about 1 %).
 PROFILE_ARRAYS = ("profile_ranks", "pressure_profile", "load_profile")
+#: Optional arrays of a contact file: the interface quantities
+#: (:mod:`roughcontact.contact.interface`); the (m, k, S) and (m, k, G) quantiles in
+#: single precision, like the profiles.
+INTERFACE_ARRAYS = ("spot_count", "mean_spot_area", "perimeter",
+                    "corrected_real_area_fraction", "mean_gap", "spot_area_quantiles",
+                    "gap_quantiles")
 #: Scalar settings of NondimSweep, stored as ``sweep_<name>`` attributes.
 SWEEP_SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffness_tol",
                   "precision")
@@ -533,6 +543,11 @@ def contact_datasets(sweep: NondimSweep) -> dict:
         datasets["profile_ranks"] = np.asarray(sweep.profile_ranks, dtype=np.int64)
         for name in PROFILE_ARRAYS[1:]:
             datasets[name] = np.asarray(getattr(sweep, name), dtype=np.float32)
+    if sweep.mean_gap is not None:
+        for name in INTERFACE_ARRAYS:
+            single = name.endswith("_quantiles")
+            datasets[name] = np.asarray(getattr(sweep, name),
+                                        dtype=np.float32 if single else None)
     return datasets
 
 
@@ -574,7 +589,8 @@ def read_contact(path: str | os.PathLike, *,
         if missing:
             raise StoredFileError(f"{path}: no {', '.join(missing)} (written by an older "
                                   f"version of roughcontact); {rebuild(path)}", path)
-        arrays = {name: f[name][...] for name in CONTACT_ARRAYS + PROFILE_ARRAYS if name in f}
+        arrays = {name: f[name][...]
+                  for name in CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS if name in f}
     verify(path, attrs, arrays_sha256(arrays))
     if job is not None:
         count = job["surface"]["count"]

@@ -154,7 +154,8 @@ def test_the_capped_plastic_area_follows_the_elastic_share_above_H(heights, unit
 
 
 def test_validity_table_reads_physical_hardness(heights, unit_influence):
-    geometry = type("Body", (), {"thickness": LENGTH, "element_area": AREA})()
+    geometry = type("Body", (), {"thickness": LENGTH, "element_area": AREA,
+                                 "size": (SIZE, SIZE), "grid": (GRID, GRID)})()
     nd = cell_module.sweep_cell(unit_influence, heights, geometry, 0.3, 8, method="pivot")
     sigma, E = 20e-6, 200e6
     scale = E * sigma / LENGTH
