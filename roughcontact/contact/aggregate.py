@@ -92,7 +92,7 @@ INTERFACE_QUANTITIES = {
     "perimeter": Quantity("m", "P', contact/non-contact interface length on the grid "
                                "(Manhattan perimeter)"),
     "corrected_real_area_fraction": Quantity(
-        "1", "(A' - kappa P' dx) / A_n, real area corrected by its perimeter "
+        "1", "(A' - c_P P' dx) / A_n, real area corrected by its perimeter "
              "(Yastrebov et al. 2017)"),
     "mean_gap": Quantity("m", "mean interfacial separation, mean of u + f - d"),
 }

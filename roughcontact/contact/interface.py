@@ -27,12 +27,12 @@ From a solution's pressure ``p`` and gap ``g = u + f - d`` on a grid of
     rough surfaces", Tribology International 114, 161-171; arXiv 1701.02727)
     correct the count by the perimeter:
 
-        ``A = A' - kappa P' dx``,  ``kappa = (pi - 1 + ln 2) / 24`` (about 0.118),
+        ``A = A' - c_P P' dx``,  ``c_P = (pi - 1 + ln 2) / 24`` (about 0.118),
 
     with ``A'`` the element count times the element area and ``P'`` the
     Manhattan perimeter on a grid of square elements of side ``dx``. Each
-    switch between contact and non-contact then removes ``kappa dx^2``; on
-    rectangular elements we remove ``kappa dx dy`` per switch (the same
+    switch between contact and non-contact then removes ``c_P dx^2``; on
+    rectangular elements we remove ``c_P dx dy`` per switch (the same
     formula, per element area). Reported as a fraction of the nominal area,
     beside the uncorrected ``real_area_fraction``.
 *gap*
@@ -55,7 +55,7 @@ import numpy as np
 __all__ = [
     "GAP_PROBABILITIES",
     "SPOT_PROBABILITIES",
-    "YASTREBOV_KAPPA",
+    "PERIMETER_CORRECTION",
     "InterfaceGrid",
     "InterfaceSummary",
     "corrected_area_fraction",
@@ -65,7 +65,7 @@ __all__ = [
 ]
 
 #: Perimeter correction of the element count, Yastrebov, Anciaux & Molinari (2017).
-YASTREBOV_KAPPA = (math.pi - 1.0 + math.log(2.0)) / 24.0
+PERIMETER_CORRECTION = (math.pi - 1.0 + math.log(2.0)) / 24.0
 #: Probabilities (by number of spots) of the stored spot-area quantiles; 1.0: the largest.
 SPOT_PROBABILITIES = (0.1, 0.25, 0.5, 0.75, 0.9, 1.0)
 #: Probabilities (by area) of the stored gap quantiles; 1.0: the largest gap.
@@ -131,7 +131,7 @@ class InterfaceSummary:
     real_area_fraction : ndarray
         Elements in contact over all elements [-].
     corrected_real_area_fraction : ndarray
-        ``(A' - kappa P' dx) / A_n`` [-] (Yastrebov et al. 2017).
+        ``(A' - c_P P' dx) / A_n`` [-] (Yastrebov et al. 2017).
     mean_gap : ndarray
         Mean of the gap field [m].
     gap_quantiles : ndarray, (..., len(GAP_PROBABILITIES))
@@ -241,13 +241,13 @@ def perimeter_switches(contact, periodic: bool = False) -> tuple[np.ndarray, np.
 
 
 def corrected_area_fraction(contact, periodic: bool = False) -> np.ndarray:
-    """``(N_c - kappa (s_x + s_y)) / n``: the element count corrected by its perimeter
+    """``(N_c - c_P (s_x + s_y)) / n``: the element count corrected by its perimeter
     (Yastrebov, Anciaux & Molinari 2017; module docstring), per field [-]."""
     mask = _fields(contact, "contact").astype(bool)
     sx, sy = perimeter_switches(mask, periodic)
     n = mask.shape[-1] * mask.shape[-2]
     count = np.count_nonzero(mask, axis=(-2, -1))
-    return (count - YASTREBOV_KAPPA * (sx + sy)) / n
+    return (count - PERIMETER_CORRECTION * (sx + sy)) / n
 
 
 def _ranks(probabilities, count):
@@ -306,7 +306,7 @@ def describe(pressure, gap, grid: InterfaceGrid) -> InterfaceSummary:
         mean_spot = np.where(counts_flat > 0, in_contact * grid.element_area / counts_flat, np.nan)
     sx, sy = perimeter_switches(contact, grid.periodic)
     perimeter = sx * dy + sy * dx
-    corrected = (in_contact.reshape(stack) - YASTREBOV_KAPPA * (sx + sy)) / n
+    corrected = (in_contact.reshape(stack) - PERIMETER_CORRECTION * (sx + sy)) / n
     ranks = _ranks(GAP_PROBABILITIES, n)
     flat_gap = np.partition(g.reshape(fields, n), ranks - 1, axis=1)
     gap_quantiles = flat_gap[:, ranks - 1]

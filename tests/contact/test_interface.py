@@ -76,7 +76,7 @@ def test_perimeter_of_rectangles():
                                + [55 * dx * dy] * 3, rtol=1e-12)
     switches = 2 * (5 + 11) + 2 * (2 + 9)
     assert summary.corrected_real_area_fraction == pytest.approx(
-        (73 - interface.YASTREBOV_KAPPA * switches) / 600, rel=1e-12)
+        (73 - interface.PERIMETER_CORRECTION * switches) / 600, rel=1e-12)
     # a rectangle touching a periodic edge has no switch there
     edge = np.zeros((8, 8), dtype=bool)
     edge[:, 2:5] = True  # a full-height strip: periodic in y, no y-switches
@@ -86,9 +86,9 @@ def test_perimeter_of_rectangles():
     assert (sx, sy) == (16, 0)
 
 
-def test_yastrebov_kappa_as_written():
-    assert interface.YASTREBOV_KAPPA == pytest.approx((math.pi - 1 + math.log(2)) / 24)
-    assert 0.118 < interface.YASTREBOV_KAPPA < 0.1182
+def test_perimeter_correction_as_written():
+    assert interface.PERIMETER_CORRECTION == pytest.approx((math.pi - 1 + math.log(2)) / 24)
+    assert 0.118 < interface.PERIMETER_CORRECTION < 0.1182
 
 
 def hertz_errors(n, offsets, radius=5.0e-3, a=0.1e-3):
