@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughcontact.contact.checks import check_positive
-from roughcontact.contact.result import SweepResult, zero_plastic_area
+from roughcontact.contact.result import InterfaceColumns, SweepResult, zero_plastic_area
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -60,7 +60,7 @@ _DTYPES = {"iterations": int, "matvecs": int, "converged": bool, "stiffness_conv
 
 
 @dataclass(frozen=True, kw_only=True)
-class CellSweep:
+class CellSweep(InterfaceColumns):
     """The per-step arrays of a swept cell, shared by :class:`NondimSweep` and
     :class:`PhysicalSweep` (units: SI, and in brackets the dimensionless form).
 
@@ -120,13 +120,6 @@ class CellSweep:
     stiffness_converged: np.ndarray
     thickness: float
     plastic_area_fraction: np.ndarray | None = None
-    spot_count: np.ndarray | None = None
-    mean_spot_area: np.ndarray | None = None
-    perimeter: np.ndarray | None = None
-    corrected_real_area_fraction: np.ndarray | None = None
-    mean_gap: np.ndarray | None = None
-    spot_area_quantiles: np.ndarray | None = None
-    gap_quantiles: np.ndarray | None = None
 
     def __post_init__(self):
         zero_plastic_area(self)

@@ -17,7 +17,8 @@ import numpy as np
 from roughcontact.contact import interface, validity
 from roughcontact.contact.kkt import plastic_fraction
 
-__all__ = ["Batch", "ContactResult", "SweepResult", "SweepTable", "zero_plastic_area"]
+__all__ = ["Batch", "ContactResult", "InterfaceColumns", "SweepResult", "SweepTable",
+           "zero_plastic_area"]
 
 
 @dataclass(frozen=True)
@@ -88,8 +89,24 @@ class ContactResult:
         return self.pressure > 0.0
 
 
+@dataclass(frozen=True, kw_only=True)
+class InterfaceColumns:
+    """The interface quantities (:mod:`roughcontact.contact.interface`) a sweep or a
+    record may hold, None when not recorded: ``spot_count``, ``mean_spot_area``,
+    ``perimeter``, ``corrected_real_area_fraction``, ``mean_gap`` (m, k) and the
+    ``spot_area_quantiles`` (m, k, S) and ``gap_quantiles`` (m, k, G)."""
+
+    spot_count: np.ndarray | None = None
+    mean_spot_area: np.ndarray | None = None
+    perimeter: np.ndarray | None = None
+    corrected_real_area_fraction: np.ndarray | None = None
+    mean_gap: np.ndarray | None = None
+    spot_area_quantiles: np.ndarray | None = None
+    gap_quantiles: np.ndarray | None = None
+
+
 @dataclass(frozen=True)
-class SweepResult:
+class SweepResult(InterfaceColumns):
     """Force-deflection sweep of m surfaces over k approaches.
 
     Every array has shape (m, k): surface by approach step, except
@@ -172,13 +189,6 @@ class SweepResult:
     profile_ranks: np.ndarray | None = None
     pressure_profile: np.ndarray | None = None
     load_profile: np.ndarray | None = None
-    spot_count: np.ndarray | None = None
-    mean_spot_area: np.ndarray | None = None
-    perimeter: np.ndarray | None = None
-    corrected_real_area_fraction: np.ndarray | None = None
-    mean_gap: np.ndarray | None = None
-    spot_area_quantiles: np.ndarray | None = None
-    gap_quantiles: np.ndarray | None = None
 
     def __post_init__(self):
         zero_plastic_area(self)
