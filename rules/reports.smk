@@ -100,6 +100,8 @@ rule grid_convergence_contact:
         runtime=get_grid_convergence_runtime,
     params:
         settings=canonical(report_section(config, "grid_convergence")),
+        # version of the stored layout (2: the interface quantities)
+        layout=2,
     script:
         "../scripts/grid_convergence_contact.py"
 

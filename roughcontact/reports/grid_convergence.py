@@ -63,7 +63,8 @@ KAPPA_REFERENCES = {"Persson sqrt(8/pi)": math.sqrt(8.0 / math.pi),
                     "asperity theory sqrt(2 pi)": math.sqrt(2.0 * math.pi),
                     "numerical studies": 2.0}
 #: Aggregates per reduced pressure, with their unit.
-QUANTITIES = {"real_area_fraction": "1", "max_pressure": "Pa"}
+QUANTITIES = {"real_area_fraction": "1", "corrected_real_area_fraction": "1",
+              "max_pressure": "Pa", "spot_count": "1", "mean_gap": "m"}
 
 
 def fit_kappa(reduced_pressures, area: np.ndarray) -> np.ndarray:
@@ -145,7 +146,10 @@ def grid_convergence_table(sweeps: Mapping[int, tuple[PhysicalSweep, dict]],
     """The study's table from each grid's sweep and attributes (:func:`read_grid_contact`).
 
     One row per (quantity, reduced pressure, grid): ``quantity``
-    (``real_area_fraction``, ``max_pressure`` or ``kappa``), ``unit``,
+    (``real_area_fraction``, ``corrected_real_area_fraction`` (the element count
+    corrected by its perimeter, Yastrebov, Anciaux & Molinari 2017),
+    ``max_pressure``, ``spot_count``, ``mean_gap``, ``kappa`` or
+    ``kappa_corrected`` (kappa of the corrected area)), ``unit``,
     ``reduced_pressure`` ``p0 / (E* h'_rms)`` [-] and ``nominal_pressure_Pa``
     (NaN for kappa), ``grid``, ``mean``, ``half_width`` (95 %), ``surfaces``,
     ``extrapolated`` and ``observed_order`` (three finest grids),
@@ -158,23 +162,26 @@ def grid_convergence_table(sweeps: Mapping[int, tuple[PhysicalSweep, dict]],
     ``wall_s``, ``cpu_s``, ``method`` and ``unconverged_solves``.
     """
     levels = np.asarray(settings.reduced_pressures)
-    area, peak = {}, {}
+    curves = {quantity: {} for quantity in QUANTITIES}
     pressures = levels * settings.pressure_scale
     for grid, (sweep, attrs) in sweeps.items():
         if not np.allclose(attrs["rms_gradient"], settings.rms_gradient, rtol=1e-9, atol=0):
             raise ValueError(f"grid {grid}: the surfaces' h'_rms differ from the study's "
                              f"{settings.rms_gradient:g}: every surface is scaled to it, so "
                              "one nominal pressure per reduced pressure serves them all")
-        area[grid] = aggregate.surface_curves(sweep, pressures, "real_area_fraction")
-        peak[grid] = aggregate.surface_curves(sweep, pressures, "max_pressure")
+        for quantity, per_grid in curves.items():
+            per_grid[grid] = aggregate.surface_curves(sweep, pressures, quantity)
+    area = curves["real_area_fraction"]
     chosen = kappa_levels(levels, area[max(area)], settings.kappa_area)
-    kappa = {grid: fit_kappa(levels[chosen], values[:, chosen])[:, None]
-             for grid, values in area.items()}
-    rows = (_aggregate_rows("real_area_fraction", levels, area, settings)
-            + _aggregate_rows("max_pressure", levels, peak, settings)
-            + _aggregate_rows("kappa", [math.nan], kappa, settings))
+    rows = [row for quantity, per_grid in curves.items()
+            for row in _aggregate_rows(quantity, levels, per_grid, settings)]
+    for name, source in (("kappa", "real_area_fraction"),
+                         ("kappa_corrected", "corrected_real_area_fraction")):
+        kappa = {grid: fit_kappa(levels[chosen], values[:, chosen])[:, None]
+                 for grid, values in curves[source].items()}
+        rows += _aggregate_rows(name, [math.nan], kappa, settings)
     table = pd.DataFrame(rows)
-    kappa_rows = table["quantity"] == "kappa"
+    kappa_rows = table["quantity"].isin(["kappa", "kappa_corrected"])
     table.loc[kappa_rows, ["nominal_pressure_Pa"]] = math.nan
     table["kappa_fit"] = ""
     table.loc[kappa_rows, "kappa_fit"] = "p* = " + " ".join(f"{p:g}" for p in levels[chosen])
@@ -187,15 +194,16 @@ def grid_convergence_table(sweeps: Mapping[int, tuple[PhysicalSweep, dict]],
     return table.merge(per_grid, on="grid", how="left")
 
 
-def _plot_levels(ax, table: pd.DataFrame, quantity: str, scale: float, ylabel: str) -> None:
+def _plot_levels(ax, table: pd.DataFrame, quantity: str, scale: float, ylabel: str,
+                 style: str = "o-", label: str = "") -> None:
     """One curve per reduced pressure against the grid, 95 % band, extrapolated dashed."""
     rows = table[table["quantity"] == quantity]
     for i, (level, part) in enumerate(rows.groupby("reduced_pressure", sort=True)):
         color = f"C{i}"
         band = BANDS["fraction" if quantity.endswith("_fraction") else "positive"]
         low, high = band(part["mean"], part["half_width"])
-        ax.plot(part["grid"], part["mean"] * scale, "o-", color=color,
-                label=f"$p^*$ = {level:.3g}")
+        ax.plot(part["grid"], part["mean"] * scale, style, color=color,
+                label=f"$p^*$ = {level:.3g}{label}")
         ax.fill_between(part["grid"], low * scale, high * scale, color=color, alpha=0.2)
         extrapolated = part["extrapolated"].iloc[0] * scale
         if math.isfinite(extrapolated):
@@ -210,6 +218,7 @@ def _plot_levels(ax, table: pd.DataFrame, quantity: str, scale: float, ylabel: s
 def _plot_changes(ax, table: pd.DataFrame, within: float) -> None:
     """|f / f_extrapolated - 1| of every aggregate against the grid, and the 1 % line."""
     for i, (quantity, marker) in enumerate((("real_area_fraction", "o"),
+                                            ("corrected_real_area_fraction", "D"),
                                             ("max_pressure", "s"), ("kappa", "^"))):
         rows = table[table["quantity"] == quantity]
         for level, part in rows.groupby("reduced_pressure", dropna=False, sort=True):
@@ -227,10 +236,12 @@ def _plot_changes(ax, table: pd.DataFrame, within: float) -> None:
 
 def _plot_kappa(ax, table: pd.DataFrame) -> None:
     """kappa per grid with its 95 % band over the surfaces, and the literature's values."""
-    rows = table[table["quantity"] == "kappa"]
-    low, high = positive_band(rows["mean"], rows["half_width"])
-    ax.errorbar(rows["grid"], rows["mean"], yerr=[rows["mean"] - low, high - rows["mean"]],
-                fmt="o-", color="k", capsize=3, label="this study (95 % band, log space)")
+    for quantity, fmt, label in (("kappa", "o-", "element count"),
+                                 ("kappa_corrected", "D:", "corrected area")):
+        rows = table[table["quantity"] == quantity]
+        low, high = positive_band(rows["mean"], rows["half_width"])
+        ax.errorbar(rows["grid"], rows["mean"], yerr=[rows["mean"] - low, high - rows["mean"]],
+                    fmt=fmt, color="k", capsize=3, label=f"{label} (95 % band, log space)")
     for (name, value), style in zip(KAPPA_REFERENCES.items(), ("--", "-.", ":"), strict=True):
         ax.axhline(value, ls=style, color="C3", lw=0.9)
         ax.annotate(f"{name} = {value:.2f}", (rows["grid"].min(), value), fontsize=7,
@@ -243,7 +254,8 @@ def _plot_kappa(ax, table: pd.DataFrame) -> None:
 
 def plot_grid_convergence(table: pd.DataFrame, path_png: str | os.PathLike,
                           within: float = 0.01) -> Figure:
-    """Four panels: real area, peak pressure (over E* h'_rms), kappa, changes; PNG.
+    """Four panels: real area (and corrected by its perimeter), peak pressure (over E*
+    h'_rms), kappa (of both areas), changes; PNG.
 
     Bands of the 95 % intervals drawn in log (logit) space
     (:func:`roughcontact.reports.plotting.positive_band`); returns the figure."""
@@ -252,6 +264,9 @@ def plot_grid_convergence(table: pd.DataFrame, path_png: str | os.PathLike,
     axes = fig.subplots(2, 2)
     scale = table.attrs.get("pressure_scale", 1.0)
     _plot_levels(axes[0, 0], table, "real_area_fraction", 1.0, r"real area fraction $A / A_0$")
+    _plot_levels(axes[0, 0], table, "corrected_real_area_fraction", 1.0,
+                 r"real area fraction $A / A_0$ (diamonds: corrected by the perimeter)",
+                 style="D:", label=", corrected")
     _plot_levels(axes[0, 1], table, "max_pressure", 1.0 / scale,
                  r"$p_\max / (E^* h'_\mathrm{rms})$")
     _plot_kappa(axes[1, 0], table)

@@ -27,7 +27,10 @@ files (:func:`read_grid_contact`). File layouts::
         content_sha256, provenance
     contact_<grid>.h5: /<field> (m, k): approach [m], load [N], nominal_pressure,
         max_pressure [Pa], mean_plane_deflection [m], real_area_fraction [-],
-        iterations, matvecs, residual, converged; /rms_gradient (m,) [-]
+        iterations, matvecs, residual, converged; the interface quantities
+        (:mod:`roughcontact.contact.interface`, periodic grid) spot_count,
+        mean_spot_area [m^2], perimeter [m], corrected_real_area_fraction [-],
+        mean_gap [m]; /rms_gradient (m,) [-]
         attributes: params, grid, seeds, method, tol, contact_modulus [Pa],
         wall_seconds, cpu_seconds, surfaces_content_sha256, content_sha256,
         provenance
@@ -45,6 +48,7 @@ import numpy as np
 
 from roughcontact import contact
 from roughcontact.contact.curves import PhysicalSweep
+from roughcontact.contact.interface import InterfaceGrid
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import arrays_sha256
@@ -63,7 +67,7 @@ from roughcontact.surfaces.statistics import height_stats, spectral_moments
 from roughcontact.surfaces.synthetic import derive_seeds
 from roughcontact.units import MM, MPA
 
-__all__ = ["CONTACT_FIELDS", "GridConvergenceSettings", "aimed_approaches",
+__all__ = ["CONTACT_FIELDS", "INTERFACE_FIELDS", "GridConvergenceSettings", "aimed_approaches",
            "build_grid_surfaces", "grid_mem_mb", "read_grid_contact", "solve_grid",
            "sweep_runtime"]
 
@@ -73,6 +77,9 @@ log = logging.getLogger("roughcontact.grid_convergence")
 CONTACT_FIELDS = ("approach", "load", "nominal_pressure", "mean_plane_deflection",
                   "real_area_fraction", "max_pressure", "iterations", "matvecs", "residual",
                   "converged")
+#: The (m, k) interface quantities of a contact file (:mod:`roughcontact.contact.interface`).
+INTERFACE_FIELDS = ("spot_count", "mean_spot_area", "perimeter",
+                    "corrected_real_area_fraction", "mean_gap")
 #: Seed key of the study's surfaces (:func:`~roughcontact.surfaces.synthetic.derive_seeds`).
 SEED_KEY = "grid_convergence"
 #: Pilot sweep on the coarsest grid: approaches as fractions of the mean initial gap.
@@ -244,7 +251,8 @@ def solve_grid(params: dict, surfaces_path, grid: int, out_path, config=None) ->
                                  settings.nu)
     gaps = heights.max(axis=(1, 2), keepdims=True) - heights
     result = contact.sweep(operator, gaps, approaches, method="auto", tol=settings.tol,
-                           stiffness=False)
+                           stiffness=False,
+                           interface=InterfaceGrid.of(operator, (settings.size, settings.size)))
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     if not result.converged.all():
         log.warning("grid %d: %d of %d solves did not converge (tol %.1e); they are left out "
@@ -254,9 +262,10 @@ def solve_grid(params: dict, surfaces_path, grid: int, out_path, config=None) ->
              "%d iterations", grid, len(heights), settings.steps, result.method, wall, cpu,
              int(result.iterations.sum()))
     units = {"approach": "m", "load": "N", "nominal_pressure": "Pa", "max_pressure": "Pa",
-             "mean_plane_deflection": "m"}
+             "mean_plane_deflection": "m", "mean_spot_area": "m^2", "perimeter": "m",
+             "mean_gap": "m"}
     datasets = {name: (np.asarray(getattr(result, name)), {"units": units.get(name, "1")})
-                for name in CONTACT_FIELDS}
+                for name in CONTACT_FIELDS + INTERFACE_FIELDS}
     datasets["rms_gradient"] = (surfaces["stats"]["rms_gradient"], {"units": "1"})
     attrs = {"params": canonical_json(params), "grid": int(grid),
              "seeds": surfaces["seeds"].tolist(), "method": result.method, "tol": settings.tol,
@@ -272,15 +281,16 @@ def read_grid_contact(path) -> tuple[PhysicalSweep, dict]:
     (reference length and nominal area: the period ``L``, ``L^2``) and its attributes;
     the content hash is checked first (:class:`~roughcontact.errors.StoredFileError`)."""
     with open_h5(path) as f:
-        missing = [name for name in (*CONTACT_FIELDS, "rms_gradient") if name not in f]
+        names = (*CONTACT_FIELDS, *INTERFACE_FIELDS, "rms_gradient")
+        missing = [name for name in names if name not in f]
         if missing:
             raise StoredFileError(f"{path}: no {', '.join(missing)}; {REBUILD}", path)
-        arrays = {name: f[name][...] for name in (*CONTACT_FIELDS, "rms_gradient")}
+        arrays = {name: f[name][...] for name in names}
         attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
     verify(path, attrs, arrays_sha256(arrays))
     size = GridConvergenceSettings.from_section(json.loads(attrs["params"])).size
     nan = np.full(arrays["approach"].shape, math.nan)
-    sweep = PhysicalSweep(**{name: arrays[name] for name in CONTACT_FIELDS},
+    sweep = PhysicalSweep(**{name: arrays[name] for name in CONTACT_FIELDS + INTERFACE_FIELDS},
                           normalized_stiffness=nan, contact_stiffness=nan,
                           stiffness_converged=np.zeros(nan.shape, dtype=bool),
                           thickness=size, sigma=math.nan, E=float(attrs["contact_modulus"]),
