@@ -449,20 +449,25 @@ def plot_cells(table, quantity: str, *, y_scale: float, ylabel: str, title: str,
     return fig
 
 
-def plot_cells_panels(table, panels, *, label: str, title: str):
+def plot_cells_panels(table, panels, *, label: str, title: str, columns: int | None = None):
     """Several quantities of every cell of ``table`` against nominal pressure [MPa], one
-    panel each, side by side (as :func:`plot_cells`).
+    panel each, ``columns`` to a row (default: all in one row) (as :func:`plot_cells`).
 
     ``panels`` holds ``(quantity, y_scale, ylabel, log_y)`` per panel; the
     legend is on the first panel, ``title`` above all. Returns the figure.
     """
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.0 * len(panels), 4.2), squeeze=False)
-    for ax, (quantity, y_scale, ylabel, log_y) in zip(axes[0], panels, strict=True):
+    columns = len(panels) if columns is None else int(columns)
+    rows = -(-len(panels) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(5.0 * columns, 4.2 * rows), squeeze=False)
+    flat = axes.ravel()
+    for ax, (quantity, y_scale, ylabel, log_y) in zip(flat, panels, strict=False):
         _draw_cells(ax, table, quantity, y_scale=y_scale, label=label)
         ax.set(ylabel=ylabel, yscale="log" if log_y else "linear")
-    axes[0][0].legend(fontsize=8)
+    for ax in flat[len(panels):]:
+        ax.set_visible(False)
+    flat[0].legend(fontsize=8)
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     return fig

@@ -49,9 +49,10 @@ SURFACE_FIGURES = ("fig03", "fig04", "fig05")
 SURFACE_ONLY_FIGURES = ("fig01", "fig02", "fig03", "fig04", "fig05")
 #: Figures drawn from contact results, and the source of their cells ("measured": a
 #: measured surface against its synthetic twin, usually ``from:`` a sweep;
-#: "fig11_resolved": Fig 11 on a grid that resolves the ACF, config/fig11_resolved.yaml).
+#: "fig11_resolved": Fig 11 on a grid that resolves the ACF, config/fig11_resolved.yaml;
+#: "gaps": the mean gap and the spots of a study's cells, usually ``from:`` fig07).
 CONTACT_FIGURES = ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu",
-                   "hardness", "measured", "fig11_resolved")
+                   "hardness", "measured", "fig11_resolved", "gaps")
 
 
 @dataclasses.dataclass(frozen=True)

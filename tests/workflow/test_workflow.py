@@ -277,7 +277,7 @@ def test_hardness_study_caps_its_capped_cells_and_checks_its_elastic_ones(quick_
 def test_study_figures_are_written(quick_run):
     workdir, start = quick_run
     for fig in ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu",
-                "hardness"):
+                "hardness", "gaps"):
         path = workdir / "results" / "figures" / f"{fig}.png"
         assert path.stat().st_size > 1000 and path.stat().st_mtime >= start - 1, fig
 
