@@ -497,7 +497,8 @@ def cells_at_pressures(table, quantities, pressures, *, by: str):
             half = at[f"{quantity}_half_width"].to_numpy()
             row = {"quantity": quantity, "nominal_pressure": level}
             for value, m, h in zip(at[by], mean, half, strict=True):
-                row |= {f"{by}={value:g} mean": m, f"{by}={value:g} half width": h}
+                name = f"{value:g}" if isinstance(value, int | float | np.number) else value
+                row |= {f"{by}={name} mean": m, f"{by}={name} half width": h}
             low, high = np.argmin(mean), np.argmax(mean)
             row["spread"] = (mean[high] - mean[low]) / np.mean(mean)
             row["separated"] = bool(mean[high] - mean[low]
