@@ -230,8 +230,27 @@ def _plausibility_check(row: dict, cell: dict, stored, levels: int) -> list[str]
         if len(valued) else float("nan"))
     row["contact_elements_at_P_max"] = (float(valued["real_area_fraction_mean"].iloc[-1])
                                         * nx * ny if len(valued) else float("nan"))
+    _interface_columns(row, valued, study_cell)
     return [f"implausible: {reason}"
             for reason in implausible(frame, nx * ny, study_cell.E, nu)]
+
+
+def _interface_columns(row: dict, valued, study_cell) -> None:
+    """The cell's spots and gap at its highest pressure level with values (columns
+    ``spots_at_P_max``, ``mean_spot_elements_at_P_max``: the mean spot area in elements,
+    below about 4 the spots are not resolved and their count and the corrected area say
+    little (docs/method/interface.md), and ``mean_gap_over_sigma_at_P_max``); NaN where the
+    sweep recorded no interface quantities."""
+    if "spot_count_mean" not in valued or not len(valued):
+        for name in ("spots_at_P_max", "mean_spot_elements_at_P_max",
+                     "mean_gap_over_sigma_at_P_max"):
+            row[name] = float("nan")
+        return
+    last = valued.iloc[-1]
+    (lx, ly), (nx, ny) = study_cell.geometry.size, study_cell.geometry.grid
+    row["spots_at_P_max"] = float(last["spot_count_mean"])
+    row["mean_spot_elements_at_P_max"] = float(last["mean_spot_area_mean"]) * nx * ny / (lx * ly)
+    row["mean_gap_over_sigma_at_P_max"] = float(last["mean_gap_mean"]) / study_cell.sigma
 
 
 def _hardness_check(row: dict, cell: dict, stored, levels: int) -> list[str]:

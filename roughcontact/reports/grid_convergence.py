@@ -212,7 +212,7 @@ def _plot_levels(ax, table: pd.DataFrame, quantity: str, scale: float, ylabel: s
     ax.set_yscale("log")
     ax.set_xlabel("grid (elements per side)")
     ax.set_ylabel(ylabel)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, ncol=2)
 
 
 def _plot_changes(ax, table: pd.DataFrame, within: float) -> None:
