@@ -192,3 +192,37 @@ def test_no_contact_and_bad_input():
         interface.describe(np.zeros((4, 5)), np.zeros((5, 4)), interface.InterfaceGrid((1, 1)))
     with pytest.raises(ValueError, match=r"\(\.\.\., ny, nx\)"):
         interface.describe(np.zeros(5), np.zeros(5), interface.InterfaceGrid((1, 1)))
+
+
+@pytest.mark.parametrize("method", ["pivot", "cg"])
+def test_a_sweep_records_the_interface_of_every_step(method):
+    """The sweep's columns equal the quantities of its pressure fields, the gap
+    recomputed from them; block principal pivoting records the surfaces one at a time
+    (described together once a step is complete), CG all at once."""
+    from roughcontact.contact import sweep
+    from roughcontact.elasticity.halfspace import halfspace_influence
+
+    n, size = 20, 1.0e-3
+    rng = np.random.default_rng(11)
+    heights = scipy.ndimage.gaussian_filter(rng.standard_normal((3, n, n)), (0, 2, 2),
+                                            mode="wrap")
+    heights *= 1e-6 / heights.std()
+    f = heights.max(axis=(1, 2), keepdims=True) - heights
+    C = halfspace_influence((n, n), (size, size), E, NU)
+    d = np.linspace(0.5e-6, 2.5e-6, 5)
+    grid = interface.InterfaceGrid((size / n, size / n))
+    result = sweep(C, f, d, method=method, element_area=(size / n) ** 2, interface=grid,
+                   return_fields=True, tol=1e-12)
+    p = result.pressure.reshape(3, 5, n * n)
+    gap = (np.einsum("ij,mkj->mki", C, p) + f.reshape(3, 1, -1)
+           - d[None, :, None]).reshape(3, 5, n, n)
+    expected = interface.describe(result.pressure, gap, grid)
+    np.testing.assert_array_equal(result.spot_count, expected.spot_count)
+    np.testing.assert_array_equal(result.perimeter, expected.perimeter)
+    np.testing.assert_array_equal(result.corrected_real_area_fraction,
+                                  expected.corrected_real_area_fraction)
+    np.testing.assert_allclose(result.mean_gap, expected.mean_gap, rtol=1e-9)
+    np.testing.assert_allclose(result.gap_quantiles, expected.gap_quantiles, rtol=1e-9,
+                               atol=1e-9 * d.max())
+    np.testing.assert_array_equal(result.spot_area_quantiles, expected.spot_area_quantiles)
+    assert (result.spot_count[:, -1] >= 1).all()
