@@ -231,6 +231,29 @@ def test_stiffness_rises_towards_E_and_negative_skew_is_stiffer(quick_run):
         assert np.mean(negative > gauss) > 0.8  # Fig 7: negative skew stiffer
 
 
+def test_aggregates_carry_the_interface_quantities(quick_run):
+    """Spots, corrected area and mean gap beside the paper's quantities, and the
+    audit's summary of them: the mean gap falls with the load, every level with contact
+    has a spot, the corrected area lies below the element count (c_P > 0) and above half
+    of it (a lone element keeps 1 - 4 c_P = 0.53), the mean spot area is the area over
+    the count."""
+    workdir, _ = quick_run
+    table, _, meta = aggregates(workdir, "fig07")
+    for _, cell in table.groupby("cell"):
+        gap = cell["mean_gap_mean"].to_numpy()
+        assert (gap > 0).all() and np.all(np.diff(gap) < 0), gap
+        spots = cell["spot_count_mean"].to_numpy()
+        assert (spots >= 1).all(), spots
+        area = cell["real_area_fraction_mean"].to_numpy()
+        corrected = cell["corrected_real_area_fraction_mean"].to_numpy()
+        assert np.all(corrected < area) and np.all(corrected > 0.5 * area)
+    assert meta["units"]["mean_gap_mean"] == "m" and meta["units"]["spot_count_mean"] == "1"
+    audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv")
+    assert (audit["spots_at_P_max"] >= 1).all()
+    assert (audit["mean_spot_elements_at_P_max"] >= 1).all()
+    assert (audit["mean_gap_over_sigma_at_P_max"] > 0).all()
+
+
 def test_two_nominal_areas_agree_within_their_bands_for_nu0(quick_run):
     workdir, _ = quick_run
     table, _, _ = aggregates(workdir, "fig14")
