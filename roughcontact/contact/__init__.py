@@ -18,7 +18,8 @@ a cell's surfaces at equal nominal pressure; ``cell`` is the one
 sweep-then-aggregate recipe the workflow, the reports and the audit share;
 ``halfspace_criterion`` measures, by solving, whether the half-space model
 is enough for a geometry; ``interface`` reads off a solution its contact
-spots, perimeter, perimeter-corrected real area and gaps.
+spots, perimeter, perimeter-corrected real area and gaps; ``counterface``
+makes the equivalent problem of two rough, elastic bodies (Eq 17-18).
 
 The solver's public names are importable from here: ``from roughcontact
 import contact; contact.solve(...)``.

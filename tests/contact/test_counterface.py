@@ -1,0 +1,117 @@
+"""Two rough, elastic bodies reduced to one (Eq 17-18): checked against closed forms.
+
+A rigid smooth counter body changes nothing (bit for bit); two half-spaces sum to
+one with the composite modulus (Love's coefficients scale with (1 - nu^2)/E); two
+spheres on two half-spaces give Hertz with the composite modulus and radius;
+swapping the bodies changes nothing but the per-body displacements; the sum of a
+matrix-free and a dense operator solves as the dense sum does.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from roughcontact.contact import counterface, solve
+from roughcontact.contact.interface import InterfaceGrid, describe
+from roughcontact.elasticity.halfspace import halfspace_influence
+from roughcontact.elasticity.protocol import DenseInfluence, MatrixFreeInfluence
+
+SIZE = 1.0e-3
+
+
+def love(n, E, nu):
+    return DenseInfluence(halfspace_influence((n, n), (SIZE, SIZE), E, nu), (SIZE / n) ** 2,
+                          (n, n))
+
+
+def sphere(n, radius):
+    x = (np.arange(n) + 0.5) * SIZE / n - SIZE / 2
+    X, Y = np.meshgrid(x, x)
+    return -(X**2 + Y**2) / (2 * radius)  # heights: a cap protruding towards the other body
+
+
+def test_a_rigid_smooth_counter_body_changes_nothing():
+    op = love(16, 200e9, 0.3)
+    heights = sphere(16, 5e-3)
+    assert counterface.equivalent_operator(op, None) is op
+    assert counterface.equivalent_heights(heights, None) is heights
+
+
+def test_two_half_spaces_sum_to_the_composite_modulus():
+    n = 20
+    E1, nu1, E2, nu2 = 210e9, 0.3, 70e9, 0.33
+    pair = counterface.equivalent_operator(love(n, E1, nu1), love(n, E2, nu2))
+    e_star = 1.0 / ((1 - nu1**2) / E1 + (1 - nu2**2) / E2)
+    one = love(n, e_star, 0.0)  # Love's coefficients depend on E / (1 - nu^2) only
+    np.testing.assert_allclose(pair.matrix, one.matrix, rtol=1e-12)
+    twin = counterface.equivalent_operator(love(n, E1, nu1), love(n, E1, nu1))
+    np.testing.assert_allclose(twin.matrix, love(n, E1 / 2, nu1).matrix, rtol=1e-12)
+
+
+def test_two_spheres_on_two_half_spaces_give_hertz():
+    n, R1, R2 = 48, 4e-3, 12e-3
+    E1, nu1, E2, nu2 = 210e9, 0.3, 110e9, 0.34
+    e_star = 1.0 / ((1 - nu1**2) / E1 + (1 - nu2**2) / E2)
+    radius = 1.0 / (1 / R1 + 1 / R2)
+    a = 0.15e-3  # contact radius: 14 elements across
+    load = 4 * e_star * a**3 / (3 * radius)
+    operator = counterface.equivalent_operator(love(n, E1, nu1), love(n, E2, nu2))
+    heights = counterface.equivalent_heights(sphere(n, R1), sphere(n, R2))
+    result = solve(operator, heights.max() - heights, mean_pressure=load / SIZE**2, tol=1e-10)
+    assert result.converged
+    summary = describe(result.pressure, result.gap, InterfaceGrid((SIZE / n, SIZE / n)))
+    assert summary.spot_count == 1
+    area = summary.corrected_real_area_fraction * SIZE**2
+    assert area == pytest.approx(math.pi * a**2, rel=0.04)
+    # Hertz's peak pressure 3F / (2 pi a^2), on elements of 1/14 of the diameter
+    assert result.max_pressure == pytest.approx(3 * load / (2 * math.pi * a**2), rel=0.05)
+    # each body deflects by its share of the compliance at the centre
+    u1, u2 = counterface.body_displacements(love(n, E1, nu1), love(n, E2, nu2),
+                                            result.pressure)
+    share = ((1 - nu1**2) / E1) / ((1 - nu1**2) / E1 + (1 - nu2**2) / E2)
+    np.testing.assert_allclose(u1, share * (u1 + u2), rtol=1e-10)
+
+
+def test_swapping_the_bodies_changes_nothing_but_their_displacements():
+    n = 24
+    rng = np.random.default_rng(5)
+    h1, h2 = 1e-6 * rng.standard_normal((2, n, n))
+    b1, b2 = love(n, 210e9, 0.3), love(n, 3e9, 0.45)
+    one = solve(counterface.equivalent_operator(b1, b2),
+                -counterface.equivalent_heights(h1, h2) + (h1 + h2).max(), approach=1e-6)
+    two = solve(counterface.equivalent_operator(b2, b1),
+                -counterface.equivalent_heights(h2, h1) + (h2 + h1).max(), approach=1e-6)
+    np.testing.assert_array_equal(one.pressure, two.pressure)
+    u1, u2 = counterface.body_displacements(b1, b2, one.pressure)
+    v2, v1 = counterface.body_displacements(b2, b1, two.pressure)
+    np.testing.assert_array_equal(u1, v1)
+    assert np.abs(u2).mean() > 10 * np.abs(u1).mean()  # the polymer deflects, not the steel
+
+
+def test_a_matrix_free_body_sums_without_a_dense_matrix():
+    n = 20
+    dense1, dense2 = love(n, 210e9, 0.3), love(n, 70e9, 0.33)
+    free = MatrixFreeInfluence(dense2, dense2.element_area, dense2.diagonal())
+    pair = counterface.equivalent_operator(dense1, free)
+    assert isinstance(pair, counterface.SumInfluence) and pair.matrix is None
+    p = np.random.default_rng(2).random(n * n)
+    np.testing.assert_allclose(pair.matvec(p), dense1.matrix @ p + dense2.matrix @ p,
+                               rtol=1e-12)
+    gap0 = -sphere(n, 5e-3)
+    gap0 -= gap0.min()
+    reference = solve(counterface.equivalent_operator(dense1, dense2), gap0, approach=2e-6,
+                      tol=1e-10)
+    result = solve(pair, gap0, approach=2e-6, method="cg", tol=1e-10)
+    np.testing.assert_allclose(result.pressure, reference.pressure,
+                               atol=1e-6 * reference.pressure.max())
+
+
+def test_bodies_on_other_grids_are_refused_with_both_named():
+    with pytest.raises(ValueError, match=r"\(400, 400\) and \(576, 576\)"):
+        counterface.equivalent_operator(love(20, 1e9, 0.3), love(24, 1e9, 0.3))
+    big = DenseInfluence(love(20, 1e9, 0.3).matrix, 4 * (SIZE / 20) ** 2, (20, 20))
+    with pytest.raises(ValueError, match="differ in area"):
+        counterface.equivalent_operator(love(20, 1e9, 0.3), big)
+    with pytest.raises(ValueError, match=r"grid \(24, 24\) does not match"):
+        counterface.equivalent_heights(np.zeros((20, 20)), np.zeros((24, 24)))
