@@ -62,8 +62,10 @@ def test_two_spheres_on_two_half_spaces_give_hertz():
     assert result.converged
     summary = describe(result.pressure, result.gap, InterfaceGrid((SIZE / n, SIZE / n)))
     assert summary.spot_count == 1
-    area = summary.corrected_real_area_fraction * SIZE**2
-    assert area == pytest.approx(math.pi * a**2, rel=0.04)
+    # measured: element count +0.7 %, corrected -3.4 % (one centre position; a flip of
+    # an edge element is 0.6 %)
+    for fraction in (result.real_area_fraction, summary.corrected_real_area_fraction):
+        assert fraction * SIZE**2 == pytest.approx(math.pi * a**2, rel=0.05)
     # Hertz's peak pressure 3F / (2 pi a^2), on elements of 1/14 of the diameter
     assert result.max_pressure == pytest.approx(3 * load / (2 * math.pi * a**2), rel=0.05)
     # each body deflects by its share of the compliance at the centre
