@@ -36,6 +36,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COVERAGE",
+    "DISTRIBUTION_QUANTITIES",
     "INTERFACE_QUANTITIES",
     "QUANTITIES",
     "SPACINGS",
@@ -59,13 +60,16 @@ class Quantity(NamedTuple):
     ``unit`` and ``meaning`` (symbol and equation of Kumar et al. 2006);
     ``flags``: the convergence flags a step needs to be used; ``difference``:
     for a quantity averaged as the difference of two averaged curves (so that
-    the relation holds at every level), their names.
+    the relation holds at every level), their names; ``quantile``: for a point of a
+    stored distribution, the sweep's quantile array and its probability
+    (:mod:`roughcontact.contact.interface`).
     """
 
     unit: str
     meaning: str
     flags: tuple[str, ...] = ("converged",)
     difference: tuple[str, str] | None = None
+    quantile: tuple[str, float] | None = None
 
 
 #: Aggregated quantities, by name.
@@ -95,6 +99,21 @@ INTERFACE_QUANTITIES = {
         "1", "(A' - c_P P' dx) / A_n, real area corrected by its perimeter "
              "(Yastrebov et al. 2017)"),
     "mean_gap": Quantity("m", "mean interfacial separation, mean of u + f - d"),
+}
+#: Points of the spot-area and gap distributions averaged like the other quantities
+#: (the contact files keep every quantile of
+#: :data:`~roughcontact.contact.interface.SPOT_PROBABILITIES` and ``GAP_PROBABILITIES``).
+DISTRIBUTION_QUANTITIES = {
+    "median_spot_area": Quantity("m^2", "median spot area (by number of spots)",
+                                 quantile=("spot_area_quantiles", 0.5)),
+    "largest_spot_area": Quantity("m^2", "area of the largest spot",
+                                  quantile=("spot_area_quantiles", 1.0)),
+    "gap_p10": Quantity("m", "gap exceeded on 90 % of the nominal area",
+                        quantile=("gap_quantiles", 0.1)),
+    "gap_median": Quantity("m", "median gap over the nominal area",
+                           quantile=("gap_quantiles", 0.5)),
+    "gap_p90": Quantity("m", "gap exceeded on 10 % of the nominal area",
+                        quantile=("gap_quantiles", 0.9)),
 }
 #: Spacings of :func:`pressure_axis`: name -> ``f(first, last, n)``.
 SPACINGS = {"log": np.geomspace, "linear": np.linspace}
@@ -144,16 +163,34 @@ def quantities(sweep: PhysicalSweep) -> dict:
     :data:`INTERFACE_QUANTITIES` when the sweep recorded them."""
     if sweep.mean_gap is None:
         return QUANTITIES
-    return {**QUANTITIES, **INTERFACE_QUANTITIES}
+    if sweep.gap_quantiles is None:
+        return {**QUANTITIES, **INTERFACE_QUANTITIES}
+    return {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES}
+
+
+_ALL = {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES}
+
+
+def _values(sweep: PhysicalSweep, quantity: str) -> np.ndarray:
+    """The (m, k) values of ``quantity``: a field of the sweep, or a point of one of its
+    stored distributions."""
+    source = _ALL[quantity].quantile
+    if source is None:
+        return np.asarray(getattr(sweep, quantity), dtype=float)
+    from roughcontact.contact.interface import GAP_PROBABILITIES, SPOT_PROBABILITIES
+
+    name, probability = source
+    probabilities = SPOT_PROBABILITIES if name == "spot_area_quantiles" else GAP_PROBABILITIES
+    return np.asarray(getattr(sweep, name), dtype=float)[..., probabilities.index(probability)]
 
 
 def _usable(sweep: PhysicalSweep, quantity: str) -> np.ndarray:
     """(m, k) mask of steps a quantity may be interpolated from."""
     P = sweep.nominal_pressure
     mask = np.isfinite(P) & (P > 0.0)
-    for flag in {**QUANTITIES, **INTERFACE_QUANTITIES}[quantity].flags:
+    for flag in _ALL[quantity].flags:
         mask &= getattr(sweep, flag)
-    return mask & np.isfinite(getattr(sweep, quantity))
+    return mask & np.isfinite(_values(sweep, quantity))
 
 
 def _increasing(P: np.ndarray) -> np.ndarray:
@@ -186,7 +223,7 @@ def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> n
     levels = np.asarray(pressures, dtype=float)
     if levels.ndim != 1 or not np.isfinite(levels).all() or (levels <= 0.0).any():
         raise ValueError("pressures must be a 1-d array of finite positive levels [Pa]")
-    return _interpolate(sweep.nominal_pressure, np.asarray(getattr(sweep, quantity), dtype=float),
+    return _interpolate(sweep.nominal_pressure, _values(sweep, quantity),
                         _usable(sweep, quantity), levels)
 
 
@@ -274,7 +311,10 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
         ``plastic_load_fraction`` [-], zero without a cap; and, when the sweep
         recorded them, the :data:`INTERFACE_QUANTITIES` ``spot_count``,
         ``mean_spot_area`` [m^2], ``perimeter`` [m],
-        ``corrected_real_area_fraction`` [-] and ``mean_gap`` [m]): ``q_mean``,
+        ``corrected_real_area_fraction`` [-] and ``mean_gap`` [m], and with
+        the stored distributions the :data:`DISTRIBUTION_QUANTITIES`
+        ``median_spot_area``, ``largest_spot_area`` [m^2], ``gap_p10``,
+        ``gap_median`` and ``gap_p90`` [m]): ``q_mean``,
         ``q_half_width`` (same unit) and
         ``q_count`` (surfaces used; fewer than ``surfaces`` where the level
         lies outside some surfaces' swept range, 0 with NaN values where it

@@ -226,3 +226,33 @@ def test_a_sweep_records_the_interface_of_every_step(method):
                                atol=1e-9 * d.max())
     np.testing.assert_array_equal(result.spot_area_quantiles, expected.spot_area_quantiles)
     assert (result.spot_count[:, -1] >= 1).all()
+
+
+def test_aggregates_read_the_distributions_at_the_solved_steps():
+    """At a pressure level that is a solved step of a single surface, the aggregated
+    points of the distributions are the stored quantiles of that step."""
+    from roughcontact.contact import aggregate, nondim
+    from roughcontact.elasticity.halfspace import halfspace_influence
+
+    n, size = 16, 1.0e-3
+    rng = np.random.default_rng(4)
+    heights = scipy.ndimage.gaussian_filter(rng.standard_normal((1, n, n)), (0, 2, 2),
+                                            mode="wrap")
+    heights /= heights.std()
+    unit = halfspace_influence((n, n), (size, size), 1.0, 0.0)
+    grid = interface.InterfaceGrid((size / n, size / n))
+    nd = nondim.solve_cell(unit, heights, thickness=size, element_area=(size / n) ** 2,
+                           approaches=np.linspace(0.5, 2.5, 6), method="pivot", tol=1e-12,
+                           interface=grid)
+    sigma = 2e-6
+    physical = nondim.to_physical(nd, sigma=sigma, E=1e9)
+    steps = physical.nominal_pressure[0, 1:5]
+    table = aggregate.aggregate_cell(physical, steps)
+    median = interface.GAP_PROBABILITIES.index(0.5)
+    np.testing.assert_allclose(table["gap_median_mean"], sigma * nd.gap_quantiles[0, 1:5, median],
+                               rtol=1e-9)
+    np.testing.assert_allclose(table["largest_spot_area_mean"],
+                               nd.spot_area_quantiles[0, 1:5, -1], rtol=1e-9)
+    np.testing.assert_allclose(table["mean_gap_mean"], sigma * nd.mean_gap[0, 1:5], rtol=1e-9)
+    assert (table["gap_p10_mean"] <= table["gap_median_mean"]).all()
+    assert (table["gap_median_mean"] <= table["gap_p90_mean"]).all()

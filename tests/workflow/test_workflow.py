@@ -247,6 +247,9 @@ def test_aggregates_carry_the_interface_quantities(quick_run):
         area = cell["real_area_fraction_mean"].to_numpy()
         corrected = cell["corrected_real_area_fraction_mean"].to_numpy()
         assert np.all(corrected < area) and np.all(corrected > 0.5 * area)
+        assert np.all(cell["gap_p10_mean"] <= cell["gap_median_mean"])
+        assert np.all(cell["gap_median_mean"] <= cell["gap_p90_mean"])
+        assert np.all(cell["median_spot_area_mean"] <= cell["largest_spot_area_mean"])
     assert meta["units"]["mean_gap_mean"] == "m" and meta["units"]["spot_count_mean"] == "1"
     audit = pd.read_csv(workdir / "results" / "audit" / "audit.csv")
     assert (audit["spots_at_P_max"] >= 1).all()
