@@ -117,3 +117,27 @@ def test_bodies_on_other_grids_are_refused_with_both_named():
         counterface.equivalent_operator(love(20, 1e9, 0.3), big)
     with pytest.raises(ValueError, match=r"grid \(24, 24\) does not match"):
         counterface.equivalent_heights(np.zeros((20, 20)), np.zeros((24, 24)))
+
+
+def test_two_finite_blocks_with_nu0_give_eq44_with_the_combined_modulus():
+    """Two finite blocks (nu = 0, clamped): a uniform pressure P deflects the pair's
+    mean plane by P (L1/E1 + L2/E2) (Eq 38 and 44 of each block, added), and under a
+    rough contact each block's mean-plane deflection is its share L_i/E_i of it."""
+    from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
+
+    size, n = 3e-3, 12
+    (L1, E1), (L2, E2) = (10e-3, 200e9), (4e-3, 5e9)
+    area = (size / n) ** 2
+    blocks = [DenseInfluence(unit_modulus_influence(
+        BlockGeometry(size=(size, size), grid=(n, n), thickness=L, mesh="refined", nu=0.0))
+        / E, area, (n, n)) for L, E in ((L1, E1), (L2, E2))]
+    pair = counterface.equivalent_operator(*blocks)
+    combined = L1 / E1 + L2 / E2
+    # the finite-element rows sum to L / E within the mesh's 0.5 % (Eq 38)
+    np.testing.assert_allclose(pair.matrix.sum(axis=1), combined, rtol=5e-3)
+    rng = np.random.default_rng(8)
+    heights = 2e-6 * rng.standard_normal((n, n))
+    result = solve(pair, heights.max() - heights, mean_pressure=1e6, tol=1e-10)
+    u1, u2 = counterface.body_displacements(*blocks, result.pressure)
+    assert u1.mean() + u2.mean() == pytest.approx(1e6 * combined, rel=5e-3)  # Eq 44
+    assert u1.mean() / u2.mean() == pytest.approx((L1 / E1) / (L2 / E2), rel=1e-2)
