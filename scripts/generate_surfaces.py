@@ -1,8 +1,8 @@
 """Snakemake entry point of rule `surfaces`: generate (or import, if measured) one surface
 cell, or take its surfaces from a larger cell's file."""
 
-from roughcontact.study.jobs import build_surface_cell
 from roughcontact.study.logs import route_logging
+from roughcontact.study.surface_jobs import build_surface_cell
 
 route_logging(snakemake.log[0])
 build_surface_cell(

@@ -23,7 +23,8 @@ def loaded_after(module: str) -> list[str]:
     return proc.stdout.split()
 
 
-@pytest.mark.parametrize("module", ["roughcontact.study.jobs", "roughcontact.contact",
+@pytest.mark.parametrize("module", ["roughcontact.study.jobs", "roughcontact.study.surface_jobs",
+                                    "roughcontact.contact",
                                     "roughcontact.reports.plotting",
                                     "roughcontact.reports.execution"])
 def test_job_modules_import_no_heavy_library(module):

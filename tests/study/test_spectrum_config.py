@@ -16,9 +16,9 @@ from roughcontact.errors import MeasurementError
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
-from roughcontact.study.jobs import build_surface_cell
 from roughcontact.study.sources import spectrum_from_entry
 from roughcontact.study.studies import contact_cells
+from roughcontact.study.surface_jobs import build_surface_cell
 from roughcontact.surfaces import spectra
 
 REPO = Path(__file__).resolve().parents[2]

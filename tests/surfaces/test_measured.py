@@ -19,11 +19,11 @@ from roughcontact.errors import MeasurementError
 from roughcontact.study.cells import contact_jobs
 from roughcontact.study.checks import check_studies
 from roughcontact.study.config import validated
-from roughcontact.study.jobs import build_surface_cell
 from roughcontact.study.records import MeasuredCell
 from roughcontact.study.sources import MeasurementImport
 from roughcontact.study.storage import read_surfaces
 from roughcontact.study.studies import contact_cells
+from roughcontact.study.surface_jobs import build_surface_cell
 from roughcontact.surfaces import johnson, measured, preparation, readers, statistics
 
 REPO = Path(__file__).resolve().parents[2]

@@ -22,8 +22,8 @@ from topographies import DATA, needs_data
 from roughcontact.errors import MeasurementError
 from roughcontact.study.checks import check_studies
 from roughcontact.study.config import validated
-from roughcontact.study.jobs import build_surface_cell
 from roughcontact.study.records import GeneratedCell, Generator
+from roughcontact.study.surface_jobs import build_surface_cell
 from roughcontact.surfaces.measured import load_measurement, statistics
 from roughcontact.surfaces.statistics import height_stats
 
