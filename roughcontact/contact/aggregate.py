@@ -30,6 +30,7 @@ import numpy as np
 import scipy.special
 
 from roughcontact.contact.curves import PhysicalSweep
+from roughcontact.contact.result import INTERFACE_UNITS
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -89,17 +90,15 @@ QUANTITIES = {
 }
 #: Aggregated interface quantities (:mod:`roughcontact.contact.interface`), by name: in the
 #: table when the sweep recorded them (every contact job of the study does).
-INTERFACE_QUANTITIES = {
-    "spot_count": Quantity("1", "N_s, contact spots (4-connected clusters of elements in "
-                                "contact)"),
-    "mean_spot_area": Quantity("m^2", "A_c / N_s, mean area of a contact spot"),
-    "perimeter": Quantity("m", "P', contact/non-contact interface length on the grid "
-                               "(Manhattan perimeter)"),
-    "corrected_real_area_fraction": Quantity(
-        "1", "(A' - c_P P' dx) / A_n, real area corrected by its perimeter "
-             "(Yastrebov et al. 2017)"),
-    "mean_gap": Quantity("m", "mean interfacial separation, mean of u + f - d"),
-}
+INTERFACE_QUANTITIES = {name: Quantity(INTERFACE_UNITS[name], meaning) for name, meaning in (
+    ("spot_count", "N_s, contact spots (4-connected clusters of elements in contact)"),
+    ("mean_spot_area", "A_c / N_s, mean area of a contact spot"),
+    ("perimeter", "P', contact/non-contact interface length on the grid (Manhattan "
+                  "perimeter)"),
+    ("corrected_real_area_fraction", "(A' - c_P P' dx) / A_n, real area corrected by its "
+                                     "perimeter (Yastrebov et al. 2017)"),
+    ("mean_gap", "mean interfacial separation, mean of u + f - d"),
+)}
 #: Points of the spot-area and gap distributions averaged like the other quantities
 #: (the contact files keep every quantile of
 #: :data:`~roughcontact.contact.interface.SPOT_PROBABILITIES` and ``GAP_PROBABILITIES``).

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from roughcontact.contact.checks import as_operator
 from roughcontact.elasticity.protocol import DenseInfluence, RestrictedInfluence
 
 __all__ = ["SumInfluence", "body_displacements", "equivalent_heights",
@@ -92,15 +93,6 @@ class SumInfluence:
         return RestrictedInfluence(self, np.asarray(indices))
 
 
-def _operator(operator, element_area, name: str):
-    """``operator`` as an influence operator (a dense ndarray needs ``element_area``)."""
-    if isinstance(operator, np.ndarray):
-        if element_area is None:
-            raise ValueError(f"{name} is a dense matrix: give element_area [m^2] too")
-        return DenseInfluence(operator, float(element_area))
-    return operator
-
-
 def equivalent_operator(first, second=None, *, element_area: float | None = None):
     """The equivalent compliance ``C1 + C2`` [m/Pa] of two bodies (module docstring).
 
@@ -129,8 +121,7 @@ def equivalent_operator(first, second=None, *, element_area: float | None = None
     """
     if second is None:
         return first
-    a = _operator(first, element_area, "the first body's operator")
-    b = _operator(second, element_area, "the counter body's operator")
+    a, b = as_operator(first, element_area), as_operator(second, element_area)
     if tuple(a.shape) != tuple(b.shape):
         raise ValueError(f"the two bodies' operators act on different element counts: "
                          f"{tuple(a.shape)} and {tuple(b.shape)}; build both on the same "

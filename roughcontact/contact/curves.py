@@ -25,14 +25,20 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from roughcontact.contact.checks import check_positive
-from roughcontact.contact.result import InterfaceColumns, SweepResult, zero_plastic_area
+from roughcontact.contact.result import (
+    INTERFACE,
+    INTERFACE_SCALARS,
+    INTERFACE_UNITS,
+    InterfaceColumns,
+    SweepResult,
+    zero_plastic_area,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = [
     "DIAGNOSTICS",
-    "INTERFACE",
     "PROFILES",
     "SOLVER_FIELDS",
     "CellSweep",
@@ -46,10 +52,6 @@ __all__ = [
 DIAGNOSTICS = ("iterations", "matvecs", "residual", "converged", "stiffness_converged")
 #: Per-step solution profiles a NondimSweep may hold, (m, k, R).
 PROFILES = ("pressure_profile", "load_profile")
-#: Interface quantities a record may hold (:mod:`roughcontact.contact.interface`), under
-#: the names of the SweepResult; None when the sweep did not record them.
-INTERFACE = ("spot_count", "mean_spot_area", "perimeter", "corrected_real_area_fraction",
-             "mean_gap", "spot_area_quantiles", "gap_quantiles")
 #: Record field -> SweepResult field, for the arrays both records read from the
 #: solver's :func:`roughcontact.contact.sweep` under the same name.
 SOLVER_FIELDS = {name: name for name in ("approach", "mean_plane_deflection",
@@ -253,7 +255,7 @@ class PhysicalSweep(CellSweep):
         }
         units = dict(_PHYSICAL_UNITS)
         if self.mean_gap is not None:
-            units.update(_INTERFACE_UNITS)
+            units.update({name: INTERFACE_UNITS[name] for name in INTERFACE_SCALARS})
         for name in units:
             columns[name] = np.asarray(getattr(self, name)).ravel()
         import pandas as pd
@@ -284,19 +286,10 @@ _PHYSICAL_UNITS = {
 }
 
 
-_INTERFACE_UNITS = {
-    "spot_count": "1",
-    "mean_spot_area": "m^2",
-    "perimeter": "m",
-    "corrected_real_area_fraction": "1",
-    "mean_gap": "m",
-}
-
-
 def interface_arrays(result) -> dict:
-    """The interface quantities (:data:`INTERFACE`) of a solver sweep or record, by
-    name; empty when it did not record them."""
-    if getattr(result, "mean_gap", None) is None:
+    """The interface quantities (:data:`~roughcontact.contact.result.INTERFACE`) of a
+    solver sweep or record, by name; empty when it did not record them."""
+    if result.mean_gap is None:
         return {}
     return {name: np.asarray(getattr(result, name)) for name in INTERFACE}
 

@@ -205,6 +205,12 @@ def _spots(mask: np.ndarray, periodic: bool) -> tuple[np.ndarray, np.ndarray]:
     return labels, counts
 
 
+def _offsets(counts: np.ndarray) -> np.ndarray:
+    """The number of spots before each field's (its labels are offset + 1 .. offset +
+    count in :func:`_spots`' numbering)."""
+    return np.concatenate(([0], np.cumsum(counts)[:-1]))
+
+
 def label_spots(contact, periodic: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Contact spots of a stack of contact sets (4-connectivity, module docstring).
 
@@ -226,8 +232,7 @@ def label_spots(contact, periodic: bool = False) -> tuple[np.ndarray, np.ndarray
     mask = _fields(contact, "contact").astype(bool)
     stack = mask.shape[:-2]
     labels, counts = _spots(mask.reshape(-1, *mask.shape[-2:]), periodic)
-    offsets = np.concatenate(([0], np.cumsum(counts)[:-1]))
-    local = np.where(labels > 0, labels - offsets[:, None, None], 0)
+    local = np.where(labels > 0, labels - _offsets(counts)[:, None, None], 0)
     return local.reshape(mask.shape), counts.reshape(stack)
 
 
@@ -251,10 +256,13 @@ def corrected_area_fraction(contact, periodic: bool = False) -> np.ndarray:
     """``(N_c - c_P (s_x + s_y)) / n``: the element count corrected by its perimeter
     (Yastrebov, Anciaux & Molinari 2017; module docstring), per field [-]."""
     mask = _fields(contact, "contact").astype(bool)
-    sx, sy = perimeter_switches(mask, periodic)
-    n = mask.shape[-1] * mask.shape[-2]
     count = np.count_nonzero(mask, axis=(-2, -1))
-    return (count - PERIMETER_CORRECTION * (sx + sy)) / n
+    return _corrected(count, *perimeter_switches(mask, periodic), mask.shape[-1] * mask.shape[-2])
+
+
+def _corrected(count, sx, sy, n: int) -> np.ndarray:
+    """``(count - c_P (sx + sy)) / n`` [-] (:func:`corrected_area_fraction`)."""
+    return np.asarray((count - PERIMETER_CORRECTION * (sx + sy)) / n, dtype=float)
 
 
 def _ranks(probabilities, count):
@@ -295,7 +303,7 @@ def describe(pressure, gap, grid: InterfaceGrid) -> InterfaceSummary:
     sizes = np.bincount(labels.ravel())[1:]
     owner = np.repeat(np.arange(fields), counts_flat)
     order = np.lexsort((sizes, owner))
-    offsets = np.concatenate(([0], np.cumsum(counts_flat)[:-1]))
+    offsets = _offsets(counts_flat)
     ranks = _ranks(SPOT_PROBABILITIES, counts_flat)  # (fields, S), 1-based
     picks = np.minimum(offsets[:, None] + ranks - 1, max(sizes.size - 1, 0))
     spot_quantiles = (sizes[order][picks] if sizes.size else np.zeros(picks.shape)) * 1.0
@@ -307,7 +315,6 @@ def describe(pressure, gap, grid: InterfaceGrid) -> InterfaceSummary:
                              np.nan)
     sx, sy = perimeter_switches(contact, grid.periodic)
     perimeter = sx * dy + sy * dx
-    corrected = (in_contact.reshape(stack) - PERIMETER_CORRECTION * (sx + sy)) / n
     ranks = _ranks(GAP_PROBABILITIES, n)
     # the order statistics: a sort is faster than a 9-fold partition on small fields
     ordered = (np.sort(g.reshape(fields, n), axis=1) if n <= SORT_LIMIT
@@ -319,7 +326,7 @@ def describe(pressure, gap, grid: InterfaceGrid) -> InterfaceSummary:
         spot_area_quantiles=spot_quantiles.reshape(*stack, len(SPOT_PROBABILITIES)),
         perimeter=np.asarray(perimeter, dtype=float),
         real_area_fraction=(in_contact / n).reshape(stack),
-        corrected_real_area_fraction=np.asarray(corrected, dtype=float),
+        corrected_real_area_fraction=_corrected(in_contact.reshape(stack), sx, sy, n),
         mean_gap=g.reshape(fields, n).mean(axis=1).reshape(stack),
         gap_quantiles=gap_quantiles.reshape(*stack, len(GAP_PROBABILITIES)),
     )

@@ -69,7 +69,6 @@ from roughcontact.contact.checks import (
 )
 from roughcontact.contact.curves import (
     DIAGNOSTICS,
-    INTERFACE,
     PROFILES,
     SOLVER_FIELDS,
     NondimSweep,
@@ -78,6 +77,7 @@ from roughcontact.contact.curves import (
     solver_arrays,
 )
 from roughcontact.contact.methods import resolve_method
+from roughcontact.contact.result import INTERFACE
 from roughcontact.contact.sweeps import sweep
 from roughcontact.elasticity import definiteness
 from roughcontact.elasticity.protocol import DenseInfluence

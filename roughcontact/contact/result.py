@@ -10,15 +10,15 @@ pressures in Pa, lengths in m, loads in N, stiffnesses in N/m.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from roughcontact.contact import interface, validity
 from roughcontact.contact.kkt import plastic_fraction
 
-__all__ = ["Batch", "ContactResult", "InterfaceColumns", "SweepResult", "SweepTable",
-           "zero_plastic_area"]
+__all__ = ["INTERFACE", "INTERFACE_SCALARS", "INTERFACE_UNITS", "Batch", "ContactResult",
+           "InterfaceColumns", "SweepResult", "SweepTable", "zero_plastic_area"]
 
 
 @dataclass(frozen=True)
@@ -103,6 +103,15 @@ class InterfaceColumns:
     mean_gap: np.ndarray | None = None
     spot_area_quantiles: np.ndarray | None = None
     gap_quantiles: np.ndarray | None = None
+
+
+#: The interface quantities' names (the fields of :class:`InterfaceColumns`), the (m, k)
+#: ones among them, and the unit of each.
+INTERFACE = tuple(field.name for field in fields(InterfaceColumns))
+INTERFACE_SCALARS = tuple(name for name in INTERFACE if not name.endswith("_quantiles"))
+INTERFACE_UNITS = {"spot_count": "1", "mean_spot_area": "m^2", "perimeter": "m",
+                   "corrected_real_area_fraction": "1", "mean_gap": "m",
+                   "spot_area_quantiles": "m^2", "gap_quantiles": "m"}
 
 
 @dataclass(frozen=True)
@@ -270,12 +279,6 @@ class Batch:
         )
 
 
-#: The (m, k) float columns of the interface quantities (with ``spot_count``, int, and
-#: the quantiles, (m, k, S) and (m, k, G)).
-INTERFACE_COLUMNS = ("mean_spot_area", "perimeter", "corrected_real_area_fraction",
-                     "mean_gap")
-
-
 class SweepTable:
     """The (m, k) columns of a :class:`SweepResult` being filled step by step (mutable).
 
@@ -298,7 +301,7 @@ class SweepTable:
             if len(self.shape) != 2:
                 raise ValueError(f"interface quantities need surfaces of shape (m, ny, nx) "
                                  f"or an operator that knows its grid, got {self.shape}")
-            columns = {name: np.zeros((m, k)) for name in INTERFACE_COLUMNS}
+            columns = {name: np.zeros((m, k)) for name in INTERFACE_SCALARS}
             columns["spot_count"] = np.zeros((m, k), dtype=int)
             columns["spot_area_quantiles"] = np.zeros((m, k, len(interface.SPOT_PROBABILITIES)))
             columns["gap_quantiles"] = np.zeros((m, k, len(interface.GAP_PROBABILITIES)))
@@ -357,8 +360,7 @@ class SweepTable:
         summary = interface.describe(
             np.reshape(pressure, (*np.shape(pressure)[:-1], *self.shape)),
             np.reshape(gap, (*np.shape(gap)[:-1], *self.shape)), self.interface)
-        for name in (*INTERFACE_COLUMNS, "spot_count", "spot_area_quantiles",
-                     "gap_quantiles"):
+        for name in INTERFACE:
             self.columns[name][rows, step] = getattr(summary, name)
 
     def _describe_pending(self, step: int) -> None:

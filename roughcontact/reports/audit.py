@@ -239,9 +239,9 @@ def _interface_columns(row: dict, valued, study_cell) -> None:
     """The cell's spots and gap at its highest pressure level with values (columns
     ``spots_at_P_max``, ``mean_spot_elements_at_P_max``: the mean spot area in elements,
     below about 4 the spots are not resolved and their count and the corrected area say
-    little (docs/method/interface.md), and ``mean_gap_over_sigma_at_P_max``); NaN where the
-    sweep recorded no interface quantities."""
-    if "spot_count_mean" not in valued or not len(valued):
+    little (docs/method/interface.md), and ``mean_gap_over_sigma_at_P_max``); NaN where no
+    level has values."""
+    if not len(valued):
         for name in ("spots_at_P_max", "mean_spot_elements_at_P_max",
                      "mean_gap_over_sigma_at_P_max"):
             row[name] = float("nan")

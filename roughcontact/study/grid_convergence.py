@@ -49,6 +49,7 @@ import numpy as np
 from roughcontact import contact
 from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.contact.interface import InterfaceGrid
+from roughcontact.contact.result import INTERFACE_SCALARS, INTERFACE_UNITS
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import arrays_sha256
@@ -67,7 +68,7 @@ from roughcontact.surfaces.statistics import height_stats, spectral_moments
 from roughcontact.surfaces.synthetic import derive_seeds
 from roughcontact.units import MM, MPA
 
-__all__ = ["CONTACT_FIELDS", "INTERFACE_FIELDS", "GridConvergenceSettings", "aimed_approaches",
+__all__ = ["CONTACT_FIELDS", "GridConvergenceSettings", "aimed_approaches",
            "build_grid_surfaces", "grid_mem_mb", "read_grid_contact", "solve_grid",
            "sweep_runtime"]
 
@@ -77,9 +78,6 @@ log = logging.getLogger("roughcontact.grid_convergence")
 CONTACT_FIELDS = ("approach", "load", "nominal_pressure", "mean_plane_deflection",
                   "real_area_fraction", "max_pressure", "iterations", "matvecs", "residual",
                   "converged")
-#: The (m, k) interface quantities of a contact file (:mod:`roughcontact.contact.interface`).
-INTERFACE_FIELDS = ("spot_count", "mean_spot_area", "perimeter",
-                    "corrected_real_area_fraction", "mean_gap")
 #: Seed key of the study's surfaces (:func:`~roughcontact.surfaces.synthetic.derive_seeds`).
 SEED_KEY = "grid_convergence"
 #: Pilot sweep on the coarsest grid: approaches as fractions of the mean initial gap.
@@ -262,10 +260,9 @@ def solve_grid(params: dict, surfaces_path, grid: int, out_path, config=None) ->
              "%d iterations", grid, len(heights), settings.steps, result.method, wall, cpu,
              int(result.iterations.sum()))
     units = {"approach": "m", "load": "N", "nominal_pressure": "Pa", "max_pressure": "Pa",
-             "mean_plane_deflection": "m", "mean_spot_area": "m^2", "perimeter": "m",
-             "mean_gap": "m"}
+             "mean_plane_deflection": "m", **INTERFACE_UNITS}
     datasets = {name: (np.asarray(getattr(result, name)), {"units": units.get(name, "1")})
-                for name in CONTACT_FIELDS + INTERFACE_FIELDS}
+                for name in CONTACT_FIELDS + INTERFACE_SCALARS}
     datasets["rms_gradient"] = (surfaces["stats"]["rms_gradient"], {"units": "1"})
     attrs = {"params": canonical_json(params), "grid": int(grid),
              "seeds": surfaces["seeds"].tolist(), "method": result.method, "tol": settings.tol,
@@ -281,7 +278,7 @@ def read_grid_contact(path) -> tuple[PhysicalSweep, dict]:
     (reference length and nominal area: the period ``L``, ``L^2``) and its attributes;
     the content hash is checked first (:class:`~roughcontact.errors.StoredFileError`)."""
     with open_h5(path) as f:
-        names = (*CONTACT_FIELDS, *INTERFACE_FIELDS, "rms_gradient")
+        names = (*CONTACT_FIELDS, *INTERFACE_SCALARS, "rms_gradient")
         missing = [name for name in names if name not in f]
         if missing:
             raise StoredFileError(f"{path}: no {', '.join(missing)}; {REBUILD}", path)
@@ -290,7 +287,7 @@ def read_grid_contact(path) -> tuple[PhysicalSweep, dict]:
     verify(path, attrs, arrays_sha256(arrays))
     size = GridConvergenceSettings.from_section(json.loads(attrs["params"])).size
     nan = np.full(arrays["approach"].shape, math.nan)
-    sweep = PhysicalSweep(**{name: arrays[name] for name in CONTACT_FIELDS + INTERFACE_FIELDS},
+    sweep = PhysicalSweep(**{name: arrays[name] for name in CONTACT_FIELDS + INTERFACE_SCALARS},
                           normalized_stiffness=nan, contact_stiffness=nan,
                           stiffness_converged=np.zeros(nan.shape, dtype=bool),
                           thickness=size, sigma=math.nan, E=float(attrs["contact_modulus"]),

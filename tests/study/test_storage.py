@@ -313,3 +313,11 @@ def test_a_full_disk_under_any_atomic_write_is_named(tmp_path):
     with pytest.raises(PermissionError):  # other errors stay what they are
         with atomic_path(path):
             raise PermissionError(errno.EACCES, "Permission denied")
+
+
+def test_contact_files_store_every_interface_quantity():
+    """The storage module names the interface datasets itself (it imports no solver);
+    they are the fields of the records it reads them into."""
+    from roughcontact.contact.result import INTERFACE
+
+    assert storage.INTERFACE_ARRAYS == INTERFACE
