@@ -11,4 +11,7 @@ solve_contact_job(
     snakemake.output[0],
     snakemake.params.solver,
     config=snakemake.config,
+    # a counter body's files (Eq 17-18), when the job has one
+    counter_surfaces_path=snakemake.input.get("counter_surfaces"),
+    counter_influence_path=snakemake.input.get("counter_influence"),
 )

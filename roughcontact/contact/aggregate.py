@@ -38,6 +38,7 @@ if TYPE_CHECKING:
 __all__ = [
     "COVERAGE",
     "DISTRIBUTION_QUANTITIES",
+    "COUNTER_QUANTITIES",
     "INTERFACE_QUANTITIES",
     "QUANTITIES",
     "SPACINGS",
@@ -63,7 +64,8 @@ class Quantity(NamedTuple):
     for a quantity averaged as the difference of two averaged curves (so that
     the relation holds at every level), their names; ``quantile``: for a point of a
     stored distribution, the sweep's quantile array and its probability
-    (:mod:`roughcontact.contact.interface`).
+    (:mod:`roughcontact.contact.interface`); ``ratio``: for a quantity averaged as
+    the ratio of two surfaces' curves, their names.
     """
 
     unit: str
@@ -71,6 +73,7 @@ class Quantity(NamedTuple):
     flags: tuple[str, ...] = ("converged",)
     difference: tuple[str, str] | None = None
     quantile: tuple[str, float] | None = None
+    ratio: tuple[str, str] | None = None
 
 
 #: Aggregated quantities, by name.
@@ -113,6 +116,18 @@ DISTRIBUTION_QUANTITIES = {
                            quantile=("gap_quantiles", 0.5)),
     "gap_p90": Quantity("m", "gap exceeded on 10 % of the nominal area",
                         quantile=("gap_quantiles", 0.9)),
+}
+#: Of a pair of elastic bodies (:mod:`roughcontact.contact.counterface`): which body
+#: deflects. In the table when the sweep recorded the counter body's deflection.
+COUNTER_QUANTITIES = {
+    "counter_deflection": Quantity("m", "d_b2, mean-plane deflection of the counter body, "
+                                        "mean of C2 p"),
+    "body_deflection": Quantity("m", "d_b1 = d_b - d_b2, mean-plane deflection of the "
+                                     "first body",
+                                difference=("mean_plane_deflection", "counter_deflection")),
+    "counter_share": Quantity("1", "d_b2 / d_b, the counter body's share of the mean-plane "
+                                   "compliance under the contact pressure",
+                              ratio=("counter_deflection", "mean_plane_deflection")),
 }
 #: Spacings of :func:`pressure_axis`: name -> ``f(first, last, n)``.
 SPACINGS = {"log": np.geomspace, "linear": np.linspace}
@@ -162,12 +177,13 @@ def quantities(sweep: PhysicalSweep) -> dict:
     :data:`INTERFACE_QUANTITIES` when the sweep recorded them."""
     if sweep.mean_gap is None:
         return QUANTITIES
+    counter = {} if sweep.counter_deflection is None else COUNTER_QUANTITIES
     if sweep.gap_quantiles is None:
-        return {**QUANTITIES, **INTERFACE_QUANTITIES}
-    return {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES}
+        return {**QUANTITIES, **INTERFACE_QUANTITIES, **counter}
+    return {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **counter}
 
 
-_ALL = {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES}
+_ALL = {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **COUNTER_QUANTITIES}
 
 
 def _values(sweep: PhysicalSweep, quantity: str) -> np.ndarray:
@@ -219,6 +235,12 @@ def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> n
         first, second = difference
         return (surface_curves(sweep, pressures, first)
                 - surface_curves(sweep, pressures, second))
+    ratio = known[quantity].ratio
+    if ratio is not None:  # e.g. the counter body's share d_b2 / d_b
+        first, second = ratio
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return (surface_curves(sweep, pressures, first)
+                    / surface_curves(sweep, pressures, second))
     levels = np.asarray(pressures, dtype=float)
     if levels.ndim != 1 or not np.isfinite(levels).all() or (levels <= 0.0).any():
         raise ValueError("pressures must be a 1-d array of finite positive levels [Pa]")

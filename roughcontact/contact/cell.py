@@ -108,7 +108,8 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
                batch_size: int | None = None,
                progress: Callable[[nondim.SweepProgress], None] | None = None,
                rows: slice | None = None, nondim_hardness: float | None = None,
-               profile: bool = True, interface: bool = True) -> NondimSweep:
+               profile: bool = True, interface: bool | InterfaceGrid = True,
+               bulk_factor: float = BULK_FACTOR) -> NondimSweep:
     """Sweep every surface of a cell to ``pressure_end`` on :func:`approach_grid`.
 
     Parameters
@@ -132,12 +133,16 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
     profile : bool
         Record the pressure and load profiles of every solution (default),
         from which :func:`validity_table` reads the share above any hardness.
-    interface : bool
+    interface : bool or InterfaceGrid
         Record every solution's contact spots, perimeter, corrected area and
         gaps (default; :mod:`roughcontact.contact.interface`) on the grid of
-        ``geometry`` (:func:`block_interface`: it then needs ``size`` and ``grid``).
+        ``geometry`` (:func:`block_interface`: it then needs ``size`` and ``grid``),
+        or on the grid given (e.g. with a counter body's deflection weights,
+        :mod:`roughcontact.contact.counterface`).
+    bulk_factor : float
+        As in :func:`approach_grid` (larger for a pair of bodies).
     """
-    approaches = approach_grid(heights, pressure_end, steps)
+    approaches = approach_grid(heights, pressure_end, steps, bulk_factor)
     if rows is not None:
         heights = heights[rows]
     return nondim.solve_cell(unit_influence, heights, thickness=geometry.thickness,
@@ -146,7 +151,13 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
                              stiffness_tol=stiffness_tol, precision=precision,
                              batch_size=batch_size, progress=progress,
                              nondim_hardness=nondim_hardness, profile=profile,
-                             interface=block_interface(geometry) if interface else None)
+                             interface=_interface_grid(interface, geometry))
+
+
+def _interface_grid(interface, geometry) -> InterfaceGrid | None:
+    if isinstance(interface, InterfaceGrid):
+        return interface
+    return block_interface(geometry) if interface else None
 
 
 def aggregate_sweep(sweep: NondimSweep, sigma: float, E: float, pressures,

@@ -34,8 +34,8 @@ import numpy as np
 from roughcontact.contact.checks import as_operator
 from roughcontact.elasticity.protocol import DenseInfluence, RestrictedInfluence
 
-__all__ = ["SumInfluence", "body_displacements", "equivalent_heights",
-           "equivalent_operator"]
+__all__ = ["ScaledInfluence", "SumInfluence", "body_displacements", "compliance_share",
+           "deflection_weights", "equivalent_heights", "equivalent_operator", "scaled"]
 
 #: Relative tolerance on the two operators' element areas.
 AREA_RTOL = 1e-9
@@ -91,6 +91,102 @@ class SumInfluence:
     def restrict(self, indices):
         """The sum restricted to the elements ``indices``."""
         return RestrictedInfluence(self, np.asarray(indices))
+
+
+@dataclass(frozen=True)
+class ScaledInfluence:
+    """``factor * C`` of a matrix-free influence operator (an
+    :class:`~roughcontact.elasticity.protocol.InfluenceOperator`): a unit-modulus body
+    ``E2 C2`` [m] made ``(E1 / E2) E2 C2`` to add to a first body of modulus ``E1``."""
+
+    operator: Any
+    factor: float
+    matrix = None
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return tuple(self.operator.shape)
+
+    @property
+    def dtype(self) -> np.dtype:
+        return np.dtype(float)
+
+    @property
+    def element_area(self) -> float:
+        return float(self.operator.element_area)
+
+    @property
+    def grid(self):
+        return self.operator.grid
+
+    @property
+    def mean_compliance(self) -> float | None:
+        value = self.operator.mean_compliance
+        return None if value is None else float(value) * self.factor
+
+    def matvec(self, pressure) -> np.ndarray:
+        return np.asarray(self.operator.matvec(pressure), dtype=float) * self.factor
+
+    def __matmul__(self, pressure) -> np.ndarray:
+        return self.matvec(pressure)
+
+    def diagonal(self) -> np.ndarray:
+        return np.asarray(self.operator.diagonal(), dtype=float) * self.factor
+
+    def restrict(self, indices):
+        return RestrictedInfluence(self, np.asarray(indices))
+
+
+def scaled(operator, factor: float, *, element_area: float | None = None):
+    """``factor * C`` of an influence operator (dense: a
+    :class:`~roughcontact.elasticity.protocol.DenseInfluence`; else a
+    :class:`ScaledInfluence`), ``factor`` > 0: the second body's unit-modulus
+    operator in the first body's unit, ``factor = E1 / E2``."""
+    factor = float(factor)
+    if not (np.isfinite(factor) and factor > 0.0):
+        raise ValueError(f"factor must be a finite positive number, got {factor!r}")
+    op = as_operator(operator, element_area)
+    if op.matrix is not None:
+        mean = op.mean_compliance
+        return DenseInfluence(op.matrix * factor, op.element_area, op.grid,
+                              None if mean is None else mean * factor)
+    return ScaledInfluence(op, factor)
+
+
+def deflection_weights(operator) -> np.ndarray:
+    """``w = C^T 1 / n``: the weights whose product with a pressure ``p`` is the mean
+    displacement ``mean(C p) = w . p`` of the body of influence ``C`` (n elements).
+
+    A dense matrix gives its column sums exactly; a matrix-free operator its
+    row sums ``C 1``, equal for the symmetric operators of elasticity
+    (reciprocity; every influence model is certified symmetric).
+    """
+    if isinstance(operator, np.ndarray):
+        return np.asarray(operator, dtype=float).sum(axis=0) / operator.shape[0]
+    op = as_operator(operator)
+    n = op.shape[0]
+    if op.matrix is not None:
+        return np.asarray(op.matrix, dtype=float).sum(axis=0) / n
+    return np.asarray(op.matvec(np.ones(n)), dtype=float) / n
+
+
+def compliance_share(first, second) -> float:
+    """The counter body's share of the pair's compliance [-]: the larger of its share of
+    the mean-plane deflection under a uniform pressure, ``1^T C2 1 / 1^T (C1 + C2) 1``,
+    and of the local (diagonal) compliance, ``sum diag C2 / sum diag (C1 + C2)``.
+
+    A counter body whose share is small changes the contact little: the measured
+    changes of k_P, real area and peak pressure against a rigid counter body are
+    in ``results/benchmarks/counter_rigid.md`` (:data:`roughcontact.study` treats
+    such a body as rigid below its ``counterface.rigid_share``).
+    """
+    a, b = (as_operator(op, 1.0 if isinstance(op, np.ndarray) else None)
+            for op in (first, second))
+    n = a.shape[0]
+    ones = np.ones(n)
+    mean_a, mean_b = float(np.sum(a.matvec(ones))), float(np.sum(b.matvec(ones)))
+    diag_a, diag_b = float(np.sum(a.diagonal())), float(np.sum(b.diagonal()))
+    return max(mean_b / (mean_a + mean_b), diag_b / (diag_a + diag_b))
 
 
 def equivalent_operator(first, second=None, *, element_area: float | None = None):

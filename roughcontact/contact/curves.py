@@ -107,6 +107,9 @@ class CellSweep(InterfaceColumns):
     spot_area_quantiles, gap_quantiles : ndarray or None
         (m, k, S) spot areas [m^2] and (m, k, G) gaps [m] (``/ sigma``) at the
         probabilities of :mod:`roughcontact.contact.interface`; None when not recorded.
+    counter_deflection : ndarray or None
+        Of a pair of elastic bodies: the counter body's mean-plane deflection [m]
+        (``/ sigma``; :mod:`roughcontact.contact.counterface`); None with a rigid one.
     """
 
     approach: np.ndarray
@@ -122,6 +125,7 @@ class CellSweep(InterfaceColumns):
     stiffness_converged: np.ndarray
     thickness: float
     plastic_area_fraction: np.ndarray | None = None
+    counter_deflection: np.ndarray | None = None
 
     def __post_init__(self):
         zero_plastic_area(self)
@@ -291,7 +295,10 @@ def interface_arrays(result) -> dict:
     solver sweep or record, by name; empty when it did not record them."""
     if result.mean_gap is None:
         return {}
-    return {name: np.asarray(getattr(result, name)) for name in INTERFACE}
+    arrays = {name: np.asarray(getattr(result, name)) for name in INTERFACE}
+    if result.counter_deflection is not None:  # a pair of elastic bodies
+        arrays["counter_deflection"] = np.asarray(result.counter_deflection)
+    return arrays
 
 
 def solver_arrays(result, names: Mapping[str, str], stiffness: str) -> dict:

@@ -48,7 +48,7 @@ surfaces, steps), in O(n) per field.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -85,10 +85,18 @@ class InterfaceGrid:
     periodic : bool
         The grid repeats (spots connect across its edges, and the edges' switches
         count in the perimeter).
+    counter_weights : ndarray (n,), optional
+        Of two elastic bodies (:mod:`roughcontact.contact.counterface`): the
+        weights ``w`` whose product with a solution's pressure is the counter
+        body's mean-plane deflection, ``mean(C2 p) = w . p``
+        (:func:`~roughcontact.contact.counterface.deflection_weights`); a sweep
+        then records it as ``counter_deflection``. None (default): no counter body,
+        or a rigid one.
     """
 
     spacing: tuple[float, float]
     periodic: bool = False
+    counter_weights: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         dx, dy = (float(s) for s in self.spacing)

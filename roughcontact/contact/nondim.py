@@ -115,7 +115,8 @@ SI_SCALES = {
 #: The scale of each interface quantity (:mod:`roughcontact.contact.interface`): gaps
 #: are heights (sigma); spots, perimeter and areas are lateral, the same in both forms.
 INTERFACE_SCALES = {name: "1" for name in INTERFACE} | {"mean_gap": "sigma",
-                                                        "gap_quantiles": "sigma"}
+                                                        "gap_quantiles": "sigma",
+                                                        "counter_deflection": "sigma"}
 #: SweepResult field of each array of a NondimSweep: the dimensionless problem has
 #: nominal area 1, so the solver's load is ``Phat`` and its tangent stiffness
 #: ``dPhat / ddhat = k_P / E``.

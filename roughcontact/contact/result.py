@@ -167,6 +167,11 @@ class SweepResult(InterfaceColumns):
         at the ranks ``r`` of ``profile_ranks``.
     load_profile : ndarray or None
         (m, k, R): share of the load on the ``r`` most loaded elements [-].
+    counter_deflection : ndarray or None
+        (m, k): the mean-plane deflection of the counter body [m] of a pair of
+        elastic bodies (``w . p``, the ``counter_weights`` of the ``interface``
+        grid; :mod:`roughcontact.contact.counterface`); the first body's is
+        ``mean_plane_deflection - counter_deflection``. None without one.
     spot_count, mean_spot_area, perimeter, corrected_real_area_fraction, mean_gap : ndarray or None
         (m, k): the interface quantities of :mod:`roughcontact.contact.interface`
         (number of contact spots, their mean area [m^2], the Manhattan perimeter
@@ -198,6 +203,7 @@ class SweepResult(InterfaceColumns):
     profile_ranks: np.ndarray | None = None
     pressure_profile: np.ndarray | None = None
     load_profile: np.ndarray | None = None
+    counter_deflection: np.ndarray | None = None
 
     def __post_init__(self):
         zero_plastic_area(self)
@@ -305,6 +311,8 @@ class SweepTable:
             columns["spot_count"] = np.zeros((m, k), dtype=int)
             columns["spot_area_quantiles"] = np.zeros((m, k, len(interface.SPOT_PROBABILITIES)))
             columns["gap_quantiles"] = np.zeros((m, k, len(interface.GAP_PROBABILITIES)))
+            if interface_grid.counter_weights is not None:
+                columns["counter_deflection"] = np.zeros((m, k))
         else:
             columns = {}
         names = ("load", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
@@ -343,6 +351,8 @@ class SweepTable:
         columns["load"][rows, step] = load
         columns["nominal_pressure"][rows, step] = load / (n * element_area)
         columns["mean_plane_deflection"][rows, step] = displacement.mean(axis=-1)
+        if "counter_deflection" in columns:  # a pair of bodies: w . p (counterface)
+            columns["counter_deflection"][rows, step] = pressure @ self.interface.counter_weights
         columns["real_area_fraction"][rows, step] = np.count_nonzero(pressure > 0.0, axis=-1) / n
         columns["max_pressure"][rows, step] = pressure.max(axis=-1)
         columns["plastic_area_fraction"][rows, step] = plastic_fraction(pressure, hardness)

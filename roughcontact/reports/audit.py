@@ -33,8 +33,9 @@ from roughcontact.contact.plausibility import (
 )
 from roughcontact.errors import StoredFileError
 from roughcontact.study.aggregation import validity_rows, validity_summary
+from roughcontact.study.jobs import certified_influence, contact_problem, read_counter
 from roughcontact.study.provenance import atomic_path, git_commit
-from roughcontact.study.records import Geometry, StudyCell
+from roughcontact.study.records import ContactJob, Geometry, StudyCell
 from roughcontact.study.storage import (
     check_parameters,
     contact_datasets,
@@ -221,7 +222,7 @@ def _plausibility_check(row: dict, cell: dict, stored, levels: int) -> list[str]
     (at the highest level with values)."""
     study_cell = StudyCell.from_params(cell)
     axis = pressure_axis(*study_cell.pressure_range, levels)
-    _, frame = aggregate_sweep(stored, study_cell.sigma, study_cell.E, axis,
+    _, frame = aggregate_sweep(stored, study_cell.height_scale, study_cell.E, axis,
                                hardness=study_cell.hardness)
     (nx, ny), nu = study_cell.geometry.grid, study_cell.geometry.nu
     valued = frame[frame["real_area_fraction_count"] > 0]
@@ -250,7 +251,8 @@ def _interface_columns(row: dict, valued, study_cell) -> None:
     (lx, ly), (nx, ny) = study_cell.geometry.size, study_cell.geometry.grid
     row["spots_at_P_max"] = float(last["spot_count_mean"])
     row["mean_spot_elements_at_P_max"] = float(last["mean_spot_area_mean"]) * nx * ny / (lx * ly)
-    row["mean_gap_over_sigma_at_P_max"] = float(last["mean_gap_mean"]) / study_cell.sigma
+    row["mean_gap_over_sigma_at_P_max"] = (float(last["mean_gap_mean"])
+                                           / study_cell.height_scale)
 
 
 def _hardness_check(row: dict, cell: dict, stored, levels: int) -> list[str]:
@@ -337,9 +339,17 @@ def write_audit(table: pd.DataFrame, csv_path, md_path, *, config_hash: str = ""
 def _job_files(root: Path, key: str, job: dict) -> dict:
     """The surface, influence and contact files of the contact job ``key`` (``job``: its
     ``params()``)."""
-    return {"surfaces": root / "results" / "surfaces" / f"{job['surface_key']}.h5",
-            "influence": root / "results" / "influence" / f"{job['geometry_key']}.h5",
-            "contact": root / "results" / "contact" / f"{key}.h5"}
+    files = {"surfaces": root / "results" / "surfaces" / f"{job['surface_key']}.h5",
+             "influence": root / "results" / "influence" / f"{job['geometry_key']}.h5",
+             "contact": root / "results" / "contact" / f"{key}.h5"}
+    counter = job.get("counter") or {}  # a counter body's files (Eq 17-18)
+    if counter.get("surface_key") is not None:
+        files["counter_surfaces"] = (root / "results" / "surfaces"
+                                     / f"{counter['surface_key']}.h5")
+    if counter.get("geometry_key") is not None:
+        files["counter_influence"] = (root / "results" / "influence"
+                                      / f"{counter['geometry_key']}.h5")
+    return files
 
 
 def check_job_files(jobs: dict[str, dict], root: str | Path = ".",
@@ -356,8 +366,12 @@ def check_job_files(jobs: dict[str, dict], root: str | Path = ".",
     problems, checked = [], set()
     for key, job in jobs.items():
         files = _job_files(Path(root), key, job)
+        counter = job.get("counter") or {}
         expected = {"surfaces": {"cell": job["surface"], "study_seed": study_seed},
-                    "influence": {"geometry": job["geometry"]}, "contact": {"job": job}}
+                    "influence": {"geometry": job["geometry"]}, "contact": {"job": job},
+                    "counter_surfaces": {"cell": counter.get("surface"),
+                                         "study_seed": study_seed},
+                    "counter_influence": {"geometry": counter.get("geometry")}}
         for kind, path in files.items():
             if path in checked:
                 continue
@@ -404,14 +418,21 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
         files = _job_files(root, key, job)
         stored, attrs = read_contact(files["contact"], job=job)
         surfaces = read_surfaces(files["surfaces"], cell=job["surface"], study_seed=study_seed)
-        unit, _ = read_influence(files["influence"], geometry=job["geometry"])
-        heights = surfaces["heights"]
+        record = ContactJob.from_params(job)
+        unit = certified_influence(read_influence(files["influence"],
+                                                  geometry=job["geometry"])[0],
+                                   files["influence"], record.geometry)
+        counter_surfaces, counter_unit, _ = read_counter(
+            record, files.get("counter_surfaces"), files.get("counter_influence"), study_seed)
+        problem = contact_problem(record, surfaces["heights"], unit, counter_surfaces,
+                                  counter_unit)
         start = time.perf_counter()
         again = sweep_cell(
-            unit, heights, Geometry.from_params(job["geometry"]).block(), job["pressure_end"],
-            stored.approach.shape[1], method=stored.method, tol=stored.tol,
-            precision=stored.precision, max_iter=stored.max_iter, rows=slice(first, last),
-            nondim_hardness=stored.nondim_hardness,
+            problem.unit, problem.heights, Geometry.from_params(job["geometry"]).block(),
+            job["pressure_end"], stored.approach.shape[1], method=stored.method,
+            tol=stored.tol, precision=stored.precision, max_iter=stored.max_iter,
+            rows=slice(first, last), nondim_hardness=stored.nondim_hardness,
+            interface=problem.interface, bulk_factor=problem.bulk_factor,
         )
         seconds = time.perf_counter() - start
         commit = git_commit()

@@ -24,7 +24,7 @@ from roughcontact.study.config import in_unit
 from roughcontact.study.provenance import atomic_path, provenance
 from roughcontact.study.records import StudyCell
 from roughcontact.study.storage import read_contact
-from roughcontact.units import MPA
+from roughcontact.units import MPA, UM
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +42,7 @@ def validity_rows(cell: StudyCell, nd, levels) -> list[pd.DataFrame]:
     threshold = cell.hardness_threshold
     out = []
     for H in cell.checked_hardness:
-        frame = cell_module.validity_table(nd, cell.sigma, cell.E, H, levels)
+        frame = cell_module.validity_table(nd, cell.height_scale, cell.E, H, levels)
         flagged = ((frame["area_above_mean"] > threshold)
                    | (frame["load_above_mean"] > threshold))
         out.append(frame.drop(columns="hardness").assign(
@@ -96,12 +96,31 @@ def _plausibility(cell: StudyCell, frame: pd.DataFrame) -> tuple[pd.DataFrame, l
     return frame, reasons
 
 
+#: What a contact file of two bodies records about them (:func:`_counter_summary`).
+COUNTER_ATTRIBUTES = ("counter_compliance_share", "counter_treated_as_rigid",
+                      "equivalent_skew", "equivalent_kurt")
+
+
+def _counter_summary(cell: StudyCell, attrs: dict) -> dict:
+    """Of a cell with a counter body: its compliance share and whether the job treated
+    it as rigid, and the equivalent surface's sample sigma [um], Sk and Ku (means over
+    the surfaces) beside the two inputs' (the cell's columns); {} otherwise."""
+    if cell.counterface is None:
+        return {}
+    out = {name: attrs[name].item() if hasattr(attrs[name], "item") else attrs[name]
+           for name in COUNTER_ATTRIBUTES if name in attrs}
+    if "equivalent_sigma_over_scale" in attrs:
+        out["equivalent_sample_sigma_um"] = (float(attrs["equivalent_sigma_over_scale"])
+                                             * in_unit(cell.height_scale, UM))
+    return out
+
+
 def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTables:
     """Aggregate one cell's contact file at ``levels`` nominal pressures over its range."""
     nd, attrs = read_contact(path, job=cell.job.params())  # solved for this cell's job
     key, label = cell.contact_key, cell.label
     axis = aggregate.pressure_axis(*cell.pressure_range, levels)
-    physical, frame = cell_module.aggregate_sweep(nd, cell.sigma, cell.E, axis,
+    physical, frame = cell_module.aggregate_sweep(nd, cell.height_scale, cell.E, axis,
                                                   hardness=cell.hardness)
     frame, implausible = _plausibility(cell, frame)
     labels = {"cell": index, "label": label, "contact_key": key, **cell.columns()}
@@ -127,7 +146,7 @@ def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTabl
     summary = {**labels,
                **{k: float(v) for k, v in aggregate.modulus_summary(per_surface, cell.E).items()},
                "unconverged_steps": unconverged, "worst_residual": float(attrs["worst_residual"]),
-               "implausible": implausible}
+               "implausible": implausible, **_counter_summary(cell, attrs)}
     if unconverged:
         log.warning("cell %s: %d unconverged steps excluded", key, unconverged)
     for reason in aggregate.COVERAGE[2:]:

@@ -18,6 +18,7 @@ from collections.abc import Mapping
 from roughcontact.study.block_checks import check_blocks
 from roughcontact.study.checks import (
     ConfigProblems,
+    check_counterfaces,
     check_feasible,
     check_memory,
     check_plausible,
@@ -130,6 +131,10 @@ def study_plan(config: dict) -> StudyPlan:
     surfaces = {cell.key: cell for name in SURFACE_FIGURES if name in figure_cells
                 for cell in figure_cells[name]}
     surfaces |= {job.surface.key: job.surface for job in jobs.values()}
+    surfaces |= {job.counter.surface.key: job.counter.surface for job in jobs.values()
+                 if job.counter is not None and job.counter.surface is not None}
+    _raise("Counter bodies that do not fit their surfaces",
+           check_counterfaces(cell for name in studies for cell in cells[name]))
     # by the figure or sweep whose b_mm they have (Fig 5 draws Fig 4's)
     windows = {name: [c.surface for c in study_cells] for name, study_cells in by_source.items()}
     windows |= {name: figure_cells[name] for name in SURFACE_FIGURES
@@ -138,6 +143,8 @@ def study_plan(config: dict) -> StudyPlan:
     _raise("Infeasible surface cells in the config", check_feasible(surfaces))
     asked = influence_geometries(config) | {job.geometry.key: job.geometry
                                             for job in jobs.values()}
+    asked |= {job.counter.geometry.key: job.counter.geometry for job in jobs.values()
+              if job.counter is not None and job.counter.geometry is not None}
     geometries = {c.key: c for g in asked.values() for c in g.candidates(build.max_bytes)}
     planned = {g.candidates(build.max_bytes)[0].key for g in asked.values()}
     _raise("Influence models that do not fit body.max_memory_gb",

@@ -11,7 +11,7 @@ import dataclasses
 import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
-from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.config import BuildSettings, in_unit, in_units
 from roughcontact.study.measured_checks import check_measured_plausible
 from roughcontact.study.records import (
     GeneratedCell,
@@ -351,6 +351,35 @@ def check_windows(config: dict, cells) -> list[str]:
                 message = window_message(config, name, cell)
                 problems += [message] if message else []
     return problems
+
+
+def check_counterfaces(cells) -> list[str]:
+    """Messages for the study cells whose counter surface is not sampled like the first
+    (:mod:`roughcontact.contact.counterface` adds the two height maps element by
+    element): a measured counter surface on another grid or plan size, once per
+    pair, with the import keys that fix it."""
+    problems = {}
+    for cell in cells:
+        counter = cell.counterface
+        if counter is None or counter.surface is None:
+            continue
+        first, other = cell.surface, counter.surface
+        if other.grid == first.grid and all(math.isclose(a, b, rel_tol=1e-9)
+                                            for a, b in zip(other.size, first.size, strict=True)):
+            continue
+        (nx, ny), (lx, ly) = first.grid, in_units(first.size)
+        (ox, oy), (olx, oly) = other.grid, in_units(other.size)
+        file = getattr(getattr(other, "source", None), "file", other.key)
+        advice = f"resample_grid: [{nx}, {ny}]"
+        if not all(math.isclose(a, b, rel_tol=1e-9) for a, b in ((olx, lx), (oly, ly))):
+            advice = (f"crop_mm: [0, 0, {lx:g}, {ly:g}] (a window of the first surface's "
+                      f"plan size) and {advice}")
+        problems[(first.key, other.key)] = (
+            f"counterface.surface {file}: {ox} x {oy} points over {olx:g} mm x {oly:g} mm, "
+            f"but the surface it meets ({first.key}) has {nx} x {ny} over {lx:g} mm x "
+            f"{ly:g} mm: the two height maps add element by element, so they need the same "
+            f"grid and plan size; add to the counter surface's measured: entry {advice}")
+    return list(problems.values())
 
 
 # ---------------------------------------------------------------------------

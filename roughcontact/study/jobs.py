@@ -23,7 +23,7 @@ import time
 import numpy as np
 
 from roughcontact.contact import cell as cell_module
-from roughcontact.contact import halfspace_criterion
+from roughcontact.contact import counterface, halfspace_criterion
 from roughcontact.elasticity import definiteness, influence, operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence
@@ -337,8 +337,99 @@ def _solver_stats(result, seconds: float) -> dict:
     }
 
 
+@dataclasses.dataclass(frozen=True)
+class ContactProblem:
+    """What a contact job sweeps: ``heights`` in units of the cell's height scale, the
+    unit-modulus operator ``unit`` [m] in the first body's unit, the ``interface``
+    grid (True: the block's), the sweep's ``bulk_factor``
+    (:func:`~roughcontact.contact.cell.approach_grid`) and the attributes that say
+    what was modelled (none for one body)."""
+
+    heights: np.ndarray
+    unit: object
+    interface: object = True
+    bulk_factor: float = cell_module.BULK_FACTOR
+    attrs: dict = dataclasses.field(default_factory=dict)
+
+
+def read_counter(job: ContactJob, surfaces_path, influence_path, study_seed=None) -> tuple:
+    """A job's counter surfaces (:func:`~roughcontact.study.storage.read_surfaces`) and
+    certified counter influence model, each None where the job has none, and the
+    content hash of the influence file as an attribute to record; each file checked
+    to have been made for the job's counter body."""
+    counter = job.counter
+    surfaces = unit = None
+    hashes = {}
+    if counter is not None and counter.surface is not None:
+        surfaces = read_surfaces(surfaces_path, cell=counter.surface.params(),
+                                 study_seed=study_seed)
+    if counter is not None and counter.geometry is not None:
+        unit, attrs = read_influence(influence_path, geometry=counter.geometry.params())
+        unit = certified_influence(unit, influence_path, counter.geometry)
+        hashes["counter_influence_content_sha256"] = attrs["content_sha256"]
+    return surfaces, unit, hashes
+
+
+def _equivalent_moments(heights: np.ndarray) -> dict:
+    """The equivalent surface's sample sigma (in units of the height scale), Sk and Ku,
+    means over the surfaces."""
+    flat = heights.reshape(heights.shape[0], -1)
+    centred = flat - flat.mean(axis=1, keepdims=True)
+    std = centred.std(axis=1)
+    return {"equivalent_sigma_over_scale": float(std.mean()),
+            "equivalent_skew": float(((centred**3).mean(axis=1) / std**3).mean()),
+            "equivalent_kurt": float(((centred**4).mean(axis=1) / std**4).mean())}
+
+
+def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
+                    counter_unit=None) -> ContactProblem:
+    """The problem a contact job sweeps: its own (one body against a rigid smooth flat),
+    or with a counter body the equivalent problem of Eq 17-18
+    (:mod:`roughcontact.contact.counterface`): heights ``(z1 + r z2) / sqrt(1 + r^2)``
+    (r = sigma2 / sigma1), the operator ``E1 C1 + (E1 / E2) E2 C2``, the interface grid
+    with the counter body's deflection weights and a bulk factor raised by the
+    counter body's compliance. A counter body whose share of the compliance
+    (:func:`~roughcontact.contact.counterface.compliance_share`) is below its
+    ``rigid_share`` is treated as rigid, and the choice logged."""
+    counter = job.counter
+    if counter is None:
+        return ContactProblem(heights, unit)
+    attrs, grid, bulk = {}, cell_module.block_interface(job.geometry), cell_module.BULK_FACTOR
+    if counter.surface is not None:
+        z2 = counter_surfaces["heights"]
+        if z2.shape[0] == 1:  # one measured counter surface meets every surface
+            z2 = np.broadcast_to(z2, heights.shape)
+        heights = (counterface.equivalent_heights(heights, counter.sigma_ratio * z2)
+                   * counter.height_factor)
+        attrs["counter_surfaces_content_sha256"] = counter_surfaces["content_sha256"]
+        attrs.update(_equivalent_moments(heights))
+        log.info("equivalent surface: (z1 + %.4g z2) / %.4g; sample sigma / scale %.4f, "
+                 "Sk %.4f, Ku %.4f (means over surfaces)", counter.sigma_ratio,
+                 1.0 / counter.height_factor, attrs["equivalent_sigma_over_scale"],
+                 attrs["equivalent_skew"], attrs["equivalent_kurt"])
+    if counter.geometry is not None:
+        second = counterface.scaled(counter_unit, counter.modulus_ratio)
+        share = counterface.compliance_share(unit, second)
+        rigid = share < counter.rigid_share
+        attrs.update(counter_compliance_share=share, counter_treated_as_rigid=rigid)
+        log.info("counter body %s, E1/E2 = %.4g: %.3g of the pair's compliance; %s",
+                 counter.geometry.key, counter.modulus_ratio, share,
+                 f"below counterface.rigid_share {counter.rigid_share:g}: treated as rigid"
+                 if rigid else "solved as an elastic pair")
+        if not rigid:
+            first_weights = counterface.deflection_weights(unit)
+            weights = counterface.deflection_weights(second)
+            # the mean-plane deflection is at most max(w) times the load: the pair's
+            # largest weight over the first body's raises the sweep's end alike
+            bulk *= float((first_weights + weights).max() / first_weights.max())
+            unit = counterface.equivalent_operator(unit, second)
+            grid = dataclasses.replace(grid, counter_weights=weights / job.geometry.thickness)
+    return ContactProblem(heights, unit, grid, bulk, attrs)
+
+
 def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, settings: dict,
-                      config=None) -> dict:
+                      config=None, counter_surfaces_path=None,
+                      counter_influence_path=None) -> dict:
     """Solve one contact job and write its non-dimensional sweep to ``out_path``.
 
     ``params``: the job's :meth:`~roughcontact.study.records.ContactJob.params`,
@@ -349,7 +440,9 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
     and influence files must have been made for the job's cell (and the
     configuration's ``study_seed``) and geometry, else
     :class:`~roughcontact.errors.StoredFileError` names the file and the
-    field that differs. Returns the root attributes written.
+    field that differs. A job with a counter body (``counter``) also reads the counter
+    surfaces and influence files, checked alike, and solves the equivalent problem
+    (:func:`_pair_problem`). Returns the root attributes written.
     """
     job, settings = ContactJob.from_params(params), ContactSettings.from_section(settings)
     start = time.perf_counter()
@@ -367,6 +460,10 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
             f"surfaces {surfaces_path} have shape {heights.shape[1:]} but geometry "
             f"{job.geometry.key} has a {ny} x {nx} (ny x nx) contact grid"
         )
+    counter_surfaces, counter_unit, counter_hashes = read_counter(
+        job, counter_surfaces_path, counter_influence_path,
+        None if config is None else config["study_seed"])
+    problem = contact_problem(job, heights, unit, counter_surfaces, counter_unit)
     hardness = job.nondim_hardness
     log.info("contact %s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
              "method %s, tol %.1e, precision %s, influence %s, %s", name, m, settings.steps,
@@ -374,10 +471,13 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
              geometry_attrs["operator"],
              "elastic" if hardness is None else f"pressure capped at H L / (E sigma) = "
              f"{hardness:.6g}")
-    result = cell_module.sweep_cell(unit, heights, job.geometry.block(), job.pressure_end,
+    result = cell_module.sweep_cell(problem.unit, problem.heights, job.geometry.block(),
+                                    job.pressure_end,
                                     settings.steps, method=settings.method, tol=settings.tol,
                                     precision=settings.precision, batch_size=min(m, BATCH_SIZE),
-                                    progress=_progress_log(), nondim_hardness=hardness)
+                                    progress=_progress_log(), nondim_hardness=hardness,
+                                    interface=problem.interface,
+                                    bulk_factor=problem.bulk_factor)
     log.info("approach d/sigma %.3g .. %.3g", result.approach[0, 0], result.approach[0, -1])
     reached = result.nominal_pressure[:, -1].min()
     if reached < job.pressure_end:
@@ -393,6 +493,8 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
         "surfaces_content_sha256": surfaces["content_sha256"],
         "influence_content_sha256": geometry_attrs["content_sha256"],
         "seeds": surfaces["seeds"].tolist(),
+        **counter_hashes,
+        **problem.attrs,
         **provenance(config),
     }
     return write_contact(out_path, result, attrs)
@@ -405,5 +507,7 @@ __all__ = [
     "build_influence",
     "choose_influence",
     "certified_influence",
+    "contact_problem",
+    "read_counter",
     "solve_contact_job",
 ]

@@ -113,7 +113,10 @@ class GeneratedCell(_SurfaceStatistics):
     [m] of the ACF ``acf`` (Eq 1), or, with a ``spectrum``, the spectrum's
     :class:`SurfaceSpec` kind (``corr_length`` then only labels the cell);
     contact ``grid`` (nx, ny) over the plan ``size`` (Lx, Ly) [m]; periodic
-    or padded filter; the ``method`` that generates them.
+    or padded filter; the ``method`` that generates them. ``stream``: the seed
+    stream ("" for a study's surfaces; ``counter`` for a counter body's,
+    :class:`Counterface`): it enters the statistics key, so a counter surface of
+    the same statistics as the first is another realisation, not the same one.
     """
 
     acf: str
@@ -121,6 +124,7 @@ class GeneratedCell(_SurfaceStatistics):
     method: Generator
     count: int
     spectrum: Spectrum | None = None
+    stream: str = ""
 
     @classmethod
     def from_params(cls, params: dict) -> GeneratedCell:
@@ -129,7 +133,8 @@ class GeneratedCell(_SurfaceStatistics):
                    size=from_unit(as_pair(params["size_mm"])), acf=str(params["acf"]),
                    periodic=bool(params["periodic"]), method=Generator(params["method"]),
                    count=int(params["count"]),
-                   spectrum=spectrum_from_params(params.get("spectrum")))
+                   spectrum=spectrum_from_params(params.get("spectrum")),
+                   stream=str(params.get("stream", "")))
 
     def params(self) -> dict:
         """The cell as stored and passed to its job (lengths in mm); ``spectrum`` only
@@ -139,6 +144,8 @@ class GeneratedCell(_SurfaceStatistics):
                   "periodic": self.periodic, "method": self.method.value, "count": self.count}
         if self.spectrum is not None:
             params["spectrum"] = self.spectrum.params()
+        if self.stream:  # a counter body's: a study's surfaces keep their keys
+            params["stream"] = self.stream
         return params
 
     @property
@@ -153,7 +160,9 @@ class GeneratedCell(_SurfaceStatistics):
         key = (f"sk{self.skew:g}_ku{self.kurt:g}_b{bx:g}x{by:g}mm_L{lx:g}x{ly:g}mm"
                f"_g{nx}x{ny}_{self.acf[:3]}_{'per' if self.periodic else 'pad'}"
                f"_{self.method.value}")
-        return key if self.spectrum is None else f"{key}_{self.spectrum.tag()}"
+        if self.spectrum is not None:
+            key = f"{key}_{self.spectrum.tag()}"
+        return key if not self.stream else f"{key}_{self.stream}"
 
     @property
     def key(self) -> str:
@@ -384,6 +393,116 @@ def coarse_geometry(geom: BlockGeometry) -> BlockGeometry:
 
 
 # ---------------------------------------------------------------------------
+# The counter body: what the surfaces are pressed against (Eq 17-18)
+
+
+def _counter_body_label(geometry: Geometry | None, E: float | None) -> str:
+    if geometry is None:
+        return "rigid"
+    if geometry.operator is InfluenceModel.HALFSPACE:
+        return f"half-space E {in_unit(E, MPA):g} MPa nu {geometry.nu:g}"
+    return (f"block E {in_unit(E, MPA):g} MPa nu {geometry.nu:g} "
+            f"{in_unit(geometry.thickness, MM):g} mm {geometry.mesh}")
+
+
+@dataclass(frozen=True)
+class Counterface:
+    """The body a study cell's surfaces are pressed against (Eq 17-18 of Kumar et al.
+    2006; :mod:`roughcontact.contact.counterface`): its surface and its body.
+
+    ``surface``: the counter surface cell on the first cell's grid and plan
+    size (a generated cell of seed stream ``counter``, or a measured one), None
+    for a smooth one; ``sigma`` [m] its heights' standard deviation (0 when
+    smooth). ``geometry``: the counter body (a block, or a half-space:
+    ``operator`` halfspace), None for a rigid one; ``E`` [Pa] its Young's
+    modulus. ``rigid_share``: below this share of the pair's compliance the
+    contact job treats the counter body as rigid (and logs it). A smooth rigid
+    counter body is no counterface at all (None on the cell: today's case).
+    """
+
+    surface: SurfaceCell | None = None
+    sigma: float = 0.0
+    geometry: Geometry | None = None
+    E: float | None = None
+    rigid_share: float = 0.01
+
+    @classmethod
+    def from_params(cls, params: dict) -> Counterface:
+        surface, geometry = params["surface"], params["geometry"]
+        return cls(surface=None if surface is None else surface_cell_from_params(surface),
+                   sigma=float(params["sigma_um"]) * UM,
+                   geometry=None if geometry is None else Geometry.from_params(geometry),
+                   E=None if params["E_MPa"] is None else float(params["E_MPa"]) * MPA,
+                   rigid_share=float(params["rigid_share"]))
+
+    def params(self) -> dict:
+        s, g = self.surface, self.geometry
+        return {"surface": None if s is None else s.params(),
+                "surface_key": None if s is None else s.key,
+                "sigma_um": in_unit(self.sigma, UM),
+                "geometry": None if g is None else g.params(),
+                "geometry_key": None if g is None else g.key,
+                "E_MPa": None if self.E is None else in_unit(self.E, MPA),
+                "rigid_share": self.rigid_share}
+
+    @property
+    def label(self) -> str:
+        if self.surface is None:
+            surface = "smooth"
+        else:
+            surface = (f"{self.surface.source_label}sigma {in_unit(self.sigma, UM):g} um, "
+                       f"Sk {self.surface.skew:g}, Ku {self.surface.kurt:g}")
+        return f"counter {surface}, {_counter_body_label(self.geometry, self.E)}"
+
+    def columns(self) -> dict:
+        """The counter body's parameters as table columns (um, MPa; NaN where none)."""
+        s, nan = self.surface, float("nan")
+        return {"counter_sigma_um": in_unit(self.sigma, UM),
+                "counter_skew": nan if s is None else s.skew,
+                "counter_kurt": nan if s is None else s.kurt,
+                "counter_body": _counter_body_label(self.geometry, self.E),
+                "counter_E_MPa": nan if self.E is None else in_unit(self.E, MPA)}
+
+
+@dataclass(frozen=True)
+class CounterJob:
+    """The counter body of a contact job, in the job's non-dimensional form: the
+    counter ``surface`` cell (None: smooth) with ``sigma_ratio`` sigma2 / sigma1,
+    the counter ``geometry`` (None: rigid) with ``modulus_ratio`` E1 / E2, and the
+    ``rigid_share`` below which the job treats the body as rigid."""
+
+    surface: SurfaceCell | None
+    sigma_ratio: float
+    geometry: Geometry | None
+    modulus_ratio: float
+    rigid_share: float
+
+    @classmethod
+    def from_params(cls, params: dict) -> CounterJob:
+        surface, geometry = params["surface"], params["geometry"]
+        return cls(surface=None if surface is None else surface_cell_from_params(surface),
+                   sigma_ratio=float(params["sigma_ratio"]),
+                   geometry=None if geometry is None else Geometry.from_params(geometry),
+                   modulus_ratio=float(params["modulus_ratio"]),
+                   rigid_share=float(params["rigid_share"]))
+
+    def params(self) -> dict:
+        s, g = self.surface, self.geometry
+        return {"surface": None if s is None else s.params(),
+                "surface_key": None if s is None else s.key,
+                "sigma_ratio": self.sigma_ratio,
+                "geometry": None if g is None else g.params(),
+                "geometry_key": None if g is None else g.key,
+                "modulus_ratio": self.modulus_ratio, "rigid_share": self.rigid_share}
+
+    @property
+    def height_factor(self) -> float:
+        """sigma1 / sqrt(sigma1^2 + sigma2^2): the equivalent heights in units of the
+        cell's height scale are ``(z1 + sigma_ratio z2) * height_factor``."""
+        return 1.0 / float(np.hypot(1.0, self.sigma_ratio))
+
+
+# ---------------------------------------------------------------------------
 # Study cells and contact jobs
 
 
@@ -415,15 +534,18 @@ class ContactJob:
     pressure_end: float
     accuracy: Accuracy = Accuracy()
     nondim_hardness: float | None = None
+    counter: CounterJob | None = None
 
     @classmethod
     def from_params(cls, params: dict) -> ContactJob:
+        counter = params.get("counter")
         return cls(surface=surface_cell_from_params(params["surface"]),
                    geometry=Geometry.from_params(params["geometry"]),
                    pressure_end=float(params["pressure_end"]),
                    accuracy=Accuracy(params["accuracy"],
                                      tuple(params["expected_error"].items()) or None),
-                   nondim_hardness=params.get("hardness"))
+                   nondim_hardness=params.get("hardness"),
+                   counter=None if counter is None else CounterJob.from_params(counter))
 
     def params(self) -> dict:
         """The job as passed to it and stored with its result (``hardness``: the cap)."""
@@ -433,6 +555,8 @@ class ContactJob:
                   "expected_error": self.accuracy.errors()}
         if self.nondim_hardness is not None:
             params["hardness"] = self.nondim_hardness
+        if self.counter is not None:
+            params["counter"] = self.counter.params()
         return params
 
     @property
@@ -446,7 +570,11 @@ class ContactJob:
         job (:func:`~roughcontact.contact.nondim.to_physical` allows 1e-5).
         """
         key = f"{self.surface.key}__{self.geometry.key}__end{self.pressure_end:g}"
-        return key if self.nondim_hardness is None else f"{key}__cap{self.nondim_hardness:.7g}"
+        if self.nondim_hardness is not None:
+            key = f"{key}__cap{self.nondim_hardness:.7g}"
+        if self.counter is not None:  # both bodies' parameters, hashed (names stay short)
+            key = f"{key}__cf{short_hash(self.counter.params(), 10)}"
+        return key
 
 
 @dataclass(frozen=True)
@@ -469,11 +597,12 @@ class StudyCell:
     hardness: float | None = None
     checked_hardness: tuple[float, ...] = ()
     hardness_threshold: float | None = None
+    counterface: Counterface | None = None
 
     @classmethod
     def from_params(cls, params: dict) -> StudyCell:
         cap, expected = params.get("cap_MPa"), params.get("expected_error")
-        threshold = params.get("hardness_threshold")
+        threshold, counter = params.get("hardness_threshold"), params.get("counterface")
         return cls(surface=surface_cell_from_params(params["surface"]),
                    geometry=Geometry.from_params(params["geometry"]),
                    sigma=float(params["sigma_um"]) * UM, E=float(params["E_MPa"]) * MPA,
@@ -482,7 +611,8 @@ class StudyCell:
                                      None if expected is None else tuple(expected.items())),
                    hardness=None if cap is None else float(cap) * MPA,
                    checked_hardness=from_unit(params.get("hardness_MPa") or (), MPA),
-                   hardness_threshold=None if threshold is None else float(threshold))
+                   hardness_threshold=None if threshold is None else float(threshold),
+                   counterface=None if counter is None else Counterface.from_params(counter))
 
     def params(self) -> dict:
         """The cell as the configuration writes it (sigma in um, E and pressures in MPa),
@@ -499,11 +629,23 @@ class StudyCell:
             params["hardness_threshold"] = self.hardness_threshold
         if self.hardness is not None:
             params["cap_MPa"] = in_unit(self.hardness, MPA)
+        if self.counterface is not None:
+            params["counterface"] = self.counterface.params()
         return params
+
+    @property
+    def height_scale(self) -> float:
+        """The unit of the job's heights [m]: ``sigma``, or with a rough counter surface
+        ``sqrt(sigma^2 + sigma2^2)``, the standard deviation of the sum of two
+        independent surfaces (the equivalent surface of Eq 17-18)."""
+        counter = self.counterface
+        if counter is None or counter.surface is None:
+            return self.sigma
+        return float(np.hypot(self.sigma, counter.sigma))
 
     def _nondim(self, pressure: float) -> float:
         return nondim_pressure(pressure, thickness=self.geometry.thickness, E=self.E,
-                               sigma=self.sigma)
+                               sigma=self.height_scale)
 
     @property
     def sweep_end(self) -> float:
@@ -521,7 +663,19 @@ class StudyCell:
         """The contact job that solves this cell."""
         return ContactJob(surface=self.surface, geometry=self.geometry,
                           pressure_end=self.sweep_end, accuracy=self.accuracy,
-                          nondim_hardness=self.nondim_hardness)
+                          nondim_hardness=self.nondim_hardness, counter=self.counter_job)
+
+    @property
+    def counter_job(self) -> CounterJob | None:
+        """The counter body in the job's form (None: a smooth rigid one)."""
+        c = self.counterface
+        if c is None:
+            return None
+        return CounterJob(surface=c.surface,
+                          sigma_ratio=0.0 if c.surface is None else c.sigma / self.sigma,
+                          geometry=c.geometry,
+                          modulus_ratio=0.0 if c.geometry is None else self.E / c.E,
+                          rigid_share=c.rigid_share)
 
     @property
     def contact_key(self) -> str:
@@ -531,10 +685,11 @@ class StudyCell:
     def label(self) -> str:
         """Short legend text of the cell."""
         cap = "" if self.hardness is None else f", capped at {in_unit(self.hardness, MPA):g} MPa"
+        counter = "" if self.counterface is None else f"; {self.counterface.label}"
         columns = self.columns()
         return (f"{self.surface.source_label}Sk {columns['skew']:g}, Ku {columns['kurt']:g}, "
                 f"b {columns['b_mm']:g} mm, {columns['size_mm']:g} mm, nu {columns['nu']:g}, "
-                f"{columns['mesh']} mesh, sigma {columns['sigma_um']:g} um{cap}")
+                f"{columns['mesh']} mesh, sigma {columns['sigma_um']:g} um{cap}{counter}")
 
     def columns(self) -> dict:
         """The cell's parameters as table columns for people (mm, um, MPa)."""
@@ -542,4 +697,7 @@ class StudyCell:
         return {"skew": s.skew, "kurt": s.kurt, "b_mm": in_unit(s.corr_length[0], MM),
                 "size_mm": in_unit(g.size[0], MM), "nu": g.nu, "mesh": g.mesh,
                 "thickness_mm": in_unit(g.thickness, MM), "sigma_um": in_unit(self.sigma, UM),
-                "E_MPa": in_unit(self.E, MPA)}
+                "E_MPa": in_unit(self.E, MPA),
+                **({} if self.counterface is None else
+                   {**self.counterface.columns(),
+                    "equivalent_sigma_um": in_unit(self.height_scale, UM)})}

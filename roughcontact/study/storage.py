@@ -95,6 +95,9 @@ PROFILE_ARRAYS = ("profile_ranks", "pressure_profile", "load_profile")
 INTERFACE_ARRAYS = ("spot_count", "mean_spot_area", "perimeter",
                     "corrected_real_area_fraction", "mean_gap", "spot_area_quantiles",
                     "gap_quantiles")
+#: Optional arrays of a contact file: of a pair of elastic bodies, the counter body's
+#: mean-plane deflection (m, k) (:mod:`roughcontact.contact.counterface`).
+COUNTER_ARRAYS = ("counter_deflection",)
 #: Scalar settings of NondimSweep, stored as ``sweep_<name>`` attributes.
 SWEEP_SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffness_tol",
                   "precision")
@@ -548,6 +551,9 @@ def contact_datasets(sweep: NondimSweep) -> dict:
             single = name.endswith("_quantiles")
             datasets[name] = np.asarray(getattr(sweep, name),
                                         dtype=np.float32 if single else None)
+    for name in COUNTER_ARRAYS:
+        if getattr(sweep, name) is not None:
+            datasets[name] = np.asarray(getattr(sweep, name))
     return datasets
 
 
@@ -590,7 +596,8 @@ def read_contact(path: str | os.PathLike, *,
             raise StoredFileError(f"{path}: no {', '.join(missing)} (written by an older "
                                   f"version of roughcontact); {rebuild(path)}", path)
         arrays = {name: f[name][...]
-                  for name in CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS if name in f}
+                  for name in CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS + COUNTER_ARRAYS
+                  if name in f}
     verify(path, attrs, arrays_sha256(arrays))
     if job is not None:
         count = job["surface"]["count"]

@@ -22,11 +22,14 @@ from roughcontact.study.config import ContactSettings, as_pair, from_unit, grid_
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.records import (
     Accuracy,
+    Counterface,
     GeneratedCell,
     Generator,
     Geometry,
+    InfluenceModel,
     MeasuredCell,
     StudyCell,
+    SurfaceCell,
 )
 from roughcontact.study.sources import MeasurementImport, spectrum_from_entry
 from roughcontact.units import MM, MPA, UM
@@ -144,6 +147,80 @@ def study_surfaces(config: dict, study: dict) -> list:
     return [measured, twin]
 
 
+# ---------------------------------------------------------------------------
+# The counter body (Eq 17-18): the ``counterface`` section and a study's ``counterface``
+
+
+def counterface_entries(config: dict, study: dict) -> list[dict]:
+    """A study's counter bodies as configured: its ``counterface`` (one entry, or a list:
+    an axis), each entry's ``surface`` and ``body`` over the ``counterface`` section's;
+    the section's own (by default a smooth rigid flat) when the study names none."""
+    section = config["counterface"]
+    entries = as_list(study.get("counterface") or {})
+    return [{"surface": entry.get("surface", section["surface"]),
+             "body": entry.get("body", section["body"])} for entry in entries]
+
+
+def counter_surface(config: dict, entry, first: SurfaceCell) -> tuple[SurfaceCell | None, float]:
+    """The counter surface cell of a ``counterface.surface`` entry on the first cell's
+    grid and plan size, and its sigma [m]: ``smooth`` (None, 0); generated (the
+    ``surfaces`` section's ACF, periodicity and method, seed stream ``counter``, one
+    counter surface per first surface; Sk, Ku by default (0, 3), b by default the
+    first cell's); or ``measured`` (its file; sigma by default the measured one)."""
+    if entry == "smooth":
+        return None, 0.0
+    if "measured" in entry:
+        cell = MeasuredCell.from_source(MeasurementImport.from_entry(entry["measured"]))
+        sigma = entry.get("sigma_um")
+        return cell, cell.sigma if sigma is None else float(sigma) * UM
+    b = entry.get("b_mm")
+    cell = generated_cell(config["surfaces"], None, skew=entry.get("skew", 0.0),
+                          kurt=entry.get("kurt", 3.0),
+                          corr_length=first.corr_length if b is None else from_unit(as_pair(b)),
+                          count=first.count, size=first.size, grid=first.grid)
+    return dataclasses.replace(cell, stream="counter"), float(entry["sigma_um"]) * UM
+
+
+def counter_body(config: dict, entry, first: Geometry) -> tuple[Geometry | None, float | None]:
+    """The counter body of a ``counterface.body`` entry on the first body's grid and plan
+    size, and its E [Pa]: ``rigid`` (None, None); a ``halfspace`` (Love's, of its nu);
+    or a ``block`` (its thickness, base, mesh and operator, each by default the
+    ``body`` section's)."""
+    if entry == "rigid":
+        return None, None
+    body = config["body"]
+    params = {"nu": entry.get("nu", body["nu"]), "size_mm": [s / MM for s in first.size],
+              "grid": list(first.grid), "base": entry.get("base", body["base"]),
+              "mesh": entry.get("mesh", body["mesh"]),
+              "thickness_mm": entry.get("thickness_mm", body["thickness_mm"])}
+    if entry["kind"] == "halfspace":
+        # Love's half-space: the thickness is only the reference length of the scaling
+        params.update(operator=InfluenceModel.HALFSPACE.value, base="clamped", mesh="paper",
+                      thickness_mm=first.thickness / MM)
+    else:
+        params["operator"] = entry.get("operator", InfluenceModel.DENSE.value)
+    return Geometry.from_params(params), float(entry["E_MPa"]) * MPA
+
+
+def with_counterfaces(config: dict, study: dict, cells: list[StudyCell]) -> list[StudyCell]:
+    """Each cell once per counter body of the study (:func:`counterface_entries`); a
+    smooth rigid counter body leaves a cell as it is (no ``counterface``: today's
+    jobs and numbers)."""
+    rigid_share = float(config["counterface"]["rigid_share"])
+    out = []
+    for entry in counterface_entries(config, study):
+        if entry["surface"] == "smooth" and entry["body"] == "rigid":
+            out.extend(cells)
+            continue
+        for cell in cells:
+            surface, sigma = counter_surface(config, entry["surface"], cell.surface)
+            geometry, E = counter_body(config, entry["body"], cell.geometry)
+            counter = Counterface(surface=surface, sigma=sigma, geometry=geometry, E=E,
+                                  rigid_share=rigid_share)
+            out.append(dataclasses.replace(cell, counterface=counter))
+    return out
+
+
 def _generated_cells(config: dict, study: dict, body: Geometry, common: dict) -> list[StudyCell]:
     """The product of a study's axes, in the order meshes, nu, size, b, moments, sigma, E."""
     surfaces = config["surfaces"]
@@ -238,5 +315,5 @@ def contact_cells(config: dict, name: str) -> tuple[StudyCell, ...]:
     common = {"pressure_range": from_unit(study["pressure_MPa"], MPA),
               "accuracy": study_accuracy(config)}
     build = _generated_cells if study.get("surface") is None else _measured_cells
-    cells = build(config, study, body_geometry(config), common)
+    cells = with_counterfaces(config, study, build(config, study, body_geometry(config), common))
     return tuple(with_hardness(cells, study, float(config["body"]["hardness_threshold"])))
