@@ -134,7 +134,7 @@ def study_plan(config: dict) -> StudyPlan:
     surfaces |= {job.counter.surface.key: job.counter.surface for job in jobs.values()
                  if job.counter is not None and job.counter.surface is not None}
     _raise("Counter bodies that do not fit their surfaces",
-           check_counterfaces(cell for name in studies for cell in cells[name]))
+           check_counterfaces((cell for name in studies for cell in cells[name]), build))
     # by the figure or sweep whose b_mm they have (Fig 5 draws Fig 4's)
     windows = {name: [c.surface for c in study_cells] for name, study_cells in by_source.items()}
     windows |= {name: figure_cells[name] for name in SURFACE_FIGURES

@@ -11,6 +11,7 @@ import dataclasses
 import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
+from roughcontact.study.block_checks import block_problems
 from roughcontact.study.config import BuildSettings, in_unit, in_units
 from roughcontact.study.measured_checks import check_measured_plausible
 from roughcontact.study.records import (
@@ -353,14 +354,36 @@ def check_windows(config: dict, cells) -> list[str]:
     return problems
 
 
-def check_counterfaces(cells) -> list[str]:
-    """Messages for the study cells whose counter surface is not sampled like the first
-    (:mod:`roughcontact.contact.counterface` adds the two height maps element by
-    element): a measured counter surface on another grid or plan size, once per
-    pair, with the import keys that fix it."""
+def _counter_body_problems(geometry: Geometry, build: BuildSettings) -> list[str]:
+    """Why a counter body cannot be built (none: it can)."""
+    if geometry.operator is InfluenceModel.HYBRID and geometry.mesh not in HYBRID_MESHES:
+        return [f"operator hybrid needs an accurate coarse model: mesh one of "
+                f"{list(HYBRID_MESHES)}, not {geometry.mesh!r} (or operator: dense)"]
+    found = block_problems(geometry, build)
+    if not found:
+        return []
+    return [f"{'; '.join(found)}; give it mesh: refined, or a thickness_mm nearer its "
+            f"plan size ({in_unit(max(geometry.size), MM):g} mm)"]
+
+
+def check_counterfaces(cells, build: BuildSettings) -> list[str]:
+    """Messages for the study cells whose counter body cannot be used: a counter block
+    that cannot be solved reliably (:func:`~roughcontact.study.block_checks.block_problems`)
+    or a hybrid one on an inaccurate mesh, and a counter surface not sampled like the
+    first (:mod:`roughcontact.contact.counterface` adds the two height maps element by
+    element): a measured one on another grid or plan size, with the import keys that
+    fix it. Once per counter body or pair."""
     problems = {}
     for cell in cells:
         counter = cell.counterface
+        if counter is not None and counter.geometry is not None:
+            geometry = counter.geometry
+            for text in _counter_body_problems(geometry, build):
+                (lx, ly), (nx, ny) = in_units(geometry.size), geometry.grid
+                problems[geometry.key] = (
+                    f"counterface.body (a {in_unit(geometry.thickness, MM):g} mm "
+                    f"{geometry.mesh} block under {lx:g} x {ly:g} mm, {nx} x {ny} "
+                    f"elements) cannot be built: {text}")
         if counter is None or counter.surface is None:
             continue
         first, other = cell.surface, counter.surface

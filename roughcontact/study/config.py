@@ -120,7 +120,7 @@ _BOUNDS = {"minimum": "at least", "maximum": "at most", "exclusiveMinimum": "abo
 def _plain(error) -> str:
     """One schema violation in plain words (the value found and what is expected)."""
     value, rule, kind = error.instance, error.validator_value, error.validator
-    if "message" in error.schema and kind == "not":
+    if "message" in error.schema and kind in ("not", "const", "required"):
         return " ".join(error.schema["message"].split())
     if kind == "required":
         key = error.message.split("'")[1]

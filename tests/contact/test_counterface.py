@@ -141,3 +141,65 @@ def test_two_finite_blocks_with_nu0_give_eq44_with_the_combined_modulus():
     u1, u2 = counterface.body_displacements(*blocks, result.pressure)
     assert u1.mean() + u2.mean() == pytest.approx(1e6 * combined, rel=5e-3)  # Eq 44
     assert u1.mean() / u2.mean() == pytest.approx((L1 / E1) / (L2 / E2), rel=1e-2)
+
+
+def _matrix_free(op):
+    return MatrixFreeInfluence(op, op.element_area, op.diagonal(), op.grid)
+
+
+@pytest.mark.parametrize("kind", ["dense", "matrix-free"])
+def test_the_deflection_weights_give_the_mean_displacement(kind):
+    op = love(12, 70e9, 0.33)
+    body = op if kind == "dense" else _matrix_free(op)
+    pressure = np.random.default_rng(3).uniform(0.0, 1e6, size=(5, op.shape[0]))
+    weights = counterface.deflection_weights(body)
+    np.testing.assert_allclose(pressure @ weights, (pressure @ op.matrix.T).mean(axis=1),
+                               rtol=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["dense", "matrix-free"])
+def test_a_scaled_body_is_the_body_times_its_factor(kind):
+    op = love(10, 70e9, 0.33)
+    body = op if kind == "dense" else _matrix_free(op)
+    half = counterface.scaled(body, 0.5)
+    p = np.random.default_rng(4).uniform(0.0, 1e6, op.shape[0])
+    np.testing.assert_allclose(half.matvec(p), 0.5 * op.matrix @ p, rtol=1e-12)
+    np.testing.assert_allclose(half.diagonal(), 0.5 * op.matrix.diagonal(), rtol=1e-12)
+    with pytest.raises(ValueError, match="factor"):
+        counterface.scaled(body, 0.0)
+
+
+def test_the_compliance_share_of_two_half_spaces_is_that_of_their_moduli():
+    # Love's coefficients scale with (1 - nu^2) / E: the share is exact whatever the
+    # pressure, on the mean plane and on the diagonal alike
+    E1, E2, nu = 100e9, 300e9, 0.3
+    share = counterface.compliance_share(love(12, E1, nu), love(12, E2, nu))
+    assert share == pytest.approx((1 / E2) / (1 / E1 + 1 / E2), rel=1e-12)
+    twin = counterface.compliance_share(love(12, E1, nu), love(12, E1, nu))
+    assert twin == pytest.approx(0.5, rel=1e-12)
+
+
+def test_a_sweep_records_the_counter_body_deflection():
+    """The sweep's counter_deflection equals mean(C2 p) recomputed from its pressure
+    fields, and the first body's is what remains of the mean-plane deflection."""
+    from roughcontact.contact import sweep
+
+    n = 16
+    first, second = love(n, 5e9, 0.3), love(n, 20e9, 0.25)
+    pair = counterface.equivalent_operator(first, second)
+    rng = np.random.default_rng(5)
+    gaps = 1e-6 * rng.standard_normal((3, n, n))
+    gaps -= gaps.min(axis=(1, 2), keepdims=True)
+    grid = InterfaceGrid((SIZE / n, SIZE / n),
+                         counter_weights=counterface.deflection_weights(second))
+    result = sweep(pair, gaps, np.linspace(0.3e-6, 2e-6, 4), method="cg", tol=1e-10,
+                   return_fields=True, interface=grid)
+    fields = result.pressure.reshape(3, 4, n * n)
+    u2 = (fields @ second.matrix.T).mean(axis=-1)
+    u1 = (fields @ first.matrix.T).mean(axis=-1)
+    np.testing.assert_allclose(result.counter_deflection, u2, rtol=1e-10)
+    np.testing.assert_allclose(result.mean_plane_deflection - result.counter_deflection, u1,
+                               rtol=1e-9)
+    # the stiffer counter body deflects less: its share is between 0 and a half
+    share = result.counter_deflection / result.mean_plane_deflection
+    assert ((share > 0.0) & (share < 0.5)).all()

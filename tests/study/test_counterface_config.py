@@ -1,0 +1,159 @@
+"""The counter body of a study (Eq 17-18): planned from the config, refused when unusable.
+
+A smooth rigid counter body is no counter body at all (today's jobs and keys); a
+generated counter surface is another realisation than the surfaces it meets; a
+measured counter surface on another grid, a half-space with a block's keys and a
+counter block that cannot be built are refused before any job, with the keys that
+fix them (each followed here); a pair of identical bodies sums to twice the
+compliance, and a much stiffer counter body is treated as rigid.
+"""
+
+import copy
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from roughcontact.contact.cell import BULK_FACTOR
+from roughcontact.elasticity.protocol import DenseInfluence
+from roughcontact.study.cells import study_plan
+from roughcontact.study.checks import ConfigProblems
+from roughcontact.study.config import ConfigError, validated
+from roughcontact.study.jobs import contact_problem
+from roughcontact.study.records import ContactJob, StudyCell
+from roughcontact.surfaces.synthetic import derive_seeds
+
+SWEEP = {"sigma_um": 24.5, "b_mm": 0.5, "pressure_MPa": [0.1, 3.0], "count": 3}
+BASE = {"study_seed": 3, "surfaces": {"grid": [16, 16], "size_mm": [2.4, 2.4]},
+        "figures": {}, "reports": {}}
+
+
+def config(**sweep) -> dict:
+    return validated({**copy.deepcopy(BASE), "sweeps": {"pair": {**SWEEP, **sweep}}})
+
+
+def test_a_smooth_rigid_counter_body_plans_todays_jobs():
+    today = study_plan(config())
+    explicit = study_plan(config(counterface={"surface": "smooth", "body": "rigid"}))
+    assert list(explicit.jobs) == list(today.jobs)
+    assert all(cell.counterface is None for cell in explicit.cells["pair"])
+    assert all("__cf" not in key for key in today.jobs)
+
+
+def test_a_counter_surface_is_another_realisation_of_its_statistics():
+    plan = study_plan(config(counterface={"surface": {"sigma_um": 10.0},
+                                          "body": {"kind": "halfspace", "E_MPa": 2000.0}}))
+    (cell,) = plan.cells["pair"]
+    first, counter = cell.surface, cell.counterface.surface
+    assert (counter.skew, counter.kurt, counter.corr_length) == (
+        first.skew, first.kurt, first.corr_length)
+    assert counter.statistics_key != first.statistics_key
+    seeds = [derive_seeds(3, c.statistics_key, 3) for c in (first, counter)]
+    assert not set(seeds[0]) & set(seeds[1])
+    assert counter.key in plan.surfaces and first.key in plan.surfaces
+    assert cell.height_scale == pytest.approx(np.hypot(24.5e-6, 10e-6), rel=1e-15)
+    job = cell.job
+    assert job.counter.sigma_ratio == pytest.approx(10.0 / 24.5)
+    assert job.counter.modulus_ratio == pytest.approx(511.0 / 2000.0)
+    assert ContactJob.from_params(job.params()) == job
+    assert StudyCell.from_params(cell.params()) == cell
+
+
+def test_a_list_of_counter_bodies_is_an_axis():
+    plan = study_plan(config(counterface=[
+        {"body": {"kind": "block", "E_MPa": 511.0}},
+        {"body": {"kind": "block", "E_MPa": 1022.0}},
+        {"body": "rigid"}]))
+    cells = plan.cells["pair"]
+    assert [c.counterface and c.counterface.E for c in cells] == [511e6, 1022e6, None]
+    assert len({c.contact_key for c in cells}) == 3
+
+
+@pytest.fixture(scope="module")
+def measured(tmp_path_factory):
+    """A 24 x 24 map over 2.4 mm: the study's plan size on another grid."""
+    path = tmp_path_factory.mktemp("counter") / "disc.npy"
+    rng = np.random.default_rng(8)
+    np.save(path, ndimage.gaussian_filter(rng.standard_normal((24, 24)), 1.5) * 2.0)
+    return path
+
+
+def measured_entry(path, **options):
+    return {"surface": {"measured": {"file": str(path), "format": "npy",
+                                     "height_unit": "um", "spacing_mm": 0.1, **options}}}
+
+
+def test_a_measured_counter_surface_on_another_grid_is_refused_with_its_fix(measured):
+    with pytest.raises(ConfigProblems) as raised:
+        study_plan(config(counterface=measured_entry(measured)))
+    message = str(raised.value)
+    assert "disc.npy: 24 x 24 points over 2.4 mm x 2.4 mm" in message
+    assert "16 x 16 over 2.4 mm x 2.4 mm" in message
+    assert "resample_grid: [16, 16]" in message
+    # the advice, followed
+    plan = study_plan(config(counterface=measured_entry(measured, resample_grid=[16, 16])))
+    (cell,) = plan.cells["pair"]
+    assert cell.counterface.surface.grid == (16, 16)
+    assert cell.counterface.sigma == pytest.approx(cell.counterface.surface.sigma)
+
+
+def test_a_measured_counter_surface_of_another_size_is_told_to_crop(measured):
+    with pytest.raises(ConfigProblems, match=r"crop_mm: \[0, 0, 1\.2, 1\.2\]"):
+        validated_plan = config(counterface=measured_entry(measured, resample_grid=[8, 8]))
+        validated_plan["surfaces"]["size_mm"] = [1.2, 1.2]
+        validated_plan["surfaces"]["grid"] = [8, 8]
+        study_plan(validated_plan)
+    plan = config(counterface=measured_entry(measured, crop_mm=[0, 0, 1.2, 1.2],
+                                             resample_grid=[8, 8]))
+    plan["surfaces"]["size_mm"] = [1.2, 1.2]
+    plan["surfaces"]["grid"] = [8, 8]
+    (cell,) = study_plan(plan).cells["pair"]
+    assert cell.counterface.surface.grid == (8, 8)
+
+
+def test_counter_entries_that_mix_kinds_are_refused_in_plain_words(measured):
+    with pytest.raises(ConfigError, match="a half-space counter body has only E_MPa and nu"):
+        config(counterface={"body": {"kind": "halfspace", "E_MPa": 1e3, "thickness_mm": 5}})
+    with pytest.raises(ConfigError, match="counter body is rigid, {kind: block"):
+        config(counterface={"body": "elastic"})
+    with pytest.raises(ConfigError, match="generated counter surface needs its sigma_um"):
+        config(counterface={"surface": {"skew": 0.5}})
+    with pytest.raises(ConfigError, match="measured counter surface takes its statistics"):
+        config(counterface={"surface": {**measured_entry(measured)["surface"], "kurt": 4}})
+
+
+def test_a_counter_body_that_cannot_be_built_is_refused_with_its_fix():
+    hybrid = {"kind": "block", "E_MPa": 511.0, "operator": "hybrid", "mesh": "paper"}
+    with pytest.raises(ConfigProblems, match="counterface.body .*mesh one of"):
+        study_plan(config(counterface={"body": hybrid}))
+    study_plan(config(counterface={"body": {**hybrid, "mesh": "refined"}}))  # followed
+    slender = {"kind": "block", "E_MPa": 511.0, "thickness_mm": 200.0}
+    with pytest.raises(ConfigProblems, match="counterface.body .*cannot be built"):
+        study_plan(config(counterface={"body": slender}))
+
+
+def _unit(n):
+    rng = np.random.default_rng(1)
+    a = rng.uniform(0.0, 0.1, (n, n))
+    return DenseInfluence(np.eye(n) + a @ a.T / n, 0.15e-3**2, (16, 16))
+
+
+def test_identical_bodies_double_the_compliance_and_a_stiff_one_is_rigid():
+    plan = study_plan(config(counterface=[{"body": {"kind": "block", "E_MPa": 511.0}},
+                                          {"body": {"kind": "block", "E_MPa": 511.0e3}}]))
+    twin, stiff = (cell.job for cell in plan.cells["pair"])
+    n = 16 * 16
+    heights = np.random.default_rng(2).standard_normal((3, 16, 16))
+    unit = _unit(n)
+    problem = contact_problem(twin, heights, unit, None, unit)
+    np.testing.assert_allclose(problem.unit.matrix, 2 * unit.matrix, rtol=1e-15)
+    assert problem.attrs["counter_compliance_share"] == pytest.approx(0.5)
+    assert problem.attrs["counter_treated_as_rigid"] is False
+    assert problem.bulk_factor == pytest.approx(2 * BULK_FACTOR)
+    np.testing.assert_allclose(problem.interface.counter_weights,
+                               unit.matrix.sum(axis=0) / n / twin.geometry.thickness, rtol=1e-14)
+    rigid = contact_problem(stiff, heights, unit, None, unit)
+    assert rigid.attrs["counter_compliance_share"] == pytest.approx(1 / 1001)
+    assert rigid.attrs["counter_treated_as_rigid"] is True
+    assert rigid.unit is unit and rigid.heights is heights
+    assert rigid.interface.counter_weights is None
