@@ -388,7 +388,9 @@ def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
     (:mod:`roughcontact.contact.counterface`): heights ``(z1 + r z2) / sqrt(1 + r^2)``
     (r = sigma2 / sigma1), the operator ``E1 C1 + (E1 / E2) E2 C2``, the interface grid
     with the counter body's deflection weights and a bulk factor raised by the
-    counter body's compliance. A counter body whose share of the compliance
+    counter body's compliance. A matrix-free counter body that meets a dense first
+    body is made dense (:func:`~roughcontact.contact.counterface.densified`). A
+    counter body whose share of the compliance
     (:func:`~roughcontact.contact.counterface.compliance_share`) is below its
     ``rigid_share`` is treated as rigid, and the choice logged."""
     counter = job.counter
@@ -408,6 +410,10 @@ def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
                  1.0 / counter.height_factor, attrs["equivalent_sigma_over_scale"],
                  attrs["equivalent_skew"], attrs["equivalent_kurt"])
     if counter.geometry is not None:
+        if getattr(unit, "matrix", None) is not None or isinstance(unit, np.ndarray):
+            # a dense first body: the pair is one dense matrix, solved by pivoting (the
+            # memory is the first body's again; CG on the sum is several times slower)
+            counter_unit = counterface.densified(counter_unit)
         second = counterface.scaled(counter_unit, counter.modulus_ratio)
         share = counterface.compliance_share(unit, second)
         rigid = share < counter.rigid_share

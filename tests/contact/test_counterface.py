@@ -203,3 +203,11 @@ def test_a_sweep_records_the_counter_body_deflection():
     # the stiffer counter body deflects less: its share is between 0 and a half
     share = result.counter_deflection / result.mean_plane_deflection
     assert ((share > 0.0) & (share < 0.5)).all()
+
+
+def test_a_densified_body_is_its_matrix():
+    op = love(12, 70e9, 0.33)
+    dense = counterface.densified(_matrix_free(op))
+    np.testing.assert_allclose(dense.matrix, op.matrix, rtol=1e-14, atol=0)
+    assert dense.grid == op.grid and dense.element_area == op.element_area
+    assert counterface.densified(op) is op
