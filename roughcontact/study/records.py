@@ -424,7 +424,7 @@ class Counterface:
     sigma: float = 0.0
     geometry: Geometry | None = None
     E: float | None = None
-    rigid_share: float = 0.01
+    rigid_share: float = 0.001
 
     @classmethod
     def from_params(cls, params: dict) -> Counterface:

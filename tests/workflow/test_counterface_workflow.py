@@ -33,7 +33,7 @@ CONFIG = {
         "pair": {**SWEEP, "counterface": [
             {"surface": {"sigma_um": 12.0}, "body": {"kind": "block", "E_MPa": 511.0}},
             {"body": {"kind": "block", "E_MPa": 511.0}},
-            {"body": {"kind": "halfspace", "E_MPa": 511.0e3, "nu": 0.3}},
+            {"body": {"kind": "halfspace", "E_MPa": 511.0e4, "nu": 0.3}},
             {"body": "rigid"},
         ]},
         "half": {**SWEEP, "E_MPa": 255.5},
@@ -74,7 +74,7 @@ def test_a_far_stiffer_counter_body_is_treated_as_rigid_and_logged(run):
     stiff, flat = cells[2], cells[3]
     summary = meta["mean_plane_modulus"][2]
     assert summary["counter_treated_as_rigid"] is True
-    assert summary["counter_compliance_share"] < 0.01
+    assert summary["counter_compliance_share"] < 0.001
     assert stiff["counter_share_mean"].isna().all()  # not modelled: not reported
     pd.testing.assert_frame_equal(stiff[COLUMNS], flat[COLUMNS])
     logs = "".join(p.read_text() for p in (results / "logs" / "contact").glob("*cf*.log"))
