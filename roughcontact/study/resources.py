@@ -174,11 +174,14 @@ def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSett
     """
     solves = job.surface.count * settings.steps
     reach = max(1.0, job.pressure_end / _MODEL["contact"]["reference_reach"])
+    # a compliant counter body: more contact at the same pressure (cost_model.yaml)
+    pair = (1.0 if job.counter is None or job.counter.geometry is None
+            else _MODEL["contact"]["counter_body_factor"])
     grid = job.geometry.grid
     if not _dense(job.geometry, build):
         return (solves * matrix_free_solve_seconds(grid) * tolerance_factor(settings)
-                * method_factor(settings) * reach)
-    return solves * dense_solve_seconds(grid, settings) * reach
+                * method_factor(settings) * reach * pair)
+    return solves * dense_solve_seconds(grid, settings) * reach * pair
 
 
 def contact_runtime(job: ContactJob, settings: ContactSettings, build: BuildSettings,
@@ -308,16 +311,24 @@ def contact_mem_mb(job: ContactJob, build: BuildSettings) -> int:
     (10 (count, n) arrays) and 400 MB of interpreter and libraries (measured:
     415 MB on 60 x 60, 167 MB on 30 x 30). Matrix-free model: the coarse
     correction (64^2 x 64^2 doubles at most) and FFT work arrays of the batch
-    (30 (count, n) arrays: 4 padded copies per surface).
+    (30 (count, n) arrays: 4 padded copies per surface). A compliant counter body
+    adds its model and, on a dense first body, the pair's matrix (2 n^2 doubles),
+    and its surfaces (count, n).
     """
     fit = _MODEL["contact"]
     nx, ny = job.geometry.grid
     n = nx * ny
     count = job.surface.count
+    counter = job.counter
+    extra = 0.0 if counter is None or counter.surface is None else DOUBLE_BYTES * count * n
     if not _dense(job.geometry, build):
-        return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2
+        if counter is not None and counter.geometry is not None:
+            extra += DOUBLE_BYTES * (COARSE_MAX**2) ** 2
+        return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2 + extra
                    + fit["matrix_free_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
-    return int(fit["memory_base_mb"] + (fit["dense_matrices"] * DOUBLE_BYTES * n**2
+    if counter is not None and counter.geometry is not None:
+        extra += 2 * DOUBLE_BYTES * n**2
+    return int(fit["memory_base_mb"] + (fit["dense_matrices"] * DOUBLE_BYTES * n**2 + extra
                + fit["dense_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
 
 
