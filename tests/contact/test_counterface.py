@@ -211,3 +211,26 @@ def test_a_densified_body_is_its_matrix():
     np.testing.assert_allclose(dense.matrix, op.matrix, rtol=1e-14, atol=0)
     assert dense.grid == op.grid and dense.element_area == op.element_area
     assert counterface.densified(op) is op
+
+
+def test_a_matrix_free_pair_sweeps_by_cg_with_each_bodys_share():
+    """Two matrix-free half-space operators (E2 = 2 E1) sum without a dense matrix; the
+    non-dimensional sweep records the counter body's share, 1/3 at every step."""
+    from roughcontact.contact import nondim
+    from roughcontact.elasticity import operators
+
+    n, size, thickness = 16, (2.4e-3, 2.4e-3), 10e-3
+    first = operators.halfspace_operator((n, n), size, 0.3)
+    second = counterface.scaled(operators.halfspace_operator((n, n), size, 0.3), 0.5)
+    pair = counterface.equivalent_operator(first, second)
+    assert isinstance(pair, counterface.SumInfluence)
+    grid = InterfaceGrid((size[0] / n, size[1] / n),
+                         counter_weights=counterface.deflection_weights(second) / thickness)
+    heights = np.random.default_rng(1).standard_normal((2, n, n))
+    result = nondim.solve_cell(pair, heights, thickness=thickness,
+                               element_area=(size[0] / n) ** 2,
+                               approaches=np.geomspace(0.05, 3.0, 6), method="auto",
+                               interface=grid)
+    assert result.method == "cg" and result.converged.all()
+    np.testing.assert_allclose(result.counter_deflection / result.mean_plane_deflection,
+                               1 / 3, rtol=1e-6)
