@@ -9,6 +9,7 @@ compliance, and a much stiffer counter body is treated as rigid.
 """
 
 import copy
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -157,3 +158,18 @@ def test_identical_bodies_double_the_compliance_and_a_stiff_one_is_rigid():
     assert rigid.attrs["counter_treated_as_rigid"] is True
     assert rigid.unit is unit and rigid.heights is heights
     assert rigid.interface.counter_weights is None
+
+
+def test_the_two_bodies_config_plans_a_pair_beside_each_rigid_flat():
+    import yaml
+
+    root = Path(__file__).resolve().parents[2]
+    raw = yaml.safe_load((root / "config" / "two_bodies.yaml").read_text())
+    plan = study_plan(validated(raw))
+    for name in ("pad_on_disc", "steel_plates"):
+        pair, flat = plan.cells[name]
+        assert flat.counterface is None and pair.counterface.geometry is not None
+        assert pair.surface == flat.surface  # the same surfaces, against each body
+    kinds = {c.counterface.geometry.operator.value for n in plan.studies
+             for c in plan.cells[n] if c.counterface is not None}
+    assert kinds == {"halfspace", "dense"}
