@@ -54,6 +54,7 @@ wildcard_constraints:
     cell="|".join(re.escape(k) for k in SURFACE_CELLS) or "__none__",
     fig="|".join(FIGURES) or "__none__",
     geometry="|".join(re.escape(k) for k in GEOMETRIES) or "__none__",
+    pair="|".join(re.escape(k) for k in PLAN.pairs) or "__none__",
     job="|".join(re.escape(k) for k in CONTACT_JOBS) or "__none__",
     study="|".join(AGGREGATES) or "__none__",
 
@@ -222,7 +223,9 @@ def contact_job_files(job):
     counter = job.counter
     if counter is not None and counter.surface is not None:
         inputs["counter_surfaces"] = f"results/surfaces/{counter.surface.key}.h5"
-    if counter is not None and counter.geometry is not None:
+    if job.pair is not None:  # a dense first body: the pair summed once
+        inputs["counter_influence"] = f"results/influence/pairs/{job.pair.key}.h5"
+    elif counter is not None and counter.geometry is not None:
         inputs["counter_influence"] = f"results/influence/{counter.geometry.key}.h5"
     return inputs
 
@@ -333,6 +336,14 @@ def get_influence_priority(wildcards):
     """
     geometry = GEOMETRIES[wildcards.geometry]
     return EARLY_PRIORITY + 1 + resources.influence_seconds(geometry, PLAN.build)
+
+
+def get_pair_mem_mb(wildcards):
+    return resources.pair_mem_mb(PLAN.pairs[wildcards.pair])
+
+
+def get_pair_runtime(wildcards, attempt):
+    return resources.pair_runtime(PLAN.pairs[wildcards.pair], attempt)
 
 
 def get_influence_mem_mb(wildcards):

@@ -50,3 +50,27 @@ checkpoint influence_choice:
         planned=get_choice_planned,
     script:
         "../scripts/choose_influence.py"
+
+
+# Two bodies (Eq 17-18) on a dense first body: the two influence models summed once per
+# pair (and modulus ratio), shared by every contact job on it; a counter body below
+# counterface.rigid_share of the compliance is treated as rigid (no matrix written).
+rule pair_influence:
+    input:
+        first=lambda wildcards: f"results/influence/{PLAN.pairs[wildcards.pair].first.key}.h5",
+        second=lambda wildcards: f"results/influence/{PLAN.pairs[wildcards.pair].second.key}.h5",
+    output:
+        "results/influence/pairs/{pair}.h5",
+    log:
+        "results/logs/influence/pairs/{pair}.log",
+    benchmark:
+        "results/benchmarks/rules/pair_influence/{pair}.tsv"
+    priority: EARLY_PRIORITY
+    threads: 1
+    resources:
+        mem_mb=get_pair_mem_mb,
+        runtime=get_pair_runtime,
+    params:
+        pair=lambda wildcards: PLAN.pairs[wildcards.pair].params(),
+    script:
+        "../scripts/build_pair.py"

@@ -346,7 +346,11 @@ def _job_files(root: Path, key: str, job: dict) -> dict:
     if counter.get("surface_key") is not None:
         files["counter_surfaces"] = (root / "results" / "surfaces"
                                      / f"{counter['surface_key']}.h5")
-    if counter.get("geometry_key") is not None:
+    pair = ContactJob.from_params(job).pair if counter else None
+    if pair is not None:  # a dense first body: the pair's file
+        files["counter_influence"] = (root / "results" / "influence" / "pairs"
+                                      / f"{pair.key}.h5")
+    elif counter.get("geometry_key") is not None:
         files["counter_influence"] = (root / "results" / "influence"
                                       / f"{counter['geometry_key']}.h5")
     return files
@@ -367,11 +371,14 @@ def check_job_files(jobs: dict[str, dict], root: str | Path = ".",
     for key, job in jobs.items():
         files = _job_files(Path(root), key, job)
         counter = job.get("counter") or {}
+        pair = ContactJob.from_params(job).pair if counter else None
         expected = {"surfaces": {"cell": job["surface"], "study_seed": study_seed},
                     "influence": {"geometry": job["geometry"]}, "contact": {"job": job},
                     "counter_surfaces": {"cell": counter.get("surface"),
                                          "study_seed": study_seed},
-                    "counter_influence": {"geometry": counter.get("geometry")}}
+                    # a pair's file (a dense first body), or the counter body's own
+                    "counter_influence": {"geometry": counter.get("geometry") if pair is None
+                                          else pair.params()}}
         for kind, path in files.items():
             if path in checked:
                 continue
@@ -422,10 +429,10 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
         unit = certified_influence(read_influence(files["influence"],
                                                   geometry=job["geometry"])[0],
                                    files["influence"], record.geometry)
-        counter_surfaces, counter_unit, _ = read_counter(
-            record, files.get("counter_surfaces"), files.get("counter_influence"), study_seed)
-        problem = contact_problem(record, surfaces["heights"], unit, counter_surfaces,
-                                  counter_unit)
+        counter_surfaces, pair, _ = read_counter(
+            record, unit, files.get("counter_surfaces"), files.get("counter_influence"),
+            study_seed)
+        problem = contact_problem(record, surfaces["heights"], unit, counter_surfaces, pair)
         start = time.perf_counter()
         again = sweep_cell(
             problem.unit, problem.heights, Geometry.from_params(job["geometry"]).block(),

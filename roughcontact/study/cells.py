@@ -32,6 +32,7 @@ from roughcontact.study.records import (
     ContactJob,
     Geometry,
     InfluenceModel,
+    PairGeometry,
     StudyCell,
     SurfaceCell,
 )
@@ -80,6 +81,9 @@ class StudyPlan:
     ``surfaces_from``: surface cell key -> the key of the cell whose file its
     surfaces are taken from (the largest cell of the same statistics,
     :func:`surfaces_from`); a cell not listed generates or imports its own.
+
+    ``pairs``: the pairs of influence models summed once for the jobs with a
+    compliant counter body on a dense first body, by key.
     """
 
     figures: tuple[str, ...]
@@ -96,6 +100,7 @@ class StudyPlan:
     choices: Mapping[str, Geometry] = dataclasses.field(default_factory=dict)
     alternatives: frozenset[str] = frozenset()
     surfaces_from: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    pairs: Mapping[str, PairGeometry] = dataclasses.field(default_factory=dict)
 
 
 def _raise(title: str, problems: list[str]) -> None:
@@ -149,15 +154,18 @@ def study_plan(config: dict) -> StudyPlan:
     planned = {g.candidates(build.max_bytes)[0].key for g in asked.values()}
     _raise("Influence models that do not fit body.max_memory_gb",
            check_memory(geometries, build))
+    candidates = candidate_jobs(jobs, build)
     return StudyPlan(figures=figures, studies=studies,
                      aggregates=tuple(sorted(set(sources.values()))), cells=cells,
-                     jobs=candidate_jobs(jobs, build), surfaces=surfaces,
+                     jobs=candidates, surfaces=surfaces,
                      geometries=geometries, figure_surfaces=figure_cells,
                      body=body_geometry(config), contact=contact_settings(config), build=build,
                      choices={k: g for k, g in asked.items()
                               if g.operator is InfluenceModel.AUTO},
                      alternatives=frozenset(geometries) - planned,
-                     surfaces_from=surfaces_from(surfaces))
+                     surfaces_from=surfaces_from(surfaces),
+                     pairs={job.pair.key: job.pair for job in candidates.values()
+                            if job.pair is not None})
 
 
 def surfaces_from(surfaces: Mapping[str, SurfaceCell]) -> dict[str, str]:

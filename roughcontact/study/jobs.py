@@ -39,14 +39,17 @@ from roughcontact.study.records import (
     ContactJob,
     Geometry,
     InfluenceModel,
+    PairGeometry,
     coarse_geometry,
 )
 from roughcontact.study.storage import (
     read_influence,
+    read_pair,
     read_surfaces,
     write_choice,
     write_contact,
     write_influence,
+    write_pair,
 )
 from roughcontact.units import GB
 
@@ -352,22 +355,116 @@ class ContactProblem:
     attrs: dict = dataclasses.field(default_factory=dict)
 
 
-def read_counter(job: ContactJob, surfaces_path, influence_path, study_seed=None) -> tuple:
+@dataclasses.dataclass(frozen=True)
+class PairModel:
+    """A counter body's elastic part of a contact problem (Eq 17-18): ``unit`` the
+    pair's operator ``E1 C1 + (E1 / E2) E2 C2`` [m] (None: the counter body is treated
+    as rigid), ``weights`` the counter body's deflection weights in the first body's
+    unit [m] (``mean(C2 p) E1 = w . p``; None when rigid), ``bulk_ratio`` the pair's
+    largest row weight over the first body's (1 when rigid) and ``attrs`` the
+    compliance share and the choice."""
+
+    unit: object
+    weights: np.ndarray | None
+    bulk_ratio: float
+    attrs: dict
+
+
+def pair_model(first, second, modulus_ratio: float, rigid_share: float) -> PairModel:
+    """The :class:`PairModel` of a first body's unit-modulus operator ``first`` [m] and
+    a counter body's ``second`` [m] of modulus ratio E1 / E2.
+
+    A matrix-free counter body that meets a dense first body is made dense
+    (:func:`~roughcontact.contact.counterface.densified`: the pair is then pivoted, at
+    the memory of the first body's matrix). A counter body whose share of the
+    compliance (:func:`~roughcontact.contact.counterface.compliance_share`) is below
+    ``rigid_share`` is treated as rigid, and the choice logged.
+    """
+    if getattr(first, "matrix", None) is not None or isinstance(first, np.ndarray):
+        second = counterface.densified(second)
+    second = counterface.scaled(second, modulus_ratio)
+    share = counterface.compliance_share(first, second)
+    rigid = share < rigid_share
+    attrs = {"counter_compliance_share": share, "counter_treated_as_rigid": rigid}
+    log.info("counter body, E1/E2 = %.4g: %.3g of the pair's compliance; %s", modulus_ratio,
+             share, f"below counterface.rigid_share {rigid_share:g}: treated as rigid"
+             if rigid else "solved as an elastic pair")
+    if rigid:
+        return PairModel(None, None, 1.0, attrs)
+    first_weights = counterface.deflection_weights(first)
+    weights = counterface.deflection_weights(second)
+    # the mean-plane deflection is at most max(w) times the load: the pair's largest
+    # weight over the first body's raises the sweep's end alike
+    ratio = float((first_weights + weights).max() / first_weights.max())
+    return PairModel(counterface.equivalent_operator(first, second), weights, ratio, attrs)
+
+
+def build_pair(params: dict, first_path, second_path, out_path, config=None) -> dict:
+    """Sum two bodies' influence models once and write the pair (its file is shared by
+    every contact job on the pair: ``results/influence/pairs/<key>.h5``).
+
+    ``params``: the pair's :meth:`~roughcontact.study.records.PairGeometry.params`;
+    each influence file must have been made for its body's geometry. The sum is
+    certified positive definite before it is written (:func:`pair_model`; a counter
+    body treated as rigid writes no matrix). Returns the root attributes.
+    """
+    pair = PairGeometry.from_params(params)
+    start = time.perf_counter()
+    bodies, hashes = [], {}
+    for name, path, geometry in (("first", first_path, pair.first),
+                                 ("second", second_path, pair.second)):
+        unit, attrs = read_influence(path, geometry=geometry.params())
+        bodies.append(certified_influence(unit, path, geometry))
+        hashes[f"{name}_content_sha256"] = attrs["content_sha256"]
+    model = pair_model(*bodies, pair.modulus_ratio, pair.rigid_share)
+    matrix = None
+    if model.unit is not None:
+        definiteness.certify(model.unit, unit="m", advice=LOAD_ADVICE,
+                             name=f"the pair of influence models {pair.key}")
+        matrix = model.unit.matrix
+    seconds = time.perf_counter() - start
+    log.info("pair %s: %s in %.1f s", pair.key, "treated as rigid" if matrix is None
+             else "summed", seconds)
+    attrs = {"pair": pair.key, "params": canonical_json(pair.params()), **hashes,
+             **model.attrs, "bulk_ratio": model.bulk_ratio, "build_seconds": seconds,
+             **provenance(config)}
+    return write_pair(out_path, matrix, model.weights, attrs)
+
+
+def read_pair_model(path, pair: PairGeometry) -> tuple[PairModel, dict]:
+    """The :class:`PairModel` of a pair file made for ``pair`` (checked, its sum
+    certified again), and the content hashes a contact job records."""
+    matrix, weights, attrs = read_pair(path, pair=pair.params())
+    unit = None if matrix is None else certified_influence(matrix, path, pair.first)
+    model = PairModel(unit, weights, float(attrs["bulk_ratio"]),
+                      {"counter_compliance_share": float(attrs["counter_compliance_share"]),
+                       "counter_treated_as_rigid": bool(attrs["counter_treated_as_rigid"])})
+    return model, {"pair_content_sha256": attrs["content_sha256"],
+                   "counter_influence_content_sha256": attrs["second_content_sha256"]}
+
+
+def read_counter(job: ContactJob, first, surfaces_path, model_path,
+                 study_seed=None) -> tuple:
     """A job's counter surfaces (:func:`~roughcontact.study.storage.read_surfaces`) and
-    certified counter influence model, each None where the job has none, and the
-    content hash of the influence file as an attribute to record; each file checked
-    to have been made for the job's counter body."""
+    :class:`PairModel` (with the first body's unit-modulus operator ``first``), each None
+    where the job has none, and the content hashes to record. ``model_path``: the pair
+    file of a dense first body (:attr:`~roughcontact.study.records.ContactJob.pair`), else
+    the counter body's influence file; each file checked to have been made for the
+    job's counter body."""
     counter = job.counter
-    surfaces = unit = None
+    surfaces = model = None
     hashes = {}
     if counter is not None and counter.surface is not None:
         surfaces = read_surfaces(surfaces_path, cell=counter.surface.params(),
                                  study_seed=study_seed)
-    if counter is not None and counter.geometry is not None:
-        unit, attrs = read_influence(influence_path, geometry=counter.geometry.params())
-        unit = certified_influence(unit, influence_path, counter.geometry)
+    if job.pair is not None:
+        model, hashes = read_pair_model(model_path, job.pair)
+    elif counter is not None and counter.geometry is not None:
+        unit, attrs = read_influence(model_path, geometry=counter.geometry.params())
+        unit = certified_influence(unit, model_path, counter.geometry)
         hashes["counter_influence_content_sha256"] = attrs["content_sha256"]
-    return surfaces, unit, hashes
+        model = pair_model(first, unit, counter.modulus_ratio, counter.rigid_share)
+    return surfaces, model, hashes
 
 
 def _equivalent_moments(heights: np.ndarray) -> dict:
@@ -382,17 +479,14 @@ def _equivalent_moments(heights: np.ndarray) -> dict:
 
 
 def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
-                    counter_unit=None) -> ContactProblem:
+                    pair: PairModel | None = None) -> ContactProblem:
     """The problem a contact job sweeps: its own (one body against a rigid smooth flat),
     or with a counter body the equivalent problem of Eq 17-18
     (:mod:`roughcontact.contact.counterface`): heights ``(z1 + r z2) / sqrt(1 + r^2)``
-    (r = sigma2 / sigma1), the operator ``E1 C1 + (E1 / E2) E2 C2``, the interface grid
-    with the counter body's deflection weights and a bulk factor raised by the
-    counter body's compliance. A matrix-free counter body that meets a dense first
-    body is made dense (:func:`~roughcontact.contact.counterface.densified`). A
-    counter body whose share of the compliance
-    (:func:`~roughcontact.contact.counterface.compliance_share`) is below its
-    ``rigid_share`` is treated as rigid, and the choice logged."""
+    (r = sigma2 / sigma1), the ``pair``'s operator (:class:`PairModel`; the first
+    body's ``unit`` where the counter body is treated as rigid), the interface grid
+    with the counter body's deflection weights and the bulk factor raised by its
+    compliance."""
     counter = job.counter
     if counter is None:
         return ContactProblem(heights, unit)
@@ -409,27 +503,16 @@ def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
                  "Sk %.4f, Ku %.4f (means over surfaces)", counter.sigma_ratio,
                  1.0 / counter.height_factor, attrs["equivalent_sigma_over_scale"],
                  attrs["equivalent_skew"], attrs["equivalent_kurt"])
-    if counter.geometry is not None:
-        if getattr(unit, "matrix", None) is not None or isinstance(unit, np.ndarray):
-            # a dense first body: the pair is one dense matrix, solved by pivoting (the
-            # memory is the first body's again; CG on the sum is several times slower)
-            counter_unit = counterface.densified(counter_unit)
-        second = counterface.scaled(counter_unit, counter.modulus_ratio)
-        share = counterface.compliance_share(unit, second)
-        rigid = share < counter.rigid_share
-        attrs.update(counter_compliance_share=share, counter_treated_as_rigid=rigid)
-        log.info("counter body %s, E1/E2 = %.4g: %.3g of the pair's compliance; %s",
-                 counter.geometry.key, counter.modulus_ratio, share,
-                 f"below counterface.rigid_share {counter.rigid_share:g}: treated as rigid"
-                 if rigid else "solved as an elastic pair")
-        if not rigid:
-            first_weights = counterface.deflection_weights(unit)
-            weights = counterface.deflection_weights(second)
-            # the mean-plane deflection is at most max(w) times the load: the pair's
-            # largest weight over the first body's raises the sweep's end alike
-            bulk *= float((first_weights + weights).max() / first_weights.max())
-            unit = counterface.equivalent_operator(unit, second)
-            grid = dataclasses.replace(grid, counter_weights=weights / job.geometry.thickness)
+    if pair is not None:
+        attrs.update(pair.attrs)
+        log.info("counter body %s: %.3g of the pair's compliance (rigid_share %g): %s",
+                 counter.geometry.key, pair.attrs["counter_compliance_share"],
+                 counter.rigid_share, "treated as rigid" if pair.unit is None
+                 else "solved as an elastic pair")
+        if pair.unit is not None:
+            unit, bulk = pair.unit, bulk * pair.bulk_ratio
+            grid = dataclasses.replace(grid, counter_weights=pair.weights
+                                       / job.geometry.thickness)
     return ContactProblem(heights, unit, grid, bulk, attrs)
 
 
@@ -466,10 +549,10 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
             f"surfaces {surfaces_path} have shape {heights.shape[1:]} but geometry "
             f"{job.geometry.key} has a {ny} x {nx} (ny x nx) contact grid"
         )
-    counter_surfaces, counter_unit, counter_hashes = read_counter(
-        job, counter_surfaces_path, counter_influence_path,
+    counter_surfaces, pair, counter_hashes = read_counter(
+        job, unit, counter_surfaces_path, counter_influence_path,
         None if config is None else config["study_seed"])
-    problem = contact_problem(job, heights, unit, counter_surfaces, counter_unit)
+    problem = contact_problem(job, heights, unit, counter_surfaces, pair)
     hardness = job.nondim_hardness
     log.info("contact %s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
              "method %s, tol %.1e, precision %s, influence %s, %s", name, m, settings.steps,
@@ -512,8 +595,10 @@ __all__ = [
     "LOAD_ADVICE",
     "build_influence",
     "choose_influence",
+    "build_pair",
     "certified_influence",
     "contact_problem",
+    "pair_model",
     "read_counter",
     "solve_contact_job",
 ]

@@ -502,6 +502,38 @@ class CounterJob:
         return 1.0 / float(np.hypot(1.0, self.sigma_ratio))
 
 
+@dataclass(frozen=True)
+class PairGeometry:
+    """Two bodies' influence models summed once: the ``first`` body's (dense) and the
+    ``second``'s scaled by ``modulus_ratio`` E1 / E2, with the ``rigid_share`` that
+    decides whether the second is treated as rigid. Its file
+    (``results/influence/pairs/<key>.h5``) is shared by every contact job on the
+    same pair (:mod:`roughcontact.study.jobs`, ``build_pair``)."""
+
+    first: Geometry
+    second: Geometry
+    modulus_ratio: float
+    rigid_share: float
+
+    @classmethod
+    def from_params(cls, params: dict) -> PairGeometry:
+        return cls(first=Geometry.from_params(params["first"]),
+                   second=Geometry.from_params(params["second"]),
+                   modulus_ratio=float(params["modulus_ratio"]),
+                   rigid_share=float(params["rigid_share"]))
+
+    def params(self) -> dict:
+        return {"first": self.first.params(), "second": self.second.params(),
+                "first_key": self.first.key, "second_key": self.second.key,
+                "modulus_ratio": self.modulus_ratio, "rigid_share": self.rigid_share}
+
+    @property
+    def key(self) -> str:
+        """File key: both bodies' geometry keys, the modulus ratio and the rigid share."""
+        return (f"{self.first.key}__{self.second.key}__r{self.modulus_ratio:.10g}"
+                f"_rs{self.rigid_share:g}")
+
+
 # ---------------------------------------------------------------------------
 # Study cells and contact jobs
 
@@ -558,6 +590,18 @@ class ContactJob:
         if self.counter is not None:
             params["counter"] = self.counter.params()
         return params
+
+    @property
+    def pair(self) -> PairGeometry | None:
+        """The pair of influence models summed once for this job: of a compliant counter
+        body on a dense first body (the pair is one dense matrix); None otherwise (a
+        matrix-free first body sums the two operators in the job, without a matrix)."""
+        counter = self.counter
+        if (counter is None or counter.geometry is None
+                or self.geometry.operator is not InfluenceModel.DENSE):
+            return None
+        return PairGeometry(first=self.geometry, second=counter.geometry,
+                            modulus_ratio=counter.modulus_ratio, rigid_share=counter.rigid_share)
 
     @property
     def key(self) -> str:

@@ -332,6 +332,20 @@ def contact_mem_mb(job: ContactJob, build: BuildSettings) -> int:
                + fit["dense_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
 
 
+def pair_mem_mb(pair) -> int:
+    """Peak memory [MB] of a pair's sum (:func:`roughcontact.study.jobs.build_pair`): both
+    bodies' matrices, a densified counter body's, the sum and its Cholesky factor (5 n^2
+    doubles) and the interpreter's."""
+    nx, ny = pair.first.grid
+    return int(_MODEL["contact"]["memory_base_mb"] + 5 * DOUBLE_BYTES * (nx * ny) ** 2 / MB)
+
+
+def pair_runtime(pair, attempt: int = 1) -> int:
+    """Requested wall time [min] of a pair's sum: a few seconds on 60 x 60 (2.4 s with a
+    half-space made dense, measured), within the shortest request."""
+    return runtime_minutes(10.0, attempt)
+
+
 def influence_mem_mb(geometry: Geometry, build: BuildSettings) -> int:
     """Peak memory [MB] of an influence build: the estimated peak of its
     finite-element solve plus 200 MB."""

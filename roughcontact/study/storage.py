@@ -116,6 +116,7 @@ VERSION_1_LACKED = {
     "surfaces": {},
     "influence": {"operator": "dense"},
     "contact": {"sweep_hardness": -1.0},
+    "pair": {},
 }
 
 
@@ -510,6 +511,39 @@ def read_influence(path: str | os.PathLike, *, geometry: dict | None = None):
 
 # ---------------------------------------------------------------------------
 # Choices of operator: auto (JSON)
+
+
+# ---------------------------------------------------------------------------
+# Pair files: two bodies' dense influence models summed once (Eq 17-18)
+
+
+def write_pair(path: str | os.PathLike, matrix, weights, attrs: dict) -> dict:
+    """Write a pair of bodies' equivalent influence model (``results/influence/pairs/
+    <pair>.h5``): ``/unit_influence`` (n, n) ``E1 C1 + (E1 / E2) E2 C2`` [m] and
+    ``/counter_weights`` (n,) the counter body's deflection weights [m], both absent
+    when the counter body is treated as rigid, with ``attrs`` (the pair's ``params``,
+    the compliance share and the choice) and the content hash; returns the attrs."""
+    datasets = {} if matrix is None else {
+        "unit_influence": (np.asarray(matrix), {
+            "units": "m (E1 C1 + (E1 / E2) E2 C2: the pair in the first body's modulus)"}),
+        "counter_weights": (np.asarray(weights), {
+            "units": "m (w: the counter body's mean deflection is w . p E1)"})}
+    attrs = {**attrs, "content_sha256": datasets_sha256(datasets)}
+    write_h5(path, datasets, attrs)
+    return attrs
+
+
+def read_pair(path: str | os.PathLike, *, pair: dict | None = None) -> tuple:
+    """``(matrix or None, weights or None, attributes)`` of a pair file
+    (:func:`write_pair`). With the ``pair`` (its ``params()``) the reader expects, the
+    file must have been made for it (:func:`check_parameters`); its datasets are
+    checked against their hash."""
+    with open_h5(path) as f:
+        attrs = upgraded(path, _decoded(f.attrs), "pair")
+        check_attributes(path, attrs, _expected(geometry=pair))
+        arrays = _all_datasets(f)
+    verify(path, attrs, arrays_sha256(arrays))
+    return arrays.get("unit_influence"), arrays.get("counter_weights"), attrs
 
 
 def write_choice(path: str | os.PathLike, choice: dict) -> None:

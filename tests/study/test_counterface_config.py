@@ -20,7 +20,7 @@ from roughcontact.elasticity.protocol import DenseInfluence
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
-from roughcontact.study.jobs import contact_problem
+from roughcontact.study.jobs import contact_problem, pair_model
 from roughcontact.study.records import ContactJob, StudyCell
 from roughcontact.surfaces.synthetic import derive_seeds
 
@@ -146,14 +146,15 @@ def test_identical_bodies_double_the_compliance_and_a_stiff_one_is_rigid():
     n = 16 * 16
     heights = np.random.default_rng(2).standard_normal((3, 16, 16))
     unit = _unit(n)
-    problem = contact_problem(twin, heights, unit, None, unit)
+    assert twin.pair is not None and twin.pair.first == twin.geometry  # summed once
+    problem = contact_problem(twin, heights, unit, None, pair_model(unit, unit, 1.0, 0.001))
     np.testing.assert_allclose(problem.unit.matrix, 2 * unit.matrix, rtol=1e-15)
     assert problem.attrs["counter_compliance_share"] == pytest.approx(0.5)
     assert problem.attrs["counter_treated_as_rigid"] is False
     assert problem.bulk_factor == pytest.approx(2 * BULK_FACTOR)
     np.testing.assert_allclose(problem.interface.counter_weights,
                                unit.matrix.sum(axis=0) / n / twin.geometry.thickness, rtol=1e-14)
-    rigid = contact_problem(stiff, heights, unit, None, unit)
+    rigid = contact_problem(stiff, heights, unit, None, pair_model(unit, unit, 1e-4, 0.001))
     assert rigid.attrs["counter_compliance_share"] == pytest.approx(1 / 10001)
     assert rigid.attrs["counter_treated_as_rigid"] is True
     assert rigid.unit is unit and rigid.heights is heights

@@ -98,3 +98,24 @@ def test_the_audit_re_solves_pairs_bit_for_bit(run):
     verify = pd.read_csv(results / "audit" / "verify.csv")
     assert verify["contact_job"].str.contains("__cf").any()
     assert verify["identical"].all()
+
+
+def test_each_pair_of_bodies_is_summed_once_and_checked_on_read(run):
+    from roughcontact.errors import StoredFileError
+    from roughcontact.study.storage import read_contact, read_pair
+
+    _, _, _, results, _ = run
+    pairs = sorted((results / "influence" / "pairs").glob("*.h5"))
+    # the rough and the smooth counter block share one pair; the stiff half-space has its own
+    assert len(pairs) == 2
+    recorded = set()
+    for path in (results / "contact").glob("*__cf*.h5"):
+        _, attrs = read_contact(path)
+        recorded.add(attrs["pair_content_sha256"])
+    assert recorded == {read_pair(p)[2]["content_sha256"] for p in pairs}
+    block = next(p for p in pairs if "halfspace" not in p.name)
+    matrix, weights, attrs = read_pair(block)
+    assert matrix.shape == (256, 256) and weights.shape == (256,)
+    other = json.loads(attrs["params"]) | {"modulus_ratio": 2.0}
+    with pytest.raises(StoredFileError, match="modulus_ratio"):
+        read_pair(block, pair=other)
