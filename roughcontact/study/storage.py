@@ -116,7 +116,6 @@ VERSION_1_LACKED = {
     "surfaces": {},
     "influence": {"operator": "dense"},
     "contact": {"sweep_hardness": -1.0},
-    "pair": {},
 }
 
 
@@ -131,7 +130,7 @@ def upgraded(path, attrs: dict, kind: str) -> dict:
                               f"roughcontact (this one reads up to {FORMAT_VERSION}); update "
                               f"roughcontact, or {rebuild(path)}", path)
     if version == 1:
-        return {**VERSION_1_LACKED[kind], **attrs}
+        return {**VERSION_1_LACKED.get(kind, {}), **attrs}  # pair files began in version 2
     return attrs
 
 
