@@ -1,6 +1,6 @@
 """Snakemake entry point of rule `contact`: one surface cell on one geometry."""
 
-from roughcontact.study.jobs import solve_contact_job
+from roughcontact.study.contact_jobs import solve_contact_job
 from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])

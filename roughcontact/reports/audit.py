@@ -33,7 +33,8 @@ from roughcontact.contact.plausibility import (
 )
 from roughcontact.errors import StoredFileError
 from roughcontact.study.aggregation import validity_rows, validity_summary
-from roughcontact.study.jobs import certified_influence, contact_problem, read_counter
+from roughcontact.study.contact_jobs import contact_problem, read_counter
+from roughcontact.study.jobs import certified_influence
 from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.study.records import ContactJob, Geometry, StudyCell
 from roughcontact.study.storage import (

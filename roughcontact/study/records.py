@@ -508,7 +508,7 @@ class PairGeometry:
     ``second``'s scaled by ``modulus_ratio`` E1 / E2, with the ``rigid_share`` that
     decides whether the second is treated as rigid. Its file
     (``results/influence/pairs/<key>.h5``) is shared by every contact job on the
-    same pair (:mod:`roughcontact.study.jobs`, ``build_pair``)."""
+    same pair (:func:`roughcontact.study.jobs.build_pair`)."""
 
     first: Geometry
     second: Geometry

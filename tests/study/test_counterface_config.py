@@ -20,7 +20,8 @@ from roughcontact.elasticity.protocol import DenseInfluence
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
-from roughcontact.study.jobs import contact_problem, pair_model
+from roughcontact.study.contact_jobs import contact_problem
+from roughcontact.study.jobs import pair_model
 from roughcontact.study.records import ContactJob, StudyCell
 from roughcontact.surfaces.synthetic import derive_seeds
 

@@ -18,7 +18,8 @@ from roughcontact.errors import IndefiniteOperator
 from roughcontact.study import jobs
 from roughcontact.study.cells import study_plan
 from roughcontact.study.config import load_config
-from roughcontact.study.jobs import build_influence, solve_contact_job
+from roughcontact.study.contact_jobs import solve_contact_job
+from roughcontact.study.jobs import build_influence
 from roughcontact.study.storage import read_contact, read_influence, write_influence
 from roughcontact.study.studies import body_geometry, contact_settings
 from roughcontact.study.surface_jobs import build_surface_cell

@@ -24,6 +24,7 @@ def loaded_after(module: str) -> list[str]:
 
 
 @pytest.mark.parametrize("module", ["roughcontact.study.jobs", "roughcontact.study.surface_jobs",
+                                    "roughcontact.study.contact_jobs",
                                     "roughcontact.contact",
                                     "roughcontact.reports.plotting",
                                     "roughcontact.reports.execution"])

@@ -24,7 +24,8 @@ from roughcontact.contact.plausibility import (
 from roughcontact.reports.audit import audit_cell
 from roughcontact.study.aggregation import aggregate_study
 from roughcontact.study.config import ContactSettings, validated
-from roughcontact.study.jobs import build_influence, solve_contact_job
+from roughcontact.study.contact_jobs import solve_contact_job
+from roughcontact.study.jobs import build_influence
 from roughcontact.study.records import Geometry, MeasuredCell, StudyCell
 from roughcontact.study.sources import MeasurementImport
 from roughcontact.study.surface_jobs import build_surface_cell

@@ -344,7 +344,7 @@ class _Hold(logging.Handler):
                 time.sleep(0.05)
 
 
-logging.getLogger("roughcontact.study.jobs").addHandler(_Hold())
+logging.getLogger("roughcontact.study.contact_jobs").addHandler(_Hold())
 """
 
 

@@ -51,7 +51,7 @@ from roughcontact.contact.curves import NondimSweep, PhysicalSweep
 from roughcontact.elasticity.influence import BlockGeometry
 from roughcontact.reports.speed.machine import describe_machine
 from roughcontact.reports.speed.sweeps import cell_heights, cell_key, reporter, timed_sweep
-from roughcontact.study.jobs import BATCH_SIZE
+from roughcontact.study.contact_jobs import BATCH_SIZE
 from roughcontact.study.presets import FALLBACK_MESH_ERRORS
 
 __all__ = [
