@@ -41,8 +41,43 @@ __all__ = ["ScaledInfluence", "SumInfluence", "body_displacements", "compliance_
 AREA_RTOL = 1e-9
 
 
+class _OnTheSameElements:
+    """What a matrix-free operator made of another (``_base``) shares with it: its
+    elements (shape, area, grid), no dense ``matrix``, and the protocol's ``@`` and
+    ``restrict`` (:class:`~roughcontact.elasticity.protocol.InfluenceOperator`)."""
+
+    matrix = None
+
+    @property
+    def _base(self):
+        raise NotImplementedError
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return tuple(self._base.shape)
+
+    @property
+    def dtype(self) -> np.dtype:
+        return np.dtype(float)
+
+    @property
+    def element_area(self) -> float:
+        return float(self._base.element_area)
+
+    @property
+    def grid(self):
+        return self._base.grid
+
+    def __matmul__(self, pressure) -> np.ndarray:
+        return self.matvec(pressure)
+
+    def restrict(self, indices):
+        """The operator restricted to the elements ``indices``."""
+        return RestrictedInfluence(self, np.asarray(indices))
+
+
 @dataclass(frozen=True)
-class SumInfluence:
+class SumInfluence(_OnTheSameElements):
     """``C = C1 + C2`` of two influence operators on the same elements, without forming
     a dense matrix (an :class:`~roughcontact.elasticity.protocol.InfluenceOperator`).
 
@@ -52,23 +87,10 @@ class SumInfluence:
 
     first: Any
     second: Any
-    matrix = None
 
     @property
-    def shape(self) -> tuple[int, int]:
-        return tuple(self.first.shape)
-
-    @property
-    def dtype(self) -> np.dtype:
-        return np.dtype(float)
-
-    @property
-    def element_area(self) -> float:
-        return float(self.first.element_area)
-
-    @property
-    def grid(self):
-        return self.first.grid
+    def _base(self):
+        return self.first
 
     @property
     def mean_compliance(self) -> float | None:
@@ -80,44 +102,24 @@ class SumInfluence:
         return (np.asarray(self.first.matvec(pressure), dtype=float)
                 + np.asarray(self.second.matvec(pressure), dtype=float))
 
-    def __matmul__(self, pressure) -> np.ndarray:
-        return self.matvec(pressure)
-
     def diagonal(self) -> np.ndarray:
         """``C1_ii + C2_ii`` [m/Pa]."""
         return (np.asarray(self.first.diagonal(), dtype=float)
                 + np.asarray(self.second.diagonal(), dtype=float))
 
-    def restrict(self, indices):
-        """The sum restricted to the elements ``indices``."""
-        return RestrictedInfluence(self, np.asarray(indices))
-
 
 @dataclass(frozen=True)
-class ScaledInfluence:
+class ScaledInfluence(_OnTheSameElements):
     """``factor * C`` of a matrix-free influence operator (an
     :class:`~roughcontact.elasticity.protocol.InfluenceOperator`): a unit-modulus body
     ``E2 C2`` [m] made ``(E1 / E2) E2 C2`` to add to a first body of modulus ``E1``."""
 
     operator: Any
     factor: float
-    matrix = None
 
     @property
-    def shape(self) -> tuple[int, int]:
-        return tuple(self.operator.shape)
-
-    @property
-    def dtype(self) -> np.dtype:
-        return np.dtype(float)
-
-    @property
-    def element_area(self) -> float:
-        return float(self.operator.element_area)
-
-    @property
-    def grid(self):
-        return self.operator.grid
+    def _base(self):
+        return self.operator
 
     @property
     def mean_compliance(self) -> float | None:
@@ -127,14 +129,8 @@ class ScaledInfluence:
     def matvec(self, pressure) -> np.ndarray:
         return np.asarray(self.operator.matvec(pressure), dtype=float) * self.factor
 
-    def __matmul__(self, pressure) -> np.ndarray:
-        return self.matvec(pressure)
-
     def diagonal(self) -> np.ndarray:
         return np.asarray(self.operator.diagonal(), dtype=float) * self.factor
-
-    def restrict(self, indices):
-        return RestrictedInfluence(self, np.asarray(indices))
 
 
 def scaled(operator, factor: float, *, element_area: float | None = None):
