@@ -33,7 +33,7 @@ from roughcontact.study.jobs import (
     read_pair_model,
 )
 from roughcontact.study.provenance import canonical_json, provenance
-from roughcontact.study.records import ContactJob
+from roughcontact.study.records import ContactJob, MeasuredCell
 from roughcontact.study.storage import read_influence, read_surfaces, write_contact
 
 log = logging.getLogger(__name__)
@@ -141,7 +141,9 @@ def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
     """The problem a contact job sweeps: its own (one body against a rigid smooth flat),
     or with a counter body the equivalent problem of Eq 17-18
     (:mod:`roughcontact.contact.counterface`): heights ``(z1 + r z2) / sqrt(1 + r^2)``
-    (r = sigma2 / sigma1), the ``pair``'s operator (:class:`PairModel`; the first
+    (r = sigma2 / sigma1; a measured counter map, measured face up like the first
+    surface, mirrored in x as the two face each other, and added to every surface),
+    the ``pair``'s operator (:class:`PairModel`; the first
     body's ``unit`` where the counter body is treated as rigid), the interface grid
     with the counter body's deflection weights and the bulk factor raised by its
     compliance."""
@@ -151,8 +153,9 @@ def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
     attrs, grid, bulk = {}, cell_module.block_interface(job.geometry), cell_module.BULK_FACTOR
     if counter.surface is not None:
         z2 = counter_surfaces["heights"]
-        if z2.shape[0] == 1:  # one measured counter surface meets every surface
-            z2 = np.broadcast_to(z2, heights.shape)
+        if isinstance(counter.surface, MeasuredCell):
+            # measured face up, like the first; facing it, the map is mirrored in x
+            z2 = np.broadcast_to(z2[..., ::-1], heights.shape)
         heights = (counterface.equivalent_heights(heights, counter.sigma_ratio * z2)
                    * counter.height_factor)
         attrs["counter_surfaces_content_sha256"] = counter_surfaces["content_sha256"]

@@ -97,6 +97,13 @@ def test_a_measured_counter_surface_on_another_grid_is_refused_with_its_fix(meas
     (cell,) = plan.cells["pair"]
     assert cell.counterface.surface.grid == (16, 16)
     assert cell.counterface.sigma == pytest.approx(cell.counterface.surface.sigma)
+    # measured face up like the first surface, the map meets every surface mirrored in x
+    z1 = np.random.default_rng(3).standard_normal((3, 16, 16))
+    z2 = np.random.default_rng(4).standard_normal((1, 16, 16))
+    problem = contact_problem(cell.job, z1, None, {"heights": z2, "content_sha256": "x"})
+    r = cell.job.counter.sigma_ratio
+    np.testing.assert_allclose(problem.heights, (z1 + r * z2[:, :, ::-1]) / np.hypot(1, r),
+                               rtol=1e-14)
 
 
 def test_a_measured_counter_surface_of_another_size_is_told_to_crop(measured):
