@@ -1,8 +1,8 @@
 """Snakemake entry point of rule `aggregate`: a figure's or sweep's tables."""
 
 from roughcontact.study.aggregation import aggregate_study
+from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.logs import route_logging
-from roughcontact.study.records import StudyCell
 
 route_logging(snakemake.log[0])
 cells = [StudyCell.from_params(params) for params in snakemake.params.cells]

@@ -34,9 +34,10 @@ from roughcontact.contact.plausibility import (
 from roughcontact.errors import StoredFileError
 from roughcontact.study.aggregation import validity_rows, validity_summary
 from roughcontact.study.contact_jobs import contact_problem, read_counter
+from roughcontact.study.contact_records import ContactJob, StudyCell
 from roughcontact.study.jobs import certified_influence
 from roughcontact.study.provenance import atomic_path, git_commit
-from roughcontact.study.records import ContactJob, Geometry, StudyCell
+from roughcontact.study.records import Geometry
 from roughcontact.study.storage import (
     check_parameters,
     contact_datasets,

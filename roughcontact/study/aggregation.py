@@ -21,8 +21,8 @@ from roughcontact.contact import aggregate, plausibility
 from roughcontact.contact import cell as cell_module
 from roughcontact.hashes import file_sha256
 from roughcontact.study.config import in_unit
+from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.provenance import atomic_path, provenance
-from roughcontact.study.records import StudyCell
 from roughcontact.study.storage import read_contact
 from roughcontact.units import MPA, UM
 

@@ -27,13 +27,11 @@ from roughcontact.study.checks import (
     check_windows,
 )
 from roughcontact.study.config import BuildSettings, ContactSettings, as_pair, from_unit
+from roughcontact.study.contact_records import ContactJob, PairGeometry, StudyCell
 from roughcontact.study.records import (
     SEEDED_PER_SURFACE,
-    ContactJob,
     Geometry,
     InfluenceModel,
-    PairGeometry,
-    StudyCell,
     SurfaceCell,
 )
 from roughcontact.study.sources import spectrum_from_entry

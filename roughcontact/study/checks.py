@@ -13,14 +13,9 @@ import math
 from roughcontact.elasticity.operators import HYBRID_MESHES
 from roughcontact.study.block_checks import block_problems
 from roughcontact.study.config import BuildSettings, in_unit, in_units
+from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.measured_checks import check_measured_plausible
-from roughcontact.study.records import (
-    GeneratedCell,
-    Generator,
-    Geometry,
-    InfluenceModel,
-    StudyCell,
-)
+from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
 from roughcontact.study.sources import SPECTRA, load_measurement, spectrum_from_entry
 from roughcontact.study.studies import (
     CAP_MODES,

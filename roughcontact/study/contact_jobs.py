@@ -26,6 +26,7 @@ import numpy as np
 from roughcontact.contact import cell as cell_module
 from roughcontact.contact import counterface
 from roughcontact.study.config import ContactSettings
+from roughcontact.study.contact_records import ContactJob
 from roughcontact.study.jobs import (
     PairModel,
     certified_influence,
@@ -33,7 +34,7 @@ from roughcontact.study.jobs import (
     read_pair_model,
 )
 from roughcontact.study.provenance import canonical_json, provenance
-from roughcontact.study.records import ContactJob, MeasuredCell
+from roughcontact.study.records import MeasuredCell
 from roughcontact.study.storage import read_influence, read_surfaces, write_contact
 
 log = logging.getLogger(__name__)
@@ -106,7 +107,7 @@ def read_counter(job: ContactJob, first, surfaces_path, model_path,
     """A job's counter surfaces (:func:`~roughcontact.study.storage.read_surfaces`) and
     :class:`PairModel` (with the first body's unit-modulus operator ``first``), each None
     where the job has none, and the content hashes to record. ``model_path``: the pair
-    file of a dense first body (:attr:`~roughcontact.study.records.ContactJob.pair`), else
+    file of a dense first body (:attr:`~roughcontact.study.contact_records.ContactJob.pair`), else
     the counter body's influence file; each file checked to have been made for the
     job's counter body."""
     counter = job.counter
@@ -182,7 +183,7 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
                       counter_influence_path=None) -> dict:
     """Solve one contact job and write its non-dimensional sweep to ``out_path``.
 
-    ``params``: the job's :meth:`~roughcontact.study.records.ContactJob.params`,
+    ``params``: the job's :meth:`~roughcontact.study.contact_records.ContactJob.params`,
     whose record ``job`` holds the surface cell, the geometry, the
     non-dimensional pressure P L / (E sigma) the sweep must reach and a capped
     job's cap H L / (E sigma); ``settings`` the solver's

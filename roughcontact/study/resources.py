@@ -42,8 +42,9 @@ from roughcontact.study.config import (
     load_config,
     report_section,
 )
+from roughcontact.study.contact_records import ContactJob
 from roughcontact.study.grid_convergence import GridConvergenceSettings, grid_mem_mb
-from roughcontact.study.records import ContactJob, Generator, Geometry, InfluenceModel
+from roughcontact.study.records import Generator, Geometry, InfluenceModel
 from roughcontact.units import GB
 
 #: The stored cost model of the source tree.

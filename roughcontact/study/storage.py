@@ -321,7 +321,7 @@ def check_parameters(path: str | os.PathLike, *, cell: dict | None = None,
     (the ``params`` attribute of a surface file, with ``study_seed``);
     ``geometry``: a geometry's :meth:`~roughcontact.study.records.Geometry.params`
     (of an influence file); ``job``: a contact job's
-    :meth:`~roughcontact.study.records.ContactJob.params` (the fields of
+    :meth:`~roughcontact.study.contact_records.ContactJob.params` (the fields of
     :data:`CONTACT_DEFINING` of a contact file's ``job``). Numbers agree to a
     relative 1e-9. Only the attributes are read (no dataset, no hash: the
     readers check those). Raises :class:`StoredFileError` naming the file,

@@ -8,7 +8,7 @@ hardness settings apply to every cell. :func:`study_section` applies the
 rules of inheritance once (the study's own values over the accuracy preset's
 over the ``body``, ``surfaces`` and ``contact`` sections; the schema fills
 every other default), and :func:`contact_cells` turns a study into
-:class:`~roughcontact.study.records.StudyCell` records in SI units: every
+:class:`~roughcontact.study.contact_records.StudyCell` records in SI units: every
 unit of the configuration is converted here, and every choice it writes as a
 string is resolved here.
 """
@@ -19,16 +19,14 @@ import dataclasses
 import itertools
 
 from roughcontact.study.config import ContactSettings, as_pair, from_unit, grid_pair
+from roughcontact.study.contact_records import Accuracy, Counterface, StudyCell
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.records import (
-    Accuracy,
-    Counterface,
     GeneratedCell,
     Generator,
     Geometry,
     InfluenceModel,
     MeasuredCell,
-    StudyCell,
     SurfaceCell,
 )
 from roughcontact.study.sources import MeasurementImport, spectrum_from_entry

@@ -10,15 +10,10 @@ from roughcontact.elasticity.influence import ModelTooLarge
 from roughcontact.study.cells import drawn_with, study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import BuildSettings, in_unit, load_config, validated
+from roughcontact.study.contact_records import ContactJob, StudyCell
 from roughcontact.study.jobs import build_influence
 from roughcontact.study.presets import ACCURACY_PRESETS
-from roughcontact.study.records import (
-    ContactJob,
-    Geometry,
-    InfluenceModel,
-    StudyCell,
-    surface_cell_from_params,
-)
+from roughcontact.study.records import Geometry, InfluenceModel, surface_cell_from_params
 from roughcontact.study.storage import read_influence
 from roughcontact.study.studies import body_geometry, contact_cells, contact_settings
 from roughcontact.units import MM, MPA, UM

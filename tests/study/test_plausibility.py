@@ -25,8 +25,9 @@ from roughcontact.reports.audit import audit_cell
 from roughcontact.study.aggregation import aggregate_study
 from roughcontact.study.config import ContactSettings, validated
 from roughcontact.study.contact_jobs import solve_contact_job
+from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.jobs import build_influence
-from roughcontact.study.records import Geometry, MeasuredCell, StudyCell
+from roughcontact.study.records import Geometry, MeasuredCell
 from roughcontact.study.sources import MeasurementImport
 from roughcontact.study.surface_jobs import build_surface_cell
 

@@ -17,13 +17,8 @@ from roughcontact.study.config import (
     ConvergenceSettings,
     validated,
 )
-from roughcontact.study.records import (
-    ContactJob,
-    GeneratedCell,
-    Generator,
-    Geometry,
-    InfluenceModel,
-)
+from roughcontact.study.contact_records import ContactJob
+from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
 
 CG = ContactSettings(method="cg", tol=1e-8, precision="mixed", steps=30, pressure_levels=30)
 #: The influence builds of a minimal config, completed by the schema's defaults (16 GB).
