@@ -338,23 +338,30 @@ def write_audit(table: pd.DataFrame, csv_path, md_path, *, config_hash: str = ""
         Path(tmp).write_text("\n".join(lines) + "\n")
 
 
-def _job_files(root: Path, key: str, job: dict) -> dict:
-    """The surface, influence and contact files of the contact job ``key`` (``job``: its
-    ``params()``)."""
-    files = {"surfaces": root / "results" / "surfaces" / f"{job['surface_key']}.h5",
-             "influence": root / "results" / "influence" / f"{job['geometry_key']}.h5",
-             "contact": root / "results" / "contact" / f"{key}.h5"}
-    counter = job.get("counter") or {}  # a counter body's files (Eq 17-18)
-    if counter.get("surface_key") is not None:
-        files["counter_surfaces"] = (root / "results" / "surfaces"
-                                     / f"{counter['surface_key']}.h5")
-    pair = ContactJob.from_params(job).pair if counter else None
+def _job_files(root: Path, key: str, job: dict, study_seed: int | None = None) -> dict:
+    """The files of the contact job ``key`` (``job``: its ``params()``) by kind, each with
+    the parameters it must have been made for (:func:`check_parameters`): its surface,
+    influence and contact files, and a counter body's surfaces and influence (the
+    pair's file on a dense first body)."""
+    surfaces, influence = root / "results" / "surfaces", root / "results" / "influence"
+    files = {"surfaces": (surfaces / f"{job['surface_key']}.h5",
+                          {"cell": job["surface"], "study_seed": study_seed}),
+             "influence": (influence / f"{job['geometry_key']}.h5",
+                           {"geometry": job["geometry"]}),
+             "contact": (root / "results" / "contact" / f"{key}.h5", {"job": job})}
+    counter = job.get("counter")
+    if counter is None:
+        return files
+    if counter["surface_key"] is not None:
+        files["counter_surfaces"] = (surfaces / f"{counter['surface_key']}.h5",
+                                     {"cell": counter["surface"], "study_seed": study_seed})
+    pair = ContactJob.from_params(job).pair
     if pair is not None:  # a dense first body: the pair's file
-        files["counter_influence"] = (root / "results" / "influence" / "pairs"
-                                      / f"{pair.key}.h5")
-    elif counter.get("geometry_key") is not None:
-        files["counter_influence"] = (root / "results" / "influence"
-                                      / f"{counter['geometry_key']}.h5")
+        files["counter_influence"] = (influence / "pairs" / f"{pair.key}.h5",
+                                      {"geometry": pair.params()})
+    elif counter["geometry_key"] is not None:
+        files["counter_influence"] = (influence / f"{counter['geometry_key']}.h5",
+                                      {"geometry": counter["geometry"]})
     return files
 
 
@@ -364,29 +371,19 @@ def check_job_files(jobs: dict[str, dict], root: str | Path = ".",
 
     ``jobs``: contact key -> the job's ``params()``. Each job's surface file
     must hold its surface cell (and ``study_seed``), its influence file its
-    geometry and its contact file its job (:func:`check_parameters`: the
-    attributes only, so every file is checked, not a sample). Raises
-    :class:`StoredFileError` naming each file that is not, with the field,
-    the values expected and found, and the command that rebuilds it.
+    geometry, its contact file its job, and a counter body's files its counter
+    body (:func:`check_parameters`: the attributes only, so every file is checked,
+    not a sample). Raises :class:`StoredFileError` naming each file that is not,
+    with the field, the values expected and found, and the command that rebuilds it.
     """
     problems, checked = [], set()
     for key, job in jobs.items():
-        files = _job_files(Path(root), key, job)
-        counter = job.get("counter") or {}
-        pair = ContactJob.from_params(job).pair if counter else None
-        expected = {"surfaces": {"cell": job["surface"], "study_seed": study_seed},
-                    "influence": {"geometry": job["geometry"]}, "contact": {"job": job},
-                    "counter_surfaces": {"cell": counter.get("surface"),
-                                         "study_seed": study_seed},
-                    # a pair's file (a dense first body), or the counter body's own
-                    "counter_influence": {"geometry": counter.get("geometry") if pair is None
-                                          else pair.params()}}
-        for kind, path in files.items():
+        for path, expected in _job_files(Path(root), key, job, study_seed).values():
             if path in checked:
                 continue
             checked.add(path)
             try:
-                check_parameters(path, **expected[kind])
+                check_parameters(path, **expected)
             except StoredFileError as err:
                 problems.append(str(err))
     if problems:
@@ -424,7 +421,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
     for pick in sorted(picks):
         key, first, last = candidates[pick]
         job = jobs[key]
-        files = _job_files(root, key, job)
+        files = {kind: path for kind, (path, _) in _job_files(root, key, job).items()}
         stored, attrs = read_contact(files["contact"], job=job)
         surfaces = read_surfaces(files["surfaces"], cell=job["surface"], study_seed=study_seed)
         record = ContactJob.from_params(job)

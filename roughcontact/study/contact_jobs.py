@@ -36,6 +36,7 @@ from roughcontact.study.jobs import (
 from roughcontact.study.provenance import canonical_json, provenance
 from roughcontact.study.records import MeasuredCell
 from roughcontact.study.storage import read_influence, read_surfaces, write_contact
+from roughcontact.surfaces.statistics import height_stats
 
 log = logging.getLogger(__name__)
 
@@ -128,13 +129,11 @@ def read_counter(job: ContactJob, first, surfaces_path, model_path,
 
 def _equivalent_moments(heights: np.ndarray) -> dict:
     """The equivalent surface's sample sigma (in units of the height scale), Sk and Ku,
-    means over the surfaces."""
-    flat = heights.reshape(heights.shape[0], -1)
-    centred = flat - flat.mean(axis=1, keepdims=True)
-    std = centred.std(axis=1)
-    return {"equivalent_sigma_over_scale": float(std.mean()),
-            "equivalent_skew": float(((centred**3).mean(axis=1) / std**3).mean()),
-            "equivalent_kurt": float(((centred**4).mean(axis=1) / std**4).mean())}
+    means over the surfaces (:func:`~roughcontact.surfaces.statistics.height_stats`)."""
+    stats = height_stats(heights)
+    return {"equivalent_sigma_over_scale": float(stats["sigma"].mean()),
+            "equivalent_skew": float(stats["skew"].mean()),
+            "equivalent_kurt": float(stats["kurt"].mean())}
 
 
 def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
@@ -155,8 +154,9 @@ def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
     if counter.surface is not None:
         z2 = counter_surfaces["heights"]
         if isinstance(counter.surface, MeasuredCell):
-            # measured face up, like the first; facing it, the map is mirrored in x
-            z2 = np.broadcast_to(z2[..., ::-1], heights.shape)
+            # measured face up, like the first; facing it, the map is mirrored in x (one
+            # map, added to every surface)
+            z2 = z2[0, :, ::-1]
         heights = (counterface.equivalent_heights(heights, counter.sigma_ratio * z2)
                    * counter.height_factor)
         attrs["counter_surfaces_content_sha256"] = counter_surfaces["content_sha256"]

@@ -22,6 +22,7 @@ import time
 import numpy as np
 
 from roughcontact.contact import counterface, halfspace_criterion
+from roughcontact.contact.checks import given_matrix
 from roughcontact.elasticity import definiteness, influence, operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence
@@ -312,7 +313,7 @@ def pair_model(first, second, modulus_ratio: float, rigid_share: float) -> PairM
     compliance (:func:`~roughcontact.contact.counterface.compliance_share`) is below
     ``rigid_share`` is treated as rigid, and the choice logged.
     """
-    if getattr(first, "matrix", None) is not None or isinstance(first, np.ndarray):
+    if given_matrix(first) is not None:
         second = counterface.densified(second)
     second = counterface.scaled(second, modulus_ratio)
     share = counterface.compliance_share(first, second)

@@ -18,7 +18,14 @@ from __future__ import annotations
 import dataclasses
 import itertools
 
-from roughcontact.study.config import ContactSettings, as_pair, from_unit, grid_pair
+from roughcontact.study.config import (
+    ContactSettings,
+    as_pair,
+    from_unit,
+    grid_pair,
+    in_unit,
+    in_units,
+)
 from roughcontact.study.contact_records import Accuracy, Counterface, StudyCell
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.records import (
@@ -187,14 +194,14 @@ def counter_body(config: dict, entry, first: Geometry) -> tuple[Geometry | None,
     if entry == "rigid":
         return None, None
     body = config["body"]
-    params = {"nu": entry.get("nu", body["nu"]), "size_mm": [s / MM for s in first.size],
+    params = {"nu": entry.get("nu", body["nu"]), "size_mm": in_units(first.size),
               "grid": list(first.grid), "base": entry.get("base", body["base"]),
               "mesh": entry.get("mesh", body["mesh"]),
               "thickness_mm": entry.get("thickness_mm", body["thickness_mm"])}
     if entry["kind"] == "halfspace":
         # Love's half-space: the thickness is only the reference length of the scaling
         params.update(operator=InfluenceModel.HALFSPACE.value, base="clamped", mesh="paper",
-                      thickness_mm=first.thickness / MM)
+                      thickness_mm=in_unit(first.thickness, MM))
     else:
         params["operator"] = entry.get("operator", InfluenceModel.DENSE.value)
     return Geometry.from_params(params), float(entry["E_MPa"]) * MPA
