@@ -243,14 +243,16 @@ def check_definite(op: InfluenceOperator) -> None:
     definiteness.certify(op)
 
 
-def check_bounded(op: InfluenceOperator, gaps: np.ndarray, d: np.ndarray, name: str) -> None:
+def check_bounded(op: InfluenceOperator, gaps: np.ndarray, d: np.ndarray, name: str,
+                  hardness=None) -> None:
     """Reject approaches with no solution for an operator with zero row sums.
 
     If ``C 1 = 0`` (mean displacement fixed to zero, ``mean_compliance = 0``),
     ``V(p + c 1) = V(p) - c sum(d - f)``, so Eq 27 has no minimizer (the load
-    is unbounded) unless ``d < mean(f)``.
+    is unbounded) unless ``d < mean(f)``. With a cap ``hardness`` [Pa] every
+    approach has one (``V`` is minimized over the box ``0 <= p <= H``).
     """
-    if op.mean_compliance != 0.0:
+    if op.mean_compliance != 0.0 or hardness is not None:
         return
     mean_gap = gaps.mean(axis=1)
     if (d >= mean_gap).any():

@@ -81,24 +81,22 @@ faster than two.
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from roughcontact.contact import cg, checks, pcg, pivot, steepest
-from roughcontact.contact.loads import solve_at_loads
+from roughcontact.contact.controls import Approaches, Loads
+from roughcontact.contact.loads import LOAD_TOL
 from roughcontact.contact.products import PRECISIONS, Products
 from roughcontact.contact.result import Batch, ContactResult
+from roughcontact.contact.retries import settle
 from roughcontact.elasticity.protocol import InfluenceOperator
 
-__all__ = ["METHODS", "PRECISIONS", "REGISTRY", "Method", "Problem", "check_method",
-           "check_problem", "method_for", "resolve_method", "run", "run_loads", "solve",
-           "solve_many", "warn_unconverged"]
-
-logger = logging.getLogger("roughcontact.contact")
-
+__all__ = ["LOAD_TOL", "METHODS", "PRECISIONS", "REGISTRY", "Method", "Problem",
+           "check_method", "check_problem", "fallbacks", "method_for", "resolve_method", "solve",
+           "solve_many", "solve_rows"]
 
 @dataclass(frozen=True)
 class Method:
@@ -190,35 +188,18 @@ def method_for(method: str, operator, hardness=None) -> Method:
     return REGISTRY[resolve_method(method, operator, hardness)]
 
 
-def warn_unconverged(method: Method, batch: Batch, max_iter: int, tol: float) -> None:
-    """Warn (on the ``roughcontact.contact`` logger) if some surfaces did not converge."""
-    failed = np.flatnonzero(~batch.converged)
-    if failed.size:
-        logger.warning(
-            "contact solve (%s) did not converge in %d iterations for %d of %d surfaces; "
-            "largest KKT residual %.3g > tol %.3g",
-            method.name, max_iter, failed.size, batch.converged.size,
-            float(batch.residual[failed].max()), tol,
-        )
-
-
-def run(method: Method, products: Products, gaps, d, pressure, tol: float, max_iter: int,
-        hardness=None) -> Batch:
-    """Solve the rows of ``gaps`` at approaches ``d`` with ``method``; warn if some
-    surfaces did not converge (on the ``roughcontact.contact`` logger)."""
-    batch = method.solve(products, gaps, d, pressure, tol, max_iter, hardness)
-    warn_unconverged(method, batch, max_iter, tol)
-    return batch
-
-
-def run_loads(method: Method, products: Products, gaps, mean_pressures, pressure, tol: float,
-              max_iter: int, hardness=None):
-    """Solve the rows of ``gaps`` at mean pressures [Pa] (load control,
-    :func:`roughcontact.contact.loads.solve_at_loads`); the batch and the approaches [m]."""
-    batch, approaches = solve_at_loads(method, products, gaps, mean_pressures, pressure, tol,
-                                       max_iter, hardness)
-    warn_unconverged(method, batch, max_iter, tol)
-    return batch, approaches
+def fallbacks(method: Method, operator) -> tuple:
+    """The methods tried, in turn, on a surface ``method`` left unconverged
+    (:mod:`roughcontact.contact.retries`), each with its products: block principal
+    pivoting where ``operator`` holds its dense matrix or can form it
+    (:data:`roughcontact.contact.pivot.EXACT_MAX_UNKNOWNS`), unless ``method`` pivots
+    already; none otherwise."""
+    if method.name in ("pivot", "exact"):
+        return ()
+    if operator.matrix is None and operator.shape[0] > pivot.EXACT_MAX_UNKNOWNS:
+        return ()
+    exact = REGISTRY["exact"]
+    return ((exact, exact.products(operator, "double")),)
 
 
 @dataclass(frozen=True)
@@ -228,7 +209,9 @@ class Problem:
     ``operator`` and the :class:`Method` chosen for it, the initial
     separations ``gaps`` (m, n) [m] and the ``shape`` of one surface as
     given, ``tol``, ``max_iter`` (the method's default filled in), the
-    ``products`` of the solve and the cap ``hardness`` [Pa] or None.
+    ``products`` of the solve, the cap ``hardness`` [Pa] or None, the tolerance
+    on the load ``load_tol`` (load control), and whether an unconverged solve is
+    ``retried``, then by the ``fallbacks`` (:func:`fallbacks`).
     """
 
     operator: InfluenceOperator
@@ -239,14 +222,28 @@ class Problem:
     max_iter: int
     products: Products
     hardness: float | None
+    load_tol: float
+    retried: bool
+    fallbacks: tuple
+
+    def settle(self, control, start, gaps=None) -> tuple[Batch, np.ndarray]:
+        """The rows of ``gaps`` (default all) under ``control``
+        (:class:`~roughcontact.contact.controls.Approaches` or ``Loads``) from ``start``
+        [Pa], retried where unconverged (:func:`roughcontact.contact.retries.settle`);
+        the batch and the approaches [m]."""
+        return settle(self.method, self.products, self.gaps if gaps is None else gaps,
+                      control, start, self.tol, self.max_iter, self.hardness, self.fallbacks,
+                      retry=self.retried)
 
 
 def check_problem(operator, gaps0, name: str, *, method, tol, max_iter, precision,
-                  element_area, hardness, batched: bool) -> Problem:
+                  element_area, hardness, batched: bool, load_tol=LOAD_TOL,
+                  retries=True) -> Problem:
     """Check the arguments shared by the entry points, in the order of their messages;
     the gaps are named ``name``."""
     check_method(method)
     tol = checks.check_positive(tol)
+    load_tol = checks.check_positive(load_tol, "load_tol")
     checks.check_max_iter(max_iter)
     checks.check_precision(precision)
     hardness = checks.check_hardness(hardness)
@@ -255,27 +252,25 @@ def check_problem(operator, gaps0, name: str, *, method, tol, max_iter, precisio
     gaps, shape = checks.check_surfaces(gaps0, op, name, batched=batched)
     checks.check_definite(op)
     return Problem(op, chosen, gaps, shape, tol, chosen.max_iter(max_iter, gaps.shape[1]),
-                   chosen.products(op, precision), hardness)
+                   chosen.products(op, precision), hardness, load_tol, bool(retries),
+                   fallbacks(chosen, op) if retries else ())
 
 
-def _solve_rows(problem: Problem, approach, p0, mean_pressure=None) -> list[ContactResult]:
-    """Solve every surface of ``problem`` at ``approach`` or ``mean_pressure``; one
-    :class:`ContactResult` each."""
+def solve_rows(problem: Problem, approach, p0, mean_pressure=None) -> list[ContactResult]:
+    """Solve every surface of ``problem`` at ``approach`` [m] or ``mean_pressure`` [Pa]
+    from ``p0`` [Pa] (None: zero), retried where unconverged
+    (:mod:`roughcontact.contact.retries`); one :class:`ContactResult` each."""
     gaps, hardness = problem.gaps, problem.hardness
     m, n = gaps.shape
     checks.check_control(approach, mean_pressure)
     if mean_pressure is None:
         d = checks.check_approach(approach, m)
-        checks.check_bounded(problem.operator, gaps, d, "approach")
+        checks.check_bounded(problem.operator, gaps, d, "approach", hardness)
+        control = Approaches(d)
     else:
-        loads = checks.check_mean_pressure(mean_pressure, m)
+        control = Loads(checks.check_mean_pressure(mean_pressure, m), problem.load_tol)
     pressure = checks.check_initial_pressure(p0, m, n, hardness=hardness)
-    if mean_pressure is None:
-        batch = run(problem.method, problem.products, gaps, d, pressure, problem.tol,
-                    problem.max_iter, hardness)
-    else:
-        batch, d = run_loads(problem.method, problem.products, gaps, loads, pressure,
-                             problem.tol, problem.max_iter, hardness)
+    batch, d = problem.settle(control, pressure)
     return [batch.contact_result(j, gaps[j] - d[j], problem.operator.element_area,
                                  problem.shape, problem.method.name, problem.tol, d[j], hardness)
             for j in range(m)]
@@ -283,7 +278,7 @@ def _solve_rows(problem: Problem, approach, p0, mean_pressure=None) -> list[Cont
 
 def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", tol=1e-10,
           max_iter=None, p0=None, element_area=None, precision="double",
-          hardness=None) -> ContactResult:
+          hardness=None, load_tol=LOAD_TOL, retries=True) -> ContactResult:
     """Contact pressure under a rigid flat at prescribed approach or mean pressure (Eq 27).
 
     Minimizes ``V = 1/2 p.C p - p.(d - f)`` over ``p >= 0`` (Eq 17, 18, 27 of
@@ -307,7 +302,7 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
         then found with the solution (``approach`` of the result): inside
         the iteration for ``"pcg"`` (Polonsky & Keer's mean-gap shift), by
         an outer solve on the approach for the other methods, to
-        ``|P(d) - P| <= tol P`` (:mod:`roughcontact.contact.loads`).
+        ``|P(d) - P| <= load_tol P`` (:mod:`roughcontact.contact.loads`).
     method : {"auto", "cg", "pcg", "steepest", "exact", "pivot"}
         See the module docstring; ``"pivot"`` and ``"exact"`` are the same
         for a single solve; ``"auto"`` (default) is ``"pivot"`` for a dense
@@ -317,7 +312,9 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
         Tolerance on the dimensionless KKT residual (:mod:`roughcontact.contact.kkt`).
     max_iter : int, optional
         Iteration limit; default ``max(1000, 2n)`` for ``"cg"``,
-        ``max(1000, 4 sqrt(n))`` for ``"pcg"``,
+        ``20 max(1000, 4 sqrt(n))`` for ``"pcg"`` (which also stops when its
+        residual has not halved in ``max(1000, 4 sqrt(n))`` iterations:
+        :func:`roughcontact.contact.pcg.stall_window`),
         ``max(20000, 20n)`` for ``"steepest"``, ``10n + 100`` pivots for
         ``"exact"`` and ``"pivot"``.
     p0 : ndarray, optional
@@ -338,12 +335,25 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
         cap; ``+inf`` is the same). See the module docstring. ``p0`` is
         clipped to ``H``.
 
+    load_tol : float
+        Tolerance on the load under load control, ``|P(d) - P| <= load_tol P``
+        (default :data:`~roughcontact.contact.loads.LOAD_TOL`, 1e-8); a
+        load-controlled result is ``converged`` only if it meets both ``tol``
+        and ``load_tol``.
+    retries : bool
+        Solve a surface again where its solve stops short of its tolerances
+        (the default; see Returns). False returns the method's own result, as
+        it stopped: for measuring a method, not for results.
+
     Returns
     -------
     ContactResult
-        Solution and diagnostics. If the limit is reached first, the last
-        iterate is returned with ``converged=False`` and a warning is logged
-        on the ``roughcontact.contact`` logger.
+        Solution and diagnostics. A surface whose solve stops short of its
+        tolerances is solved again (from zero pressure if it was warm-started,
+        then by block principal pivoting where the matrix is dense or can be
+        formed: :mod:`roughcontact.contact.retries`); if every attempt fails,
+        the best is returned with ``converged=False`` and a warning naming the
+        attempts is logged on the ``roughcontact.contact`` logger.
 
     Raises
     ------
@@ -352,13 +362,14 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
     """
     problem = check_problem(operator, gap0, "gap0", method=method, tol=tol, max_iter=max_iter,
                             precision=precision, element_area=element_area, hardness=hardness,
-                            batched=False)
-    return _solve_rows(problem, approach, p0, mean_pressure)[0]
+                            batched=False, load_tol=load_tol, retries=retries)
+    return solve_rows(problem, approach, p0, mean_pressure)[0]
 
 
 def solve_many(operator, gaps0, approach=None, *, mean_pressure=None, method="auto", tol=1e-10,
                max_iter=None, p0=None, element_area=None, precision="double",
-               hardness=None) -> tuple[ContactResult, ...]:
+               hardness=None, load_tol=LOAD_TOL,
+               retries=True) -> tuple[ContactResult, ...]:
     """Solve m contact problems with one operator in one batched call (Eq 27).
 
     Same problem as :func:`solve` for each surface; all unfinished surfaces
@@ -377,7 +388,7 @@ def solve_many(operator, gaps0, approach=None, *, mean_pressure=None, method="au
         Rigid-body approach ``d >= 0`` [m], shared or per surface.
     mean_pressure : float or ndarray (m,), optional
         Mean pressure ``P >= 0`` [Pa] instead (load control, see :func:`solve`).
-    method, tol, max_iter, element_area, precision, hardness
+    method, tol, max_iter, element_area, precision, hardness, load_tol, retries
         As in :func:`solve`.
     p0 : ndarray, optional
         Starting pressures [Pa], shape of ``gaps0``.
@@ -389,5 +400,5 @@ def solve_many(operator, gaps0, approach=None, *, mean_pressure=None, method="au
     """
     problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
                             precision=precision, element_area=element_area, hardness=hardness,
-                            batched=True)
-    return tuple(_solve_rows(problem, approach, p0, mean_pressure))
+                            batched=True, load_tol=load_tol, retries=retries)
+    return tuple(solve_rows(problem, approach, p0, mean_pressure))

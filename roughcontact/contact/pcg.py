@@ -93,8 +93,9 @@ from roughcontact.contact.result import Batch
 from roughcontact.elasticity.transforms import Stencil
 
 __all__ = ["DRIFT_FACTOR", "EXACT_AT", "IN_FLIGHT_ELEMENTS", "NESTED_MIN_ELEMENTS",
-           "REFRESH_EVERY", "ProductRequest", "Solution", "constrained_pcg", "default_max_iter",
-           "grid_operator", "run_solves", "solve", "solve_load", "solve_steps"]
+           "REFRESH_EVERY", "STALL_WINDOWS", "ProductRequest", "Solution", "constrained_pcg",
+           "default_max_iter", "grid_operator", "run_solves", "solve", "solve_load",
+           "solve_steps", "stall_window"]
 
 #: Residual at which the carried displacement is first recomputed in double.
 EXACT_AT = 1e-5
@@ -109,9 +110,32 @@ NESTED_MIN_ELEMENTS = 128 * 128
 IN_FLIGHT_ELEMENTS = 2**22
 
 
-def default_max_iter(n: int) -> int:
-    """Iteration limit for ``n`` unknowns: ``max(1000, 4 sqrt(n))``."""
+#: A solve's iteration limit is this many stall windows (:func:`stall_window`).
+STALL_WINDOWS = 20
+
+
+def stall_window(n: int) -> int:
+    """Iterations without progress after which a solve of ``n`` unknowns stops:
+    ``max(1000, 4 sqrt(n))``.
+
+    Progress is the KKT residual falling below half its best value so far. A
+    preconditioned solve on a grid FFT operator converges in O(sqrt(n))
+    iterations (measured for issue 28: 100-600 at 64^2-1024^2); an
+    unpreconditioned one on an ill-conditioned dense block (the paper's mesh,
+    condition number 1e8) may need several thousand and still halve its residual
+    every few hundred iterations, while a solve whose free set cycles (measured: a
+    32 x 32 paper-mesh block under load control, the residual between 0.43 and 0.66
+    for 20000 iterations) makes none. So the budget follows the problem: a solve
+    goes on while it converges, up to :func:`default_max_iter`, and one that stalls
+    stops after this window, to be retried (:mod:`roughcontact.contact.retries`).
+    """
     return max(1000, int(4 * np.sqrt(n)))
+
+
+def default_max_iter(n: int) -> int:
+    """Iteration limit for ``n`` unknowns: :data:`STALL_WINDOWS` stall windows,
+    ``20 max(1000, 4 sqrt(n))``; a solve that stalls stops earlier (:func:`stall_window`)."""
+    return STALL_WINDOWS * stall_window(n)
 
 
 @dataclass(frozen=True)
@@ -358,7 +382,8 @@ def constrained_pcg(operator, gap0, *, approach=None, mean_pressure=None, tol=1e
         Starting pressure [Pa] (a warm start or a coarser grid's solution);
         default the lower half of the gap range, uniformly loaded.
     max_iter : int, optional
-        Iteration limit, default :func:`default_max_iter`.
+        Iteration limit, default :func:`default_max_iter`; a solve whose residual
+        has not halved in :func:`stall_window` iterations stops before it.
     single : bool
         Direction and correction products in float32 (``precision="mixed"``).
 
@@ -366,7 +391,7 @@ def constrained_pcg(operator, gap0, *, approach=None, mean_pressure=None, tol=1e
     -------
     Solution
         Its ``residual`` is computed on the exact ``u``; it exceeds ``tol``
-        only when ``max_iter`` was reached.
+        only when ``max_iter`` was reached or the solve stalled.
     """
     return run_solves([solve_steps(operator, gap0, approach=approach,
                                    mean_pressure=mean_pressure, tol=tol, pressure0=pressure0,
@@ -397,17 +422,22 @@ def _iterate(operator, f, approach, mean_pressure, tol, pressure0, max_iter, sin
     yield from state.start()
     exact, exact_next, carried = False, EXACT_AT, np.inf
     iteration = since_exact = 0
+    window = stall_window(f.size)
+    best, progress_at = np.inf, 0  # the best residual's last halving, and when
     while True:
         res = state.residual()
+        if res <= 0.5 * best:
+            best, progress_at = res, iteration
         if exact and since_exact == 0 and state.work.single \
                 and res > max(DRIFT_FACTOR * carried, tol):
             state.work.use_double()  # the float32 recurrence drifted: continue in double
-        if res <= max(tol, exact_next) or iteration >= max_iter or since_exact >= REFRESH_EVERY:
+        stop = iteration >= max_iter or iteration - progress_at >= window
+        if res <= max(tol, exact_next) or stop or since_exact >= REFRESH_EVERY:
             if not exact:
                 yield from state.recompute()
                 exact, since_exact, exact_next, carried = True, 0, tol, res
                 continue  # the residual again, on the exact u
-            if res <= tol or iteration >= max_iter:
+            if res <= tol or stop:
                 break
         yield from state.step()
         exact = False

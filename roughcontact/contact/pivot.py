@@ -122,11 +122,14 @@ class PivotState:
     """
 
     __slots__ = ("step", "free", "upper", "best", "budget", "rounds", "factor", "index",
-                 "members", "priority", "saturated", "saturated_load")
+                 "members", "priority", "saturated", "saturated_load", "cold", "spent")
 
     def __init__(self, free: np.ndarray, upper: np.ndarray | None = None,
                  priority: np.ndarray | None = None):
         self.step = 0
+        # the step started from the cold guess (:func:`_cold_sets`); the rounds of its
+        # earlier attempts (a warm start that did not settle)
+        self.cold, self.spent = True, 0
         self.restart(free, upper, priority)
         # lower Cholesky factor of C on the elements ``index`` (in that order),
         # and the same set as a mask
@@ -358,44 +361,67 @@ def _next_sets(p, rate, delta: float, rigid_next, hardness):
 
 
 def _step_solved(state: PivotState, j: int, x, gap, gaps, steps, operator, diagonal,
-                 options: SweepOptions, table: SweepTable) -> None:
+                 options: SweepOptions, table: SweepTable, method: str) -> None:
     """Record surface ``j``'s solved step (pressure ``x``, ``gap``), its tangent from
-    the factor, and restart it at its next step from the predicted sets."""
+    the factor, and restart it at its next step from the predicted sets.
+
+    A step that did not settle within ``max_iter`` pivots is pivoted again from the
+    cold guess if it started from a prediction; if it started cold it is recorded
+    unconverged, logged, and the next step starts cold, not from it."""
     step, hardness = state.step, options.hardness
     d = steps[j, step]
     k = steps.shape[1]
     scale = gap_scale((gaps[j] - d)[None])[0]
     p = _clip(x, hardness)
     residual = kkt_residuals(p[None], gap[None], diagonal, np.array([scale]), hardness)[0]
+    converged = residual <= options.tol
+    if not converged and not state.cold:
+        state.spent += state.rounds
+        state.restart(*_cold_sets(gaps[j] - d, hardness))
+        state.cold = True
+        return
     table.record(j, step, p, gap - gaps[j] + d, residual, operator.element_area, hardness, gap)
-    table.record_work(j, step, state.rounds, state.rounds, residual <= options.tol)
+    rounds = state.spent + state.rounds
+    table.record_work(j, step, rounds, rounds, converged)
     rate = np.zeros(p.size)
-    if state.index.size and (options.stiffness or step + 1 < k):
+    if converged and state.index.size and (options.stiffness or step + 1 < k):
         rate[state.index] = state.solve(np.ones(state.index.size))
     if options.stiffness:
-        table.record_stiffness(j, step, operator.element_area * rate.sum(), True)
+        table.record_stiffness(j, step, operator.element_area * rate.sum(), converged)
+    if not converged:
+        logger.warning("contact sweep (%s): surface %d, step %d (approach %.6g m) did not "
+                       "settle in %d pivots, from the predicted sets and from the cold "
+                       "guess (KKT residual %.3g > tol %.3g); flagged, its next step "
+                       "starts cold", method, j, step, d, rounds, residual, options.tol)
     state.step += 1
+    state.spent = 0
     if state.step < k:
         rigid_next = gaps[j] - steps[j, state.step]
-        state.restart(*_next_sets(p, rate, steps[j, state.step] - d, rigid_next, hardness))
+        if converged:
+            state.restart(*_next_sets(p, rate, steps[j, state.step] - d, rigid_next, hardness))
+        else:
+            state.restart(*_cold_sets(rigid_next, hardness))
+        state.cold = not converged
 
 
-def sweep(method, products: Products, gaps, steps, options: SweepOptions,
-          table: SweepTable) -> None:
+def sweep(problem, steps, options: SweepOptions, table: SweepTable) -> None:
     """Every surface's sweep by block principal pivoting, all in flight at once.
 
-    Each surface advances through its own approaches ``steps`` (m, k) [m];
-    every round factors each in-flight surface's ``C_FF`` on its current
-    guess, solves ``C_FF p_F = d - f_F`` (``- C_FU H`` with a cap), and
-    computes the gaps of *all* in-flight surfaces, whatever step each is at,
-    with one product ``P C``. A surface whose guess is consistent
+    ``problem`` is the checked :class:`roughcontact.contact.methods.Problem`
+    (its method names the sweep in the log, its products give ``C``, its gaps
+    ``f`` (m, n) [m]). Each surface advances through its own approaches
+    ``steps`` (m, k) [m]; every round factors each in-flight surface's ``C_FF``
+    on its current guess, solves ``C_FF p_F = d - f_F`` (``- C_FU H`` with a
+    cap), and computes the gaps of *all* in-flight surfaces, whatever step each
+    is at, with one product ``P C``. A surface whose guess is consistent
     (``p_F >= 0``, ``g >= 0`` off ``F``, to rounding) has solved its step:
     its tangent ``(C_FF)^-1 1`` comes from the same factor (saturated
     elements fixed), and its next step starts at once from the predicted
     sets ``{p + (d' - d) dp/dd > 0}`` (and ``>= H`` for the saturated set).
-    Fills ``table`` in place; ``method`` (the registry entry) names the sweep in the
-    warning about unconverged steps.
+    A step that does not settle is retried and flagged as in
+    :func:`_step_solved`. Fills ``table`` in place.
     """
+    products, gaps = problem.products, problem.gaps
     dense = dense_influence(products.operator)
     diagonal = products.operator.diagonal()
     m = gaps.shape[0]
@@ -415,10 +441,4 @@ def sweep(method, products: Products, gaps, steps, options: SweepOptions,
             if state.settled(x[r], gap[r], diagonal, 1e-3 * options.tol * scale,
                              options.hardness, options.max_iter):
                 _step_solved(state, j, x[r], gap[r], gaps, steps, dense, diagonal, options,
-                             table)
-    failed = ~table.columns["converged"]
-    if failed.any():
-        logger.warning(
-            "contact sweep (%s): %d of %d steps did not converge; largest KKT residual "
-            "%.3g > tol %.3g", method.name, int(failed.sum()), failed.size,
-            float(table.columns["residual"][failed].max()), options.tol)
+                             table, problem.method.name)

@@ -19,8 +19,10 @@ import numpy as np
 
 from roughcontact.contact import cg, checks
 from roughcontact.contact.checks import SweepOptions
+from roughcontact.contact.controls import Approaches, Loads
 from roughcontact.contact.kkt import free_set
-from roughcontact.contact.methods import Method, check_problem, run, run_loads
+from roughcontact.contact.loads import LOAD_TOL
+from roughcontact.contact.methods import Problem, check_problem
 from roughcontact.contact.products import Products
 from roughcontact.contact.result import SweepResult, SweepTable
 from roughcontact.contact.stiffness import free_set_cg
@@ -65,14 +67,17 @@ def _tangent(products: Products, pressure, options: SweepOptions, step: int,
     return solution.x
 
 
-def approach_loop(method: Method, products: Products, gaps, steps, options: SweepOptions,
-                  table: SweepTable) -> None:
+def approach_loop(problem: Problem, steps, options: SweepOptions, table: SweepTable) -> None:
     """The shared approach loop: all surfaces through step 1, 2, ... k together.
 
     Each step starts from the previous solution or, with ``extrapolate``,
     from :func:`predict` with ``dp/dd`` the tangent of the stiffness solve
-    (``stiffness``) or else the secant of the last two steps. Fills ``table``.
+    (``stiffness``) or else the secant of the last two steps; a surface whose
+    step did not converge (after the retries of
+    :mod:`roughcontact.contact.retries`) starts its next step from zero
+    pressure instead. Fills ``table``.
     """
+    gaps = problem.gaps
     m, n = gaps.shape
     pressure = np.zeros((m, n))
     rate = np.full((m, n), np.nan)
@@ -80,17 +85,28 @@ def approach_loop(method: Method, products: Products, gaps, steps, options: Swee
         start = pressure
         if options.extrapolate and step > 0:
             start = predict(pressure, steps[:, step], steps[:, step - 1], rate, options.hardness)
-        batch = run(method, products, gaps, steps[:, step].copy(), start, options.tol,
-                    options.max_iter, options.hardness)
+        batch, _ = problem.settle(Approaches(steps[:, step].copy()), start)
         if options.extrapolate and not options.stiffness:
             # Secant dp/dd of this step, for the next prediction.
             delta = steps[:, step] - (steps[:, step - 1] if step > 0 else np.nan)
             with np.errstate(invalid="ignore", divide="ignore"):
                 rate = (batch.pressure - pressure) / delta[:, None]
         pressure = batch.pressure
-        tangent = _record(products, batch, options, step, table, gaps, steps[:, step])
+        tangent = _record(problem.products, batch, options, step, table, gaps, steps[:, step])
         if options.stiffness:
             rate = tangent
+        pressure, rate = _restart_failed(batch.converged, pressure, rate)
+
+
+def _restart_failed(converged, pressure, rate):
+    """The next step's start without the unconverged surfaces' solutions: zero pressure
+    and no rate where ``converged`` is False."""
+    if converged.all():
+        return pressure, rate
+    pressure = np.where(converged[:, None], pressure, 0.0)
+    if rate is not None:
+        rate = np.where(converged[:, None], rate, np.nan)
+    return pressure, rate
 
 
 def _record(products: Products, batch, options: SweepOptions, step: int, table: SweepTable,
@@ -107,21 +123,21 @@ def _record(products: Products, batch, options: SweepOptions, step: int, table: 
     return None
 
 
-def load_loop(method: Method, products: Products, gaps, loads, options: SweepOptions,
-              table: SweepTable) -> np.ndarray:
+def load_loop(problem: Problem, loads, options: SweepOptions, table: SweepTable) -> np.ndarray:
     """The loop of a load-controlled sweep: all surfaces through the mean pressures
-    ``loads`` (m, k) [Pa], each step started from the previous step's pressure
-    (:func:`roughcontact.contact.loads.solve_at_loads`). Fills ``table``; returns the
-    approaches found (m, k) [m]."""
+    ``loads`` (m, k) [Pa], each step started from the previous step's pressure (from
+    zero after a step that did not converge; :mod:`roughcontact.contact.retries`) and
+    met to ``problem.load_tol`` (:func:`roughcontact.contact.loads.solve_at_loads`).
+    Fills ``table``; returns the approaches found (m, k) [m]."""
+    gaps = problem.gaps
     m, n = gaps.shape
     pressure = np.zeros((m, n))
     approaches = np.zeros(loads.shape)
     for step in range(loads.shape[1]):
-        batch, approaches[:, step] = run_loads(method, products, gaps, loads[:, step].copy(),
-                                               pressure, options.tol, options.max_iter,
-                                               options.hardness)
-        pressure = batch.pressure
-        _record(products, batch, options, step, table, gaps, approaches[:, step])
+        batch, approaches[:, step] = problem.settle(
+            Loads(loads[:, step].copy(), problem.load_tol), pressure)
+        _record(problem.products, batch, options, step, table, gaps, approaches[:, step])
+        pressure, _ = _restart_failed(batch.converged, batch.pressure, None)
     return approaches
 
 
@@ -132,14 +148,15 @@ def _steps(problem, approaches, mean_pressures) -> np.ndarray:
     if mean_pressures is not None:
         return checks.approach_steps(mean_pressures, m, "Pa", "mean_pressures")
     steps = checks.approach_steps(approaches, m, "m")
-    checks.check_bounded(problem.operator, problem.gaps, steps.max(axis=1), "approaches")
+    checks.check_bounded(problem.operator, problem.gaps, steps.max(axis=1), "approaches",
+                         problem.hardness)
     return steps
 
 
 def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto", tol=1e-10,
           max_iter=None, element_area=None, return_fields=False, stiffness=True,
           stiffness_tol=1e-6, precision="double", extrapolate=True, hardness=None,
-          profile=False, interface=None) -> SweepResult:
+          profile=False, interface=None, load_tol=LOAD_TOL, retries=True) -> SweepResult:
     """Force-deflection curves of m surfaces over k approaches or loads (Eq 27, 33, 35).
 
     Solves Eq 27 for every surface at every approach, all surfaces at once
@@ -174,10 +191,14 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
         the iteration for ``"pcg"``, else by an outer solve on the
         approach), started from the previous step's pressure; the approaches
         found are the result's ``approach``.
-    method, tol, max_iter, element_area, precision, hardness
+    method, tol, max_iter, element_area, precision, hardness, load_tol, retries
         As in :func:`roughcontact.contact.solve`; ``precision`` also applies
         to the stiffness CG. With ``hardness`` the tangent and the
-        extrapolation hold the saturated elements (``p = H``) fixed.
+        extrapolation hold the saturated elements (``p = H``) fixed. A step
+        that does not converge is retried as a single solve is
+        (:mod:`roughcontact.contact.retries`); if it still does not, it is
+        flagged (``converged`` False), logged, and the surface's next step
+        starts from zero pressure, not from it.
     return_fields : bool
         Keep the pressure fields ``(m, k, *surface shape)`` [Pa].
     stiffness : bool
@@ -208,7 +229,7 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
     """
     problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
                             precision=precision, element_area=element_area, hardness=hardness,
-                            batched=True)
+                            batched=True, load_tol=load_tol, retries=retries)
     stiffness_tol = checks.check_positive(stiffness_tol, "stiffness_tol")
     gaps = problem.gaps
     steps = _steps(problem, approaches, mean_pressures)
@@ -217,8 +238,8 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
     table = SweepTable(gaps.shape[0], steps.shape[1], problem.shape, return_fields, profile,
                        interface)
     if mean_pressures is not None:  # load control
-        steps = load_loop(problem.method, problem.products, gaps, steps, options, table)
+        steps = load_loop(problem, steps, options, table)
     else:
         loop = problem.method.sweep or approach_loop
-        loop(problem.method, problem.products, gaps, steps, options, table)
+        loop(problem, steps, options, table)
     return table.result(steps, problem.method.name, problem.tol, problem.hardness)

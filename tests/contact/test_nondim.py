@@ -131,8 +131,10 @@ def test_cell_grid_reaches_its_pressure_on_every_surface_without_a_trial_solve()
 def test_unconverged_steps_are_flagged_not_hidden(heights, unit_influence, caplog):
     approaches = np.linspace(0.5, 3.0, 4)
     with caplog.at_level(logging.WARNING):
+        # pivoting, the solver of last resort, limited to one pivot: the sweep's
+        # retries (cold) cannot settle every step either
         nd = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                               approaches=approaches, max_iter=2)
+                               approaches=approaches, method="exact", max_iter=1)
     assert (~nd.converged).any()
     assert (nd.residual[~nd.converged] > nd.tol).all()
     assert np.isfinite(nd.nominal_pressure).all()
