@@ -12,7 +12,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from roughcontact.study.config import load_config
+from roughcontact.study import resources
+from roughcontact.study.cells import convergence_presets, study_plan
+from roughcontact.study.config import ConvergenceSettings, load_config, report_section
 from roughcontact.study.studies import contact_cells
 
 REPO = Path(__file__).resolve().parents[2]
@@ -169,8 +171,8 @@ def test_cluster_results_equal_a_plain_run(fig14_runs):
 
 
 def dry_run_jobs(text):
-    """Jobs of a dry run's listing: rule, job group (None if alone), wildcards, threads
-    and resources."""
+    """Jobs of a dry run's listing: rule, job group (None if alone), input files,
+    wildcards, threads and resources."""
     jobs, group = [], None
     for line in text.splitlines():
         if match := re.search(r"Group job (\S+) \(jobs", line):
@@ -179,7 +181,9 @@ def dry_run_jobs(text):
             if not match.group(1):  # not indented: a job outside any group
                 group = None
             jobs.append({"rule": match.group(2), "group": group, "wildcards": "",
-                         "threads": 1, "resources": {}})
+                         "input": [], "threads": 1, "resources": {}})
+        elif match := re.fullmatch(r"\s+input: (.*)", line):
+            jobs[-1]["input"] = match.group(1).split(", ")
         elif match := re.fullmatch(r"\s+wildcards: (.*)", line):
             jobs[-1]["wildcards"] = match.group(1)
         elif match := re.fullmatch(r"\s+threads: (\d+)", line):
@@ -187,6 +191,82 @@ def dry_run_jobs(text):
         elif match := re.fullmatch(r"\s+resources: (.*)", line):
             jobs[-1]["resources"] = dict(item.split("=", 1) for item in match.group(1).split(", "))
     return jobs
+
+
+def wildcard_values(job):
+    """A dry-run job's wildcards, name -> value."""
+    return dict(item.split("=", 1) for item in job["wildcards"].split(", ") if item)
+
+
+def _influence(plan, config, job):
+    geometry = plan.geometries[wildcard_values(job)["geometry"]]
+    return (resources.influence_mem_mb(geometry, plan.build),
+            resources.influence_runtime(geometry, plan.build))
+
+
+def _influence_choice(plan, config, job):
+    planned = plan.choices[wildcard_values(job)["auto"]].candidates(plan.build.max_bytes)[0]
+    return (resources.choice_mem_mb(planned, plan.build),
+            resources.choice_runtime(planned, plan.build))
+
+
+def _pair_influence(plan, config, job):
+    pair = plan.pairs[wildcard_values(job)["pair"]]
+    return resources.pair_mem_mb(pair), resources.pair_runtime(pair)
+
+
+def _surfaces(plan, config, job):
+    cell = plan.surfaces[wildcard_values(job)["cell"]]
+    return resources.surfaces_mem_mb(cell), resources.surfaces_runtime(cell)
+
+
+def _contact(plan, config, job):
+    contact = plan.jobs[wildcard_values(job)["job"]]
+    return (resources.contact_mem_mb(contact, plan.build),
+            resources.contact_runtime(contact, plan.contact, plan.build))
+
+
+def _influence_convergence(plan, config, job):
+    presets = convergence_presets(config)
+    section = ConvergenceSettings.from_section(report_section(config, "influence_convergence"))
+    return (resources.convergence_mem_mb(plan.body, presets),
+            resources.convergence_runtime(plan.body, presets, section))
+
+
+def _audit(plan, config, job):  # it reads and hashes its input files
+    return (resources.audit_mem_mb(plan.geometries.values(), plan.build),
+            resources.audit_runtime(len(job["input"])))
+
+
+def _summary(plan, config, job):  # its memory is the rule's own number
+    return None, resources.summary_runtime()
+
+
+#: Rule -> (plan, config, dry-run job) -> (memory [MB], wall time [min]) of a first attempt
+#: from the cost model (roughcontact.study.resources on config/cost_model.yaml), from the
+#: records rules/common.smk passes it; None where the model does not give the number.
+MODEL_REQUESTS = {
+    "influence": _influence,
+    "influence_choice": _influence_choice,
+    "pair_influence": _pair_influence,
+    "surfaces": _surfaces,
+    "contact": _contact,
+    "influence_convergence": _influence_convergence,
+    "audit": _audit,
+    "aggregate": _summary,
+    "figure": _summary,
+    "table": _summary,
+    "config_snapshot": _summary,
+}
+
+
+def model_request(plan, config, job):
+    """``{"mem_mb": MB, "runtime": min}`` the cost model gives a dry-run ``job`` of the
+    validated ``config`` (its ``plan``), the entries it gives (:data:`MODEL_REQUESTS`; a
+    rule not listed there fails, so that a new rule's resources are checked too)."""
+    mem_mb, runtime = MODEL_REQUESTS[job["rule"]](plan, config, job)
+    return {name: value for name, value in (("mem_mb", mem_mb), ("runtime", runtime))
+            if value is not None}
 
 
 def slurm_dry_run(workdir, *args):
@@ -209,6 +289,13 @@ def test_slurm_profile_gives_every_job_of_the_study_its_resources(tmp_path):
         assert int(res["runtime"]) > 0, job
         assert job["threads"] >= 1, job
         assert res["slurm_account"] == "CHANGE_ME" and res["slurm_partition"] == "CHANGE_ME"
+    # each job asks for what the cost model gives it, through rules/common.smk
+    config = load_config(PAPER)
+    plan = study_plan(config)
+    for job in jobs:
+        model = model_request(plan, config, job)
+        asked = {name: int(job["resources"][name]) for name in model}
+        assert asked == model, (job["rule"], job["wildcards"])
     by_rule = {}
     for job in jobs:
         by_rule.setdefault(job["rule"], []).append(job)
