@@ -86,6 +86,13 @@ class _Curve:
         self.batch, self.approach = batch, d
         return float(batch.pressure.mean())
 
+    @property
+    def failed(self) -> bool:
+        """The last solve stopped short of its tolerance: the outer solve ends there (its
+        loads are not to be trusted; the retries of
+        :mod:`roughcontact.contact.retries` take over)."""
+        return self.batch is not None and not bool(self.batch.converged[0])
+
     def resolve_load(self, load_tol: float, target: float, slope: float, d: float) -> None:
         """Lower ``tol`` so that a solve at ``d`` [m] knows its load to a tenth of
         ``load_tol`` of ``target`` [Pa], given the slope ``dP/dd`` [Pa/m] near it."""
@@ -110,7 +117,7 @@ def _bracket(curve: _Curve, target: float, first_touch: float, ceiling: float | 
             if not d_hi < ceiling:
                 d_hi = ceiling
         p_hi = curve(d_hi)
-        if p_hi >= target or d_hi == ceiling:
+        if p_hi >= target or d_hi == ceiling or curve.failed:
             return d_lo, p_lo, d_hi, p_hi
         d_lo, p_lo = d_hi, p_hi
         step *= 4.0
@@ -128,7 +135,8 @@ def _illinois(curve: _Curve, target: float, bracket, load_tol: float) -> float:
     d_lo, p_lo, d_hi, p_hi = bracket
     side = 0
     d, p = d_hi, p_hi
-    while abs(p - target) > load_tol * target and curve.solves < MAX_OUTER:
+    while abs(p - target) > load_tol * target and curve.solves < MAX_OUTER \
+            and not curve.failed:
         if not d_hi > d_lo or not p_hi > p_lo:
             if curve.tol <= TOL_FLOOR:
                 break
@@ -153,7 +161,7 @@ def _illinois(curve: _Curve, target: float, bracket, load_tol: float) -> float:
             if side == 1:
                 p_lo = target - 0.5 * (target - p_lo)
             side = 1
-    if curve.approach != d:
+    if curve.approach != d and not curve.failed:
         curve(d)
     return d
 
@@ -237,9 +245,9 @@ def _outer_solves(method, products, gaps, mean_pressures, pressure, tol, max_ite
             # a single element carrying the whole load deflects n P C_ii: an upper scale
             scale = target * float(diagonal.mean()) * np.sqrt(n)
             bracket = _bracket(curve, target, first_touch, ceiling, scale)
-            if bracket[2] == ceiling and bracket[3] < target:
+            if bracket[2] == ceiling and bracket[3] < target and not curve.failed:
                 _at_ceiling(curve, target, diagonal)
-            else:
+            else:  # (ends at once after a failed solve)
                 _illinois(curve, target, bracket, load_tol)
         else:
             curve(first_touch)

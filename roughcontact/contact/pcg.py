@@ -233,7 +233,7 @@ class _Iteration:
             flat = np.flatnonzero(np.asarray(pressure0).reshape(-1) > 0.0)
             p_free = np.asarray(pressure0, dtype=np.float64).reshape(-1)[flat]
         else:  # the lower half of the gap range, uniformly loaded (rescaled at once)
-            flat = np.flatnonzero(self.f_flat < self.f_min + 0.5 * (self.f_max - self.f_min))
+            flat = np.flatnonzero(self.f_flat <= self.f_min + 0.5 * (self.f_max - self.f_min))
             p_free = np.ones(flat.size)
         self._set_free(flat, p_free)
         if self.total_load is not None:

@@ -1,5 +1,7 @@
 """Load control (mean pressure given) against displacement control at the same mean pressure."""
 
+import logging
+
 import numpy as np
 import pytest
 
@@ -85,3 +87,94 @@ def test_zero_load_touches_and_exactly_one_control_is_required():
         contact.sweep(op, gap[None], [1e-7], mean_pressures=[1e3])
     with pytest.raises(ValueError, match="mean_pressure must be finite and non-negative"):
         contact.solve(op, gap, mean_pressure=-1.0)
+
+
+# --- issue 42: load control that stalled, and flags that cried wolf ------------------
+
+
+@pytest.fixture(scope="module")
+def paper_block():
+    """The 32 x 32 paper-mesh block of issue 42 (4.8 mm wide, 10 mm thick, E 511 MPa,
+    nu 0; condition number 6e7) and one of the rough surfaces (sigma 0.5 um, b 0.5 mm,
+    seed 2) on which pcg's load control cycled at 0.1 MPa."""
+    from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
+    from roughcontact.elasticity.protocol import DenseInfluence
+    from roughcontact.surfaces import synthetic
+    from roughcontact.surfaces.spec import SurfaceSpec
+
+    geom = BlockGeometry(size=(4.8e-3, 4.8e-3), grid=(32, 32), thickness=10e-3, mesh="paper",
+                         nu=0.0)
+    op = DenseInfluence(unit_modulus_influence(geom) / geom.E, geom.element_area, geom.grid)
+    spec = SurfaceSpec(grid=32, size=4.8e-3, corr_length=0.5e-3, sigma=0.5e-6,
+                       acf="exponential")
+    heights = synthetic.generate_many(spec, range(3), method="paper")[2]
+    return op, heights.max() - heights
+
+
+@pytest.mark.parametrize("precision", ["double", "mixed"])
+def test_pcg_load_control_on_an_ill_conditioned_block_is_right_or_flagged(paper_block,
+                                                                          precision, caplog):
+    # On 16554c5 pcg's load control cycled here from its first iteration (KKT residual
+    # 0.43-0.66; 20000 iterations did not help) and the sweep returned a real area of
+    # 0.52 against pivot's 0.02, flagged, and started its next step from it. Now the
+    # stalled solve stops after its window and is solved again by pivoting; every step
+    # is right.
+    op, gap = paper_block
+    loads = np.geomspace(0.1e6, 10e6, 12)
+    with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
+        result = contact.sweep(op, gap[None], mean_pressures=loads, method="pcg",
+                               precision=precision, tol=1e-10, stiffness=False)
+    assert result.converged.all()
+    np.testing.assert_allclose(result.nominal_pressure[0], loads, rtol=1e-8)
+    # the referee: pivoting at the approaches found gives the same contact and loads
+    exact = contact.sweep(op, gap[None], result.approach[0], method="pivot", tol=1e-12,
+                          stiffness=False)
+    np.testing.assert_array_equal(result.real_area_fraction, exact.real_area_fraction)
+    np.testing.assert_allclose(exact.nominal_pressure[0], loads, rtol=1e-6)
+    assert not any("did not converge" in r.getMessage() for r in caplog.records)
+
+
+def test_pcg_load_control_stall_is_cut_short(paper_block):
+    # Without the retries the stalled solve is returned flagged after its stall window
+    # (the residual not halved in max(1000, 4 sqrt(n)) iterations), not after 20000.
+    from roughcontact.contact import pcg
+
+    op, gap = paper_block
+    stalled = contact.solve(op, gap, mean_pressure=0.1e6, method="pcg", tol=1e-10,
+                            retries=False)
+    assert not stalled.converged and stalled.residual > 0.1
+    assert stalled.iterations == pcg.stall_window(gap.size)
+    retried = contact.solve(op, gap, mean_pressure=0.1e6, method="pcg", tol=1e-10)
+    exact = contact.solve(op, gap, mean_pressure=0.1e6, method="exact", tol=1e-12)
+    assert retried.converged
+    np.testing.assert_array_equal(retried.contact_set, exact.contact_set)
+    assert retried.approach == pytest.approx(exact.approach, rel=1e-8)
+
+
+def _natural_residual(op, gap, approach, pressure):
+    """The KKT residual of Eq 27 recomputed from the operator's products (not the
+    solver's): ``max |min(C_ii p, g)| / max |d - f|``, ``g = C p + f - d``."""
+    p = pressure.reshape(-1)
+    g = np.asarray(op.matvec(p), dtype=float) + gap.reshape(-1) - approach
+    natural = np.minimum(op.diagonal() * p, g)
+    return float(np.abs(natural).max() / np.abs(approach - gap).max())
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_cg_load_control_flags_mean_what_they_say(seed):
+    # On 16554c5 cg's outer solve on the approach used tol for both the KKT residual
+    # and the load, and flagged good solutions (KKT met, load missed by 3e-10 to 2e-9),
+    # and near full contact of these zero-mean operators it stopped at d = mean f with
+    # the load 3-33 % off. Now: every step converged, to both tolerances, by an
+    # independent measure.
+    op = SpectralHalfSpace((32, 32), (1e-3, 1e-3), E, NU)
+    gaps = rough_gaps(4, (32, 32), seed)
+    loads = np.geomspace(1e5, 3e7, 8)
+    result = contact.sweep(op, gaps, mean_pressures=loads, method="cg", tol=1e-10,
+                           return_fields=True, stiffness=False)
+    assert result.converged.all()
+    for j, k in np.ndindex(result.approach.shape):
+        pressure = result.pressure[j, k]
+        assert abs(pressure.mean() - loads[k]) <= 1e-8 * loads[k]
+        assert _natural_residual(op, gaps[j], result.approach[j, k], pressure) <= 1.01e-10
+    assert (result.real_area_fraction[:, -1] > 0.99).all()  # near full contact
