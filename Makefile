@@ -12,7 +12,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 export MKL_NUM_THREADS ?= 1
 
-.PHONY: run test test-cluster lint bench docs docs-check clean-results
+.PHONY: run test test-cluster test-verification lint bench docs docs-check clean-results
 
 $(BIN)/python:
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || \
@@ -51,6 +51,11 @@ docs-check: docs
 # slurm-wlm and munge with apt-get if missing) runs Fig 14 of config/quick.yaml.
 test-cluster: $(STAMP)
 	$(BIN)/pytest -q -m slurm -rP --durations=0 tests/workflow/test_slurm_cluster.py
+
+# The verification matrix's seeded set (tests/contact/test_verification_seeded.py, minutes):
+# every operator x method x control x cap on more seeds and harder blocks than make test's.
+test-verification: $(STAMP)
+	$(BIN)/pytest -q -n $(CORES) -m verification tests/contact/test_verification_seeded.py
 
 # Benchmarks (minutes; results in results/benchmarks/). QUICK=1 for a short run.
 bench: $(STAMP)

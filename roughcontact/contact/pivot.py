@@ -121,8 +121,9 @@ class PivotState:
     ``C_FF`` anew. The order changes the factor's rounding only.
     """
 
-    __slots__ = ("step", "free", "upper", "best", "budget", "rounds", "factor", "index",
-                 "members", "priority", "saturated", "saturated_load", "cold", "spent")
+    __slots__ = ("step", "free", "upper", "best", "best_sets", "budget", "rounds", "factor",
+                 "index", "members", "priority", "saturated", "saturated_load", "cold",
+                 "spent")
 
     def __init__(self, free: np.ndarray, upper: np.ndarray | None = None,
                  priority: np.ndarray | None = None):
@@ -143,6 +144,7 @@ class PivotState:
         the elements' expected pressures ``priority`` (their order in a new factor)."""
         self.free, self.upper, self.priority = free, upper, priority
         self.best, self.budget, self.rounds = free.size + 1, BLOCK_TRIES, 0
+        self.best_sets = None
 
     def refactor(self, operator: InfluenceOperator) -> str:
         """Bring the factor to the current free set: keep it if the set is unchanged;
@@ -262,13 +264,28 @@ class PivotState:
         """Kim & Park (2011), Algorithm 2: block exchanges while they reduce the
         number of infeasible variables (``BLOCK_TRIES`` tries otherwise), then
         Murty's single exchange of the largest index, which terminates for a
-        P-matrix. With a cap, free elements ``over`` it move to the saturated set."""
+        P-matrix. With a cap, free elements ``over`` it move to the saturated set.
+
+        The single exchanges start from the sets with the fewest infeasible variables
+        so far, not from where the block exchanges stalled: measured on a capped,
+        ill-conditioned block (the paper's mesh, 10 x 10 under a 10 mm block, 0.06 E*
+        against H = 0.1 E*), Murty's rule from a stalled guess with 58 infeasible
+        variables had not settled after 1100 exchanges; from the best guess (7) it
+        settled in 85 rounds."""
         count = int(infeasible.sum())
         if count < self.best:
             self.best, self.budget = count, BLOCK_TRIES
+            self.best_sets = (self.free.copy(), None if self.upper is None
+                              else self.upper.copy(), infeasible.copy(),
+                              None if over is None else over.copy())
         elif self.budget > 0:
             self.budget -= 1
         else:
+            if self.budget == 0 and self.best_sets is not None:  # back to the best guess
+                free, upper, infeasible, over = self.best_sets
+                self.free = free.copy()
+                self.upper = None if upper is None else upper.copy()
+                self.budget = -1
             single = np.zeros_like(infeasible)
             single[np.flatnonzero(infeasible)[-1]] = True
             infeasible = single

@@ -381,3 +381,44 @@ def refusal_expected(body: Body, method: str, case: Case) -> str | None:
     if method == "pcg" and case.hardness is not None:
         return "does not solve the capped problem"
     return None
+
+
+# ---------------------------------------------------------------------------
+# The seeded set (pytest -m verification; benchmarks/verification_matrix.py)
+
+
+def random_block(seed: int) -> Body:
+    """A dense block drawn from ``seed``: mesh preset, grid 10-20 per side (square or
+    not), plan size 1-9 mm, thickness 0.3-5 times the plan size, nu (0 on the paper
+    mesh, else 0-0.45): condition numbers from 1e1 (refined) to 1e7 (paper, thick)."""
+    rng = np.random.default_rng(4200 + seed)
+    mesh = ("paper", "graded", "refined", "converged")[seed % 4]
+    side = int(rng.integers(10, 21)) if mesh != "converged" else int(rng.integers(6, 11))
+    grid = (side, int(rng.choice([side, max(4, side // 2)])))
+    width = float(rng.uniform(1e-3, 9e-3))
+    size = (width, width * grid[1] / grid[0])
+    thickness = width * float(rng.uniform(0.3, 5.0))
+    nu = 0.0 if mesh == "paper" else float(rng.uniform(0.0, 0.45))
+    name = f"random block {seed} ({mesh} {grid[0]}x{grid[1]}, L/w {thickness / width:.1f})"
+    return _body(name, lambda: _block(mesh, grid, thickness, nu, size=size), grid, size)
+
+
+def seeded_bodies() -> dict[str, Callable[[], Body]]:
+    """The operators of the seeded set: the core ones, the issue's 32 x 32 paper-mesh
+    block (condition number 6e7), eight random blocks, and periodic and spectral cells
+    of aspect 64 (the hybrid block and the pairs as in the core)."""
+    nu = 0.3
+    out = dict(core_bodies())
+    out["block paper 32 (issue 42)"] = lambda: _body(
+        "block paper 32 (issue 42)",
+        lambda: _block("paper", (32, 32), 10e-3, 0.0, E=5.11e8, size=(4.8e-3, 4.8e-3)),
+        (32, 32), (4.8e-3, 4.8e-3))
+    for seed in range(8):
+        out[f"random block {seed}"] = functools.partial(random_block, seed)
+    out["periodic 64:1"] = lambda: _body(
+        "periodic 64:1", lambda: (PeriodicHalfSpace((256, 4), (2.56e-3, 0.04e-3), 2.0e9, nu),
+                                  2.0e9 / (1 - nu**2)), (256, 4), (2.56e-3, 0.04e-3))
+    out["spectral 1:64"] = lambda: _body(
+        "spectral 1:64", lambda: (SpectralHalfSpace((4, 256), (0.04e-3, 2.56e-3), 2.0e9, nu),
+                                  2.0e9 / (1 - nu**2)), (4, 256), (0.04e-3, 2.56e-3))
+    return out
