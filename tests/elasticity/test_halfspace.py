@@ -44,7 +44,8 @@ def test_square_centre_closed_form():
     # Square of side 2a: u = 8 (1 - nu^2) p a ln(1 + sqrt 2) / (pi E).
     a = 0.7e-3
     expected = 8.0 * (1.0 - NU**2) * a * np.log(1.0 + np.sqrt(2.0)) / (np.pi * E)
-    assert love_rectangle(0.0, 0.0, a, a, E, NU) == pytest.approx(expected, rel=1e-13)
+    # abs=0: approx's default abs=1e-12 would pass any m/Pa value
+    assert love_rectangle(0.0, 0.0, a, a, E, NU) == pytest.approx(expected, rel=1e-13, abs=0.0)
 
 
 @pytest.mark.parametrize("x, y", [(0.3, -0.2), (1.7, 0.4), (-2.5, -1.5), (1.0, 0.0)])
@@ -63,7 +64,7 @@ def test_rectangle_matches_quadrature(x, y):
     for x0, x1 in zip(xs[:-1], xs[1:], strict=True):
         for y0, y1 in zip(ys[:-1], ys[1:], strict=True):
             total += integrate.dblquad(integrand, x0, x1, y0, y1, epsabs=1e-12, epsrel=1e-11)[0]
-    assert love_rectangle(x, y, a, b, E, NU) == pytest.approx(LOVE * total, rel=1e-8)
+    assert love_rectangle(x, y, a, b, E, NU) == pytest.approx(LOVE * total, rel=1e-8, abs=0.0)
 
 
 def test_far_field_is_boussinesq():
@@ -100,7 +101,7 @@ def test_influence_matrix_entries_and_ordering():
         for m in range(nx * ny):
             jy, jx = divmod(m, nx)
             expected = love_rectangle((ix - jx) * dx, (iy - jy) * dy, dx / 2, dy / 2, E, NU)
-            assert C[k, m] == pytest.approx(expected, rel=1e-12)
+            assert C[k, m] == pytest.approx(expected, rel=1e-12, abs=0.0)
     np.testing.assert_array_equal(C, C.T)
 
 
@@ -152,11 +153,11 @@ def test_periodic_operator_properties():
     op = PeriodicHalfSpace((nx, ny), (1.2e-3, 0.8e-3), E, NU, mean_compliance=3e-12)
     n = nx * ny
     assert op.shape == (n, n)
-    assert op.element_area == pytest.approx(1.2e-3 * 0.8e-3 / n)
+    assert op.element_area == pytest.approx(1.2e-3 * 0.8e-3 / n, rel=1e-6, abs=0.0)
     rng = np.random.default_rng(1)
     q, r = rng.random(n), rng.random(n)
     # Symmetric.
-    assert q @ (op @ r) == pytest.approx(r @ (op @ q), rel=1e-12)
+    assert q @ (op @ r) == pytest.approx(r @ (op @ q), rel=1e-12, abs=0.0)
     # Uniform pressure gives u = mean_compliance * P (the zero-mode convention).
     np.testing.assert_allclose(op @ np.full(n, 2.0e5), 3e-12 * 2.0e5, rtol=1e-10)
     # Columns of a batch are independent products.
@@ -166,7 +167,7 @@ def test_periodic_operator_properties():
     # diagonal() is C[i, i] of the operator.
     unit = np.zeros(n)
     unit[37] = 1.0
-    assert op.diagonal()[37] == pytest.approx((op @ unit)[37], rel=1e-12)
+    assert op.diagonal()[37] == pytest.approx((op @ unit)[37], rel=1e-12, abs=0.0)
     assert op.diagonal().shape == (n,)
 
 

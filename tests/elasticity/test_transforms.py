@@ -104,13 +104,14 @@ def test_spectral_halfspace_is_symmetric_with_its_mean_eigenvalue_on_the_diagona
     a, b = rng.random((2, 16 * 12))
     assert abs(a @ op.matvec(b) - b @ op.matvec(a)) <= 1e-13 * abs(a @ op.matvec(b))
     column = op.matvec(np.eye(16 * 12)[:, 37])
-    assert column[37] == pytest.approx(op.diagonal()[0], rel=1e-12)
+    # abs=0: approx's default abs=1e-12 would pass any m/Pa value
+    assert column[37] == pytest.approx(op.diagonal()[0], rel=1e-12, abs=0.0)
     # C_ii is the mean of the eigenvalues 2 / (E* |q|) over the full grid
     qx = 2 * np.pi * np.fft.fftfreq(16, SIZE[0] / 16)
     qy = 2 * np.pi * np.fft.fftfreq(12, SIZE[1] / 12)
     q = np.hypot(qx[None, :], qy[:, None])
     eig = np.where(q > 0, 2 * (1 - NU**2) / (E * np.where(q > 0, q, 1.0)), 0.0)
-    assert op.diagonal()[0] == pytest.approx(eig.mean(), rel=1e-12)
+    assert op.diagonal()[0] == pytest.approx(eig.mean(), rel=1e-12, abs=0.0)
 
 
 def _mirrored_hybrid(grid=(24, 20), coarse=(6, 5)):

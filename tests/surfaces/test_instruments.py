@@ -84,8 +84,9 @@ def test_grid_size_reader_and_mask_agree_with_surfacetopography(name):
     assert m.grid == (nx, ny)
     assert m.heights.shape == (ny, nx)
     expected_size = [float(s) * scale for s in topography.physical_sizes]
-    assert m.size == pytest.approx(expected_size, rel=1e-9)
-    assert m.spacing == pytest.approx([expected_size[0] / nx, expected_size[1] / ny], rel=1e-9)
+    assert m.size == pytest.approx(expected_size, rel=1e-9, abs=0.0)
+    assert m.spacing == pytest.approx([expected_size[0] / nx, expected_size[1] / ny], rel=1e-9,
+                                      abs=0.0)
     assert m.preparation["reader"] == reader_name
     masked = int(np.ma.getmaskarray(topography.heights()).sum())
     assert m.preparation["masked_points"] == masked
@@ -99,7 +100,7 @@ def test_grid_size_reader_and_mask_agree_with_surfacetopography(name):
 def test_sigma_is_surfacetopography_rms_height_after_plane_removal(name):
     _, topography, scale = reference(name)
     expected = topography.detrend(detrend_mode="height").rms_height_from_area() * scale
-    assert statistics(loaded(name))["sigma"] == pytest.approx(expected, rel=1e-9)
+    assert statistics(loaded(name))["sigma"] == pytest.approx(expected, rel=1e-9, abs=0.0)
 
 
 @needs_data
@@ -163,7 +164,7 @@ def test_decimal_commas_and_points_read_the_same_grid(tmp_path):
         assert m.grid == (64, 48)
         sigmas.append(statistics(m)["sigma"])
     independent = plane_removed(expected * 1e-6, (1e-5, 1e-5)).std()
-    assert sigmas == pytest.approx([independent] * 3, rel=1e-9)
+    assert sigmas == pytest.approx([independent] * 3, rel=1e-9, abs=0.0)
 
 
 def test_an_ambiguous_decimal_comma_line_is_refused_unless_decimal_says(tmp_path):
@@ -270,7 +271,7 @@ def test_a_spacing_contradicting_the_file_is_refused():
         load_measurement(DATA / "x3p-2.x3p", spacing=(1.1 * lx / nx, ly / ny))
     assert not isinstance(err.value, MeasurementError)
     m = load_measurement(DATA / "x3p-2.x3p", spacing=(lx / nx, ly / ny))  # agreeing: accepted
-    assert m.size == pytest.approx([lx, ly], rel=1e-9)
+    assert m.size == pytest.approx([lx, ly], rel=1e-9, abs=0.0)
 
 
 def test_an_npy_file_needs_a_height_unit(tmp_path):
@@ -317,7 +318,7 @@ def test_decimate_by_4_averages_blocks_and_multiplies_the_spacing():
     _, (dx, dy) = grid_and_spacing("matrix-3.txt")
     m = load_measurement(DATA / "matrix-3.txt", decimate_by=4)
     assert m.grid == (64, 64)
-    assert m.spacing == pytest.approx([4 * dx, 4 * dy], rel=1e-12)
+    assert m.spacing == pytest.approx([4 * dx, 4 * dy], rel=1e-12, abs=0.0)
     assert m.preparation["decimated_by"] == 4
     full = plane_removed(reference_heights_m("matrix-3.txt"), (dx, dy))
     blocks = full.reshape(64, 4, 64, 4).mean(axis=(1, 3))
@@ -331,8 +332,8 @@ def test_resample_keeps_the_physical_size():
     size = [float(s) * scale for s in topography.physical_sizes]
     m = load_measurement(DATA / "matrix-3.txt", resample_grid=(100, 80))
     assert m.heights.shape == (80, 100)
-    assert m.size == pytest.approx(size, rel=1e-12)
-    assert m.spacing == pytest.approx([size[0] / 100, size[1] / 80], rel=1e-12)
+    assert m.size == pytest.approx(size, rel=1e-12, abs=0.0)
+    assert m.spacing == pytest.approx([size[0] / 100, size[1] / 80], rel=1e-12, abs=0.0)
     assert abs(m.heights.mean()) < 1e-12 * m.heights.std()
 
 
@@ -428,7 +429,7 @@ def test_an_instrument_file_runs_end_to_end_beside_its_twin(tmp_path):
     assert prep["reader"] == name and prep["file_grid"] == list(topography.nb_grid_pts)
     assert prep["file_spacing_m"] == pytest.approx(
         [s * metres / n for s, n in zip(topography.physical_sizes, topography.nb_grid_pts,
-                                        strict=True)], rel=1e-12)
+                                        strict=True)], rel=1e-12, abs=0.0)
     assert prep["crop_points"][2:] == [round(1.5e-3 / (s * metres / n)) for s, n in
                                        zip(topography.physical_sizes,
                                            topography.nb_grid_pts, strict=True)]

@@ -124,8 +124,13 @@ def test_lognormal_kurt_matches_scipy_lognormal():
     skew, excess = stats.lognorm(s=sigmas).stats("sk")
     np.testing.assert_allclose(jn.lognormal_kurt(skew), excess + 3.0, rtol=1e-12)
     np.testing.assert_allclose(jn.lognormal_kurt(-skew), excess + 3.0, rtol=1e-12)
-    # stable near the normal point: beta2 - 3 ~ 16 beta1 / 9
-    assert jn.lognormal_kurt(1e-6) - 3.0 == pytest.approx(16.0 / 9.0 * 1e-12, rel=1e-5)
+    # stable near the normal point: beta2 - 3 ~ 16 beta1 / 9. beta2 is a double
+    # next to 3, so beta2 - 3 = 1.8e-12 can be right only to a spacing of 3
+    # (4.4e-16, 2.5e-4 of it; measured 0.2 spacing, beta2 correctly rounded), not
+    # to rel=1e-5; approx's default abs=1e-12 passed anything from 0.8e-12 to 2.8e-12.
+    # Cardano's w - 1 = u + 1/u - 2 without the stable form is 3.2 spacings off.
+    assert jn.lognormal_kurt(1e-6) - 3.0 == pytest.approx(16.0 / 9.0 * 1e-12, rel=1e-5,
+                                                          abs=np.spacing(3.0))
 
 
 # ---------------------------------------------------------------------------
