@@ -79,7 +79,8 @@ def dense_influence(operator: InfluenceOperator) -> InfluenceOperator:
             f"{EXACT_MAX_UNKNOWNS} unknowns; operator has n = {n}: use method='cg'"
         )
     matrix = rows_product(operator, np.eye(n))
-    return DenseInfluence(0.5 * (matrix + matrix.T), operator.element_area)
+    return DenseInfluence(0.5 * (matrix + matrix.T), operator.element_area, operator.grid,
+                          operator.mean_compliance)
 
 
 def _not_positive_definite() -> ValueError:
@@ -155,6 +156,8 @@ class PivotState:
         ``"new"`` it did."""
         if self.members is not None and np.array_equal(self.free, self.members):
             return "kept"
+        if operator.mean_compliance == 0.0 and self.free.all():
+            self._leave_null_space()
         kept = 0
         if self.members is not None and self.index.size:
             left = np.flatnonzero(~self.free[self.index])
@@ -169,6 +172,16 @@ class PivotState:
             raise _not_positive_definite() from None
         self.members = self.free.copy()
         return kind
+
+    def _leave_null_space(self) -> None:
+        """An operator with ``C 1 = 0`` is singular on the set of every element (and
+        definite on any smaller one), and every element free is no solution unless
+        ``d = mean f`` exactly: the element of the largest expected pressure goes to
+        the cap (to zero pressure without one), and the exchanges go on from there."""
+        j = int(np.argmax(self.priority)) if self.priority is not None else 0
+        self.free[j] = False
+        if self.upper is not None:
+            self.upper[j] = True
 
     def _ordered(self, elements: np.ndarray) -> np.ndarray:
         """``elements`` in order of decreasing :attr:`priority` (ties: element order)."""

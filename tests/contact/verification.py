@@ -208,9 +208,14 @@ def rough_gap(body: Body, seed: int, slope: float) -> np.ndarray:
 
 
 def _exact(body: Body, gap, *, approach=None, mean_pressure=None, hardness=None):
-    return contact.solve(body.operator, gap, approach, mean_pressure=mean_pressure,
-                         method="exact", tol=1e-12, hardness=hardness,
-                         element_area=body.size[0] * body.size[1] / body.n)
+    """Block principal pivoting's solution (a case's target, not a referee)."""
+    result = contact.solve(body.operator, gap, approach, mean_pressure=mean_pressure,
+                           method="exact", tol=1e-12, hardness=hardness,
+                           element_area=body.size[0] * body.size[1] / body.n)
+    if not result.converged:
+        raise RuntimeError(f"{body.name}: the case's exact solution did not converge "
+                           f"(KKT residual {result.residual:.3g})")
+    return result
 
 
 def _approach_for_area(body: Body, gap, area: float) -> float:
