@@ -86,8 +86,10 @@ def lognormal_kurt(skew):
     float or numpy.ndarray
         Pearson kurtosis ``beta2_L = w^4 + 2 w^3 + 3 w^2 - 3`` with ``w`` the
         real root of ``Sk^2 = (w - 1)(w + 2)^2`` (Johnson's lognormal line,
-        the SU/SB boundary in Fig 1 of Kumar et al. 2006). Accurate to full
-        relative precision in ``beta2_L - 3`` near the normal point.
+        the SU/SB boundary in Fig 1 of Kumar et al. 2006). Correctly rounded
+        near the normal point: the excess ``beta2_L - 3`` is computed to full
+        relative precision, but the returned kurtosis, a double near 3, holds
+        it only to one spacing of 3 (4.4e-16).
     """
     result = lognormal_kurt_from_wm1(lognormal_wm1(np.asarray(skew, dtype=float)))
     return float(result) if np.ndim(result) == 0 else result
