@@ -30,6 +30,7 @@ import verification as V
 
 from roughcontact import contact
 from roughcontact.contact import counterface
+from roughcontact.contact.references import hertz, sphere_gap, westergaard_pressure
 from roughcontact.elasticity.halfspace import (
     PeriodicHalfSpace,
     SpectralHalfSpace,
@@ -137,17 +138,6 @@ def test_flat_punch_on_every_mesh(punch_blocks, method, control, capped):
                                        rtol=1e-7, err_msg=mesh)
 
 
-def westergaard_pressure(s, wavelength, half_width, mean_pressure):
-    """Westergaard's pressure [Pa] under the wave ``h (1 - cos(2 pi s / lambda))`` in
-    partial contact ``|s| < a`` at mean pressure ``P = p* sin^2(pi a / lambda)``
-    (Johnson 1985, Sec 13.2):
-    ``p = 2 P cos(pi s / lambda) sqrt(sin^2(pi a / lambda) - sin^2(pi s / lambda)) /
-    sin^2(pi a / lambda)``."""
-    edge = np.sin(np.pi * half_width / wavelength) ** 2
-    inside = np.clip(edge - np.sin(np.pi * s / wavelength) ** 2, 0.0, None)
-    return 2.0 * mean_pressure * np.cos(np.pi * s / wavelength) * np.sqrt(inside) / edge
-
-
 WAVE_E, WAVE_NU = 2.0e9, 0.3
 
 
@@ -187,12 +177,6 @@ def test_westergaard_on_elongated_cells(kind, method, control):
 HERTZ_N, HERTZ_DX, HERTZ_RADIUS = 24, 1e-6, 1e-2
 
 
-def paraboloid(n: int, dx: float, radius: float) -> np.ndarray:
-    """The gap ``r^2 / 2R`` [m] of a sphere of radius ``radius`` centred on the grid."""
-    x = (np.arange(n) - (n - 1) / 2) * dx
-    return (x[None, :] ** 2 + x[:, None] ** 2) / (2.0 * radius)
-
-
 @pytest.mark.parametrize("control", V.CONTROLS)
 @pytest.mark.parametrize("method", V.METHODS)
 @pytest.mark.parametrize("kind", ["free", "dense"])
@@ -206,7 +190,7 @@ def test_hertz_on_the_half_space(kind, method, control):
     size = (HERTZ_N * HERTZ_DX, HERTZ_N * HERTZ_DX)
     op = halfspace_operator(grid, size, nu) if kind == "free" else DenseInfluence(
         halfspace_influence(grid, size, 1.0, nu), HERTZ_DX**2, grid)
-    gap = paraboloid(HERTZ_N, HERTZ_DX, HERTZ_RADIUS)
+    gap = sphere_gap(HERTZ_N, HERTZ_DX, HERTZ_RADIUS)
     approach = (8 * HERTZ_DX) ** 2 / HERTZ_RADIUS
     if control == "approach":
         result = contact.solve(op, gap, approach, method=method, element_area=HERTZ_DX**2)
@@ -215,13 +199,11 @@ def test_hertz_on_the_half_space(kind, method, control):
         result = contact.solve(op, gap, mean_pressure=load, method=method,
                                element_area=HERTZ_DX**2)
     assert result.converged
-    force = result.load
-    a_hertz = (3.0 * force * HERTZ_RADIUS / (4.0 * e_star)) ** (1.0 / 3.0)
-    p0_hertz = 3.0 * force / (2.0 * np.pi * a_hertz**2)
+    expected = hertz(result.load, HERTZ_RADIUS, e_star)
     a = np.sqrt(np.count_nonzero(result.pressure) * HERTZ_DX**2 / np.pi)
-    assert a / a_hertz == pytest.approx(1.0, rel=0.05)
-    assert result.max_pressure / p0_hertz == pytest.approx(1.0, rel=0.05)
-    assert (a_hertz**2 / HERTZ_RADIUS) / result.approach == pytest.approx(1.0, rel=0.05)
+    assert a / expected.a == pytest.approx(1.0, rel=0.05)
+    assert result.max_pressure / expected.p0 == pytest.approx(1.0, rel=0.05)
+    assert expected.d / result.approach == pytest.approx(1.0, rel=0.05)
 
 
 @pytest.mark.parametrize("control", V.CONTROLS)

@@ -7,6 +7,7 @@ import pytest
 from scipy import integrate, special
 
 from roughcontact import contact
+from roughcontact.contact.references import westergaard_pressure
 from roughcontact.elasticity.halfspace import (
     PeriodicHalfSpace,
     halfspace_influence,
@@ -238,24 +239,6 @@ def test_periodic_cosine_modes_match_discrete_closed_form(grid, spacing):
         expected = element_cosine_compliance(q * width / 2.0) * 2.0 / (E_STAR * q)
         # as a ratio: approx's default abs=1e-12 would pass any m/Pa value
         assert compliance / expected == pytest.approx(1.0, rel=5e-4)
-
-
-def westergaard_pressure(s, wavelength, half_width, mean_pressure):
-    """Westergaard's pressure [Pa] under a wavy surface in partial contact.
-
-    A rigid flat on an elastic half-space (E*) whose surface is the wave
-    ``h (1 - cos(2 pi s / lambda))``: at mean pressure
-    ``P = p* sin^2(pi a / lambda)``, ``p* = pi E* h / lambda`` (the pressure of
-    full contact), the contact is ``|s| < a`` (mod lambda) and
-
-        p(s) = 2 P cos(pi s / lambda) sqrt(sin^2(pi a / lambda) - sin^2(pi s / lambda))
-               / sin^2(pi a / lambda)
-
-    (Johnson 1985, Sec 13.2; Westergaard 1939).
-    """
-    edge = np.sin(np.pi * half_width / wavelength) ** 2
-    inside = np.clip(edge - np.sin(np.pi * s / wavelength) ** 2, 0.0, None)
-    return 2.0 * mean_pressure * np.cos(np.pi * s / wavelength) * np.sqrt(inside) / edge
 
 
 @pytest.mark.parametrize("n_long, n_short", [(512, 64), (512, 8)])
