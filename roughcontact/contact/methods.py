@@ -54,6 +54,14 @@ Methods (:data:`REGISTRY`; :data:`METHODS` also holds ``"auto"``):
     without a hardness cap, ``"cg"`` for any other matrix-free operator or a
     capped problem on one (:func:`resolve_method`); the default.
 
+Tolerances and retries: every result is ``converged`` only if its KKT
+residual met ``tol`` and, under load control, its load met ``load_tol``
+(:mod:`roughcontact.contact.loads`). A solve that stops short is solved
+again cold, then by block principal pivoting where the matrix is dense or
+can be formed, and only then returned flagged, the attempts logged
+(:mod:`roughcontact.contact.retries`; ``retries=False`` returns a method's
+own result).
+
 Operators: ``operator`` is a dense symmetric influence matrix (ndarray, n x
 n, m/Pa; then ``element_area`` [m^2] must be given), an
 :class:`roughcontact.elasticity.protocol.InfluenceOperator` (such as
