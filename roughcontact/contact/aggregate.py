@@ -300,6 +300,17 @@ def statistics(samples: np.ndarray, confidence: float = 0.95):
     return mean, half_width, count
 
 
+def _check_confidence(confidence) -> float:
+    """``confidence`` as a float in (0, 1)."""
+    try:
+        confidence = float(confidence)
+    except (TypeError, ValueError):
+        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}") from None
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+    return confidence
+
+
 def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
                    confidence: float = 0.95) -> pd.DataFrame:
     """Mean and confidence band over the surfaces of a cell at each nominal pressure.
@@ -349,12 +360,7 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
         ``sigma``, ``E``, ``thickness`` and ``nominal_area``.
     """
     sweep = _check_sweep(sweep_physical)
-    try:
-        confidence = float(confidence)
-    except (TypeError, ValueError):
-        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}") from None
-    if not 0.0 < confidence < 1.0:
-        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+    confidence = _check_confidence(confidence)
     levels = np.asarray(pressures, dtype=float)
     m = sweep.nominal_pressure.shape[0]
     columns = {"nominal_pressure": levels}

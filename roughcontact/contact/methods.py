@@ -77,6 +77,13 @@ operator object, so pass a
 plain ndarray to solve many times with one dense matrix (the Cholesky
 factorization of a 60 x 60 grid's matrix costs about one second).
 
+Precision: ``precision="mixed"`` takes the search-direction products of
+``"cg"`` and ``"steepest"`` with a single-precision copy of a dense ``C``
+(about twice as fast), and as float32 FFTs of a grid FFT operator (also the
+direction products of ``"pcg"``); convergence is still decided on
+double-precision residuals, so the result meets ``tol`` either way. Ignored
+by pivoting and by other matrix-free operators.
+
 Performance: the products ``C p`` dominate the iterative methods.
 :func:`solve_many` and :func:`roughcontact.contact.sweep` apply ``C`` to all
 unfinished surfaces at once (BLAS 3), and ``precision="mixed"`` takes the
@@ -319,49 +326,34 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
     tol : float
         Tolerance on the dimensionless KKT residual (:mod:`roughcontact.contact.kkt`).
     max_iter : int, optional
-        Iteration limit; default ``max(1000, 2n)`` for ``"cg"``,
-        ``20 max(1000, 4 sqrt(n))`` for ``"pcg"`` (which also stops when its
-        residual has not halved in ``max(1000, 4 sqrt(n))`` iterations:
-        :func:`roughcontact.contact.pcg.stall_window`),
-        ``max(20000, 20n)`` for ``"steepest"``, ``10n + 100`` pivots for
-        ``"exact"`` and ``"pivot"``.
+        Iteration limit; default the method's (``Method.default_max_iter``:
+        ``max(1000, 2n)`` for ``"cg"``, ``20 max(1000, 4 sqrt(n))`` for
+        ``"pcg"``, which also stops a stalled solve,
+        :func:`roughcontact.contact.pcg.stall_window`; ``max(20000, 20n)`` for
+        ``"steepest"``; ``10n + 100`` pivots).
     p0 : ndarray, optional
         Non-negative starting pressure [Pa] (warm start), shape of ``gap0``;
         default zero. Pivoting takes its support as the first contact set.
     element_area : float, optional
         Element area ``dA`` [m^2]; default ``operator.element_area``.
     precision : {"double", "mixed"}
-        ``"mixed"`` takes the search-direction products of ``"cg"`` and
-        ``"steepest"`` with a single-precision copy of a dense ``C`` (about
-        twice as fast), and as float32 FFTs of a grid FFT operator (also
-        the direction products of ``"pcg"``); convergence is still decided on
-        double-precision residuals, so the result meets ``tol`` either way.
-        Ignored by pivoting and by other matrix-free operators.
+        ``"mixed"``: single-precision search products (module docstring);
+        convergence is decided in double precision either way.
     hardness : float, optional
-        Pressure cap ``H`` [Pa] (elastic-perfectly-plastic elements): solves
-        Eq 27 over ``0 <= p <= H`` instead of ``p >= 0``; default None (no
-        cap; ``+inf`` is the same). See the module docstring. ``p0`` is
-        clipped to ``H``.
-
+        Pressure cap ``H`` [Pa]: Eq 27 over ``0 <= p <= H`` (module docstring);
+        default None (no cap; ``+inf`` is the same). ``p0`` is clipped to ``H``.
     load_tol : float
-        Tolerance on the load under load control, ``|P(d) - P| <= load_tol P``
-        (default :data:`~roughcontact.contact.loads.LOAD_TOL`, 1e-8); a
-        load-controlled result is ``converged`` only if it meets both ``tol``
-        and ``load_tol``.
+        Tolerance on the load, ``|P(d) - P| <= load_tol P`` (default 1e-8).
     retries : bool
-        Solve a surface again where its solve stops short of its tolerances
-        (the default; see Returns). False returns the method's own result, as
-        it stopped: for measuring a method, not for results.
+        Solve again where a solve stops short (default; module docstring).
+        False returns the method's own result: for measuring a method.
 
     Returns
     -------
     ContactResult
-        Solution and diagnostics. A surface whose solve stops short of its
-        tolerances is solved again (from zero pressure if it was warm-started,
-        then by block principal pivoting where the matrix is dense or can be
-        formed: :mod:`roughcontact.contact.retries`); if every attempt fails,
-        the best is returned with ``converged=False`` and a warning naming the
-        attempts is logged on the ``roughcontact.contact`` logger.
+        Solution and diagnostics; ``converged=False`` (and a warning naming the
+        attempts on the ``roughcontact.contact`` logger) only if every attempt
+        failed.
 
     Raises
     ------

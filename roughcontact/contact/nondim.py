@@ -357,38 +357,27 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         Rigid approaches ``dhat = d / sigma`` [-], shared or per surface,
         non-negative and strictly increasing (e.g.
         :func:`roughcontact.contact.cell.approach_grid`).
-    method, tol, max_iter, stiffness_tol, precision
-        Passed to :func:`roughcontact.contact.sweep`; ``tol`` bounds the
-        dimensionless KKT residual, which is the same in SI units.
+    method, tol, max_iter, stiffness_tol, precision, profile, interface
+        Passed to :func:`roughcontact.contact.sweep` (``tol`` bounds the
+        dimensionless KKT residual, the same in SI units; the interface's gaps
+        are in units of sigma, like the heights).
     batch_size : int, optional
         Surfaces per :func:`~roughcontact.contact.sweep` call (default: all
-        in one call, the fastest). Smaller batches bound memory and give
-        progress reports sooner.
+        in one call, the fastest); smaller batches bound memory.
     progress : callable, optional
-        Called with a :class:`SweepProgress` for every step of every batch.
-        ``contact.sweep`` offers no per-step hook, so the reports of a batch
-        are made, in step order, when that batch is finished.
+        Called with a :class:`SweepProgress` for every step of every batch,
+        in step order when the batch is finished.
     nondim_hardness : float, optional
-        Dimensionless pressure cap ``H L / (E sigma)`` (``0 <= phat <= H L /
-        (E sigma)``): the result then holds only for the (sigma, E, H) with that
-        value (:func:`to_physical` checks it). None: the elastic problem.
-    profile : bool
-        Record every solution's pressure and load profiles
-        (:mod:`roughcontact.contact.validity`), from which the share of area
-        and load above any hardness is read without another solve.
-    interface : InterfaceGrid, optional
-        The surfaces' element sides [m] and periodicity
-        (:class:`roughcontact.contact.interface.InterfaceGrid`): record every
-        solution's spots, perimeter, corrected area and gaps (gaps in units of
-        sigma, like the heights). None (default): not recorded.
+        Dimensionless cap ``H L / (E sigma)``: the result then holds only for
+        the (sigma, E, H) with that value (:func:`to_physical` checks it).
+        None: the elastic problem.
 
     Returns
     -------
     NondimSweep
-        (m, k) arrays. Steps whose contact solve did not reach ``tol`` (or
-        gave non-finite values) have ``converged=False``; their values are the
-        solver's last iterate and must not be used as results. A warning is
-        logged with their count.
+        (m, k) arrays; steps that did not converge (or gave non-finite values)
+        have ``converged=False``, must not be used as results, and are counted
+        in a warning.
     """
     thickness = check_positive(thickness, "thickness")
     element_area = check_positive(element_area, "element_area")

@@ -8,7 +8,12 @@ once); the others share :func:`approach_loop`: all surfaces at one step at
 a time, each step started from the first-order prediction
 ``max(p + (d' - d) dp/dd, 0)`` of :func:`predict`, exact on an unchanged
 contact set, with the tangent ``dp/dd = (C_FF)^-1 1`` from
-:func:`~roughcontact.contact.stiffness.free_set_cg`.
+:func:`~roughcontact.contact.stiffness.free_set_cg` (or, without the stiffness,
+the secant of the last two steps): the contact solve then only corrects the
+elements that enter or leave contact. Under load control (:func:`load_loop`)
+each step starts from the previous step's pressure and is solved at its load
+inside the iteration for ``"pcg"``, else by an outer solve on the approach
+(:mod:`roughcontact.contact.loads`).
 """
 
 from __future__ import annotations
@@ -159,22 +164,13 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
           profile=False, interface=None, load_tol=LOAD_TOL, retries=True) -> SweepResult:
     """Force-deflection curves of m surfaces over k approaches or loads (Eq 27, 33, 35).
 
-    Solves Eq 27 for every surface at every approach, all surfaces at once
-    (see :func:`roughcontact.contact.solve_many`). With the default
-    ``"auto"`` method a dense matrix is swept by block principal pivoting
-    (:func:`roughcontact.contact.pivot.sweep`, every surface in flight at
-    once, the tangent from its factor); the other methods use
-    :func:`approach_loop`, each step warm-started from the previous
-    solution or, with ``extrapolate``, from its first-order extrapolation
-    ``max(p_k + (d_k+1 - d_k) dp/dd, 0)``: ``dp/dd`` is the tangent
-    ``(C_AA)^-1 1`` of the stiffness solve when ``stiffness`` is on, else the
-    secant of the last two steps. On an unchanged contact set the solution is
-    linear in ``d`` (Eq 27), so the prediction is then exact up to the
-    stiffness CG's error and the contact solve only corrects the elements
-    that enter or leave contact. With ``stiffness`` the tangent stiffness
-    ``dF/dd = dA 1^T (C_AA)^-1 1`` (see
-    :func:`~roughcontact.contact.tangent_stiffness`) is found at every step
-    by CG on the contact set, started from zero.
+    Solves Eq 27 for every surface at every step, all surfaces at once (see
+    :func:`roughcontact.contact.solve_many`): a dense matrix by block principal
+    pivoting with "auto" (:func:`roughcontact.contact.pivot.sweep`), the other
+    methods by :func:`approach_loop`, each step started from the previous solution
+    or its extrapolation (module docstring). With ``stiffness`` the tangent
+    ``dF/dd = dA 1^T (C_AA)^-1 1`` (:func:`~roughcontact.contact.tangent_stiffness`)
+    is found at every step by CG on the contact set.
 
     Parameters
     ----------
@@ -186,19 +182,14 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
         Rigid-body approaches ``d >= 0`` [m] at each step, shared or per
         surface; warm starts help most when they increase.
     mean_pressures : ndarray, (k,) or (m, k), optional
-        Mean pressures ``P >= 0`` [Pa] instead (load control, exactly one of
-        the two): every step solved at its load (:func:`load_loop`; inside
-        the iteration for ``"pcg"``, else by an outer solve on the
-        approach), started from the previous step's pressure; the approaches
-        found are the result's ``approach``.
+        Mean pressures ``P >= 0`` [Pa] instead (load control, :func:`load_loop`);
+        the approaches found are the result's ``approach``.
     method, tol, max_iter, element_area, precision, hardness, load_tol, retries
         As in :func:`roughcontact.contact.solve`; ``precision`` also applies
-        to the stiffness CG. With ``hardness`` the tangent and the
-        extrapolation hold the saturated elements (``p = H``) fixed. A step
-        that does not converge is retried as a single solve is
-        (:mod:`roughcontact.contact.retries`); if it still does not, it is
-        flagged (``converged`` False), logged, and the surface's next step
-        starts from zero pressure, not from it.
+        to the stiffness CG; with ``hardness`` the tangent and the extrapolation
+        hold the saturated elements fixed. A step that does not converge after
+        its retries is flagged, logged, and the surface's next step starts from
+        zero pressure, not from it.
     return_fields : bool
         Keep the pressure fields ``(m, k, *surface shape)`` [Pa].
     stiffness : bool
@@ -207,21 +198,16 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
         Estimated relative error of ``dF/dd`` at which the free-set CG of the
         stiffness stops (:mod:`roughcontact.contact.stiffness`).
     extrapolate : bool
-        Start each step from the extrapolated pressure (above) instead of the
-        previous solution. Only the starting point changes: every solution
-        still meets ``tol``.
+        Start each step from the extrapolated pressure instead of the previous
+        solution (only the start changes: every solution still meets ``tol``).
     profile : bool
         Keep every solution's pressure and load profiles
-        (:func:`roughcontact.contact.validity.pressure_profile` at the ranks
-        of :func:`~roughcontact.contact.validity.rank_grid`): enough to tell,
-        for any hardness chosen later, how much of the contact area and load
-        lies above it (:func:`~roughcontact.contact.validity.fractions_above`).
+        (:mod:`roughcontact.contact.validity`): the share of area and load above
+        any hardness chosen later.
     interface : InterfaceGrid, optional
-        Element sides and periodicity of the surfaces' grid
-        (:class:`roughcontact.contact.interface.InterfaceGrid`, e.g.
-        ``InterfaceGrid.of(operator, size)``): record every solution's contact
-        spots, perimeter, perimeter-corrected real area, mean gap and gap
-        quantiles (:mod:`roughcontact.contact.interface`). Default None: not recorded.
+        The surfaces' grid (:class:`roughcontact.contact.interface.InterfaceGrid`):
+        record every solution's spots, perimeter, corrected area, mean gap and gap
+        quantiles. Default None: not recorded.
 
     Returns
     -------

@@ -391,6 +391,39 @@ def check_job_files(jobs: dict[str, dict], root: str | Path = ".",
                               "read them (no batch was re-solved):\n  " + "\n  ".join(problems))
 
 
+def _stored_batches(jobs: dict[str, dict], root: Path) -> list[tuple[str, int, int]]:
+    """Every stored batch of the jobs' contact files: (job key, first, end) surfaces."""
+    candidates = []
+    for key in sorted(jobs):
+        _, attrs = read_contact(root / "results" / "contact" / f"{key}.h5")
+        m = len(attrs["seeds"])
+        size = int(attrs.get("batch_size", m))
+        candidates += [(key, start, min(m, start + size)) for start in range(0, m, size)]
+    return candidates
+
+
+def _compare(stored, again, rows: slice) -> tuple[bool, float]:
+    """Whether the re-solved batch ``again`` equals the ``rows`` of the ``stored``
+    sweep bit for bit, and its largest relative difference in the continuous columns."""
+    worst, identical = 0.0, True
+    continuous = ("approach", "nominal_pressure", "mean_plane_deflection",
+                  "real_area_fraction", "max_pressure", "normalized_stiffness")
+    if stored.mean_gap is not None:
+        continuous += ("mean_gap",)
+        # counted on the contact set: one element entering contact at a tolerance's
+        # edge changes them by a step, so they are compared bit for bit only
+        for name in ("spot_count", "perimeter", "corrected_real_area_fraction"):
+            identical &= bool(np.array_equal(getattr(stored, name)[rows],
+                                             getattr(again, name)))
+    for name in continuous:
+        a = getattr(stored, name)[rows]
+        b = getattr(again, name)
+        identical &= bool(np.array_equal(a, b))
+        scale = np.maximum(np.abs(a), np.abs(a).max() * 1e-12)
+        worst = max(worst, float(np.nanmax(np.abs(a - b) / scale)))
+    return identical, worst
+
+
 def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
                   root: str | Path = ".", rtol: float | None = None,
                   study_seed: int | None = None) -> pd.DataFrame:
@@ -409,13 +442,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
     root = Path(root)
     check_job_files(jobs, root, study_seed)
     rng = np.random.default_rng(seed)
-    candidates = []
-    for key in sorted(jobs):
-        path = root / "results" / "contact" / f"{key}.h5"
-        _, attrs = read_contact(path)
-        m = len(attrs["seeds"])
-        size = int(attrs.get("batch_size", m))
-        candidates += [(key, start, min(m, start + size)) for start in range(0, m, size)]
+    candidates = _stored_batches(jobs, root)
     picks = rng.choice(len(candidates), size=min(sample, len(candidates)), replace=False)
     rows = []
     for pick in sorted(picks):
@@ -445,22 +472,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
         same_versions = (attrs["package_version"] == __version__
                          and attrs["numpy_version"] == np.__version__
                          and attrs["git_commit"] == commit and not commit.endswith("-dirty"))
-        worst, identical = 0.0, True
-        continuous = ("approach", "nominal_pressure", "mean_plane_deflection",
-                      "real_area_fraction", "max_pressure", "normalized_stiffness")
-        if stored.mean_gap is not None:
-            continuous += ("mean_gap",)
-            # counted on the contact set: one element entering contact at a tolerance's
-            # edge changes them by a step, so they are compared bit for bit only
-            for name in ("spot_count", "perimeter", "corrected_real_area_fraction"):
-                identical &= bool(np.array_equal(getattr(stored, name)[first:last],
-                                                 getattr(again, name)))
-        for name in continuous:
-            a = getattr(stored, name)[first:last]
-            b = getattr(again, name)
-            identical &= bool(np.array_equal(a, b))
-            scale = np.maximum(np.abs(a), np.abs(a).max() * 1e-12)
-            worst = max(worst, float(np.nanmax(np.abs(a - b) / scale)))
+        identical, worst = _compare(stored, again, slice(first, last))
         limit = rtol if rtol is not None else 100 * stored.tol
         ok = identical if same_versions else worst <= limit
         rows.append({
