@@ -201,7 +201,7 @@ def get_audit_inputs(wildcards):
     files = {f"results/influence/choices/{key}.json" for key in PLAN.choices}
     for key, job in resolved_jobs().items():
         files.add(f"results/contact/{key}.h5")
-        files.update(contact_job_files(job).values())
+        files.update(job.paths().values())
     return sorted(files)
 
 
@@ -213,25 +213,9 @@ def get_contact_params(wildcards):
     return CONTACT_JOBS[wildcards.job].params()
 
 
-def contact_job_files(job):
-    """The files a contact job reads by input name: its surfaces and influence, and a
-    counter body's (Eq 17-18) when it has one."""
-    inputs = {
-        "surfaces": f"results/surfaces/{job.surface.key}.h5",
-        "influence": f"results/influence/{job.geometry.key}.h5",
-    }
-    counter = job.counter
-    if counter is not None and counter.surface is not None:
-        inputs["counter_surfaces"] = f"results/surfaces/{counter.surface.key}.h5"
-    if job.pair is not None:  # a dense first body: the pair summed once
-        inputs["counter_influence"] = f"results/influence/pairs/{job.pair.key}.h5"
-    elif counter is not None and counter.geometry is not None:
-        inputs["counter_influence"] = f"results/influence/{counter.geometry.key}.h5"
-    return inputs
-
-
 def get_contact_inputs(wildcards):
-    return contact_job_files(CONTACT_JOBS[wildcards.job])
+    # the files a contact job reads: one place decides them (ContactJob.files)
+    return CONTACT_JOBS[wildcards.job].paths()
 
 
 def get_aggregate_cells(wildcards):

@@ -6,12 +6,9 @@ from roughcontact.study.logs import route_logging
 route_logging(snakemake.log[0])
 solve_contact_job(
     snakemake.params.job,
-    snakemake.input.surfaces,
-    snakemake.input.influence,
+    # the job's files by input name (ContactJob.files: surfaces, influence, a counter body's)
+    dict(snakemake.input.items()),
     snakemake.output[0],
     snakemake.params.solver,
     config=snakemake.config,
-    # a counter body's files (Eq 17-18), when the job has one
-    counter_surfaces_path=snakemake.input.get("counter_surfaces"),
-    counter_influence_path=snakemake.input.get("counter_influence"),
 )

@@ -22,20 +22,33 @@ A rigid counter body (``None``) adds nothing: the first operator and heights
 are returned as they are, so a one-body problem gives today's numbers bit for
 bit. The solution of the equivalent problem is that of the pair; each body's
 share of the displacement is ``C_i p`` (:func:`body_displacements`).
+
+A counter body as a value (:class:`Body`): its surface (:class:`RoughSurface`,
+or the null :data:`SMOOTH`) and its compliance (:class:`CompliantBody` with its
+modulus ratio, a pair summed once, :class:`SummedPair`, or the null
+:data:`RIGID`); :data:`RIGID_FLAT` is the rigid smooth flat of the paper.
+:func:`pair` makes the one contact problem of a first body and any counter body
+(:class:`Pair`), so code that builds a problem never asks whether there is one.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import logging
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
-from roughcontact.contact.checks import as_operator
+from roughcontact.contact.checks import as_operator, given_matrix
 from roughcontact.elasticity.protocol import DenseInfluence, RestrictedInfluence
+from roughcontact.surfaces.statistics import height_stats
 
-__all__ = ["ScaledInfluence", "SumInfluence", "body_displacements", "compliance_share",
-           "deflection_weights", "densified", "equivalent_heights", "equivalent_operator", "scaled"]
+__all__ = ["RIGID", "RIGID_FLAT", "SMOOTH", "Body", "CompliantBody", "Pair", "PairModel",
+           "RoughSurface", "ScaledInfluence", "SumInfluence", "SummedPair", "body_displacements",
+           "compliance_share", "deflection_weights", "densified", "equivalent_heights",
+           "equivalent_operator", "pair", "pair_model", "scaled"]
+
+log = logging.getLogger("roughcontact.contact")
 
 #: Relative tolerance on the two operators' element areas.
 AREA_RTOL = 1e-9
@@ -297,3 +310,184 @@ def body_displacements(first, second, pressure) -> tuple[np.ndarray, np.ndarray]
     if second is None:
         return u1, np.zeros_like(u1)
     return u1, np.asarray(second.matvec(flat), dtype=float).reshape(p.shape)
+
+
+# ---------------------------------------------------------------------------
+# A counter body as a value, and the one problem of a pair
+
+
+@dataclass(frozen=True)
+class PairModel:
+    """The elastic part of a contact of two bodies (Eq 17-18), in the first body's
+    unit: ``unit`` the pair's operator ``E1 C1 + (E1 / E2) E2 C2`` [m] (None: the
+    first body's own, the counter body rigid or treated as rigid), ``weights`` the
+    counter body's deflection weights [m] (``mean(C2 p) E1 = w . p``; None when
+    rigid), ``bulk_ratio`` the pair's largest row weight over the first body's (1
+    when rigid) and ``attrs`` the compliance share and the choice (none for a rigid
+    counter body)."""
+
+    unit: object
+    weights: np.ndarray | None
+    bulk_ratio: float
+    attrs: dict = field(default_factory=dict)
+
+    def operator(self, first):
+        """The operator to solve with: the pair's, or ``first`` where rigid."""
+        return first if self.unit is None else self.unit
+
+    def interface(self, grid, thickness: float):
+        """The interface ``grid`` with the counter body's deflection weights, made
+        dimensionless by the first body's ``thickness`` [m] (unchanged where rigid)."""
+        if self.weights is None:
+            return grid
+        return replace(grid, counter_weights=self.weights / thickness)
+
+
+def pair_model(first, second, modulus_ratio: float, rigid_share: float) -> PairModel:
+    """The :class:`PairModel` of a first body's unit-modulus operator ``first`` [m] and
+    a counter body's ``second`` [m] of modulus ratio E1 / E2.
+
+    A matrix-free counter body that meets a dense first body is made dense
+    (:func:`densified`: the pair is then pivoted, at the memory of the first body's
+    matrix). A counter body whose share of the compliance (:func:`compliance_share`)
+    is below ``rigid_share`` is treated as rigid, and the choice logged.
+    """
+    if given_matrix(first) is not None:
+        second = densified(second)
+    second = scaled(second, modulus_ratio)
+    share = compliance_share(first, second)
+    rigid = share < rigid_share
+    attrs = {"counter_compliance_share": share, "counter_treated_as_rigid": rigid}
+    log.info("counter body, E1/E2 = %.4g: %.3g of the pair's compliance; %s", modulus_ratio,
+             share, f"below counterface.rigid_share {rigid_share:g}: treated as rigid"
+             if rigid else "solved as an elastic pair")
+    if rigid:
+        return PairModel(None, None, 1.0, attrs)
+    first_weights = deflection_weights(first)
+    weights = deflection_weights(second)
+    # the mean-plane deflection is at most max(w) times the load: the pair's largest
+    # weight over the first body's raises the sweep's end alike
+    ratio = float((first_weights + weights).max() / first_weights.max())
+    return PairModel(equivalent_operator(first, second), weights, ratio, attrs)
+
+
+class _Rigid:
+    """The null compliance: a rigid counter body adds nothing."""
+
+    def join(self, first, rigid_share: float) -> PairModel:
+        return PairModel(None, None, 1.0)
+
+
+#: A rigid counter body.
+RIGID = _Rigid()
+
+
+@dataclass(frozen=True)
+class CompliantBody:
+    """A counter body's unit-modulus operator ``unit`` ``E2 C2`` [m] and the modulus
+    ratio E1 / E2: joined to the first body by :func:`pair_model`."""
+
+    unit: object
+    modulus_ratio: float
+
+    def join(self, first, rigid_share: float) -> PairModel:
+        return pair_model(first, self.unit, self.modulus_ratio, rigid_share)
+
+
+@dataclass(frozen=True)
+class SummedPair:
+    """A pair summed once, before the contact (the pair file of a dense first body):
+    its :class:`PairModel` as stored."""
+
+    model: PairModel
+
+    def join(self, first, rigid_share: float) -> PairModel:
+        log.info("counter body: %.3g of the pair's compliance (rigid_share %g): %s",
+                 self.model.attrs["counter_compliance_share"], rigid_share,
+                 "treated as rigid" if self.model.unit is None
+                 else "solved as an elastic pair")
+        return self.model
+
+
+class _Smooth:
+    """The null counter surface: a smooth counter body adds no heights."""
+
+    def add_to(self, heights) -> tuple[np.ndarray, dict]:
+        return heights, {}
+
+
+#: A smooth counter surface.
+SMOOTH = _Smooth()
+
+
+@dataclass(frozen=True)
+class RoughSurface:
+    """A counter surface facing the first: ``heights`` in units of its own rms height
+    (one map (ny, nx), added to every first surface, or one per surface) on the first
+    body's grid, and ``sigma_ratio`` sigma2 / sigma1. ``content_sha256``: its file's
+    hash, recorded with the result."""
+
+    heights: np.ndarray
+    sigma_ratio: float
+    content_sha256: str = ""
+
+    @classmethod
+    def face_up(cls, heights, sigma_ratio: float, content_sha256: str = "") -> RoughSurface:
+        """A map measured face up, like the first surface: facing the first body it is
+        mirrored in x."""
+        return cls(np.asarray(heights)[..., ::-1], sigma_ratio, content_sha256)
+
+    def add_to(self, heights) -> tuple[np.ndarray, dict]:
+        """The equivalent surface ``(z1 + r z2) / sqrt(1 + r^2)`` in units of the composite
+        rms height ``sqrt(sigma1^2 + sigma2^2)``, and its sample moments (means over the
+        surfaces) to record."""
+        r = self.sigma_ratio
+        combined = equivalent_heights(heights, r * self.heights) * (1.0 / float(np.hypot(1.0, r)))
+        stats = height_stats(combined)
+        attrs = {"counter_surfaces_content_sha256": self.content_sha256,
+                 "equivalent_sigma_over_scale": float(stats["sigma"].mean()),
+                 "equivalent_skew": float(stats["skew"].mean()),
+                 "equivalent_kurt": float(stats["kurt"].mean())}
+        log.info("equivalent surface: (z1 + %.4g z2) / %.4g; sample sigma / scale %.4f, "
+                 "Sk %.4f, Ku %.4f (means over surfaces)", r, float(np.hypot(1.0, r)),
+                 attrs["equivalent_sigma_over_scale"], attrs["equivalent_skew"],
+                 attrs["equivalent_kurt"])
+        return combined, attrs
+
+
+@dataclass(frozen=True)
+class Body:
+    """The body the surfaces are pressed against (Eq 17-18): its ``surface``
+    (:class:`RoughSurface` or :data:`SMOOTH`) and its ``compliance``
+    (:class:`CompliantBody`, :class:`SummedPair` or :data:`RIGID`), with the
+    ``rigid_share`` below which a compliant one is treated as rigid."""
+
+    surface: Any = SMOOTH
+    compliance: Any = RIGID
+    rigid_share: float = 0.001
+
+
+#: The paper's counter body: a rigid smooth flat.
+RIGID_FLAT = Body()
+
+
+@dataclass(frozen=True)
+class Pair:
+    """The one contact problem of a first body and a counter body: the equivalent
+    ``heights``, the elastic ``model`` (:class:`PairModel`) and the ``attrs`` that say
+    what was modelled (none against the rigid smooth flat)."""
+
+    heights: np.ndarray
+    model: PairModel
+    attrs: dict
+
+
+def pair(heights, first, second: Body = RIGID_FLAT) -> Pair:
+    """The contact problem of a first body (its ``heights`` in units of its rms height,
+    its unit-modulus operator ``first`` [m]) pressed against ``second``: the heights
+    summed and scaled (:meth:`RoughSurface.add_to`), the compliances joined
+    (:func:`pair_model`, or the pair summed once); against :data:`RIGID_FLAT` the first
+    body's own problem, unchanged."""
+    combined, attrs = second.surface.add_to(heights)
+    model = second.compliance.join(first, second.rigid_share)
+    return Pair(combined, model, {**attrs, **model.attrs})

@@ -340,28 +340,12 @@ def write_audit(table: pd.DataFrame, csv_path, md_path, *, config_hash: str = ""
 
 def _job_files(root: Path, key: str, job: dict, study_seed: int | None = None) -> dict:
     """The files of the contact job ``key`` (``job``: its ``params()``) by kind, each with
-    the parameters it must have been made for (:func:`check_parameters`): its surface,
-    influence and contact files, and a counter body's surfaces and influence (the
-    pair's file on a dense first body)."""
-    surfaces, influence = root / "results" / "surfaces", root / "results" / "influence"
-    files = {"surfaces": (surfaces / f"{job['surface_key']}.h5",
-                          {"cell": job["surface"], "study_seed": study_seed}),
-             "influence": (influence / f"{job['geometry_key']}.h5",
-                           {"geometry": job["geometry"]}),
-             "contact": (root / "results" / "contact" / f"{key}.h5", {"job": job})}
-    counter = job.get("counter")
-    if counter is None:
-        return files
-    if counter["surface_key"] is not None:
-        files["counter_surfaces"] = (surfaces / f"{counter['surface_key']}.h5",
-                                     {"cell": counter["surface"], "study_seed": study_seed})
-    pair = ContactJob.from_params(job).pair
-    if pair is not None:  # a dense first body: the pair's file
-        files["counter_influence"] = (influence / "pairs" / f"{pair.key}.h5",
-                                      {"geometry": pair.params()})
-    elif counter["geometry_key"] is not None:
-        files["counter_influence"] = (influence / f"{counter['geometry_key']}.h5",
-                                      {"geometry": counter["geometry"]})
+    the parameters it must have been made for (:func:`check_parameters`): the files
+    the job reads (:meth:`~roughcontact.study.contact_records.ContactJob.files`: its
+    surfaces and influence, a counter body's) and its contact file."""
+    files = {name: (root / file.path, file.made_for)
+             for name, file in ContactJob.from_params(job).files(study_seed).items()}
+    files["contact"] = (root / "results" / "contact" / f"{key}.h5", {"job": job})
     return files
 
 
@@ -455,10 +439,8 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
         unit = certified_influence(read_influence(files["influence"],
                                                   geometry=job["geometry"])[0],
                                    files["influence"], record.geometry)
-        counter_surfaces, pair, _ = read_counter(
-            record, unit, files.get("counter_surfaces"), files.get("counter_influence"),
-            study_seed)
-        problem = contact_problem(record, surfaces["heights"], unit, counter_surfaces, pair)
+        counter, _ = read_counter(record, files, study_seed)
+        problem = contact_problem(record, surfaces["heights"], unit, counter)
         start = time.perf_counter()
         again = sweep_cell(
             problem.unit, problem.heights, Geometry.from_params(job["geometry"]).block(),

@@ -24,7 +24,7 @@ from roughcontact.study.config import in_unit
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.provenance import atomic_path, provenance
 from roughcontact.study.storage import read_contact
-from roughcontact.units import MPA, UM
+from roughcontact.units import MPA
 
 log = logging.getLogger(__name__)
 
@@ -96,25 +96,6 @@ def _plausibility(cell: StudyCell, frame: pd.DataFrame) -> tuple[pd.DataFrame, l
     return frame, reasons
 
 
-#: What a contact file of two bodies records about them (:func:`_counter_summary`).
-COUNTER_ATTRIBUTES = ("counter_compliance_share", "counter_treated_as_rigid",
-                      "equivalent_skew", "equivalent_kurt")
-
-
-def _counter_summary(cell: StudyCell, attrs: dict) -> dict:
-    """Of a cell with a counter body: its compliance share and whether the job treated
-    it as rigid, and the equivalent surface's sample sigma [um], Sk and Ku (means over
-    the surfaces) beside the two inputs' (the cell's columns); {} otherwise."""
-    if cell.counterface is None:
-        return {}
-    out = {name: attrs[name].item() if hasattr(attrs[name], "item") else attrs[name]
-           for name in COUNTER_ATTRIBUTES if name in attrs}
-    if "equivalent_sigma_over_scale" in attrs:
-        out["equivalent_sample_sigma_um"] = (float(attrs["equivalent_sigma_over_scale"])
-                                             * in_unit(cell.height_scale, UM))
-    return out
-
-
 def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTables:
     """Aggregate one cell's contact file at ``levels`` nominal pressures over its range."""
     nd, attrs = read_contact(path, job=cell.job.params())  # solved for this cell's job
@@ -146,7 +127,7 @@ def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTabl
     summary = {**labels,
                **{k: float(v) for k, v in aggregate.modulus_summary(per_surface, cell.E).items()},
                "unconverged_steps": unconverged, "worst_residual": float(attrs["worst_residual"]),
-               "implausible": implausible, **_counter_summary(cell, attrs)}
+               "implausible": implausible, **cell.counterface.summary(attrs, cell.height_scale)}
     if unconverged:
         log.warning("cell %s: %d unconverged steps excluded", key, unconverged)
     for reason in aggregate.COVERAGE[2:]:

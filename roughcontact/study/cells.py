@@ -134,8 +134,7 @@ def study_plan(config: dict) -> StudyPlan:
     surfaces = {cell.key: cell for name in SURFACE_FIGURES if name in figure_cells
                 for cell in figure_cells[name]}
     surfaces |= {job.surface.key: job.surface for job in jobs.values()}
-    surfaces |= {job.counter.surface.key: job.counter.surface for job in jobs.values()
-                 if job.counter is not None and job.counter.surface is not None}
+    surfaces |= {key: cell for job in jobs.values() for key, cell in job.counter.cells().items()}
     _raise("Counter bodies that do not fit their surfaces",
            check_counterfaces((cell for name in studies for cell in cells[name]), build))
     # by the figure or sweep whose b_mm they have (Fig 5 draws Fig 4's)
@@ -146,8 +145,8 @@ def study_plan(config: dict) -> StudyPlan:
     _raise("Infeasible surface cells in the config", check_feasible(surfaces))
     asked = influence_geometries(config) | {job.geometry.key: job.geometry
                                             for job in jobs.values()}
-    asked |= {job.counter.geometry.key: job.counter.geometry for job in jobs.values()
-              if job.counter is not None and job.counter.geometry is not None}
+    asked |= {key: geometry for job in jobs.values()
+              for key, geometry in job.counter.geometries().items()}
     geometries = {c.key: c for g in asked.values() for c in g.candidates(build.max_bytes)}
     planned = {g.candidates(build.max_bytes)[0].key for g in asked.values()}
     _raise("Influence models that do not fit body.max_memory_gb",
@@ -162,8 +161,8 @@ def study_plan(config: dict) -> StudyPlan:
                               if g.operator is InfluenceModel.AUTO},
                      alternatives=frozenset(geometries) - planned,
                      surfaces_from=surfaces_from(surfaces),
-                     pairs={job.pair.key: job.pair for job in candidates.values()
-                            if job.pair is not None})
+                     pairs={key: pair for job in candidates.values()
+                            for key, pair in job.pairs().items()})
 
 
 def surfaces_from(surfaces: Mapping[str, SurfaceCell]) -> dict[str, str]:

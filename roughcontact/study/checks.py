@@ -370,34 +370,36 @@ def check_counterfaces(cells, build: BuildSettings) -> list[str]:
     fix it. Once per counter body or pair."""
     problems = {}
     for cell in cells:
-        counter = cell.counterface
-        if counter is not None and counter.geometry is not None:
-            geometry = counter.geometry
+        for geometry in cell.counterface.body.geometries().values():
             for text in _counter_body_problems(geometry, build):
                 (lx, ly), (nx, ny) = in_units(geometry.size), geometry.grid
                 problems[geometry.key] = (
                     f"counterface.body (a {in_unit(geometry.thickness, MM):g} mm "
                     f"{geometry.mesh} block under {lx:g} x {ly:g} mm, {nx} x {ny} "
                     f"elements) cannot be built: {text}")
-        if counter is None or counter.surface is None:
-            continue
-        first, other = cell.surface, counter.surface
-        if other.grid == first.grid and all(math.isclose(a, b, rel_tol=1e-9)
-                                            for a, b in zip(other.size, first.size, strict=True)):
-            continue
-        (nx, ny), (lx, ly) = first.grid, in_units(first.size)
-        (ox, oy), (olx, oly) = other.grid, in_units(other.size)
-        file = getattr(getattr(other, "source", None), "file", other.key)
-        advice = f"resample_grid: [{nx}, {ny}]"
-        if not all(math.isclose(a, b, rel_tol=1e-9) for a, b in ((olx, lx), (oly, ly))):
-            advice = (f"crop_mm: [0, 0, {lx:g}, {ly:g}] (a window of the first surface's "
-                      f"plan size) and {advice}")
-        problems[(first.key, other.key)] = (
-            f"counterface.surface {file}: {ox} x {oy} points over {olx:g} mm x {oly:g} mm, "
-            f"but the surface it meets ({first.key}) has {nx} x {ny} over {lx:g} mm x "
-            f"{ly:g} mm: the two height maps add element by element, so they need the same "
-            f"grid and plan size; add to the counter surface's measured: entry {advice}")
+        first = cell.surface
+        for other in cell.counterface.surface.cells().values():
+            if other.grid != first.grid or not all(
+                    math.isclose(a, b, rel_tol=1e-9)
+                    for a, b in zip(other.size, first.size, strict=True)):
+                problems[(first.key, other.key)] = _counter_grid_message(first, other)
     return list(problems.values())
+
+
+def _counter_grid_message(first, other) -> str:
+    """A counter surface not sampled like the first, with the import keys that fix it."""
+    (nx, ny), (lx, ly) = first.grid, in_units(first.size)
+    (ox, oy), (olx, oly) = other.grid, in_units(other.size)
+    file = getattr(getattr(other, "source", None), "file", other.key)
+    advice = f"resample_grid: [{nx}, {ny}]"
+    if not all(math.isclose(a, b, rel_tol=1e-9) for a, b in ((olx, lx), (oly, ly))):
+        advice = (f"crop_mm: [0, 0, {lx:g}, {ly:g}] (a window of the first surface's "
+                  f"plan size) and {advice}")
+    return (
+        f"counterface.surface {file}: {ox} x {oy} points over {olx:g} mm x {oly:g} mm, "
+        f"but the surface it meets ({first.key}) has {nx} x {ny} over {lx:g} mm x "
+        f"{ly:g} mm: the two height maps add element by element, so they need the same "
+        f"grid and plan size; add to the counter surface's measured: entry {advice}")
 
 
 # ---------------------------------------------------------------------------

@@ -28,15 +28,11 @@ from roughcontact.contact import counterface
 from roughcontact.study.config import ContactSettings
 from roughcontact.study.contact_records import ContactJob
 from roughcontact.study.jobs import (
-    PairModel,
     certified_influence,
-    pair_model,
     read_pair_model,
 )
 from roughcontact.study.provenance import canonical_json, provenance
-from roughcontact.study.records import MeasuredCell
 from roughcontact.study.storage import read_influence, read_surfaces, write_contact
-from roughcontact.surfaces.statistics import height_stats
 
 log = logging.getLogger(__name__)
 
@@ -103,84 +99,48 @@ class ContactProblem:
     attrs: dict = dataclasses.field(default_factory=dict)
 
 
-def read_counter(job: ContactJob, first, surfaces_path, model_path,
-                 study_seed=None) -> tuple:
-    """A job's counter surfaces (:func:`~roughcontact.study.storage.read_surfaces`) and
-    :class:`PairModel` (with the first body's unit-modulus operator ``first``), each None
-    where the job has none, and the content hashes to record. ``model_path``: the pair
-    file of a dense first body (:attr:`~roughcontact.study.contact_records.ContactJob.pair`), else
-    the counter body's influence file; each file checked to have been made for the
-    job's counter body."""
-    counter = job.counter
-    surfaces = model = None
-    hashes = {}
-    if counter is not None and counter.surface is not None:
-        surfaces = read_surfaces(surfaces_path, cell=counter.surface.params(),
-                                 study_seed=study_seed)
-    if job.pair is not None:
-        model, hashes = read_pair_model(model_path, job.pair)
-    elif counter is not None and counter.geometry is not None:
-        unit, attrs = read_influence(model_path, geometry=counter.geometry.params())
-        unit = certified_influence(unit, model_path, counter.geometry)
-        hashes["counter_influence_content_sha256"] = attrs["content_sha256"]
-        model = pair_model(first, unit, counter.modulus_ratio, counter.rigid_share)
-    return surfaces, model, hashes
+class _ModelReader:
+    """How a counter body's model files are read (for
+    :meth:`~roughcontact.study.contact_records.CounterJob.read`): each checked to have
+    been made for its geometry or pair, its operator certified."""
+
+    @staticmethod
+    def pair(path, pair):
+        return read_pair_model(path, pair)
+
+    @staticmethod
+    def influence(path, geometry):
+        unit, attrs = read_influence(path, geometry=geometry.params())
+        return (certified_influence(unit, path, geometry),
+                {"counter_influence_content_sha256": attrs["content_sha256"]})
 
 
-def _equivalent_moments(heights: np.ndarray) -> dict:
-    """The equivalent surface's sample sigma (in units of the height scale), Sk and Ku,
-    means over the surfaces (:func:`~roughcontact.surfaces.statistics.height_stats`)."""
-    stats = height_stats(heights)
-    return {"equivalent_sigma_over_scale": float(stats["sigma"].mean()),
-            "equivalent_skew": float(stats["skew"].mean()),
-            "equivalent_kurt": float(stats["kurt"].mean())}
+def read_counter(job: ContactJob, paths: dict, study_seed=None) -> tuple:
+    """A job's counter body (:class:`~roughcontact.contact.counterface.Body`; the rigid
+    smooth flat for a job without one) from its files ``paths`` (input name -> path, as
+    :meth:`~roughcontact.study.contact_records.ContactJob.files` names them), each
+    checked to have been made for the job's counter body, and the content hashes to
+    record."""
+    return job.counter.read(paths, job.geometry, _ModelReader, study_seed)
 
 
-def contact_problem(job: ContactJob, heights, unit, counter_surfaces=None,
-                    pair: PairModel | None = None) -> ContactProblem:
-    """The problem a contact job sweeps: its own (one body against a rigid smooth flat),
-    or with a counter body the equivalent problem of Eq 17-18
-    (:mod:`roughcontact.contact.counterface`): heights ``(z1 + r z2) / sqrt(1 + r^2)``
-    (r = sigma2 / sigma1; a measured counter map, measured face up like the first
-    surface, mirrored in x as the two face each other, and added to every surface),
-    the ``pair``'s operator (:class:`PairModel`; the first
-    body's ``unit`` where the counter body is treated as rigid), the interface grid
-    with the counter body's deflection weights and the bulk factor raised by its
-    compliance."""
-    counter = job.counter
-    if counter is None:
-        return ContactProblem(heights, unit)
-    attrs, grid, bulk = {}, cell_module.block_interface(job.geometry), cell_module.BULK_FACTOR
-    if counter.surface is not None:
-        z2 = counter_surfaces["heights"]
-        if isinstance(counter.surface, MeasuredCell):
-            # measured face up, like the first; facing it, the map is mirrored in x (one
-            # map, added to every surface)
-            z2 = z2[0, :, ::-1]
-        heights = (counterface.equivalent_heights(heights, counter.sigma_ratio * z2)
-                   * counter.height_factor)
-        attrs["counter_surfaces_content_sha256"] = counter_surfaces["content_sha256"]
-        attrs.update(_equivalent_moments(heights))
-        log.info("equivalent surface: (z1 + %.4g z2) / %.4g; sample sigma / scale %.4f, "
-                 "Sk %.4f, Ku %.4f (means over surfaces)", counter.sigma_ratio,
-                 1.0 / counter.height_factor, attrs["equivalent_sigma_over_scale"],
-                 attrs["equivalent_skew"], attrs["equivalent_kurt"])
-    if pair is not None:
-        attrs.update(pair.attrs)
-        log.info("counter body %s: %.3g of the pair's compliance (rigid_share %g): %s",
-                 counter.geometry.key, pair.attrs["counter_compliance_share"],
-                 counter.rigid_share, "treated as rigid" if pair.unit is None
-                 else "solved as an elastic pair")
-        if pair.unit is not None:
-            unit, bulk = pair.unit, bulk * pair.bulk_ratio
-            grid = dataclasses.replace(grid, counter_weights=pair.weights
-                                       / job.geometry.thickness)
-    return ContactProblem(heights, unit, grid, bulk, attrs)
+def contact_problem(job: ContactJob, heights, unit,
+                    counter: counterface.Body = counterface.RIGID_FLAT) -> ContactProblem:
+    """The problem a contact job sweeps: the pair of its first body (``heights`` in units
+    of the cell's sigma, unit-modulus operator ``unit`` [m]) and its ``counter`` body
+    (Eq 17-18; :func:`roughcontact.contact.counterface.pair`): the equivalent heights,
+    the pair's operator, the interface grid with the counter body's deflection weights
+    and the bulk factor raised by its compliance; against the rigid smooth flat the
+    job's own problem."""
+    paired = counterface.pair(heights, unit, counter)
+    grid = paired.model.interface(cell_module.block_interface(job.geometry),
+                                  job.geometry.thickness)
+    return ContactProblem(paired.heights, paired.model.operator(unit), grid,
+                          cell_module.BULK_FACTOR * paired.model.bulk_ratio, paired.attrs)
 
 
-def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, settings: dict,
-                      config=None, counter_surfaces_path=None,
-                      counter_influence_path=None) -> dict:
+def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
+                      config=None) -> dict:
     """Solve one contact job and write its non-dimensional sweep to ``out_path``.
 
     ``params``: the job's :meth:`~roughcontact.study.contact_records.ContactJob.params`,
@@ -191,15 +151,18 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
     and influence files must have been made for the job's cell (and the
     configuration's ``study_seed``) and geometry, else
     :class:`~roughcontact.errors.StoredFileError` names the file and the
-    field that differs. A job with a counter body (``counter``) also reads the counter
-    surfaces and influence files, checked alike, and solves the equivalent problem
-    (:func:`_pair_problem`). Returns the root attributes written.
+    field that differs. ``inputs``: the job's files by input name
+    (:meth:`~roughcontact.study.contact_records.ContactJob.files`: ``surfaces``,
+    ``influence`` and a counter body's, each checked alike); a job with a counter body
+    solves the equivalent problem (:func:`contact_problem`). Returns the root
+    attributes written.
     """
     job, settings = ContactJob.from_params(params), ContactSettings.from_section(settings)
     start = time.perf_counter()
+    study_seed = None if config is None else config["study_seed"]
+    surfaces_path, influence_path = inputs["surfaces"], inputs["influence"]
     # each input must have been made for this job (not only carry its name)
-    surfaces = read_surfaces(surfaces_path, cell=job.surface.params(),
-                             study_seed=None if config is None else config["study_seed"])
+    surfaces = read_surfaces(surfaces_path, cell=job.surface.params(), study_seed=study_seed)
     unit, geometry_attrs = read_influence(influence_path, geometry=job.geometry.params())
     unit = certified_influence(unit, influence_path, job.geometry)
     heights = surfaces["heights"]
@@ -211,10 +174,8 @@ def solve_contact_job(params: dict, surfaces_path, influence_path, out_path, set
             f"surfaces {surfaces_path} have shape {heights.shape[1:]} but geometry "
             f"{job.geometry.key} has a {ny} x {nx} (ny x nx) contact grid"
         )
-    counter_surfaces, pair, counter_hashes = read_counter(
-        job, unit, counter_surfaces_path, counter_influence_path,
-        None if config is None else config["study_seed"])
-    problem = contact_problem(job, heights, unit, counter_surfaces, pair)
+    counter, counter_hashes = read_counter(job, inputs, study_seed)
+    problem = contact_problem(job, heights, unit, counter)
     hardness = job.nondim_hardness
     log.info("contact %s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
              "method %s, tol %.1e, precision %s, influence %s, %s", name, m, settings.steps,

@@ -16,7 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from roughcontact.contact import counterface
 from roughcontact.contact.cell import nondim_pressure
+from roughcontact.elasticity.operators import COARSE_MAX
 from roughcontact.study.config import from_unit, in_unit, in_units
 from roughcontact.study.provenance import short_hash
 from roughcontact.study.records import (
@@ -25,116 +27,460 @@ from roughcontact.study.records import (
     SurfaceCell,
     surface_cell_from_params,
 )
+from roughcontact.study.storage import read_surfaces
 from roughcontact.units import MM, MPA, UM
 
 # ---------------------------------------------------------------------------
 # The counter body: what the surfaces are pressed against (Eq 17-18)
+#
+#: Bytes of a double.
+DOUBLE_BYTES = 8
+
+# A counter body is its surface and its body, each a value: a rough counter surface
+# or the smooth one, an elastic counter body or the rigid one; the paper's rigid smooth
+# flat is the null counter body (:data:`NO_COUNTERFACE` on a study cell,
+# :data:`NO_COUNTER` on a job), whose methods give the one-body answers. Each record
+# answers what the study asks of it (its files, its parameters, its label, its share of
+# a job's memory and time), so the code that asks never needs to know which it holds.
 
 
-def _counter_body_label(geometry: Geometry | None, E: float | None) -> str:
-    if geometry is None:
+class _Smooth:
+    """A smooth counter surface (the null): no heights, no file."""
+
+    sigma = 0.0
+
+    def job_form(self, sigma: float) -> _Smooth:
+        return self
+
+    def height_scale(self, sigma: float) -> float:
+        return sigma
+
+    def params(self) -> dict:
+        return {"surface": None, "surface_key": None}
+
+    def job_params(self) -> dict:
+        return {"surface": None, "surface_key": None, "sigma_ratio": 0.0}
+
+    def label(self) -> str:
+        return "smooth"
+
+    def columns(self) -> dict:
+        return {"counter_skew": float("nan"), "counter_kurt": float("nan")}
+
+    def cells(self) -> dict:
+        return {}
+
+    def files(self, study_seed=None) -> dict:
+        return {}
+
+    def read(self, paths: dict, study_seed=None):
+        return counterface.SMOOTH
+
+    def bytes(self, count: int, n: int) -> float:
+        return 0.0
+
+
+#: The smooth counter surface.
+SMOOTH = _Smooth()
+
+
+@dataclass(frozen=True)
+class RoughCounter:
+    """A rough counter surface: its ``cell`` (generated with the seed stream
+    ``counter``, or measured) and ``sigma`` [m] (on a study cell) or ``sigma_ratio``
+    sigma2 / sigma1 (on a job)."""
+
+    cell: SurfaceCell
+    sigma: float = 0.0
+    sigma_ratio: float = 0.0
+
+    def job_form(self, sigma: float) -> RoughCounter:
+        return RoughCounter(self.cell, sigma_ratio=self.sigma / sigma)
+
+    def height_scale(self, sigma: float) -> float:
+        """``sqrt(sigma^2 + sigma2^2)``: the rms height of the sum of two independent
+        surfaces (the equivalent surface of Eq 17-18) [m]."""
+        return float(np.hypot(sigma, self.sigma))
+
+    def params(self) -> dict:
+        return {"surface": self.cell.params(), "surface_key": self.cell.key}
+
+    def job_params(self) -> dict:
+        return {**self.params(), "sigma_ratio": self.sigma_ratio}
+
+    def label(self) -> str:
+        return (f"{self.cell.source_label}sigma {in_unit(self.sigma, UM):g} um, "
+                f"Sk {self.cell.skew:g}, Ku {self.cell.kurt:g}")
+
+    def columns(self) -> dict:
+        return {"counter_skew": self.cell.skew, "counter_kurt": self.cell.kurt}
+
+    def cells(self) -> dict:
+        """The counter surface cell to generate or import, by key."""
+        return {self.cell.key: self.cell}
+
+    def files(self, study_seed=None) -> dict:
+        """The counter surfaces' file, with what it must have been made for."""
+        return {"counter_surfaces": JobFile(f"results/surfaces/{self.cell.key}.h5",
+                                            {"cell": self.cell.params(),
+                                             "study_seed": study_seed})}
+
+    def read(self, paths: dict, study_seed=None) -> counterface.RoughSurface:
+        """The counter surface facing the first (:meth:`SurfaceCell.facing`), read from
+        its file (checked to have been made for it)."""
+        stored = read_surfaces(paths["counter_surfaces"], cell=self.cell.params(),
+                               study_seed=study_seed)
+        return self.cell.facing(stored["heights"], self.sigma_ratio, stored["content_sha256"])
+
+    def bytes(self, count: int, n: int) -> float:
+        """A contact job's memory for the counter surfaces [bytes]."""
+        return DOUBLE_BYTES * count * n
+
+
+class _Rigid:
+    """A rigid counter body (the null): no compliance, no file."""
+
+    E = None
+
+    def job_form(self, E: float) -> _Rigid:
+        return self
+
+    def params(self) -> dict:
+        return {"geometry": None, "geometry_key": None, "E_MPa": None}
+
+    def job_params(self) -> dict:
+        return {"geometry": None, "geometry_key": None, "modulus_ratio": 0.0}
+
+    def label(self) -> str:
         return "rigid"
-    if geometry.operator is InfluenceModel.HALFSPACE:
-        return f"half-space E {in_unit(E, MPA):g} MPa nu {geometry.nu:g}"
-    return (f"block E {in_unit(E, MPA):g} MPa nu {geometry.nu:g} "
-            f"{in_unit(geometry.thickness, MM):g} mm {geometry.mesh}")
+
+    def columns(self) -> dict:
+        return {"counter_E_MPa": float("nan")}
+
+    def geometries(self) -> dict:
+        return {}
+
+    def pairs(self, first: Geometry, rigid_share: float) -> dict:
+        return {}
+
+    def files(self, first: Geometry, rigid_share: float) -> dict:
+        return {}
+
+    def read(self, paths: dict, first: Geometry, rigid_share: float, reader) -> tuple:
+        return counterface.RIGID, {}
+
+    def time_factor(self, model: dict) -> float:
+        return 1.0
+
+    def bytes(self, dense: bool, n: int) -> float:
+        return 0.0
+
+
+#: The rigid counter body.
+RIGID = _Rigid()
+
+
+@dataclass(frozen=True)
+class ElasticCounter:
+    """An elastic counter body: its ``geometry`` (a block, or a half-space:
+    ``operator`` halfspace) and ``E`` [Pa] (on a study cell) or ``modulus_ratio``
+    E1 / E2 (on a job)."""
+
+    geometry: Geometry
+    E: float | None = None
+    modulus_ratio: float = 0.0
+
+    def job_form(self, E: float) -> ElasticCounter:
+        return ElasticCounter(self.geometry, modulus_ratio=E / self.E)
+
+    def params(self) -> dict:
+        return {"geometry": self.geometry.params(), "geometry_key": self.geometry.key,
+                "E_MPa": in_unit(self.E, MPA)}
+
+    def job_params(self) -> dict:
+        return {"geometry": self.geometry.params(), "geometry_key": self.geometry.key,
+                "modulus_ratio": self.modulus_ratio}
+
+    def label(self) -> str:
+        g = self.geometry
+        if g.operator is InfluenceModel.HALFSPACE:
+            return f"half-space E {in_unit(self.E, MPA):g} MPa nu {g.nu:g}"
+        return (f"block E {in_unit(self.E, MPA):g} MPa nu {g.nu:g} "
+                f"{in_unit(g.thickness, MM):g} mm {g.mesh}")
+
+    def columns(self) -> dict:
+        return {"counter_E_MPa": in_unit(self.E, MPA)}
+
+    def geometries(self) -> dict:
+        """The counter body's influence model to build, by key."""
+        return {self.geometry.key: self.geometry}
+
+    def pairs(self, first: Geometry, rigid_share: float) -> dict:
+        """The pair summed once for a job on ``first`` (:class:`PairGeometry`), by key: of
+        a dense first body (one dense matrix); none on a matrix-free one (the job sums
+        the two operators, without a matrix)."""
+        if first.operator is not InfluenceModel.DENSE:
+            return {}
+        pair = PairGeometry(first=first, second=self.geometry,
+                            modulus_ratio=self.modulus_ratio, rigid_share=rigid_share)
+        return {pair.key: pair}
+
+    def files(self, first: Geometry, rigid_share: float) -> dict:
+        """The counter body's file for a job on ``first``: the pair's on a dense first
+        body, else its influence file; with what it must have been made for."""
+        for pair in self.pairs(first, rigid_share).values():
+            return {"counter_influence": JobFile(f"results/influence/pairs/{pair.key}.h5",
+                                                 {"geometry": pair.params()}, pair)}
+        return {"counter_influence": JobFile(f"results/influence/{self.geometry.key}.h5",
+                                             {"geometry": self.geometry.params()})}
+
+    def read(self, paths: dict, first: Geometry, rigid_share: float, reader) -> tuple:
+        """The counter body's compliance for a job on ``first``, read from its file by
+        ``reader`` (``pair(path, pair)``: a pair file's :class:`PairModel` and hashes;
+        ``influence(path, geometry)``: an influence file's certified operator and
+        hashes; each checked to have been made for it), and the hashes to record."""
+        path = paths["counter_influence"]
+        for pair in self.pairs(first, rigid_share).values():
+            model, hashes = reader.pair(path, pair)
+            return counterface.SummedPair(model), hashes
+        unit, hashes = reader.influence(path, self.geometry)
+        return counterface.CompliantBody(unit, self.modulus_ratio), hashes
+
+    def time_factor(self, model: dict) -> float:
+        """A compliant counter body: more contact at the same pressure (the cost
+        ``model``'s ``counter_body_factor``, config/cost_model.yaml)."""
+        return float(model["contact"]["counter_body_factor"])
+
+    def bytes(self, dense: bool, n: int) -> float:
+        """A contact job's memory for the counter body [bytes]: on a dense first body the
+        pair's matrix (2 n^2 doubles), on a matrix-free one its coarse correction."""
+        if dense:
+            return 2 * DOUBLE_BYTES * n**2
+        return DOUBLE_BYTES * (COARSE_MAX**2) ** 2
+
+
+@dataclass(frozen=True)
+class JobFile:
+    """A file a job reads: its ``path`` and the parameters it must have been made for
+    (:func:`roughcontact.study.storage.check_parameters`), and the pair it holds."""
+
+    path: str
+    made_for: dict
+    pair: object = None
+
+
+def _counter_surface(params: dict, scale: str) -> _Smooth | RoughCounter:
+    """The counter surface of stored parameters: a cell's (``scale`` "sigma_um") or a
+    job's ("sigma_ratio")."""
+    if params["surface"] is None:
+        return SMOOTH
+    cell = surface_cell_from_params(params["surface"])
+    if scale == "sigma_um":
+        return RoughCounter(cell, sigma=float(params["sigma_um"]) * UM)
+    return RoughCounter(cell, sigma_ratio=float(params["sigma_ratio"]))
+
+
+def _counter_body(params: dict, scale: str) -> _Rigid | ElasticCounter:
+    """The counter body of stored parameters: a cell's (``scale`` "E_MPa") or a job's
+    ("modulus_ratio")."""
+    if params["geometry"] is None:
+        return RIGID
+    geometry = Geometry.from_params(params["geometry"])
+    if scale == "E_MPa":
+        return ElasticCounter(geometry, E=float(params["E_MPa"]) * MPA)
+    return ElasticCounter(geometry, modulus_ratio=float(params["modulus_ratio"]))
 
 
 @dataclass(frozen=True)
 class Counterface:
     """The body a study cell's surfaces are pressed against (Eq 17-18 of Kumar et al.
-    2006; :mod:`roughcontact.contact.counterface`): its surface and its body.
+    2006; :mod:`roughcontact.contact.counterface`): its ``surface`` (a
+    :class:`RoughCounter` on the first cell's grid and plan size, generated with the
+    seed stream ``counter`` or measured, or :data:`SMOOTH`) and its ``body`` (an
+    :class:`ElasticCounter`, block or half-space, or :data:`RIGID`). ``rigid_share``:
+    below this share of the pair's compliance the contact job treats the counter body
+    as rigid (and logs it). A smooth rigid counter body is no counterface at all
+    (:data:`NO_COUNTERFACE`: today's case)."""
 
-    ``surface``: the counter surface cell on the first cell's grid and plan
-    size (a generated cell of seed stream ``counter``, or a measured one), None
-    for a smooth one; ``sigma`` [m] its heights' standard deviation (0 when
-    smooth). ``geometry``: the counter body (a block, or a half-space:
-    ``operator`` halfspace), None for a rigid one; ``E`` [Pa] its Young's
-    modulus. ``rigid_share``: below this share of the pair's compliance the
-    contact job treats the counter body as rigid (and logs it). A smooth rigid
-    counter body is no counterface at all (None on the cell: today's case).
-    """
-
-    surface: SurfaceCell | None = None
-    sigma: float = 0.0
-    geometry: Geometry | None = None
-    E: float | None = None
+    surface: _Smooth | RoughCounter = SMOOTH
+    body: _Rigid | ElasticCounter = RIGID
     rigid_share: float = 0.001
 
     @classmethod
     def from_params(cls, params: dict) -> Counterface:
-        surface, geometry = params["surface"], params["geometry"]
-        return cls(surface=None if surface is None else surface_cell_from_params(surface),
-                   sigma=float(params["sigma_um"]) * UM,
-                   geometry=None if geometry is None else Geometry.from_params(geometry),
-                   E=None if params["E_MPa"] is None else float(params["E_MPa"]) * MPA,
-                   rigid_share=float(params["rigid_share"]))
+        return cls(_counter_surface(params, "sigma_um"), _counter_body(params, "E_MPa"),
+                   float(params["rigid_share"]))
 
     def params(self) -> dict:
-        s, g = self.surface, self.geometry
-        return {"surface": None if s is None else s.params(),
-                "surface_key": None if s is None else s.key,
-                "sigma_um": in_unit(self.sigma, UM),
-                "geometry": None if g is None else g.params(),
-                "geometry_key": None if g is None else g.key,
-                "E_MPa": None if self.E is None else in_unit(self.E, MPA),
-                "rigid_share": self.rigid_share}
+        """The cell's ``counterface`` parameters (um, MPa)."""
+        return {"counterface": {**self.surface.params(),
+                                "sigma_um": in_unit(self.surface.sigma, UM),
+                                **self.body.params(), "rigid_share": self.rigid_share}}
 
     @property
     def label(self) -> str:
-        if self.surface is None:
-            surface = "smooth"
-        else:
-            surface = (f"{self.surface.source_label}sigma {in_unit(self.sigma, UM):g} um, "
-                       f"Sk {self.surface.skew:g}, Ku {self.surface.kurt:g}")
-        return f"counter {surface}, {_counter_body_label(self.geometry, self.E)}"
+        return f"; counter {self.surface.label()}, {self.body.label()}"
 
-    def columns(self) -> dict:
-        """The counter body's parameters as table columns (um, MPa; NaN where none)."""
-        s, nan = self.surface, float("nan")
-        return {"counter_sigma_um": in_unit(self.sigma, UM),
-                "counter_skew": nan if s is None else s.skew,
-                "counter_kurt": nan if s is None else s.kurt,
-                "counter_body": _counter_body_label(self.geometry, self.E),
-                "counter_E_MPa": nan if self.E is None else in_unit(self.E, MPA)}
+    def columns(self, height_scale: float) -> dict:
+        """The counter body's parameters as table columns (um, MPa; NaN where none), and
+        the composite sigma [um]."""
+        return {"counter_sigma_um": in_unit(self.surface.sigma, UM), **self.surface.columns(),
+                "counter_body": self.body.label(), **self.body.columns(),
+                "equivalent_sigma_um": in_unit(height_scale, UM)}
+
+    def height_scale(self, sigma: float) -> float:
+        return self.surface.height_scale(sigma)
+
+    def job_form(self, sigma: float, E: float) -> CounterJob:
+        """The counter body in a job's form: ratios to the first body's ``sigma`` [m]
+        and ``E`` [Pa]."""
+        return CounterJob(self.surface.job_form(sigma), self.body.job_form(E),
+                          self.rigid_share)
+
+    def summary(self, attrs: dict, height_scale: float) -> dict:
+        """What the contact file records about the two bodies (:data:`COUNTER_ATTRIBUTES`),
+        and the equivalent surface's sample sigma [um]."""
+        out = {name: attrs[name].item() if hasattr(attrs[name], "item") else attrs[name]
+               for name in COUNTER_ATTRIBUTES if name in attrs}
+        if "equivalent_sigma_over_scale" in attrs:
+            out["equivalent_sample_sigma_um"] = (float(attrs["equivalent_sigma_over_scale"])
+                                                 * in_unit(height_scale, UM))
+        return out
+
+
+#: What a contact file of two bodies records about them (:meth:`Counterface.summary`).
+COUNTER_ATTRIBUTES = ("counter_compliance_share", "counter_treated_as_rigid",
+                      "equivalent_skew", "equivalent_kurt")
+
+
+class _NoCounterface:
+    """The paper's counter body, a rigid smooth flat: no counterface (the null)."""
+
+    label = ""
+    surface, body = SMOOTH, RIGID
+
+    def params(self) -> dict:
+        return {}
+
+    def columns(self, height_scale: float) -> dict:
+        return {}
+
+    def height_scale(self, sigma: float) -> float:
+        return sigma
+
+    def job_form(self, sigma: float, E: float) -> _NoCounter:
+        return NO_COUNTER
+
+    def summary(self, attrs: dict, height_scale: float) -> dict:
+        return {}
+
+
+#: A study cell against the rigid smooth flat.
+NO_COUNTERFACE = _NoCounterface()
 
 
 @dataclass(frozen=True)
 class CounterJob:
-    """The counter body of a contact job, in the job's non-dimensional form: the
-    counter ``surface`` cell (None: smooth) with ``sigma_ratio`` sigma2 / sigma1,
-    the counter ``geometry`` (None: rigid) with ``modulus_ratio`` E1 / E2, and the
-    ``rigid_share`` below which the job treats the body as rigid."""
+    """The counter body of a contact job, in the job's non-dimensional form: its
+    ``surface`` (:class:`RoughCounter` with ``sigma_ratio`` sigma2 / sigma1, or
+    :data:`SMOOTH`), its ``body`` (:class:`ElasticCounter` with ``modulus_ratio``
+    E1 / E2, or :data:`RIGID`) and the ``rigid_share`` below which the job treats the
+    body as rigid."""
 
-    surface: SurfaceCell | None
-    sigma_ratio: float
-    geometry: Geometry | None
-    modulus_ratio: float
+    surface: _Smooth | RoughCounter
+    body: _Rigid | ElasticCounter
     rigid_share: float
 
     @classmethod
     def from_params(cls, params: dict) -> CounterJob:
-        surface, geometry = params["surface"], params["geometry"]
-        return cls(surface=None if surface is None else surface_cell_from_params(surface),
-                   sigma_ratio=float(params["sigma_ratio"]),
-                   geometry=None if geometry is None else Geometry.from_params(geometry),
-                   modulus_ratio=float(params["modulus_ratio"]),
-                   rigid_share=float(params["rigid_share"]))
+        return cls(_counter_surface(params, "sigma_ratio"),
+                   _counter_body(params, "modulus_ratio"), float(params["rigid_share"]))
 
     def params(self) -> dict:
-        s, g = self.surface, self.geometry
-        return {"surface": None if s is None else s.params(),
-                "surface_key": None if s is None else s.key,
-                "sigma_ratio": self.sigma_ratio,
-                "geometry": None if g is None else g.params(),
-                "geometry_key": None if g is None else g.key,
-                "modulus_ratio": self.modulus_ratio, "rigid_share": self.rigid_share}
+        return {**self.surface.job_params(), **self.body.job_params(),
+                "rigid_share": self.rigid_share}
 
-    @property
-    def height_factor(self) -> float:
-        """sigma1 / sqrt(sigma1^2 + sigma2^2): the equivalent heights in units of the
-        cell's height scale are ``(z1 + sigma_ratio z2) * height_factor``."""
-        return 1.0 / float(np.hypot(1.0, self.sigma_ratio))
+    def job_params(self) -> dict:
+        """What the counter body adds to a job's parameters."""
+        return {"counter": self.params()}
+
+    def key(self) -> str:
+        """What the counter body adds to a job's key: both bodies' parameters, hashed
+        (names stay short)."""
+        return f"__cf{short_hash(self.params(), 10)}"
+
+    def cells(self) -> dict:
+        return self.surface.cells()
+
+    def geometries(self) -> dict:
+        return self.body.geometries()
+
+    def pairs(self, first: Geometry) -> dict:
+        return self.body.pairs(first, self.rigid_share)
+
+    def files(self, first: Geometry, study_seed=None) -> dict:
+        return {**self.surface.files(study_seed), **self.body.files(first, self.rigid_share)}
+
+    def read(self, paths: dict, first: Geometry, reader, study_seed=None) -> tuple:
+        """The counter body (:class:`~roughcontact.contact.counterface.Body`) read from
+        the job's files ``paths`` (each checked; ``reader`` as
+        :meth:`ElasticCounter.read`), and the content hashes to record."""
+        compliance, hashes = self.body.read(paths, first, self.rigid_share, reader)
+        return counterface.Body(self.surface.read(paths, study_seed), compliance,
+                                self.rigid_share), hashes
+
+    def time_factor(self, model: dict) -> float:
+        return self.body.time_factor(model)
+
+    def bytes(self, count: int, n: int, dense: bool) -> float:
+        return self.surface.bytes(count, n) + self.body.bytes(dense, n)
+
+
+class _NoCounter:
+    """A job against the rigid smooth flat (the null): nothing added."""
+
+    def job_params(self) -> dict:
+        return {}
+
+    def key(self) -> str:
+        return ""
+
+    def cells(self) -> dict:
+        return {}
+
+    def geometries(self) -> dict:
+        return {}
+
+    def pairs(self, first: Geometry) -> dict:
+        return {}
+
+    def files(self, first: Geometry, study_seed=None) -> dict:
+        return {}
+
+    def read(self, paths: dict, first: Geometry, reader, study_seed=None) -> tuple:
+        return counterface.RIGID_FLAT, {}
+
+    def time_factor(self, model: dict) -> float:
+        return 1.0
+
+    def bytes(self, count: int, n: int, dense: bool) -> float:
+        return 0.0
+
+
+#: A job against the rigid smooth flat.
+NO_COUNTER = _NoCounter()
+
+
+def counter_job_from_params(params: dict) -> CounterJob | _NoCounter:
+    """A job's counter body from its stored parameters (none: :data:`NO_COUNTER`)."""
+    counter = params.get("counter")
+    return NO_COUNTER if counter is None else CounterJob.from_params(counter)
+
+
+def counterface_from_params(params: dict) -> Counterface | _NoCounterface:
+    """A study cell's counter body from its parameters (none: :data:`NO_COUNTERFACE`)."""
+    counter = params.get("counterface")
+    return NO_COUNTERFACE if counter is None else Counterface.from_params(counter)
 
 
 @dataclass(frozen=True)
@@ -201,18 +547,17 @@ class ContactJob:
     pressure_end: float
     accuracy: Accuracy = Accuracy()
     nondim_hardness: float | None = None
-    counter: CounterJob | None = None
+    counter: CounterJob | _NoCounter = NO_COUNTER
 
     @classmethod
     def from_params(cls, params: dict) -> ContactJob:
-        counter = params.get("counter")
         return cls(surface=surface_cell_from_params(params["surface"]),
                    geometry=Geometry.from_params(params["geometry"]),
                    pressure_end=float(params["pressure_end"]),
                    accuracy=Accuracy(params["accuracy"],
                                      tuple(params["expected_error"].items()) or None),
                    nondim_hardness=params.get("hardness"),
-                   counter=None if counter is None else CounterJob.from_params(counter))
+                   counter=counter_job_from_params(params))
 
     def params(self) -> dict:
         """The job as passed to it and stored with its result (``hardness``: the cap)."""
@@ -222,21 +567,29 @@ class ContactJob:
                   "expected_error": self.accuracy.errors()}
         if self.nondim_hardness is not None:
             params["hardness"] = self.nondim_hardness
-        if self.counter is not None:
-            params["counter"] = self.counter.params()
+        params.update(self.counter.job_params())
         return params
 
-    @property
-    def pair(self) -> PairGeometry | None:
-        """The pair of influence models summed once for this job: of a compliant counter
-        body on a dense first body (the pair is one dense matrix); None otherwise (a
-        matrix-free first body sums the two operators in the job, without a matrix)."""
-        counter = self.counter
-        if (counter is None or counter.geometry is None
-                or self.geometry.operator is not InfluenceModel.DENSE):
-            return None
-        return PairGeometry(first=self.geometry, second=counter.geometry,
-                            modulus_ratio=counter.modulus_ratio, rigid_share=counter.rigid_share)
+    def pairs(self) -> dict[str, PairGeometry]:
+        """The pair of influence models summed once for this job, by key: of a compliant
+        counter body on a dense first body (the pair is one dense matrix); none
+        otherwise (a matrix-free first body sums the two operators in the job)."""
+        return self.counter.pairs(self.geometry)
+
+    def files(self, study_seed=None) -> dict[str, JobFile]:
+        """The files the job reads, by input name, each with what it must have been made
+        for: its surfaces and influence model and its counter body's (the pair's file on
+        a dense first body). The one place that decides them: the rules, the plan, the
+        audit, the resources and the job take them from here."""
+        return {"surfaces": JobFile(f"results/surfaces/{self.surface.key}.h5",
+                                    {"cell": self.surface.params(), "study_seed": study_seed}),
+                "influence": JobFile(f"results/influence/{self.geometry.key}.h5",
+                                     {"geometry": self.geometry.params()}),
+                **self.counter.files(self.geometry, study_seed)}
+
+    def paths(self) -> dict[str, str]:
+        """The paths of :meth:`files`, by input name (a rule's inputs)."""
+        return {name: file.path for name, file in self.files().items()}
 
     @property
     def key(self) -> str:
@@ -251,9 +604,7 @@ class ContactJob:
         key = f"{self.surface.key}__{self.geometry.key}__end{self.pressure_end:g}"
         if self.nondim_hardness is not None:
             key = f"{key}__cap{self.nondim_hardness:.7g}"
-        if self.counter is not None:  # both bodies' parameters, hashed (names stay short)
-            key = f"{key}__cf{short_hash(self.counter.params(), 10)}"
-        return key
+        return key + self.counter.key()
 
 
 @dataclass(frozen=True)
@@ -276,12 +627,12 @@ class StudyCell:
     hardness: float | None = None
     checked_hardness: tuple[float, ...] = ()
     hardness_threshold: float | None = None
-    counterface: Counterface | None = None
+    counterface: Counterface | _NoCounterface = NO_COUNTERFACE
 
     @classmethod
     def from_params(cls, params: dict) -> StudyCell:
         cap, expected = params.get("cap_MPa"), params.get("expected_error")
-        threshold, counter = params.get("hardness_threshold"), params.get("counterface")
+        threshold = params.get("hardness_threshold")
         return cls(surface=surface_cell_from_params(params["surface"]),
                    geometry=Geometry.from_params(params["geometry"]),
                    sigma=float(params["sigma_um"]) * UM, E=float(params["E_MPa"]) * MPA,
@@ -291,7 +642,7 @@ class StudyCell:
                    hardness=None if cap is None else float(cap) * MPA,
                    checked_hardness=from_unit(params.get("hardness_MPa") or (), MPA),
                    hardness_threshold=None if threshold is None else float(threshold),
-                   counterface=None if counter is None else Counterface.from_params(counter))
+                   counterface=counterface_from_params(params))
 
     def params(self) -> dict:
         """The cell as the configuration writes it (sigma in um, E and pressures in MPa),
@@ -308,8 +659,7 @@ class StudyCell:
             params["hardness_threshold"] = self.hardness_threshold
         if self.hardness is not None:
             params["cap_MPa"] = in_unit(self.hardness, MPA)
-        if self.counterface is not None:
-            params["counterface"] = self.counterface.params()
+        params.update(self.counterface.params())
         return params
 
     @property
@@ -317,10 +667,7 @@ class StudyCell:
         """The unit of the job's heights [m]: ``sigma``, or with a rough counter surface
         ``sqrt(sigma^2 + sigma2^2)``, the standard deviation of the sum of two
         independent surfaces (the equivalent surface of Eq 17-18)."""
-        counter = self.counterface
-        if counter is None or counter.surface is None:
-            return self.sigma
-        return float(np.hypot(self.sigma, counter.sigma))
+        return self.counterface.height_scale(self.sigma)
 
     def _nondim(self, pressure: float) -> float:
         return nondim_pressure(pressure, thickness=self.geometry.thickness, E=self.E,
@@ -345,16 +692,9 @@ class StudyCell:
                           nondim_hardness=self.nondim_hardness, counter=self.counter_job)
 
     @property
-    def counter_job(self) -> CounterJob | None:
-        """The counter body in the job's form (None: a smooth rigid one)."""
-        c = self.counterface
-        if c is None:
-            return None
-        return CounterJob(surface=c.surface,
-                          sigma_ratio=0.0 if c.surface is None else c.sigma / self.sigma,
-                          geometry=c.geometry,
-                          modulus_ratio=0.0 if c.geometry is None else self.E / c.E,
-                          rigid_share=c.rigid_share)
+    def counter_job(self) -> CounterJob | _NoCounter:
+        """The counter body in the job's form (ratios to this cell's sigma and E)."""
+        return self.counterface.job_form(self.sigma, self.E)
 
     @property
     def contact_key(self) -> str:
@@ -364,7 +704,7 @@ class StudyCell:
     def label(self) -> str:
         """Short legend text of the cell."""
         cap = "" if self.hardness is None else f", capped at {in_unit(self.hardness, MPA):g} MPa"
-        counter = "" if self.counterface is None else f"; {self.counterface.label}"
+        counter = self.counterface.label
         columns = self.columns()
         return (f"{self.surface.source_label}Sk {columns['skew']:g}, Ku {columns['kurt']:g}, "
                 f"b {columns['b_mm']:g} mm, {columns['size_mm']:g} mm, nu {columns['nu']:g}, "
@@ -376,7 +716,4 @@ class StudyCell:
         return {"skew": s.skew, "kurt": s.kurt, "b_mm": in_unit(s.corr_length[0], MM),
                 "size_mm": in_unit(g.size[0], MM), "nu": g.nu, "mesh": g.mesh,
                 "thickness_mm": in_unit(g.thickness, MM), "sigma_um": in_unit(self.sigma, UM),
-                "E_MPa": in_unit(self.E, MPA),
-                **({} if self.counterface is None else
-                   {**self.counterface.columns(),
-                    "equivalent_sigma_um": in_unit(self.height_scale, UM)})}
+                "E_MPa": in_unit(self.E, MPA), **self.counterface.columns(self.height_scale)}

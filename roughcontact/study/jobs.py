@@ -22,7 +22,6 @@ import time
 import numpy as np
 
 from roughcontact.contact import counterface, halfspace_criterion
-from roughcontact.contact.checks import given_matrix
 from roughcontact.elasticity import definiteness, influence, operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence
@@ -288,58 +287,15 @@ def choose_influence(params: dict, planned: dict, planned_path, out_path,
 # Pair jobs: two bodies' influence models summed once (Eq 17-18)
 
 
-@dataclasses.dataclass(frozen=True)
-class PairModel:
-    """A counter body's elastic part of a contact problem (Eq 17-18): ``unit`` the
-    pair's operator ``E1 C1 + (E1 / E2) E2 C2`` [m] (None: the counter body is treated
-    as rigid), ``weights`` the counter body's deflection weights in the first body's
-    unit [m] (``mean(C2 p) E1 = w . p``; None when rigid), ``bulk_ratio`` the pair's
-    largest row weight over the first body's (1 when rigid) and ``attrs`` the
-    compliance share and the choice."""
-
-    unit: object
-    weights: np.ndarray | None
-    bulk_ratio: float
-    attrs: dict
-
-
-def pair_model(first, second, modulus_ratio: float, rigid_share: float) -> PairModel:
-    """The :class:`PairModel` of a first body's unit-modulus operator ``first`` [m] and
-    a counter body's ``second`` [m] of modulus ratio E1 / E2.
-
-    A matrix-free counter body that meets a dense first body is made dense
-    (:func:`~roughcontact.contact.counterface.densified`: the pair is then pivoted, at
-    the memory of the first body's matrix). A counter body whose share of the
-    compliance (:func:`~roughcontact.contact.counterface.compliance_share`) is below
-    ``rigid_share`` is treated as rigid, and the choice logged.
-    """
-    if given_matrix(first) is not None:
-        second = counterface.densified(second)
-    second = counterface.scaled(second, modulus_ratio)
-    share = counterface.compliance_share(first, second)
-    rigid = share < rigid_share
-    attrs = {"counter_compliance_share": share, "counter_treated_as_rigid": rigid}
-    log.info("counter body, E1/E2 = %.4g: %.3g of the pair's compliance; %s", modulus_ratio,
-             share, f"below counterface.rigid_share {rigid_share:g}: treated as rigid"
-             if rigid else "solved as an elastic pair")
-    if rigid:
-        return PairModel(None, None, 1.0, attrs)
-    first_weights = counterface.deflection_weights(first)
-    weights = counterface.deflection_weights(second)
-    # the mean-plane deflection is at most max(w) times the load: the pair's largest
-    # weight over the first body's raises the sweep's end alike
-    ratio = float((first_weights + weights).max() / first_weights.max())
-    return PairModel(counterface.equivalent_operator(first, second), weights, ratio, attrs)
-
-
 def build_pair(params: dict, first_path, second_path, out_path, config=None) -> dict:
     """Sum two bodies' influence models once and write the pair (its file is shared by
     every contact job on the pair: ``results/influence/pairs/<key>.h5``).
 
     ``params``: the pair's :meth:`~roughcontact.study.contact_records.PairGeometry.params`;
     each influence file must have been made for its body's geometry. The sum is
-    certified positive definite before it is written (:func:`pair_model`; a counter
-    body treated as rigid writes no matrix). Returns the root attributes.
+    certified positive definite before it is written
+    (:func:`~roughcontact.contact.counterface.pair_model`; a counter body treated as
+    rigid writes no matrix). Returns the root attributes.
     """
     pair = PairGeometry.from_params(params)
     start = time.perf_counter()
@@ -349,7 +305,7 @@ def build_pair(params: dict, first_path, second_path, out_path, config=None) -> 
         unit, attrs = read_influence(path, geometry=geometry.params())
         bodies.append(certified_influence(unit, path, geometry))
         hashes[f"{name}_content_sha256"] = attrs["content_sha256"]
-    model = pair_model(*bodies, pair.modulus_ratio, pair.rigid_share)
+    model = counterface.pair_model(*bodies, pair.modulus_ratio, pair.rigid_share)
     matrix = None
     if model.unit is not None:
         definiteness.certify(model.unit, unit="m", advice=LOAD_ADVICE,
@@ -364,12 +320,13 @@ def build_pair(params: dict, first_path, second_path, out_path, config=None) -> 
     return write_pair(out_path, matrix, model.weights, attrs)
 
 
-def read_pair_model(path, pair: PairGeometry) -> tuple[PairModel, dict]:
-    """The :class:`PairModel` of a pair file made for ``pair`` (checked, its sum
-    certified again), and the content hashes a contact job records."""
+def read_pair_model(path, pair: PairGeometry) -> tuple[counterface.PairModel, dict]:
+    """The :class:`~roughcontact.contact.counterface.PairModel` of a pair file made for
+    ``pair`` (checked, its sum certified again), and the content hashes a contact job
+    records."""
     matrix, weights, attrs = read_pair(path, pair=pair.params())
     unit = None if matrix is None else certified_influence(matrix, path, pair.first)
-    model = PairModel(unit, weights, float(attrs["bulk_ratio"]),
+    model = counterface.PairModel(unit, weights, float(attrs["bulk_ratio"]),
                       {"counter_compliance_share": float(attrs["counter_compliance_share"]),
                        "counter_treated_as_rigid": bool(attrs["counter_treated_as_rigid"])})
     return model, {"pair_content_sha256": attrs["content_sha256"],
@@ -379,11 +336,9 @@ def read_pair_model(path, pair: PairGeometry) -> tuple[PairModel, dict]:
 __all__ = [
     "BUILD_ADVICE",
     "LOAD_ADVICE",
-    "PairModel",
     "build_influence",
     "build_pair",
     "certified_influence",
     "choose_influence",
-    "pair_model",
     "read_pair_model",
 ]

@@ -35,6 +35,7 @@ from enum import Enum
 from pathlib import Path
 from typing import ClassVar
 
+from roughcontact.contact import counterface
 from roughcontact.elasticity.influence import BlockGeometry, CostEstimate, estimate_cost
 from roughcontact.elasticity.operators import HYBRID_MESHES, choose_operator, default_coarse_grid
 from roughcontact.study import sources
@@ -180,6 +181,12 @@ class GeneratedCell(_SurfaceStatistics):
         """The start of a study cell's legend text: none for generated surfaces."""
         return ""
 
+    def facing(self, heights, sigma_ratio: float, content_sha256: str = ""):
+        """These surfaces as a counter surface facing the first body
+        (:class:`~roughcontact.contact.counterface.RoughSurface`): generated ones as
+        they are (each added to its first surface)."""
+        return counterface.RoughSurface(heights, sigma_ratio, content_sha256)
+
     def spec(self, sigma: float = 1.0) -> SurfaceSpec:
         """The :class:`SurfaceSpec` of the cell's surfaces (heights in units of ``sigma``).
 
@@ -264,6 +271,11 @@ class MeasuredCell(_SurfaceStatistics):
     @property
     def source_label(self) -> str:
         return f"measured {Path(self.source.file).name}: "
+
+    def facing(self, heights, sigma_ratio: float, content_sha256: str = ""):
+        """The measured map as a counter surface facing the first body: measured face up
+        like the first, so mirrored in x (one map, added to every first surface)."""
+        return counterface.RoughSurface.face_up(heights[0], sigma_ratio, content_sha256)
 
 
 SurfaceCell = GeneratedCell | MeasuredCell

@@ -176,8 +176,7 @@ def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSett
     solves = job.surface.count * settings.steps
     reach = max(1.0, job.pressure_end / _MODEL["contact"]["reference_reach"])
     # a compliant counter body: more contact at the same pressure (cost_model.yaml)
-    pair = (1.0 if job.counter is None or job.counter.geometry is None
-            else _MODEL["contact"]["counter_body_factor"])
+    pair = job.counter.time_factor(_MODEL)
     grid = job.geometry.grid
     if not _dense(job.geometry, build):
         return (solves * matrix_free_solve_seconds(grid) * tolerance_factor(settings)
@@ -320,15 +319,11 @@ def contact_mem_mb(job: ContactJob, build: BuildSettings) -> int:
     nx, ny = job.geometry.grid
     n = nx * ny
     count = job.surface.count
-    counter = job.counter
-    extra = 0.0 if counter is None or counter.surface is None else DOUBLE_BYTES * count * n
-    if not _dense(job.geometry, build):
-        if counter is not None and counter.geometry is not None:
-            extra += DOUBLE_BYTES * (COARSE_MAX**2) ** 2
+    dense = _dense(job.geometry, build)
+    extra = job.counter.bytes(count, n, dense)
+    if not dense:
         return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2 + extra
                    + fit["matrix_free_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
-    if counter is not None and counter.geometry is not None:
-        extra += 2 * DOUBLE_BYTES * n**2
     return int(fit["memory_base_mb"] + (fit["dense_matrices"] * DOUBLE_BYTES * n**2 + extra
                + fit["dense_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
 

@@ -26,7 +26,15 @@ from roughcontact.study.config import (
     in_unit,
     in_units,
 )
-from roughcontact.study.contact_records import Accuracy, Counterface, StudyCell
+from roughcontact.study.contact_records import (
+    RIGID,
+    SMOOTH,
+    Accuracy,
+    Counterface,
+    ElasticCounter,
+    RoughCounter,
+    StudyCell,
+)
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.records import (
     GeneratedCell,
@@ -220,8 +228,10 @@ def with_counterfaces(config: dict, study: dict, cells: list[StudyCell]) -> list
         for cell in cells:
             surface, sigma = counter_surface(config, entry["surface"], cell.surface)
             geometry, E = counter_body(config, entry["body"], cell.geometry)
-            counter = Counterface(surface=surface, sigma=sigma, geometry=geometry, E=E,
-                                  rigid_share=rigid_share)
+            counter = Counterface(
+                surface=SMOOTH if surface is None else RoughCounter(surface, sigma=sigma),
+                body=RIGID if geometry is None else ElasticCounter(geometry, E=E),
+                rigid_share=rigid_share)
             out.append(dataclasses.replace(cell, counterface=counter))
     return out
 

@@ -15,14 +15,20 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+from roughcontact.contact import counterface
 from roughcontact.contact.cell import BULK_FACTOR
 from roughcontact.elasticity.protocol import DenseInfluence
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
 from roughcontact.study.contact_jobs import contact_problem
-from roughcontact.study.contact_records import ContactJob, StudyCell
-from roughcontact.study.jobs import pair_model
+from roughcontact.study.contact_records import (
+    NO_COUNTER,
+    NO_COUNTERFACE,
+    RIGID,
+    ContactJob,
+    StudyCell,
+)
 from roughcontact.surfaces.synthetic import derive_seeds
 
 SWEEP = {"sigma_um": 24.5, "b_mm": 0.5, "pressure_MPa": [0.1, 3.0], "count": 3}
@@ -38,7 +44,9 @@ def test_a_smooth_rigid_counter_body_plans_todays_jobs():
     today = study_plan(config())
     explicit = study_plan(config(counterface={"surface": "smooth", "body": "rigid"}))
     assert list(explicit.jobs) == list(today.jobs)
-    assert all(cell.counterface is None for cell in explicit.cells["pair"])
+    assert all(cell.counterface is NO_COUNTERFACE for cell in explicit.cells["pair"])
+    assert all(job.counter is NO_COUNTER and set(job.files()) == {"surfaces", "influence"}
+               for job in today.jobs.values())
     assert all("__cf" not in key for key in today.jobs)
 
 
@@ -46,7 +54,7 @@ def test_a_counter_surface_is_another_realisation_of_its_statistics():
     plan = study_plan(config(counterface={"surface": {"sigma_um": 10.0},
                                           "body": {"kind": "halfspace", "E_MPa": 2000.0}}))
     (cell,) = plan.cells["pair"]
-    first, counter = cell.surface, cell.counterface.surface
+    first, counter = cell.surface, cell.counterface.surface.cell
     assert (counter.skew, counter.kurt, counter.corr_length) == (
         first.skew, first.kurt, first.corr_length)
     assert counter.statistics_key != first.statistics_key
@@ -55,8 +63,12 @@ def test_a_counter_surface_is_another_realisation_of_its_statistics():
     assert counter.key in plan.surfaces and first.key in plan.surfaces
     assert cell.height_scale == pytest.approx(np.hypot(24.5e-6, 10e-6), rel=1e-15)
     job = cell.job
-    assert job.counter.sigma_ratio == pytest.approx(10.0 / 24.5)
-    assert job.counter.modulus_ratio == pytest.approx(511.0 / 2000.0)
+    assert job.counter.surface.sigma_ratio == pytest.approx(10.0 / 24.5)
+    assert job.counter.body.modulus_ratio == pytest.approx(511.0 / 2000.0)
+    # a half-space on a dense first body: the pair is summed once, its file the job's
+    assert set(job.files()) == {"surfaces", "influence", "counter_surfaces", "counter_influence"}
+    assert job.files()["counter_influence"].path.startswith("results/influence/pairs/")
+    assert job.files()["counter_surfaces"].path == f"results/surfaces/{counter.key}.h5"
     assert ContactJob.from_params(job.params()) == job
     assert StudyCell.from_params(cell.params()) == cell
 
@@ -67,7 +79,8 @@ def test_a_list_of_counter_bodies_is_an_axis():
         {"body": {"kind": "block", "E_MPa": 1022.0}},
         {"body": "rigid"}]))
     cells = plan.cells["pair"]
-    assert [c.counterface and c.counterface.E for c in cells] == [511e6, 1022e6, None]
+    assert [c.counterface.body.E for c in cells] == [511e6, 1022e6, None]
+    assert cells[2].counterface is NO_COUNTERFACE
     assert len({c.contact_key for c in cells}) == 3
 
 
@@ -95,13 +108,14 @@ def test_a_measured_counter_surface_on_another_grid_is_refused_with_its_fix(meas
     # the advice, followed
     plan = study_plan(config(counterface=measured_entry(measured, resample_grid=[16, 16])))
     (cell,) = plan.cells["pair"]
-    assert cell.counterface.surface.grid == (16, 16)
-    assert cell.counterface.sigma == pytest.approx(cell.counterface.surface.sigma)
+    assert cell.counterface.surface.cell.grid == (16, 16)
+    assert cell.counterface.surface.sigma == pytest.approx(cell.counterface.surface.cell.sigma)
     # measured face up like the first surface, the map meets every surface mirrored in x
     z1 = np.random.default_rng(3).standard_normal((3, 16, 16))
     z2 = np.random.default_rng(4).standard_normal((1, 16, 16))
-    problem = contact_problem(cell.job, z1, None, {"heights": z2, "content_sha256": "x"})
-    r = cell.job.counter.sigma_ratio
+    r = cell.job.counter.surface.sigma_ratio
+    facing = cell.job.counter.surface.cell.facing(z2, r, "x")
+    problem = contact_problem(cell.job, z1, None, counterface.Body(facing))
     np.testing.assert_allclose(problem.heights, (z1 + r * z2[:, :, ::-1]) / np.hypot(1, r),
                                rtol=1e-14)
 
@@ -117,7 +131,7 @@ def test_a_measured_counter_surface_of_another_size_is_told_to_crop(measured):
     plan["surfaces"]["size_mm"] = [1.2, 1.2]
     plan["surfaces"]["grid"] = [8, 8]
     (cell,) = study_plan(plan).cells["pair"]
-    assert cell.counterface.surface.grid == (8, 8)
+    assert cell.counterface.surface.cell.grid == (8, 8)
 
 
 def test_counter_entries_that_mix_kinds_are_refused_in_plain_words(measured):
@@ -154,15 +168,19 @@ def test_identical_bodies_double_the_compliance_and_a_stiff_one_is_rigid():
     n = 16 * 16
     heights = np.random.default_rng(2).standard_normal((3, 16, 16))
     unit = _unit(n)
-    assert twin.pair is not None and twin.pair.first == twin.geometry  # summed once
-    problem = contact_problem(twin, heights, unit, None, pair_model(unit, unit, 1.0, 0.001))
+    (pair,) = twin.pairs().values()
+    assert pair.first == twin.geometry  # summed once
+    model = counterface.pair_model(unit, unit, 1.0, 0.001)
+    problem = contact_problem(twin, heights, unit,
+                              counterface.Body(compliance=counterface.SummedPair(model)))
     np.testing.assert_allclose(problem.unit.matrix, 2 * unit.matrix, rtol=1e-15)
     assert problem.attrs["counter_compliance_share"] == pytest.approx(0.5)
     assert problem.attrs["counter_treated_as_rigid"] is False
     assert problem.bulk_factor == pytest.approx(2 * BULK_FACTOR)
     np.testing.assert_allclose(problem.interface.counter_weights,
                                unit.matrix.sum(axis=0) / n / twin.geometry.thickness, rtol=1e-14)
-    rigid = contact_problem(stiff, heights, unit, None, pair_model(unit, unit, 1e-4, 0.001))
+    rigid = contact_problem(stiff, heights, unit, counterface.Body(
+        compliance=counterface.CompliantBody(unit, 1e-4), rigid_share=0.001))
     assert rigid.attrs["counter_compliance_share"] == pytest.approx(1 / 10001)
     assert rigid.attrs["counter_treated_as_rigid"] is True
     assert rigid.unit is unit and rigid.heights is heights
@@ -177,8 +195,8 @@ def test_the_two_bodies_config_plans_a_pair_beside_each_rigid_flat():
     plan = study_plan(validated(raw))
     for name in ("pad_on_disc", "steel_plates"):
         pair, flat = plan.cells[name]
-        assert flat.counterface is None and pair.counterface.geometry is not None
+        assert flat.counterface is NO_COUNTERFACE and pair.counterface.body is not RIGID
         assert pair.surface == flat.surface  # the same surfaces, against each body
-    kinds = {c.counterface.geometry.operator.value for n in plan.studies
-             for c in plan.cells[n] if c.counterface is not None}
+    kinds = {g.operator.value for n in plan.studies for c in plan.cells[n]
+             for g in c.counterface.body.geometries().values()}
     assert kinds == {"halfspace", "dense"}

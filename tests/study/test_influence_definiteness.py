@@ -61,14 +61,16 @@ def test_an_indefinite_influence_file_is_refused_naming_it_and_its_advice_works(
     settings = contact_settings(config).params()
     out = tmp_path / "contact.h5"
     with pytest.raises(IndefiniteOperator) as info:
-        solve_contact_job(job.params(), surfaces, stored, out, settings)
+        solve_contact_job(job.params(), {"surfaces": surfaces, "influence": stored}, out,
+                          settings)
     message = str(info.value)
     assert str(stored) in message and f"smallest about {smallest:.4g} m" in message
     assert "Delete the file" in message and not out.exists()
     # the advice, followed: delete it, and the workflow's build writes it again
     stored.unlink()
     _build(config, job.geometry, stored)
-    solve_contact_job(job.params(), surfaces, stored, out, settings)
+    solve_contact_job(job.params(), {"surfaces": surfaces, "influence": stored}, out,
+                          settings)
     sweep, _ = read_contact(out)
     assert sweep.converged.all()
 

@@ -90,7 +90,8 @@ def test_a_one_element_contact_is_flagged_in_the_table_the_log_and_the_audit(tmp
     build_surface_cell(surface.params(), 0, paths["surfaces"])
     build_influence(geometry.params(), paths["influence"], solver="auto", max_memory_gb=4)
     settings = ContactSettings.from_section(validated({"study_seed": 0})["contact"])
-    solve_contact_job(cell.job.params(), paths["surfaces"], paths["influence"],
+    solve_contact_job(cell.job.params(), {"surfaces": paths["surfaces"],
+                                          "influence": paths["influence"]},
                       paths["contact"], settings.params())
     with caplog.at_level(logging.WARNING):
         frame = aggregate_study([cell], {cell.contact_key: paths["contact"]}, 8,
