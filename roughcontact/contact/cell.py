@@ -18,7 +18,7 @@ the same way:
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import dataclasses
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -102,14 +102,14 @@ def block_interface(geometry) -> InterfaceGrid:
     return InterfaceGrid((lx / nx, ly / ny), periodic=False)
 
 
+#: The study's sweep (:func:`sweep_cell`): mixed precision, the pressure profiles and the
+#: interface quantities on the block's grid recorded.
+SWEEP_OPTIONS = nondim.CellOptions(precision="mixed", profile=True, interface=True)
+
+
 def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: float, steps: int,
-               *, method: str = "cg", tol: float = 1e-8, precision: str = "mixed",
-               stiffness_tol: float = 1e-6, max_iter: int | None = None,
-               batch_size: int | None = None,
-               progress: Callable[[nondim.SweepProgress], None] | None = None,
-               rows: slice | None = None, nondim_hardness: float | None = None,
-               profile: bool = True, interface: bool | InterfaceGrid = True,
-               bulk_factor: float = BULK_FACTOR) -> NondimSweep:
+               *, options: nondim.CellOptions = SWEEP_OPTIONS, rows: slice | None = None,
+               bulk_factor: float = BULK_FACTOR, **settings) -> NondimSweep:
     """Sweep every surface of a cell to ``pressure_end`` on :func:`approach_grid`.
 
     Parameters
@@ -123,35 +123,27 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
         (a :class:`~roughcontact.elasticity.influence.BlockGeometry`).
     pressure_end, steps
         As in :func:`approach_grid`.
-    method, tol, precision, stiffness_tol, max_iter, batch_size, progress
-        As in :func:`roughcontact.contact.nondim.solve_cell`.
+    options : roughcontact.contact.nondim.CellOptions
+        The sweep's settings (default :data:`SWEEP_OPTIONS`); ``settings`` (keywords
+        named as its fields) replace those of ``options``. Its ``interface`` may be
+        True: the grid of ``geometry`` (:func:`block_interface`: it then needs
+        ``size`` and ``grid``), or an ``InterfaceGrid`` (e.g. with a counter body's
+        deflection weights, :mod:`roughcontact.contact.counterface`).
     rows : slice, optional
         Solve only these surfaces, on the approach grid of the whole cell (the
         audit re-solves one stored batch this way).
-    nondim_hardness : float, optional
-        Dimensionless cap ``H L / (E sigma)`` of a capped sweep (None: elastic).
-    profile : bool
-        Record the pressure and load profiles of every solution (default),
-        from which :func:`validity_table` reads the share above any hardness.
-    interface : bool or InterfaceGrid
-        Record every solution's contact spots, perimeter, corrected area and
-        gaps (default; :mod:`roughcontact.contact.interface`) on the grid of
-        ``geometry`` (:func:`block_interface`: it then needs ``size`` and ``grid``),
-        or on the grid given (e.g. with a counter body's deflection weights,
-        :mod:`roughcontact.contact.counterface`).
     bulk_factor : float
         As in :func:`approach_grid` (larger for a pair of bodies).
     """
+    options = dataclasses.replace(options, **settings)
     approaches = approach_grid(heights, pressure_end, steps, bulk_factor)
     if rows is not None:
         heights = heights[rows]
     return nondim.solve_cell(unit_influence, heights, thickness=geometry.thickness,
                              element_area=geometry.element_area, approaches=approaches,
-                             method=method, tol=tol, max_iter=max_iter,
-                             stiffness_tol=stiffness_tol, precision=precision,
-                             batch_size=batch_size, progress=progress,
-                             nondim_hardness=nondim_hardness, profile=profile,
-                             interface=_interface_grid(interface, geometry))
+                             options=dataclasses.replace(
+                                 options, interface=_interface_grid(options.interface,
+                                                                    geometry)))
 
 
 def _interface_grid(interface, geometry) -> InterfaceGrid | None:

@@ -52,6 +52,7 @@ on the same criterion.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Callable
@@ -85,6 +86,7 @@ from roughcontact.elasticity.protocol import DenseInfluence
 __all__ = [
     "INTERFACE_SCALES",
     "SI_SCALES",
+    "CellOptions",
     "SweepProgress",
     "dimensionless_operator",
     "initial_separation",
@@ -325,13 +327,43 @@ def _check_batch_size(batch_size, m: int) -> int:
 # Sweep
 
 
+@dataclass(frozen=True)
+class CellOptions:
+    """How the surfaces of a cell are swept (:func:`solve_cell`,
+    :func:`roughcontact.contact.cell.sweep_cell`): one record for every setting.
+
+    ``method``, ``tol``, ``max_iter``, ``stiffness_tol``, ``precision``, ``profile``
+    and ``interface`` as in :func:`roughcontact.contact.sweep` (``tol`` bounds the
+    dimensionless KKT residual, the same in SI units; the interface's gaps are in units
+    of sigma, like the heights). ``batch_size``: surfaces per sweep (None: all in one,
+    the fastest; smaller batches bound memory). ``progress``: called with a
+    :class:`SweepProgress` for every step of every batch, in step order when the
+    batch is finished. ``nondim_hardness``: the dimensionless cap ``H L / (E sigma)``
+    (the result then holds only for the (sigma, E, H) with that value,
+    :func:`to_physical` checks it; None: elastic).
+    """
+
+    method: str = "cg"
+    tol: float = 1e-8
+    max_iter: int | None = None
+    stiffness_tol: float = 1e-6
+    precision: str = "double"
+    batch_size: int | None = None
+    progress: Callable[[SweepProgress], None] | None = None
+    nondim_hardness: float | None = None
+    profile: bool = False
+    interface: object = None
+
+    def sweep_keys(self) -> dict:
+        """The keywords of :func:`roughcontact.contact.sweep` these options set."""
+        return {"method": self.method, "tol": self.tol, "max_iter": self.max_iter,
+                "stiffness_tol": self.stiffness_tol, "precision": self.precision,
+                "hardness": self.nondim_hardness, "profile": self.profile,
+                "interface": self.interface}
+
+
 def solve_cell(unit_influence, heights, *, thickness: float, element_area: float, approaches,
-               method: str = "cg", tol: float = 1e-8, max_iter: int | None = None,
-               stiffness_tol: float = 1e-6, precision: str = "double",
-               batch_size: int | None = None,
-               progress: Callable[[SweepProgress], None] | None = None,
-               nondim_hardness: float | None = None, profile: bool = False,
-               interface=None) -> NondimSweep:
+               options: CellOptions = CellOptions(), **settings) -> NondimSweep:
     """Dimensionless force-deflection sweep of all surfaces of one cell (Eq 27, 33, 35).
 
     Solves ``min 1/2 phat.K phat - phat.(dhat - fhat)`` over ``phat >= 0``
@@ -357,20 +389,9 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         Rigid approaches ``dhat = d / sigma`` [-], shared or per surface,
         non-negative and strictly increasing (e.g.
         :func:`roughcontact.contact.cell.approach_grid`).
-    method, tol, max_iter, stiffness_tol, precision, profile, interface
-        Passed to :func:`roughcontact.contact.sweep` (``tol`` bounds the
-        dimensionless KKT residual, the same in SI units; the interface's gaps
-        are in units of sigma, like the heights).
-    batch_size : int, optional
-        Surfaces per :func:`~roughcontact.contact.sweep` call (default: all
-        in one call, the fastest); smaller batches bound memory.
-    progress : callable, optional
-        Called with a :class:`SweepProgress` for every step of every batch,
-        in step order when the batch is finished.
-    nondim_hardness : float, optional
-        Dimensionless cap ``H L / (E sigma)``: the result then holds only for
-        the (sigma, E, H) with that value (:func:`to_physical` checks it).
-        None: the elastic problem.
+    options : CellOptions
+        The sweep's settings; ``settings`` (keywords named as its fields) replace
+        those of ``options``.
 
     Returns
     -------
@@ -379,52 +400,50 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         have ``converged=False``, must not be used as results, and are counted
         in a warning.
     """
+    options = dataclasses.replace(options, **settings)
     thickness = check_positive(thickness, "thickness")
     element_area = check_positive(element_area, "element_area")
     gaps = initial_separation(heights)
     m, n = gaps.shape
     steps = _check_steps(approaches, m)
-    batch_size = _check_batch_size(batch_size, m)
     operator = as_operator(dimensionless_operator(_certified(unit_influence, element_area),
                                                   thickness), 1.0 / n)
-    hardness = (None if nondim_hardness is None
-                else check_positive(nondim_hardness, "nondim_hardness (H L / (E sigma))"))
-    method = resolve_method(method, operator, hardness)  # recorded as solved
-    ranks = validity.rank_grid(n) if profile else None
-    if interface is not None:  # the interface quantities need the fields' (ny, nx)
+    hardness = (None if options.nondim_hardness is None else
+                check_positive(options.nondim_hardness, "nondim_hardness (H L / (E sigma))"))
+    options = dataclasses.replace(options, batch_size=_check_batch_size(options.batch_size, m),
+                                  nondim_hardness=hardness,
+                                  method=resolve_method(options.method, operator, hardness))
+    if options.interface is not None:  # the interface quantities need the fields' (ny, nx)
         if np.ndim(heights) != 3:
             raise ValueError(f"interface quantities need heights of shape (m, ny, nx), got "
                              f"{np.shape(heights)}")
         gaps = gaps.reshape(np.shape(heights))
-    arrays = _sweep_batches(operator, gaps, steps, batch_size, progress, method=method, tol=tol,
-                            max_iter=max_iter, stiffness_tol=stiffness_tol, precision=precision,
-                            hardness=hardness, profile=profile, interface=interface)
-    _warn_unconverged(arrays, tol, stiffness_tol)
+    arrays = _sweep_batches(operator, gaps, steps, options)
+    _warn_unconverged(arrays, options.tol, options.stiffness_tol)
     return NondimSweep(**arrays, thickness=thickness, element_area=element_area, n_elements=n,
-                       method=method, tol=float(tol), stiffness_tol=float(stiffness_tol),
-                       precision=precision, max_iter=None if max_iter is None else int(max_iter),
-                       nondim_hardness=hardness, profile_ranks=ranks)
+                       method=options.method, tol=float(options.tol),
+                       stiffness_tol=float(options.stiffness_tol), precision=options.precision,
+                       max_iter=None if options.max_iter is None else int(options.max_iter),
+                       nondim_hardness=hardness,
+                       profile_ranks=validity.rank_grid(n) if options.profile else None)
 
 
-def _sweep_batches(operator, gaps, steps, batch_size: int, progress, *, method, tol, max_iter,
-                   stiffness_tol, precision, hardness, profile, interface=None) -> dict:
-    """:func:`roughcontact.contact.sweep` of ``batch_size`` surfaces at a time
+def _sweep_batches(operator, gaps, steps, options: CellOptions) -> dict:
+    """:func:`roughcontact.contact.sweep` of ``options.batch_size`` surfaces at a time
     (:func:`solve_cell`): the (m, k) arrays of a NondimSweep, and with ``profile``
     its (m, k, R) profiles."""
     m, n = gaps.shape[0], gaps[0].size
     batches = []
     start = time.perf_counter()
-    for first in range(0, m, batch_size):
-        rows = slice(first, min(m, first + batch_size))
-        result = sweep(operator, gaps[rows], steps[rows], method=method, tol=tol,
-                       max_iter=max_iter, element_area=1.0 / n, stiffness=True,
-                       stiffness_tol=stiffness_tol, precision=precision,
-                       hardness=hardness, profile=profile, interface=interface)
+    for first in range(0, m, options.batch_size):
+        rows = slice(first, min(m, first + options.batch_size))
+        result = sweep(operator, gaps[rows], steps[rows], element_area=1.0 / n, stiffness=True,
+                       **options.sweep_keys())
         batch = solver_arrays(result, FROM_SOLVER, stiffness="normalized_stiffness")
-        if profile:
+        if options.profile:
             batch.update({name: getattr(result, name) for name in PROFILES})
         batch.update(interface_arrays(result))
-        _report_batch(batch, rows, m, time.perf_counter() - start, progress)
+        _report_batch(batch, rows, m, time.perf_counter() - start, options.progress)
         batches.append(batch)
     return {name: np.concatenate([batch[name] for batch in batches]) for name in batches[0]}
 

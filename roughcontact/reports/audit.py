@@ -13,6 +13,7 @@ with what is stored: bit-identical for the same library versions.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import time
@@ -25,7 +26,7 @@ import pandas as pd
 
 from roughcontact import __version__
 from roughcontact.contact.aggregate import pressure_axis
-from roughcontact.contact.cell import aggregate_sweep, sweep_cell
+from roughcontact.contact.cell import SWEEP_OPTIONS, aggregate_sweep
 from roughcontact.contact.plausibility import (
     MAX_PRESSURE_OVER_E_STAR,
     MIN_CONTACT_ELEMENTS,
@@ -33,11 +34,10 @@ from roughcontact.contact.plausibility import (
 )
 from roughcontact.errors import StoredFileError
 from roughcontact.study.aggregation import validity_rows, validity_summary
-from roughcontact.study.contact_jobs import contact_problem, read_counter
+from roughcontact.study.contact_jobs import contact_problem, read_counter, sweep_problem
 from roughcontact.study.contact_records import ContactJob, StudyCell
 from roughcontact.study.jobs import certified_influence
 from roughcontact.study.provenance import atomic_path, git_commit
-from roughcontact.study.records import Geometry
 from roughcontact.study.storage import (
     check_parameters,
     contact_datasets,
@@ -442,13 +442,10 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
         counter, _ = read_counter(record, files, study_seed)
         problem = contact_problem(record, surfaces["heights"], unit, counter)
         start = time.perf_counter()
-        again = sweep_cell(
-            problem.unit, problem.heights, Geometry.from_params(job["geometry"]).block(),
-            job["pressure_end"], stored.approach.shape[1], method=stored.method,
-            tol=stored.tol, precision=stored.precision, max_iter=stored.max_iter,
-            rows=slice(first, last), nondim_hardness=stored.nondim_hardness,
-            interface=problem.interface, bulk_factor=problem.bulk_factor,
-        )
+        options = dataclasses.replace(SWEEP_OPTIONS, method=stored.method, tol=stored.tol,
+                                      precision=stored.precision, max_iter=stored.max_iter)
+        again = sweep_problem(record, problem, stored.approach.shape[1], options,
+                              rows=slice(first, last))
         seconds = time.perf_counter() - start
         commit = git_commit()
         same_versions = (attrs["package_version"] == __version__

@@ -139,6 +139,20 @@ def contact_problem(job: ContactJob, heights, unit,
                           cell_module.BULK_FACTOR * paired.model.bulk_ratio, paired.attrs)
 
 
+def sweep_problem(job: ContactJob, problem: ContactProblem, steps: int, options,
+                  rows: slice | None = None):
+    """Sweep a job's ``problem`` over ``steps`` approaches to its end
+    (:func:`roughcontact.contact.cell.sweep_cell`, ``options`` a
+    :class:`~roughcontact.contact.nondim.CellOptions`; the job's cap, the problem's
+    interface grid and bulk factor set here): the job's sweep, and the audit's re-solve
+    of the stored batch ``rows``."""
+    options = dataclasses.replace(options, nondim_hardness=job.nondim_hardness,
+                                  interface=problem.interface)
+    return cell_module.sweep_cell(problem.unit, problem.heights, job.geometry.block(),
+                                  job.pressure_end, steps, options=options, rows=rows,
+                                  bulk_factor=problem.bulk_factor)
+
+
 def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
                       config=None) -> dict:
     """Solve one contact job and write its non-dimensional sweep to ``out_path``.
@@ -183,13 +197,10 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
              geometry_attrs["operator"],
              "elastic" if hardness is None else f"pressure capped at H L / (E sigma) = "
              f"{hardness:.6g}")
-    result = cell_module.sweep_cell(problem.unit, problem.heights, job.geometry.block(),
-                                    job.pressure_end,
-                                    settings.steps, method=settings.method, tol=settings.tol,
-                                    precision=settings.precision, batch_size=min(m, BATCH_SIZE),
-                                    progress=_progress_log(), nondim_hardness=hardness,
-                                    interface=problem.interface,
-                                    bulk_factor=problem.bulk_factor)
+    options = dataclasses.replace(cell_module.SWEEP_OPTIONS, method=settings.method,
+                                  tol=settings.tol, precision=settings.precision,
+                                  batch_size=min(m, BATCH_SIZE), progress=_progress_log())
+    result = sweep_problem(job, problem, settings.steps, options)
     log.info("approach d/sigma %.3g .. %.3g", result.approach[0, 0], result.approach[0, -1])
     reached = result.nominal_pressure[:, -1].min()
     if reached < job.pressure_end:
@@ -218,4 +229,5 @@ __all__ = [
     "contact_problem",
     "read_counter",
     "solve_contact_job",
+    "sweep_problem",
 ]
