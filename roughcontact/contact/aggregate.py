@@ -311,6 +311,22 @@ def _check_confidence(confidence) -> float:
     return confidence
 
 
+def _quantity_columns(sweep: PhysicalSweep, levels: np.ndarray, confidence: float):
+    """The ``nominal_pressure`` column and each quantity's mean, half-width and count
+    at ``levels`` [Pa] (:func:`aggregate_cell`), and their units."""
+    columns = {"nominal_pressure": levels}
+    units = {"nominal_pressure": "Pa"}
+    for quantity, spec in quantities(sweep).items():
+        samples = surface_curves(sweep, levels, quantity)
+        mean, half_width, count = statistics(samples, confidence)
+        columns[f"{quantity}_mean"] = mean
+        columns[f"{quantity}_half_width"] = half_width
+        columns[f"{quantity}_count"] = count
+        units.update({f"{quantity}_mean": spec.unit, f"{quantity}_half_width": spec.unit,
+                      f"{quantity}_count": "1"})
+    return columns, units
+
+
 def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
                    confidence: float = 0.95) -> pd.DataFrame:
     """Mean and confidence band over the surfaces of a cell at each nominal pressure.
@@ -335,44 +351,24 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
     Returns
     -------
     pandas.DataFrame
-        One row per level. Columns: ``nominal_pressure`` [Pa]; for each
-        quantity ``q`` of ``QUANTITIES`` (``normalized_stiffness`` k_P [Pa],
-        ``approach`` d [m], ``mean_plane_deflection`` d_b [m],
-        ``asperity_deflection`` d_a [m], ``real_area_fraction`` [-],
-        ``max_pressure`` [Pa], ``plastic_area_fraction`` and
-        ``plastic_load_fraction`` [-], zero without a cap; and, when the sweep
-        recorded them, the :data:`INTERFACE_QUANTITIES` ``spot_count``,
-        ``mean_spot_area`` [m^2], ``perimeter`` [m],
-        ``corrected_real_area_fraction`` [-] and ``mean_gap`` [m], and with
-        the stored distributions the :data:`DISTRIBUTION_QUANTITIES`
-        ``median_spot_area``, ``largest_spot_area`` [m^2], ``gap_p10``,
-        ``gap_median`` and ``gap_p90`` [m]): ``q_mean``,
-        ``q_half_width`` (same unit) and
-        ``q_count`` (surfaces used; fewer than ``surfaces`` where the level
-        lies outside some surfaces' swept range, 0 with NaN values where it
-        lies outside all); ``coverage`` (:func:`coverage`: why a count is
+        One row per level: ``nominal_pressure`` [Pa]; for each quantity ``q`` of
+        :func:`quantities` (``QUANTITIES``, and the interface, distribution and
+        counter-body ones the sweep recorded; units in ``frame.attrs["units"]``)
+        ``q_mean``, ``q_half_width`` (same unit) and ``q_count`` (surfaces used:
+        fewer where the level lies outside some surfaces' swept range, 0 with NaN
+        values outside all); ``coverage`` (:func:`coverage`: why a count is
         short); ``surfaces`` (m); ``unconverged_steps`` and
-        ``unconverged_stiffness_steps``, the cell's totals (all surfaces and
-        steps, repeated on every row) of steps excluded because the contact
-        solve did not converge, respectively because the contact solve
-        converged but the stiffness solve did not (excluded from k_P only).
-        ``frame.attrs`` holds ``units``, ``confidence``, ``interpolation``,
-        ``sigma``, ``E``, ``thickness`` and ``nominal_area``.
+        ``unconverged_stiffness_steps``, the cell's totals (repeated on every row)
+        of steps excluded because the contact solve, respectively only the
+        stiffness solve (from k_P), did not converge. ``frame.attrs`` holds
+        ``units``, ``confidence``, ``interpolation``, ``sigma``, ``E``,
+        ``thickness`` and ``nominal_area``.
     """
     sweep = _check_sweep(sweep_physical)
     confidence = _check_confidence(confidence)
     levels = np.asarray(pressures, dtype=float)
     m = sweep.nominal_pressure.shape[0]
-    columns = {"nominal_pressure": levels}
-    units = {"nominal_pressure": "Pa"}
-    for quantity, spec in quantities(sweep).items():
-        samples = surface_curves(sweep, levels, quantity)
-        mean, half_width, count = statistics(samples, confidence)
-        columns[f"{quantity}_mean"] = mean
-        columns[f"{quantity}_half_width"] = half_width
-        columns[f"{quantity}_count"] = count
-        units.update({f"{quantity}_mean": spec.unit, f"{quantity}_half_width": spec.unit,
-                      f"{quantity}_count": "1"})
+    columns, units = _quantity_columns(sweep, levels, confidence)
     columns["coverage"] = coverage(sweep, levels)
     columns["surfaces"] = np.full(levels.size, m)
     columns["unconverged_steps"] = np.full(levels.size, int((~sweep.converged).sum()))

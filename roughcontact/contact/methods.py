@@ -48,11 +48,18 @@ Methods (:data:`REGISTRY`; :data:`METHODS` also holds ``"auto"``):
     Its sweep keeps every surface in flight at once.
 ``"exact"``
     The same pivoting, whose sweep solves one approach at a time with the
-    shared approach loop (:mod:`roughcontact.contact.sweeps`).
+    shared approach loop (:mod:`roughcontact.contact.sweeps`); for a single
+    solve it is ``"pivot"``.
 ``"auto"``
     ``"pivot"`` for a dense matrix, ``"pcg"`` for a grid FFT operator
     without a hardness cap, ``"cg"`` for any other matrix-free operator or a
     capped problem on one (:func:`resolve_method`); the default.
+
+Iteration limits (``max_iter``, default ``Method.default_max_iter``):
+``max(1000, 2n)`` for ``"cg"``, ``20 max(1000, 4 sqrt(n))`` for ``"pcg"``
+(which also stops a solve whose residual has not halved in
+``max(1000, 4 sqrt(n))`` iterations), ``max(20000, 20n)`` for
+``"steepest"``, ``10n + 100`` pivots.
 
 Tolerances and retries: every result is ``converged`` only if its KKT
 residual met ``tol`` and, under load control, its load met ``load_tol``
@@ -312,25 +319,15 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
     approach : float, optional
         Rigid-body approach ``d >= 0`` [m] (displacement control).
     mean_pressure : float, optional
-        Nominal (mean) pressure ``P = sum p / n >= 0`` [Pa] (load control);
-        exactly one of ``approach`` and ``mean_pressure``. The approach is
-        then found with the solution (``approach`` of the result): inside
-        the iteration for ``"pcg"`` (Polonsky & Keer's mean-gap shift), by
-        an outer solve on the approach for the other methods, to
-        ``|P(d) - P| <= load_tol P`` (:mod:`roughcontact.contact.loads`).
+        Nominal pressure ``P = sum p / n >= 0`` [Pa] instead (load control,
+        :mod:`roughcontact.contact.loads`); the approach is found with the solution.
     method : {"auto", "cg", "pcg", "steepest", "exact", "pivot"}
-        See the module docstring; ``"pivot"`` and ``"exact"`` are the same
-        for a single solve; ``"auto"`` (default) is ``"pivot"`` for a dense
-        matrix, ``"pcg"`` for a grid FFT operator (uncapped) and ``"cg"``
-        otherwise (:func:`resolve_method`).
+        See the module docstring (``"auto"``, the default: :func:`resolve_method`).
     tol : float
         Tolerance on the dimensionless KKT residual (:mod:`roughcontact.contact.kkt`).
     max_iter : int, optional
-        Iteration limit; default the method's (``Method.default_max_iter``:
-        ``max(1000, 2n)`` for ``"cg"``, ``20 max(1000, 4 sqrt(n))`` for
-        ``"pcg"``, which also stops a stalled solve,
-        :func:`roughcontact.contact.pcg.stall_window`; ``max(20000, 20n)`` for
-        ``"steepest"``; ``10n + 100`` pivots).
+        Iteration limit; default the method's (``Method.default_max_iter``; pcg
+        also stops a stalled solve, :func:`roughcontact.contact.pcg.stall_window`).
     p0 : ndarray, optional
         Non-negative starting pressure [Pa] (warm start), shape of ``gap0``;
         default zero. Pivoting takes its support as the first contact set.
@@ -352,13 +349,8 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
     -------
     ContactResult
         Solution and diagnostics; ``converged=False`` (and a warning naming the
-        attempts on the ``roughcontact.contact`` logger) only if every attempt
-        failed.
-
-    Raises
-    ------
-    ValueError
-        On invalid input; the message names the argument.
+        attempts) only if every attempt failed. Invalid input raises ValueError
+        naming the argument.
     """
     problem = check_problem(operator, gap0, "gap0", method=method, tol=tol, max_iter=max_iter,
                             precision=precision, element_area=element_area, hardness=hardness,

@@ -366,13 +366,11 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
                options: CellOptions = CellOptions(), **settings) -> NondimSweep:
     """Dimensionless force-deflection sweep of all surfaces of one cell (Eq 27, 33, 35).
 
-    Solves ``min 1/2 phat.K phat - phat.(dhat - fhat)`` over ``phat >= 0``
-    (Eq 27 in the variables of the module docstring) for every surface at
-    every approach with :func:`roughcontact.contact.sweep`: all surfaces of a
-    batch at once, each step warm-started from the previous one, and the
-    stiffness ``dPhat/ddhat = (1/n) 1^T (K_AA)^-1 1`` (``k_P / E``) on the
-    contact set ``A`` at every step. The dimensionless element area is ``1/n``
-    (nominal area 1). The result holds for every sigma and E (:func:`to_physical`).
+    Solves Eq 27 in the variables of the module docstring for every surface at every
+    approach with :func:`roughcontact.contact.sweep` (a batch at once, warm starts),
+    with the stiffness ``dPhat/ddhat = (1/n) 1^T (K_AA)^-1 1`` (``k_P / E``) at every
+    step; element area ``1/n``. The result holds for every sigma and E
+    (:func:`to_physical`).
 
     Parameters
     ----------
@@ -383,12 +381,10 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
     thickness : float
         Block thickness ``L`` [m] of the geometry ``Chat`` was built for.
     element_area : float
-        Contact element area ``dA`` [m^2] of that geometry; recorded so that
-        :func:`to_physical` can give loads in N.
+        Contact element area ``dA`` [m^2] of that geometry (for loads in N).
     approaches : ndarray, (k,) or (m, k)
-        Rigid approaches ``dhat = d / sigma`` [-], shared or per surface,
-        non-negative and strictly increasing (e.g.
-        :func:`roughcontact.contact.cell.approach_grid`).
+        Rigid approaches ``dhat = d / sigma`` [-], shared or per surface, non-negative
+        and increasing (:func:`roughcontact.contact.cell.approach_grid`).
     options : CellOptions
         The sweep's settings; ``settings`` (keywords named as its fields) replace
         those of ``options``.

@@ -60,6 +60,26 @@ def _attempt(name: str, batch: Batch, control, r: int) -> str:
             f"{batch.residual[r]:.3g}{load})")
 
 
+def _retry(batch: Batch, approaches, rows, attempt, gaps, control, tol: float, hardness,
+           tried: dict) -> None:
+    """Solve the surfaces ``rows`` again from zero pressure with ``attempt`` (method,
+    products, iteration limit, how), take its better results into ``batch`` and say
+    what was tried in ``tried``; a method that cannot take the problem (ValueError)
+    is recorded as refused."""
+    method, products, limit, how = attempt
+    subset = control.rows(rows)
+    try:
+        again, found = subset.solve(method, products, gaps[rows],
+                                    np.zeros((rows.size, gaps.shape[1])), tol, limit, hardness)
+    except ValueError as error:
+        for j in rows:
+            tried[int(j)].append(f"{method.name} {how}: refused ({error})")
+        return
+    for r, j in enumerate(rows):
+        tried[int(j)].append(_attempt(f"{method.name} {how}", again, subset, r))
+    _take(batch, approaches, rows, again, found)
+
+
 def settle(method, products, gaps, control, start, tol: float, max_iter: int, hardness,
            fallbacks=(), retry: bool = True) -> tuple[Batch, np.ndarray]:
     """Solve the rows of ``gaps`` [m] under ``control`` with the retries of the module
@@ -104,19 +124,9 @@ def settle(method, products, gaps, control, start, tol: float, max_iter: int, ha
         rows = np.flatnonzero(~batch.converged)
         if attempt_method is method:
             rows = rows[warm[rows]]
-        if not rows.size:
-            continue
-        subset = control.rows(rows)
-        try:
-            again, found = subset.solve(attempt_method, attempt_products, gaps[rows],
-                                        np.zeros((rows.size, n)), tol, limit, hardness)
-        except ValueError as error:  # a fallback that cannot take this problem
-            for j in rows:
-                tried[int(j)].append(f"{attempt_method.name} {how}: refused ({error})")
-            continue
-        for r, j in enumerate(rows):
-            tried[int(j)].append(_attempt(f"{attempt_method.name} {how}", again, subset, r))
-        _take(batch, approaches, rows, again, found)
+        if rows.size:
+            _retry(batch, approaches, rows, (attempt_method, attempt_products, limit, how),
+                   gaps, control, tol, hardness, tried)
     for j in np.flatnonzero(~batch.converged):
         logger.warning("contact solve did not converge for surface %d at %s (tol %.3g); "
                        "tried: %s; returned flagged (converged=False)", j,

@@ -164,13 +164,9 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
           profile=False, interface=None, load_tol=LOAD_TOL, retries=True) -> SweepResult:
     """Force-deflection curves of m surfaces over k approaches or loads (Eq 27, 33, 35).
 
-    Solves Eq 27 for every surface at every step, all surfaces at once (see
-    :func:`roughcontact.contact.solve_many`): a dense matrix by block principal
-    pivoting with "auto" (:func:`roughcontact.contact.pivot.sweep`), the other
-    methods by :func:`approach_loop`, each step started from the previous solution
-    or its extrapolation (module docstring). With ``stiffness`` the tangent
-    ``dF/dd = dA 1^T (C_AA)^-1 1`` (:func:`~roughcontact.contact.tangent_stiffness`)
-    is found at every step by CG on the contact set.
+    Every surface at every step, all at once (:func:`roughcontact.contact.solve_many`;
+    the loops and warm starts: module docstring), with the tangent ``dF/dd =
+    dA 1^T (C_AA)^-1 1`` (:func:`roughcontact.contact.tangent_stiffness`).
 
     Parameters
     ----------
@@ -179,17 +175,13 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
     gaps0 : ndarray, (m, ny, nx) or (m, n)
         Initial separations ``f`` [m] (Eq 21).
     approaches : ndarray, (k,) or (m, k), optional
-        Rigid-body approaches ``d >= 0`` [m] at each step, shared or per
-        surface; warm starts help most when they increase.
+        Rigid-body approaches ``d >= 0`` [m] at each step, shared or per surface.
     mean_pressures : ndarray, (k,) or (m, k), optional
-        Mean pressures ``P >= 0`` [Pa] instead (load control, :func:`load_loop`);
-        the approaches found are the result's ``approach``.
+        Mean pressures ``P >= 0`` [Pa] instead (:func:`load_loop`).
     method, tol, max_iter, element_area, precision, hardness, load_tol, retries
-        As in :func:`roughcontact.contact.solve`; ``precision`` also applies
-        to the stiffness CG; with ``hardness`` the tangent and the extrapolation
-        hold the saturated elements fixed. A step that does not converge after
-        its retries is flagged, logged, and the surface's next step starts from
-        zero pressure, not from it.
+        As in :func:`roughcontact.contact.solve` (``precision`` also for the
+        stiffness CG). A step unconverged after its retries is flagged, logged,
+        and the surface's next step starts from zero pressure, not from it.
     return_fields : bool
         Keep the pressure fields ``(m, k, *surface shape)`` [Pa].
     stiffness : bool
@@ -198,16 +190,13 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
         Estimated relative error of ``dF/dd`` at which the free-set CG of the
         stiffness stops (:mod:`roughcontact.contact.stiffness`).
     extrapolate : bool
-        Start each step from the extrapolated pressure instead of the previous
-        solution (only the start changes: every solution still meets ``tol``).
+        Start each step from the extrapolated pressure (only the start changes).
     profile : bool
         Keep every solution's pressure and load profiles
-        (:mod:`roughcontact.contact.validity`): the share of area and load above
-        any hardness chosen later.
+        (:mod:`roughcontact.contact.validity`).
     interface : InterfaceGrid, optional
-        The surfaces' grid (:class:`roughcontact.contact.interface.InterfaceGrid`):
-        record every solution's spots, perimeter, corrected area, mean gap and gap
-        quantiles. Default None: not recorded.
+        The surfaces' grid (:class:`~roughcontact.contact.interface.InterfaceGrid`):
+        record every solution's spots, perimeter, corrected area and gaps.
 
     Returns
     -------

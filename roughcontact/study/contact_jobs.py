@@ -139,6 +139,22 @@ def contact_problem(job: ContactJob, heights, unit,
                           cell_module.BULK_FACTOR * paired.model.bulk_ratio, paired.attrs)
 
 
+def _read_first_body(job: ContactJob, inputs: dict, study_seed) -> tuple:
+    """A job's surfaces, its first body's certified unit-modulus operator and the
+    influence file's attributes, each file checked to have been made for the job (not
+    only to carry its name) and the surfaces to lie on the geometry's grid."""
+    surfaces = read_surfaces(inputs["surfaces"], cell=job.surface.params(),
+                             study_seed=study_seed)
+    unit, attrs = read_influence(inputs["influence"], geometry=job.geometry.params())
+    unit = certified_influence(unit, inputs["influence"], job.geometry)
+    nx, ny = job.geometry.grid
+    if surfaces["heights"].shape[1:] != (ny, nx):
+        raise ValueError(
+            f"surfaces {inputs['surfaces']} have shape {surfaces['heights'].shape[1:]} but "
+            f"geometry {job.geometry.key} has a {ny} x {nx} (ny x nx) contact grid")
+    return surfaces, unit, attrs
+
+
 def sweep_problem(job: ContactJob, problem: ContactProblem, steps: int, options,
                   rows: slice | None = None):
     """Sweep a job's ``problem`` over ``steps`` approaches to its end
@@ -174,20 +190,10 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
     job, settings = ContactJob.from_params(params), ContactSettings.from_section(settings)
     start = time.perf_counter()
     study_seed = None if config is None else config["study_seed"]
-    surfaces_path, influence_path = inputs["surfaces"], inputs["influence"]
-    # each input must have been made for this job (not only carry its name)
-    surfaces = read_surfaces(surfaces_path, cell=job.surface.params(), study_seed=study_seed)
-    unit, geometry_attrs = read_influence(influence_path, geometry=job.geometry.params())
-    unit = certified_influence(unit, influence_path, job.geometry)
+    surfaces, unit, geometry_attrs = _read_first_body(job, inputs, study_seed)
     heights = surfaces["heights"]
     m = heights.shape[0]
     name = f"{job.surface.key}__{job.geometry.key}"
-    nx, ny = job.geometry.grid
-    if heights.shape[1:] != (ny, nx):
-        raise ValueError(
-            f"surfaces {surfaces_path} have shape {heights.shape[1:]} but geometry "
-            f"{job.geometry.key} has a {ny} x {nx} (ny x nx) contact grid"
-        )
     counter, counter_hashes = read_counter(job, inputs, study_seed)
     problem = contact_problem(job, heights, unit, counter)
     hardness = job.nondim_hardness
