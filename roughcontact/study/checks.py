@@ -23,6 +23,7 @@ from roughcontact.study.studies import (
     body_geometry,
     resolve_source,
     source_name,
+    study_path,
     study_section,
     study_surfaces,
 )
@@ -115,11 +116,6 @@ def _check_hardness(name: str, study: dict) -> list[str]:
         return [f"{name}: cap_meshes lists {unknown}, which the study does not solve "
                 f"(its meshes: {meshes}); list some of {meshes}, or null for all"]
     return []
-
-
-def study_path(config: dict, name: str) -> str:
-    """The configuration path of a figure or sweep: ``figures.<name>`` or ``sweeps.<name>``."""
-    return f"{'sweeps' if name in config['sweeps'] else 'figures'}.{name}"
 
 
 def _numbers(numbers: list[float], like) -> str:
