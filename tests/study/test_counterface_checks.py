@@ -13,7 +13,7 @@ import copy
 import pytest
 
 from roughcontact.study.cells import study_plan
-from roughcontact.study.config import validated
+from roughcontact.study.config import ConfigError, validated
 from roughcontact.study.studies import counterface_entries
 
 SWEEP = {"sigma_um": 24.5, "b_mm": 0.5, "pressure_MPa": [0.1, 3.0], "count": 3}
@@ -58,3 +58,23 @@ def test_the_schema_fills_the_static_defaults_and_one_function_the_body_sections
     defaults = config(counterface={"surface": {"sigma_um": 1.0},
                                    "body": {"kind": "block", "E_MPa": 511.0}})
     assert list(study_plan(explicit).jobs) == list(study_plan(defaults).jobs)
+
+
+@pytest.mark.parametrize(("counterface", "key"), [
+    ({"surface": {"sigma_um": "1.5"}}, "sweeps.pad.counterface.surface.sigma_um"),
+    ([{"body": "rigid"}, {"surface": {"sigma_um": "1.5"}}],
+     "sweeps.pad.counterface[1].surface.sigma_um"),
+])
+def test_a_counter_value_of_the_wrong_type_names_its_key_and_that_a_number_is_expected(
+        counterface, key):
+    with pytest.raises(ConfigError) as raised:
+        config(counterface=counterface)
+    (line,) = [t.strip() for t in str(raised.value).splitlines() if t.startswith("  ")]
+    assert line == f'{key}: "1.5" is not a number (text: write 1.5 without quotes)'
+    # the section's own, and the advice followed
+    with pytest.raises(ConfigError, match=r'\n  counterface.surface.sigma_um: "1.5" is not a '
+                                          r"number \(text: write 1.5 without quotes\)\n"):
+        validated({**raw(), "counterface": {"surface": {"sigma_um": "1.5"}}})
+    fixed = copy.deepcopy(counterface)
+    (fixed if isinstance(fixed, dict) else fixed[1])["surface"]["sigma_um"] = 1.5
+    study_plan(config(counterface=fixed))
