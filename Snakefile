@@ -6,6 +6,7 @@ from snakemake.exceptions import WorkflowError
 from snakemake.utils import min_version
 
 from roughcontact.study.config import ConfigError, apply_schema
+from roughcontact.study.logs import forward_plan_warnings
 
 min_version("8.0")
 
@@ -16,6 +17,7 @@ if not config:
     configfile: os.path.join(workflow.basedir, "config", "config.yaml")
 
 
+forward_plan_warnings(logger)  # the plan's warnings in Snakemake's log
 try:
     apply_schema(config)  # every default filled in; one line per offending key
 except ConfigError as err:

@@ -197,12 +197,17 @@ def get_audit_stamp(wildcards):
     return digest.hexdigest()
 
 
-def get_audit_inputs(wildcards):
+def audit_files(jobs):
+    """The files the audit reads for contact ``jobs`` (by key) and the choices."""
     files = {f"results/influence/choices/{key}.json" for key in PLAN.choices}
-    for key, job in resolved_jobs().items():
+    for key, job in jobs.items():
         files.add(f"results/contact/{key}.h5")
         files.update(job.paths().values())
     return sorted(files)
+
+
+def get_audit_inputs(wildcards):
+    return audit_files(resolved_jobs())
 
 
 def get_audit_jobs(wildcards):
@@ -358,7 +363,10 @@ def get_summary_runtime(wildcards, attempt):
 
 
 def get_audit_runtime(wildcards, attempt):
-    return resources.audit_runtime(len(get_audit_inputs(wildcards)), attempt)
+    # a choice still to be made (a dry run): every candidate's files, at most what it
+    # reads (Snakemake takes a pending checkpoint's placeholder for no resource at all)
+    files = settled(get_audit_inputs, wildcards)
+    return resources.audit_runtime(len(files or audit_files(CONTACT_JOBS)), attempt)
 
 
 def get_audit_mem_mb(wildcards):

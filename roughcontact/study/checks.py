@@ -8,6 +8,8 @@ to change; :func:`roughcontact.study.cells.study_plan` raises
 from __future__ import annotations
 
 import dataclasses
+import json
+import logging
 import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
@@ -15,14 +17,27 @@ from roughcontact.study.block_checks import block_problems
 from roughcontact.study.config import BuildSettings, in_unit, in_units
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.measured_checks import check_measured_plausible
-from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
-from roughcontact.study.sources import SPECTRA, load_measurement, spectrum_from_entry
+from roughcontact.study.records import (
+    GeneratedCell,
+    Generator,
+    Geometry,
+    InfluenceModel,
+    MeasuredCell,
+)
+from roughcontact.study.sources import (
+    SPECTRA,
+    MeasurementImport,
+    load_measurement,
+    spectrum_from_entry,
+)
 from roughcontact.study.studies import (
     CAP_MODES,
     as_list,
     body_geometry,
+    counterface_entries,
     resolve_source,
     source_name,
+    study_path,
     study_section,
     study_surfaces,
 )
@@ -81,7 +96,7 @@ def check_studies(config: dict, names) -> list[str]:
     """Messages for contact figures or sweeps the schema cannot check: a ``from:`` that
     names no study or a cycle, a pressure range, a measured surface, the hybrid
     operator's mesh, the hardness settings."""
-    problems = []
+    problems = check_figure_duplicates(config)
     for name in names:
         try:
             study = study_section(config, name)
@@ -92,11 +107,77 @@ def check_studies(config: dict, names) -> list[str]:
         if not low < high:
             problems.append(f"{name}.pressure_MPa = [{low}, {high}]: expected [P_min, P_max] "
                             f"with P_min < P_max (MPa)")
+        problems += check_duplicates(config, name)
         problems += check_measured(config, name, resolve_source(config, name))
+        problems += check_counter_measured(config, name)
         problems += _check_operator(config, name, study)
         problems += _check_hardness(name, study)
         problems += _check_pressure_below_hardness(config, name, study)
+    warn_single_surfaces(config, names)
     return list(dict.fromkeys(problems))  # a study drawn from another: its messages once
+
+
+#: The list axes of a contact study (one cell per value) and of the surface figures.
+STUDY_AXES = ("meshes", "nu", "size_mm", "b_mm", "moments", "sigma_um", "E_MPa",
+              "hardness_MPa", "cap_meshes")
+FIGURE_AXES = {"fig02": ("b_mm",), "fig03": ("b_mm",), "fig04": ("moments",)}
+
+
+def _repeats(where: str, values: list, written: list | None = None) -> list[str]:
+    """Messages for the values of the list ``where`` that repeat an earlier one (each
+    shown as ``written``, by default as compared)."""
+    problems = []
+    for j, value in enumerate(values):
+        i = values.index(value)  # == compares numbers by value: 1 == 1.0
+        if i < j:
+            shown = json.dumps((values if written is None else written)[j])
+            problems.append(f"{where}[{j}]: {shown} repeats {where}[{i}]: the "
+                            f"same cells twice (a list axis names each value once); remove "
+                            f"{where}[{j}]")
+    return problems
+
+
+def check_duplicates(config: dict, name: str) -> list[str]:
+    """Messages for a list axis of the study ``name`` (of its source) that names a value
+    twice, which would make the same cells twice: each list of :data:`STUDY_AXES`, and
+    the counter bodies (compared with their defaults resolved, so ``{body: rigid}`` and
+    ``{surface: smooth, body: rigid}`` are the same)."""
+    entry = resolve_source(config, name)
+    where = study_path(config, source_name(config, name))
+    problems = []
+    for key in STUDY_AXES:
+        if isinstance(entry.get(key), list):  # optional: a scalar or the inherited value
+            problems += _repeats(f"{where}.{key}", entry[key])
+    if isinstance(entry.get("counterface"), list):  # optional: the section's
+        resolved = [(e.surface, e.body) for e in counterface_entries(config, name)]
+        problems += _repeats(f"{where}.counterface", resolved, entry["counterface"])
+    return problems
+
+
+def check_figure_duplicates(config: dict) -> list[str]:
+    """:func:`check_duplicates` of the surface figures' lists (:data:`FIGURE_AXES`)."""
+    return [problem for figure, keys in FIGURE_AXES.items() if figure in config["figures"]
+            for key in keys if isinstance(config["figures"][figure][key], list)
+            for problem in _repeats(f"figures.{figure}.{key}", config["figures"][figure][key])]
+
+
+log = logging.getLogger(__name__)
+
+
+def warn_single_surfaces(config: dict, names) -> None:
+    """Log a warning, once per source study, for a study whose generated cells have one
+    surface each (``count: 1``): a cell's 95 % band of the mean needs two, so its
+    aggregates have none (NaN)."""
+    for source in dict.fromkeys(source_name(config, name) for name in names):
+        study = study_section(config, source)
+        generated = study.get("surface") is None or study["compare_synthetic"]
+        if generated and study["count"] == 1:
+            where = study_path(config, source)
+            key = (f"{where}.count" if "count" in resolve_source(config, source)
+                   else "surfaces.count")
+            log.warning("%s: one surface per cell (%s = 1): a single-surface cell has no "
+                        "confidence band (its 95 %% band of the mean is NaN in the "
+                        "aggregates); set %s to 2 or more for one", where, key, key)
 
 
 def _check_hardness(name: str, study: dict) -> list[str]:
@@ -115,11 +196,6 @@ def _check_hardness(name: str, study: dict) -> list[str]:
         return [f"{name}: cap_meshes lists {unknown}, which the study does not solve "
                 f"(its meshes: {meshes}); list some of {meshes}, or null for all"]
     return []
-
-
-def study_path(config: dict, name: str) -> str:
-    """The configuration path of a figure or sweep: ``figures.<name>`` or ``sweeps.<name>``."""
-    return f"{'sweeps' if name in config['sweeps'] else 'figures'}.{name}"
 
 
 def _numbers(numbers: list[float], like) -> str:
@@ -174,6 +250,25 @@ def _check_pressure_below_hardness(config: dict, name: str, study: dict) -> list
             f"{' and '.join(meaningless)}. Fix: " + "; or ".join(fixes)]
 
 
+def import_problems(where: str, entry: dict) -> list[str]:
+    """The refusal of a measured map that cannot be imported as its ``entry`` (a
+    ``surface:`` or a counter surface's ``measured:``) says, named ``where``."""
+    try:
+        MeasuredCell.from_source(MeasurementImport.from_entry(entry))
+    except (OSError, ValueError) as err:
+        return [f"{where}: {err}"]
+    return []
+
+
+def check_counter_measured(config: dict, name: str) -> list[str]:
+    """Messages for the measured counter surfaces of a study that cannot be imported
+    (:func:`import_problems`, as a study's ``surface:``)."""
+    return [problem for entry in counterface_entries(config, name)
+            if entry.surface != "smooth" and "measured" in entry.surface
+            for problem in import_problems(f"{entry.surface_key}.measured.file",
+                                           entry.surface["measured"])]
+
+
 def check_measured(config: dict, name: str, entry: dict) -> list[str]:
     """Messages for a study whose measured surface cannot be used as configured
     (``entry``: the study as configured)."""
@@ -190,6 +285,9 @@ def check_measured(config: dict, name: str, entry: dict) -> list[str]:
     if clashing:
         return [f"{name}: 'surface' (a measured surface) fixes the statistics, grid and "
                 f"size; remove {', '.join(clashing)}"]
+    problems = import_problems(f"{name}.surface", entry["surface"])
+    if problems:
+        return problems
     try:
         surfaces = study_surfaces(config, study_section(config, name))
     except (OSError, ValueError) as err:

@@ -16,6 +16,7 @@ import copy
 import difflib
 import functools
 import json
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -117,6 +118,19 @@ _BOUNDS = {"minimum": "at least", "maximum": "at most", "exclusiveMinimum": "abo
            "exclusiveMaximum": "below"}
 
 
+def _unquoted(value, kinds) -> str:
+    """The advice for a number written in quotes (text) where a number is expected."""
+    if not isinstance(value, str) or not {"number", "integer"} & set(kinds):
+        return ""
+    try:
+        number = float(value)
+    except ValueError:
+        return ""
+    if not math.isfinite(number) or ("number" not in kinds and not number.is_integer()):
+        return ""
+    return f" (text: write {value.strip()} without quotes)"
+
+
 def _plain(error) -> str:
     """One schema violation in plain words (the value found and what is expected)."""
     value, rule, kind = error.instance, error.validator_value, error.validator
@@ -130,8 +144,9 @@ def _plain(error) -> str:
     if kind == "enum":
         return f"{json.dumps(value)} is not one of {_listed(rule)}"
     if kind == "type":
-        wanted = " or ".join(_TYPES.get(t, t) for t in ([rule] if isinstance(rule, str) else rule))
-        return f"{json.dumps(value)} is not {wanted}"
+        kinds = [rule] if isinstance(rule, str) else rule
+        wanted = " or ".join(_TYPES.get(t, t) for t in kinds)
+        return f"{json.dumps(value)} is not {wanted}{_unquoted(value, kinds)}"
     if kind in _BOUNDS:
         return f"{json.dumps(value)} is out of range: it must be {_BOUNDS[kind]} {rule:g}"
     if kind in ("minItems", "maxItems"):
@@ -142,15 +157,23 @@ def _plain(error) -> str:
         return text
     if kind in ("oneOf", "anyOf") and error.context:
         # of the branches, the error of a value of the right type says most
-        specific = [e for e in error.context if e.validator != "type"]
+        specific = _specific(error.context)
         if specific:
             from jsonschema.exceptions import best_match
 
             return _plain(best_match(specific))
-        wanted = " or ".join(_TYPES.get(e.validator_value, str(e.validator_value))
-                             for e in error.context)
-        return f"{json.dumps(value)} is not {wanted}"
+        kinds = [e.validator_value for e in error.context]
+        wanted = " or ".join(_TYPES.get(k, str(k)) for k in kinds)
+        return f"{json.dumps(value)} is not {wanted}{_unquoted(value, kinds)}"
     return error.message
+
+
+def _specific(branches) -> list:
+    """The errors of a ``oneOf``'s (``anyOf``'s) branches that the value's type matched:
+    all but a branch's refusal of the value's type itself. An error deeper in the value
+    (``{surface: {sigma_um: "1.5"}}``: a key of the entry branch) is specific, whatever
+    its kind."""
+    return [e for e in branches if e.validator != "type" or e.path]
 
 
 def schema_errors(config: dict) -> list[str]:
@@ -169,7 +192,7 @@ def schema_errors(config: dict) -> list[str]:
         # of a oneOf's branches, the one for a value of the right type gives the place
         deepest = error
         while deepest.validator in ("oneOf", "anyOf") and deepest.context:
-            specific = [e for e in deepest.context if e.validator != "type"]
+            specific = _specific(deepest.context)
             if not specific:
                 break
             deepest = jsonschema.exceptions.best_match(specific)

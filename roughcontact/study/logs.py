@@ -43,3 +43,23 @@ def route_logging(path: str | os.PathLike, level: int = logging.INFO) -> None:
     # scikit-fem reports every assembly at INFO; keep job logs to our own progress
     logging.getLogger("skfem").setLevel(logging.WARNING)
     sys.excepthook = _excepthook
+
+
+class _Forward(logging.Handler):
+    """Hands each record on to another logger (its message, at its level)."""
+
+    def __init__(self, target: logging.Logger):
+        super().__init__(logging.WARNING)
+        self.target = target
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.target.log(record.levelno, record.getMessage())
+
+
+def forward_plan_warnings(target: logging.Logger) -> None:
+    """Send the warnings the ``roughcontact`` loggers give while the workflow is planned
+    (a single-surface cell, ...) to ``target``, Snakemake's logger: they appear in its
+    output and its log beside the plan. Once per process."""
+    library = logging.getLogger("roughcontact")
+    if not any(isinstance(h, _Forward) for h in library.handlers):
+        library.addHandler(_Forward(target))

@@ -164,76 +164,133 @@ def study_surfaces(config: dict, study: dict) -> list:
 # The counter body (Eq 17-18): the ``counterface`` section and a study's ``counterface``
 
 
-def counterface_entries(config: dict, study: dict) -> list[dict]:
-    """A study's counter bodies as configured: its ``counterface`` (one entry, or a list:
-    an axis), each entry's ``surface`` and ``body`` over the ``counterface`` section's;
-    the section's own (by default a smooth rigid flat) when the study names none."""
+def study_path(config: dict, name: str) -> str:
+    """The configuration path of a figure or sweep: ``figures.<name>`` or ``sweeps.<name>``."""
+    return f"{'sweeps' if name in config['sweeps'] else 'figures'}.{name}"
+
+
+@dataclasses.dataclass(frozen=True)
+class CounterfaceEntry:
+    """One counter body of a study as configured, every default resolved
+    (:func:`counter_defaults`): its ``surface`` and ``body`` entries and the
+    configuration keys they are written under (``counterface.surface``, or a study's
+    ``sweeps.pad.counterface[1].body``), for the messages that name them."""
+
+    surface: str | dict
+    body: str | dict
+    surface_key: str
+    body_key: str
+
+    @property
+    def is_null(self) -> bool:
+        """A smooth rigid counter body: the paper's flat, no counter body at all."""
+        return self.surface == "smooth" and self.body == "rigid"
+
+
+#: The keys of a counter body that default to the ``body`` section's, by its kind.
+BODY_INHERITED = {"block": ("nu", "thickness_mm", "base", "mesh"), "halfspace": ("nu",)}
+
+
+def counter_defaults(config: dict, surface, body) -> tuple:
+    """A counter ``surface`` and ``body`` entry with the defaults that are another
+    section's value, which the schema cannot write (it fills the static ones: skew,
+    kurt, a block's operator): the one place that resolves them.
+
+    A block's nu, thickness_mm, base and mesh (a half-space's nu) are the ``body``
+    section's; a generated counter surface's ``b_mm`` None stands for the first
+    surface's (each cell's), a measured one's ``sigma_um`` None for its measured sigma.
+    """
+    if body != "rigid":
+        body = {**{key: config["body"][key] for key in BODY_INHERITED[body["kind"]]}, **body}
+    if surface != "smooth":
+        surface = {("sigma_um" if "measured" in surface else "b_mm"): None, **surface}
+    return surface, body
+
+
+def counterface_entries(config: dict, name: str) -> list[CounterfaceEntry]:
+    """The counter bodies of the figure or sweep ``name`` (of its source, with ``from:``):
+    its ``counterface`` (one entry, or a list: an axis), each entry's ``surface`` and
+    ``body`` over the ``counterface`` section's; the section's own (by default a smooth
+    rigid flat) when the study names none."""
     section = config["counterface"]
-    entries = as_list(study.get("counterface") or {})
-    return [{"surface": entry.get("surface", section["surface"]),
-             "body": entry.get("body", section["body"])} for entry in entries]
+    own = resolve_source(config, name).get("counterface")  # optional: the section's
+    where = f"{study_path(config, source_name(config, name))}.counterface"
+    if own is None:
+        entries, keys = [{}], [None]
+    elif isinstance(own, list):
+        entries, keys = own, [f"{where}[{i}]" for i in range(len(own))]
+    else:
+        entries, keys = [own], [where]
+    out = []
+    for entry, key in zip(entries, keys, strict=True):
+        (surface, surface_key), (body, body_key) = (
+            (entry[part], f"{key}.{part}") if part in entry else
+            (section[part], f"counterface.{part}") for part in ("surface", "body"))
+        out.append(CounterfaceEntry(*counter_defaults(config, surface, body),
+                                    surface_key=surface_key, body_key=body_key))
+    return out
 
 
 def counter_surface(config: dict, entry, first: SurfaceCell) -> tuple[SurfaceCell | None, float]:
-    """The counter surface cell of a ``counterface.surface`` entry on the first cell's
-    grid and plan size, and its sigma [m]: ``smooth`` (None, 0); generated (the
-    ``surfaces`` section's ACF, periodicity and method, seed stream ``counter``, one
-    counter surface per first surface; Sk, Ku by default (0, 3), b by default the
-    first cell's); or ``measured`` (its file; sigma by default the measured one)."""
+    """The counter surface cell of a counter ``surface`` entry (:func:`counter_defaults`)
+    on the first cell's grid and plan size, and its sigma [m]: ``smooth`` (None, 0);
+    generated (the ``surfaces`` section's ACF, periodicity and method, seed stream
+    ``counter``, one counter surface per first surface; b by default the first
+    cell's); or ``measured`` (its file; sigma by default the measured one)."""
     if entry == "smooth":
         return None, 0.0
+    sigma = entry["sigma_um"]
     if "measured" in entry:
         cell = MeasuredCell.from_source(MeasurementImport.from_entry(entry["measured"]))
-        sigma = entry.get("sigma_um")
         return cell, cell.sigma if sigma is None else float(sigma) * UM
-    b = entry.get("b_mm")
-    cell = generated_cell(config["surfaces"], None, skew=entry.get("skew", 0.0),
-                          kurt=entry.get("kurt", 3.0),
+    b = entry["b_mm"]
+    cell = generated_cell(config["surfaces"], None, skew=entry["skew"], kurt=entry["kurt"],
                           corr_length=first.corr_length if b is None else from_unit(as_pair(b)),
                           count=first.count, size=first.size, grid=first.grid)
-    return dataclasses.replace(cell, stream="counter"), float(entry["sigma_um"]) * UM
+    return dataclasses.replace(cell, stream="counter"), float(sigma) * UM
 
 
-def counter_body(config: dict, entry, first: Geometry) -> tuple[Geometry | None, float | None]:
-    """The counter body of a ``counterface.body`` entry on the first body's grid and plan
-    size, and its E [Pa]: ``rigid`` (None, None); a ``halfspace`` (Love's, of its nu);
-    or a ``block`` (its thickness, base, mesh and operator, each by default the
-    ``body`` section's)."""
+def counter_body(entry, first: Geometry) -> tuple[Geometry | None, float | None]:
+    """The counter body of a counter ``body`` entry (:func:`counter_defaults`) on the
+    first body's grid and plan size, and its E [Pa]: ``rigid`` (None, None); a
+    ``halfspace`` (Love's, of its nu); or a ``block`` (its nu, thickness, base, mesh
+    and operator)."""
     if entry == "rigid":
         return None, None
-    body = config["body"]
-    params = {"nu": entry.get("nu", body["nu"]), "size_mm": in_units(first.size),
-              "grid": list(first.grid), "base": entry.get("base", body["base"]),
-              "mesh": entry.get("mesh", body["mesh"]),
-              "thickness_mm": entry.get("thickness_mm", body["thickness_mm"])}
+    params = {"nu": entry["nu"], "size_mm": in_units(first.size), "grid": list(first.grid)}
     if entry["kind"] == "halfspace":
         # Love's half-space: the thickness is only the reference length of the scaling
         params.update(operator=InfluenceModel.HALFSPACE.value, base="clamped", mesh="paper",
                       thickness_mm=in_unit(first.thickness, MM))
     else:
-        params["operator"] = entry.get("operator", InfluenceModel.DENSE.value)
+        params.update({key: entry[key] for key in ("thickness_mm", "base", "mesh", "operator")})
     return Geometry.from_params(params), float(entry["E_MPa"]) * MPA
 
 
-def with_counterfaces(config: dict, study: dict, cells: list[StudyCell]) -> list[StudyCell]:
-    """Each cell once per counter body of the study (:func:`counterface_entries`); a
-    smooth rigid counter body leaves a cell as it is (no ``counterface``: today's
-    jobs and numbers)."""
-    rigid_share = float(config["counterface"]["rigid_share"])
-    out = []
-    for entry in counterface_entries(config, study):
-        if entry["surface"] == "smooth" and entry["body"] == "rigid":
-            out.extend(cells)
-            continue
-        for cell in cells:
-            surface, sigma = counter_surface(config, entry["surface"], cell.surface)
-            geometry, E = counter_body(config, entry["body"], cell.geometry)
-            counter = Counterface(
-                surface=SMOOTH if surface is None else RoughCounter(surface, sigma=sigma),
-                body=RIGID if geometry is None else ElasticCounter(geometry, E=E),
-                rigid_share=rigid_share)
-            out.append(dataclasses.replace(cell, counterface=counter))
-    return out
+def counterface_of(config: dict, entry: CounterfaceEntry, cell: StudyCell) -> Counterface:
+    """The counter body of ``entry`` for a study cell (on its grid and plan size)."""
+    surface, sigma = counter_surface(config, entry.surface, cell.surface)
+    geometry, E = counter_body(entry.body, cell.geometry)
+    return Counterface(
+        surface=SMOOTH if surface is None else RoughCounter(surface, sigma=sigma),
+        body=RIGID if geometry is None else ElasticCounter(geometry, E=E),
+        rigid_share=float(config["counterface"]["rigid_share"]))
+
+
+def counterface_groups(config: dict, name: str,
+                       cells: list[StudyCell]) -> list[tuple[CounterfaceEntry, list[StudyCell]]]:
+    """Each counter body of the study ``name`` (:func:`counterface_entries`) with the
+    cells it makes of ``cells``: each cell against it; a smooth rigid counter body
+    leaves a cell as it is (no ``counterface``: today's jobs and numbers)."""
+    return [(entry, list(cells) if entry.is_null else
+             [dataclasses.replace(cell, counterface=counterface_of(config, entry, cell))
+              for cell in cells])
+            for entry in counterface_entries(config, name)]
+
+
+def with_counterfaces(config: dict, name: str, cells: list[StudyCell]) -> list[StudyCell]:
+    """Each cell once per counter body of the study ``name`` (:func:`counterface_groups`)."""
+    return [cell for _, group in counterface_groups(config, name, cells) for cell in group]
 
 
 def _generated_cells(config: dict, study: dict, body: Geometry, common: dict) -> list[StudyCell]:
@@ -327,8 +384,15 @@ def contact_cells(config: dict, name: str) -> tuple[StudyCell, ...]:
     measurement and its twin.
     """
     study = study_section(config, name)
+    cells = with_counterfaces(config, name, study_base_cells(config, name))
+    return tuple(with_hardness(cells, study, float(config["body"]["hardness_threshold"])))
+
+
+def study_base_cells(config: dict, name: str) -> list[StudyCell]:
+    """The cells of a contact figure or sweep on the body section's block, before its
+    counter bodies and hardness settings (:func:`contact_cells`)."""
+    study = study_section(config, name)
     common = {"pressure_range": from_unit(study["pressure_MPa"], MPA),
               "accuracy": study_accuracy(config)}
     build = _generated_cells if study.get("surface") is None else _measured_cells
-    cells = with_counterfaces(config, study, build(config, study, body_geometry(config), common))
-    return tuple(with_hardness(cells, study, float(config["body"]["hardness_threshold"])))
+    return build(config, study, body_geometry(config), common)

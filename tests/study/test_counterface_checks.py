@@ -1,0 +1,157 @@
+"""Every input error of a counter body is refused before any job, naming its key.
+
+The counter body (Eq 17-18) gets the checks of the first body, by the same code: the
+schema's defaults, the plausibility (unit slips) of E, sigma and thickness, the
+block's geometry limits, the surface's window, the measured import; a list axis
+refuses duplicates. Each refusal names the configuration key (the section's
+``counterface.body.E_MPa`` or a study's ``sweeps.pad.counterface[1].surface.sigma_um``)
+and, where it gives advice, the advice is followed here and the plan then passes.
+"""
+
+import copy
+import logging
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from roughcontact.study.cells import study_plan
+from roughcontact.study.checks import ConfigProblems
+from roughcontact.study.config import ConfigError, validated
+from roughcontact.study.studies import counterface_entries
+
+SWEEP = {"sigma_um": 24.5, "b_mm": 0.5, "pressure_MPa": [0.1, 3.0], "count": 3}
+BASE = {"study_seed": 3, "surfaces": {"grid": [16, 16], "size_mm": [2.4, 2.4]},
+        "figures": {}, "reports": {}}
+
+
+def raw(**sweep) -> dict:
+    return {**copy.deepcopy(BASE), "sweeps": {"pad": {**SWEEP, **sweep}}}
+
+
+def config(**sweep) -> dict:
+    return validated(raw(**sweep))
+
+
+def test_the_schema_fills_the_static_defaults_and_one_function_the_body_sections():
+    entry = config(counterface={"surface": {"sigma_um": 1.0},
+                                "body": {"kind": "block", "E_MPa": 511.0}})
+    written = entry["sweeps"]["pad"]["counterface"]
+    assert written["surface"] == {"sigma_um": 1.0, "skew": 0.0, "kurt": 3.0}
+    assert written["body"] == {"kind": "block", "E_MPa": 511.0, "operator": "dense"}
+    (resolved,) = counterface_entries(entry, "pad")
+    body = entry["body"]
+    assert resolved.body == {**written["body"], "nu": body["nu"], "base": body["base"],
+                             "thickness_mm": body["thickness_mm"], "mesh": body["mesh"]}
+    assert resolved.surface == {**written["surface"], "b_mm": None}  # the first surface's
+    assert (resolved.surface_key, resolved.body_key) == ("sweeps.pad.counterface.surface",
+                                                        "sweeps.pad.counterface.body")
+    # a half-space takes no block default; a smooth rigid section none at all
+    half = config(counterface={"body": {"kind": "halfspace", "E_MPa": 2e5, "nu": 0.3}})
+    assert half["sweeps"]["pad"]["counterface"]["body"] == {"kind": "halfspace",
+                                                             "E_MPa": 2e5, "nu": 0.3}
+    assert half["counterface"]["surface"] == "smooth" and half["counterface"]["body"] == "rigid"
+    (entry,) = counterface_entries(half, "pad")
+    assert (entry.surface_key, entry.body_key) == ("counterface.surface",
+                                                   "sweeps.pad.counterface.body")
+    # the plan is the one of the values written out
+    explicit = config(counterface={"surface": {"sigma_um": 1.0, "skew": 0.0, "kurt": 3.0},
+                                   "body": {"kind": "block", "E_MPa": 511.0, "nu": 0.0,
+                                            "thickness_mm": 10.0, "base": "clamped",
+                                            "mesh": "paper", "operator": "dense"}})
+    defaults = config(counterface={"surface": {"sigma_um": 1.0},
+                                   "body": {"kind": "block", "E_MPa": 511.0}})
+    assert list(study_plan(explicit).jobs) == list(study_plan(defaults).jobs)
+
+
+@pytest.mark.parametrize(("counterface", "key"), [
+    ({"surface": {"sigma_um": "1.5"}}, "sweeps.pad.counterface.surface.sigma_um"),
+    ([{"body": "rigid"}, {"surface": {"sigma_um": "1.5"}}],
+     "sweeps.pad.counterface[1].surface.sigma_um"),
+])
+def test_a_counter_value_of_the_wrong_type_names_its_key_and_that_a_number_is_expected(
+        counterface, key):
+    with pytest.raises(ConfigError) as raised:
+        config(counterface=counterface)
+    (line,) = [t.strip() for t in str(raised.value).splitlines() if t.startswith("  ")]
+    assert line == f'{key}: "1.5" is not a number (text: write 1.5 without quotes)'
+    # the section's own, and the advice followed
+    with pytest.raises(ConfigError, match=r'\n  counterface.surface.sigma_um: "1.5" is not a '
+                                          r"number \(text: write 1.5 without quotes\)\n"):
+        validated({**raw(), "counterface": {"surface": {"sigma_um": "1.5"}}})
+    fixed = copy.deepcopy(counterface)
+    (fixed if isinstance(fixed, dict) else fixed[1])["surface"]["sigma_um"] = 1.5
+    study_plan(config(counterface=fixed))
+
+
+def smooth_map(path, n=16, spacing=0.15):
+    """A correlated n x n height map [um] (no noise: the plausibility check refuses noise)."""
+    z = ndimage.gaussian_filter(np.random.default_rng(8).standard_normal((n, n)), 1.5,
+                                mode="wrap") * 2.0
+    np.save(path, z)
+    return {"file": str(path), "format": "npy", "height_unit": "um", "spacing_mm": spacing}
+
+
+def refusal(cfg) -> list[str]:
+    with pytest.raises(ConfigProblems) as raised:
+        study_plan(cfg)
+    return raised.value.problems
+
+
+def test_a_counter_map_that_cannot_be_imported_is_refused_naming_its_file_key(tmp_path):
+    missing = {"file": str(tmp_path / "nope.npy")}
+    assert refusal(config(counterface=[{"body": "rigid"},
+                                       {"surface": {"measured": missing}}])) == [
+        f"sweeps.pad.counterface[1].surface.measured.file: {missing['file']}: no such file"]
+    headed = tmp_path / "disc.csv"
+    heights = np.load(smooth_map(tmp_path / "disc.npy")["file"])
+    rows = "\n".join(",".join(f"{v:.6f}" for v in row) for row in heights)
+    headed.write_text("h1,h2\n" + rows + "\n")
+    entry = {"file": str(headed), "height_unit": "um", "spacing_mm": 0.15}
+    section = {**raw(), "counterface": {"surface": {"measured": entry}}}
+    (problem,) = refusal(validated(section))
+    assert problem.startswith(f"counterface.surface.measured.file: {headed}, line 1: the first "
+                              "data line is not numbers ('h1,h2'): a header? Start header "
+                              "lines with #")
+    headed.write_text("# h1,h2\n" + rows + "\n")  # the advice, followed
+    (cell,) = study_plan(validated(section)).cells["pad"]
+    assert cell.counterface.surface.grid == (16, 16)
+
+
+def test_an_axis_that_names_a_value_twice_is_refused_naming_the_repeat():
+    twice = [{"body": {"kind": "block", "E_MPa": 511.0}}, {"body": "rigid"},
+             {"surface": "smooth", "body": "rigid"}]
+    assert refusal(config(counterface=twice)) == [
+        'sweeps.pad.counterface[2]: {"surface": "smooth", "body": "rigid"} repeats '
+        "sweeps.pad.counterface[1]: the same cells twice (a list axis names each value "
+        "once); remove sweeps.pad.counterface[2]"]
+    assert len(study_plan(config(counterface=twice[:2])).cells["pad"]) == 2  # followed
+    for key, values, repeat in (("b_mm", [0.5, 0.4, 0.5], 2), ("sigma_um", [24.5, 24.50], 1),
+                                ("moments", [[0.0, 3.0], [0, 3]], 1),
+                                ("meshes", ["paper", "paper"], 1)):
+        (problem,) = refusal(config(**{key: values}))
+        assert problem.startswith(f"sweeps.pad.{key}[{repeat}]: ")
+        assert problem.endswith(f"remove sweeps.pad.{key}[{repeat}]")
+        study_plan(config(**{key: values[:repeat] + values[repeat + 1:]}))
+    figure = {"sigma_um": 24.5, "b_mm": [0.5, 0.5]}
+    (problem,) = refusal(validated({**raw(), "figures": {"fig03": figure}}))
+    assert problem.startswith("figures.fig03.b_mm[1]: 0.5 repeats figures.fig03.b_mm[0]")
+    study_plan(validated({**raw(), "figures": {"fig03": {**figure, "b_mm": [0.5]}}}))
+
+
+def test_a_single_surface_study_is_warned_once_at_plan_time(caplog):
+    single = raw()
+    del single["sweeps"]["pad"]["count"]
+    single["surfaces"]["count"] = 1
+    single["sweeps"]["again"] = {"from": "pad"}
+    with caplog.at_level(logging.WARNING, logger="roughcontact"):
+        study_plan(validated(single))
+    (record,) = [r for r in caplog.records if "one surface per cell" in r.getMessage()]
+    assert record.getMessage().startswith("sweeps.pad: one surface per cell "
+                                          "(surfaces.count = 1): a single-surface cell has "
+                                          "no confidence band")
+    caplog.clear()
+    single["surfaces"]["count"] = 2  # the advice, followed
+    with caplog.at_level(logging.WARNING, logger="roughcontact"):
+        study_plan(validated(single))
+    assert not [r for r in caplog.records if "one surface per cell" in r.getMessage()]
