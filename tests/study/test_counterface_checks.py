@@ -115,7 +115,7 @@ def test_a_counter_map_that_cannot_be_imported_is_refused_naming_its_file_key(tm
                               "lines with #")
     headed.write_text("# h1,h2\n" + rows + "\n")  # the advice, followed
     (cell,) = study_plan(validated(section)).cells["pad"]
-    assert cell.counterface.surface.grid == (16, 16)
+    assert cell.counterface.surface.cell.grid == (16, 16)
 
 
 def test_an_axis_that_names_a_value_twice_is_refused_naming_the_repeat():
