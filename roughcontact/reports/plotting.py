@@ -528,14 +528,16 @@ def plot_two_bodies(tables):
     ``counter_share`` (:func:`fraction_band`). One curve with its band per cell
     (:func:`plot_band`), labelled by :func:`two_bodies_label`; the rigid smooth
     flat in black, a counter body not modelled (treated as rigid) without a
-    share. The first panel of a row names the study and its first body.
+    share. The panels of a row share their P axis; the first names the study
+    and its first body.
     Returns the figure.
     """
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
     names = list(tables)
-    fig, axes = plt.subplots(len(names), 4, figsize=(19.0, 4.3 * len(names)), squeeze=False)
+    fig, axes = plt.subplots(len(names), 4, figsize=(19.0, 4.3 * len(names)), squeeze=False,
+                             sharex="row")
     for row_axes, name in zip(axes, names, strict=True):
         table = tables[name]
         scale, unit = stiffness_unit(table["normalized_stiffness_mean"])
@@ -561,6 +563,9 @@ def plot_two_bodies(tables):
         row_axes[1].set_yscale("log")
         share = row_axes[3]
         share.set(ylabel="share of the mean-plane deflection $d_b$ [%]", ylim=(-3.0, 103.0))
+        if not share.lines:
+            share.text(0.5, 0.5, "no counter body modelled", transform=share.transAxes,
+                       ha="center", va="center", color="0.4")
         handles = share.get_legend_handles_labels()[0] + [
             Line2D([], [], color="0.3", label="counter body"),
             Line2D([], [], color="0.3", linestyle="--", marker="x", markersize=4,

@@ -289,6 +289,14 @@ def test_plot_two_bodies_draws_each_counter_body_beside_the_rigid_flat():
     assert "$E$ = 2000 MPa" in pad[0].get_title(loc="left")
     assert plates[3].get_ylabel() == "share of the mean-plane deflection $d_b$ [%]"
     plt.close(fig)
+    # a study of one body only (no counter columns): no share, said so, on its P axis
+    one = two_bodies_table([FLAT], [None], [1e9], 255.5)
+    fig = plot_two_bodies({"half": one.drop(columns=[c for c in one if "counter" in c])})
+    assert fig.axes[0].get_legend().get_texts()[0].get_text() == "rigid smooth flat"
+    share = fig.axes[3]
+    assert not share.lines and share.texts[0].get_text() == "no counter body modelled"
+    assert share.get_xlim() == fig.axes[0].get_xlim()
+    plt.close(fig)
 
 
 def test_load_studies_reads_four_files_per_study_in_order(tmp_path):
