@@ -9,10 +9,11 @@ import re
 from snakemake.exceptions import IncompleteCheckpointException, WorkflowError
 
 from roughcontact.study import grid_convergence, resources
+from roughcontact.reports.captions import figure_caption
 from roughcontact.study.cells import (
-    CONTACT_FIGURES,
     convergence_presets,
     drawn_with,
+    figure_aggregates,
     study_plan,
 )
 from roughcontact.study.checks import ConfigProblems
@@ -26,7 +27,7 @@ from roughcontact.study.provenance import canonical_json, config_hash
 from roughcontact.study.records import InfluenceModel
 from roughcontact.study.storage import read_choice
 from roughcontact.study.sources import spectrum_from_entry
-from roughcontact.study.studies import resolve_source, source_name
+from roughcontact.study.studies import resolve_source
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = str(config["blas_threads"])
@@ -263,15 +264,17 @@ def get_figure_surfaces(wildcards):
 
 
 def get_figure_aggregates(wildcards):
-    if wildcards.fig not in CONTACT_FIGURES:
-        return []
-    name = source_name(config, wildcards.fig)
+    """The aggregate files of the studies a figure draws, four per study in its order."""
     return [
-        f"results/aggregates/{name}.csv",
-        f"results/aggregates/{name}.moduli.csv",
-        f"results/aggregates/{name}.json",
-        f"results/aggregates/{name}.validity.csv",
+        f"results/aggregates/{name}.{ext}"
+        for name in figure_aggregates(config, wildcards.fig)
+        for ext in ("csv", "moduli.csv", "json", "validity.csv")
     ]
+
+
+def get_figure_caption(wildcards):
+    """The report's caption of a figure, written from the study's own settings."""
+    return figure_caption(wildcards.fig, config, PLAN)
 
 
 def get_figure_parameters(wildcards):

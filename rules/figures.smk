@@ -1,4 +1,6 @@
-# Last stage: the paper's figures from papermill-parameterised notebooks.
+# Last stage: the paper's figures from papermill-parameterised notebooks. Each figure's
+# caption in the report (report/figure.rst) is written from the study's own settings
+# (params.caption: roughcontact.reports.captions).
 
 
 rule figure:
@@ -26,6 +28,7 @@ rule figure:
         runtime=get_summary_runtime,
     params:
         parameters=get_figure_parameters,
+        caption=get_figure_caption,
     script:
         "../scripts/render_figure.py"
 
@@ -47,6 +50,7 @@ use rule figure as table with:
     params:
         parameters=lambda wildcards, output: get_figure_parameters(wildcards)
         | {"csv": output.csv},
+        caption=get_figure_caption,
 
 
 ruleorder: table > figure

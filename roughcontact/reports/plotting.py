@@ -473,6 +473,117 @@ def plot_cells_panels(table, panels, *, label: str, title: str, columns: int | N
     return fig
 
 
+#: Files per study of a figure's ``aggregate_files`` (``rules/common.smk``:
+#: ``get_figure_aggregates``): table, moduli, sidecar, validity.
+AGGREGATE_FILES = 4
+
+
+def load_studies(paths, names) -> dict:
+    """The aggregate tables of several studies by name (:func:`load_aggregates` of each
+    :data:`AGGREGATE_FILES` paths of ``paths``, in the order of ``names``)."""
+    paths, names = list(paths), list(names)
+    if len(paths) != AGGREGATE_FILES * len(names):
+        raise ValueError(f"{len(paths)} aggregate files for {len(names)} studies "
+                         f"({', '.join(names)}): expected {AGGREGATE_FILES} each")
+    return {name: load_aggregates(paths[AGGREGATE_FILES * k:AGGREGATE_FILES * (k + 1)])[0]
+            for k, name in enumerate(names)}
+
+
+def stiffness_unit(values) -> tuple[float, str]:
+    """Scale and unit of a stiffness or pressure [Pa] on an axis: MPa, or GPa where the
+    values exceed 10 GPa (a steel block's k_P)."""
+    import numpy as np
+
+    return (1e-9, "GPa") if np.nanmax(np.asarray(values, dtype=float)) > 1e10 else (1e-6, "MPa")
+
+
+def _counter_modelled(cell) -> bool:
+    """Whether a cell's counter body was modelled (its share reported): not the rigid
+    smooth flat, and not a counter body the contact job treated as rigid."""
+    return "counter_share_count" in cell and bool((cell["counter_share_count"] > 0).any())
+
+
+def two_bodies_label(cell) -> str:
+    """Legend text of a cell of a two-bodies study (its rows of an aggregate table): its
+    counter body (:func:`~roughcontact.reports.captions.counter_label`), and whether the
+    contact job treated it as rigid (below ``rigid_share``: no share reported)."""
+    from roughcontact.reports.captions import counter_label
+
+    label = counter_label(cell.iloc[0])
+    if label != "rigid smooth flat" and not _counter_modelled(cell):
+        label += " (treated as rigid)"
+    return label
+
+
+def plot_two_bodies(tables):
+    """Two rough, elastic bodies (Eq 17-18): each counter body of a study beside the
+    rigid smooth flat, against nominal pressure P [MPa] (log axis).
+
+    ``tables``: study name -> aggregate table, one row of panels each. Columns:
+    normalized stiffness k_P (MPa, or GPa where it exceeds 10 GPa), real area
+    [%] (log axis), mean gap [µm], and each body's share of the mean-plane
+    deflection d_b [%]: the counter body's (``counter_share``, solid) and the
+    first body's (1 - ``counter_share``, dashed with crosses: visible where the
+    two are equal), both with the 95 % band of
+    ``counter_share`` (:func:`fraction_band`). One curve with its band per cell
+    (:func:`plot_band`), labelled by :func:`two_bodies_label`; the rigid smooth
+    flat in black, a counter body not modelled (treated as rigid) without a
+    share. The panels of a row share their P axis; the first names the study
+    and its first body.
+    Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    names = list(tables)
+    fig, axes = plt.subplots(len(names), 4, figsize=(19.0, 4.3 * len(names)), squeeze=False,
+                             sharex="row")
+    for row_axes, name in zip(axes, names, strict=True):
+        table = tables[name]
+        scale, unit = stiffness_unit(table["normalized_stiffness_mean"])
+        panels = [("normalized_stiffness", scale, f"normalized stiffness $k_P$ [{unit}]"),
+                  ("real_area_fraction", 100.0, "real contact area $A_r / A_n$ [%]"),
+                  ("mean_gap", 1e6, r"mean gap $\bar g$ [µm]")]
+        colors = iter(f"C{k}" for k in range(10))
+        for _, cell in table.groupby("cell", sort=True):
+            label = two_bodies_label(cell)
+            color = "k" if label == "rigid smooth flat" else next(colors)
+            for ax, (quantity, y_scale, _) in zip(row_axes, panels, strict=False):
+                plot_band(ax, cell, quantity, y_scale=y_scale, label=label, color=color)
+            if _counter_modelled(cell):
+                body = cell.assign(body_share_mean=1.0 - cell["counter_share_mean"],
+                                   body_share_half_width=cell["counter_share_half_width"],
+                                   body_share_count=cell["counter_share_count"])
+                plot_band(row_axes[3], cell, "counter_share", y_scale=100.0, color=color,
+                          band="fraction", label=label)
+                plot_band(row_axes[3], body, "body_share", y_scale=100.0, color=color,
+                          band="fraction", linestyle="--").set(marker="x", markersize=4)
+        for ax, (_, _, ylabel) in zip(row_axes, panels, strict=False):
+            ax.set_ylabel(ylabel)
+        row_axes[1].set_yscale("log")
+        share = row_axes[3]
+        share.set(ylabel="share of the mean-plane deflection $d_b$ [%]", ylim=(-3.0, 103.0))
+        if not share.lines:
+            share.text(0.5, 0.5, "no counter body modelled", transform=share.transAxes,
+                       ha="center", va="center", color="0.4")
+        handles = share.get_legend_handles_labels()[0] + [
+            Line2D([], [], color="0.3", label="counter body"),
+            Line2D([], [], color="0.3", linestyle="--", marker="x", markersize=4,
+                   label="first body")]
+        share.legend(handles=handles, fontsize=7)
+        for ax in row_axes:
+            ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]")
+            ax.grid(True, which="both", alpha=0.3)
+        first = table.iloc[0]
+        row_axes[0].set_title(
+            f"{name}: first body $\\sigma$ = {first['sigma_um']:g} µm, $E$ = "
+            f"{first['E_MPa']:g} MPa, $\\nu$ = {first['nu']:g}, {first['thickness_mm']:g} mm "
+            f"{first['mesh']} mesh", fontsize=9, loc="left")
+        row_axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
 def cells_at_pressures(table, quantities, pressures, *, by: str):
     """Mean and 95 % half width of each quantity for every cell of an aggregate table,
     at the nominal-pressure levels nearest ``pressures`` [Pa], side by side.

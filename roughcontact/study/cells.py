@@ -53,6 +53,9 @@ SURFACE_ONLY_FIGURES = ("fig01", "fig02", "fig03", "fig04", "fig05")
 #: "gaps": the mean gap and the spots of a study's cells, usually ``from:`` fig07).
 CONTACT_FIGURES = ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu",
                    "hardness", "measured", "fig11_resolved", "gaps")
+#: Figures drawn from the aggregates of the studies they list (``studies:``), with no cells
+#: of their own ("two_bodies": each counter body of those studies beside the rigid flat).
+STUDIES_FIGURES = ("two_bodies",)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -113,9 +116,14 @@ def study_plan(config: dict) -> StudyPlan:
     invalid contact study or infeasible surface cell, before any job is
     planned to run.
     """
-    figures = tuple(n for n in (*SURFACE_ONLY_FIGURES, *CONTACT_FIGURES)
+    figures = tuple(n for n in (*SURFACE_ONLY_FIGURES, *CONTACT_FIGURES, *STUDIES_FIGURES)
                     if n in config["figures"])
     studies = tuple(n for n in figures if n in CONTACT_FIGURES) + tuple(config["sweeps"])
+    _raise("Figures that list no study of the config", [
+        f"figures.{name}.studies: {study!r} is no sweep or contact figure of the config "
+        f"(sweeps: {', '.join(config['sweeps']) or 'none'})"
+        for name in figures if name in STUDIES_FIGURES
+        for study in config["figures"][name]["studies"] if study not in studies])
     _raise("Spectra that cannot be used", check_spectra(config, studies))
     _raise("Invalid contact studies in the config", check_studies(config, studies))
     sources = {name: source_name(config, name) for name in studies}
@@ -276,6 +284,15 @@ def drawn_with(config: dict, name: str) -> dict:
     """The validated settings of the other figures a figure draws with, by figure name
     (``{"fig04": ...}`` for Fig 5; none for the others): notebook parameters."""
     return {other: config["figures"][other] for other in _DRAWN_WITH.get(name, ())}
+
+
+def figure_aggregates(config: dict, name: str) -> tuple[str, ...]:
+    """The studies whose aggregate tables a figure draws, in its order: a contact figure's
+    own (its ``from:`` followed), the listed ones of a :data:`STUDIES_FIGURES` figure
+    (each followed likewise), none for the others."""
+    if name in STUDIES_FIGURES:
+        return tuple(source_name(config, study) for study in config["figures"][name]["studies"])
+    return (source_name(config, name),) if name in CONTACT_FIGURES else ()
 
 
 def figure_surfaces(config: dict, name: str, cells) -> tuple[SurfaceCell, ...]:

@@ -1,5 +1,5 @@
 """Figure helpers of the notebooks: tables as CSV and as figures, 3-D surface panels,
-curves against nominal pressure per mesh or per cell, the study summary."""
+curves against nominal pressure per mesh or per cell, two bodies, the study summary."""
 
 import json
 
@@ -12,14 +12,17 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from roughcontact.errors import StoredFileError  # noqa: E402
+from roughcontact.hashes import file_sha256  # noqa: E402
 from roughcontact.reports.plotting import (  # noqa: E402
     cells_at_pressures,
     describe_study,
     draw_surfaces,
     draw_table,
+    load_studies,
     plot_by_mesh,
     plot_cells,
     plot_cells_panels,
+    plot_two_bodies,
     save_table,
     surface_moments,
 )
@@ -209,3 +212,104 @@ def test_the_figures_draw_only_surfaces_made_for_their_cells(tmp_path):
         surface_moments([path], 40.0, cells=[cell | {"kurt": 4.0}])
     with pytest.raises(StoredFileError, match="kurt = 3 in the file, 4 expected"):
         draw_surfaces([path], 40.0, ["t"], cells=[cell | {"kurt": 4.0}])
+
+
+#: The counter columns of a cell pressed against a half-space, a block, or nothing (the
+#: rigid smooth flat: NaN), as the aggregate tables write them.
+HALFSPACE = {"counter_body": "half-space E 110000 MPa nu 0.26", "counter_sigma_um": 1.5,
+             "counter_skew": 0.0, "counter_kurt": 3.0}
+BLOCK = {"counter_body": "block E 210000 MPa nu 0.3 10 mm refined", "counter_sigma_um": 0.8,
+         "counter_skew": 0.0, "counter_kurt": 3.0}
+FLAT = {"counter_body": float("nan"), "counter_sigma_um": float("nan"),
+        "counter_skew": float("nan"), "counter_kurt": float("nan")}
+
+
+def two_bodies_table(counters, shares, k_P, E_MPa) -> pd.DataFrame:
+    """A two-bodies study: one cell per counter body (its share of d_b, None where it is
+    not reported), three levels, k_P [Pa], real area, mean gap and the counter columns."""
+    rows = []
+    for cell, (counter, share, k) in enumerate(zip(counters, shares, k_P, strict=True)):
+        for level, P in enumerate((1e6, 3e6, 1e7)):
+            reported = share is not None
+            rows.append({"cell": cell, "nominal_pressure": P, "surfaces": 5, "mesh": "refined",
+                         "sigma_um": 5.0, "E_MPa": E_MPa, "nu": 0.25, "thickness_mm": 10.0,
+                         "normalized_stiffness_mean": k * (1 + level),
+                         "normalized_stiffness_half_width": 0.02 * k,
+                         "normalized_stiffness_count": 5,
+                         "real_area_fraction_mean": 0.01 * (1 + level) * (1 + cell),
+                         "real_area_fraction_half_width": 1e-3,
+                         "real_area_fraction_count": 5,
+                         "mean_gap_mean": 4e-6 / (1 + level), "mean_gap_half_width": 2e-7,
+                         "mean_gap_count": 5,
+                         "counter_share_mean": share if reported else np.nan,
+                         "counter_share_half_width": 1e-3 if reported else np.nan,
+                         "counter_share_count": 5 if reported else 0, **counter})
+    return pd.DataFrame(rows)
+
+
+def test_plot_two_bodies_draws_each_counter_body_beside_the_rigid_flat():
+    """A row per study, four panels: k_P, real area, mean gap and the shares of d_b; a
+    curve and band per cell in the first three, the counter body's share and the first
+    body's (1 - share) for each modelled counter body, none for the flat or a counter
+    body treated as rigid; the legend names each counter body."""
+    tables = {"pad_on_disc": two_bodies_table([HALFSPACE, FLAT], [0.015, None], [1e9, 1.1e9],
+                                              2000.0),
+              "steel_plates": two_bodies_table([BLOCK, HALFSPACE | {"counter_E_MPa": 1e7}, FLAT],
+                                               [0.5, None, None], [7e10, 1.2e11, 1.3e11],
+                                               210000.0)}
+    fig = plot_two_bodies(tables)
+    assert len(fig.axes) == 8
+    pad, plates = fig.axes[:4], fig.axes[4:]
+    assert [t.get_text() for t in pad[0].get_legend().get_texts()] == [
+        "half-space E 110000 MPa nu 0.26 (sigma 1.5 um)", "rigid smooth flat"]
+    assert [t.get_text() for t in plates[0].get_legend().get_texts()] == [
+        "block E 210000 MPa nu 0.3 10 mm refined (sigma 0.8 um)",
+        "half-space E 110000 MPa nu 0.26 (sigma 1.5 um) (treated as rigid)",
+        "rigid smooth flat"]
+    for row, cells in ((pad, 2), (plates, 3)):
+        for ax in row[:3]:  # a curve and a band per cell
+            assert len(ax.lines) == len(ax.collections) == cells
+            assert ax.get_xscale() == "log"
+        assert row[1].get_yscale() == "log" and row[2].get_yscale() == "linear"
+        assert row[0].lines[-1].get_color() == "k"  # the rigid smooth flat
+    # the shares: the counter body's and the first body's, in per cent, with their bands
+    assert len(pad[3].lines) == len(pad[3].collections) == 2
+    np.testing.assert_allclose(pad[3].lines[0].get_ydata(), [1.5] * 3)
+    np.testing.assert_allclose(pad[3].lines[1].get_ydata(), [98.5] * 3)
+    assert pad[3].lines[1].get_linestyle() == "--"
+    assert len(plates[3].lines) == 2  # the block's; none for the half-space treated as rigid
+    np.testing.assert_allclose(plates[3].lines[1].get_ydata(), [50.0] * 3)
+    assert [t.get_text() for t in pad[3].get_legend().get_texts()] == [
+        "half-space E 110000 MPa nu 0.26 (sigma 1.5 um)", "counter body", "first body"]
+    # units: MPa for the pad, GPa for the steel (above 10 GPa); the row names its study
+    assert pad[0].get_ylabel() == "normalized stiffness $k_P$ [MPa]"
+    assert plates[0].get_ylabel() == "normalized stiffness $k_P$ [GPa]"
+    np.testing.assert_allclose(plates[0].lines[0].get_ydata(), [70.0, 140.0, 210.0])
+    assert pad[0].get_title(loc="left").startswith("pad_on_disc: first body")
+    assert "$E$ = 2000 MPa" in pad[0].get_title(loc="left")
+    assert plates[3].get_ylabel() == "share of the mean-plane deflection $d_b$ [%]"
+    plt.close(fig)
+    # a study of one body only (no counter columns): no share, said so, on its P axis
+    one = two_bodies_table([FLAT], [None], [1e9], 255.5)
+    fig = plot_two_bodies({"half": one.drop(columns=[c for c in one if "counter" in c])})
+    assert fig.axes[0].get_legend().get_texts()[0].get_text() == "rigid smooth flat"
+    share = fig.axes[3]
+    assert not share.lines and share.texts[0].get_text() == "no counter body modelled"
+    assert share.get_xlim() == fig.axes[0].get_xlim()
+    plt.close(fig)
+
+
+def test_load_studies_reads_four_files_per_study_in_order(tmp_path):
+    paths = []
+    for name, k in (("a", 1.0), ("b", 2.0)):
+        table, moduli = tmp_path / f"{name}.csv", tmp_path / f"{name}.moduli.csv"
+        pd.DataFrame({"cell": [0], "k": [k]}).to_csv(table, index=False)
+        pd.DataFrame({"cell": [0]}).to_csv(moduli, index=False)
+        meta = tmp_path / f"{name}.json"
+        meta.write_text(json.dumps({"table_sha256": file_sha256(table),
+                                    "moduli_sha256": file_sha256(moduli)}))
+        paths += [table, moduli, meta, tmp_path / f"{name}.validity.csv"]
+    tables = load_studies(paths, ["a", "b"])
+    assert list(tables) == ["a", "b"] and tables["b"]["k"].tolist() == [2.0]
+    with pytest.raises(ValueError, match="7 aggregate files for 2 studies"):
+        load_studies(paths[:7], ["a", "b"])

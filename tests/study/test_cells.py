@@ -7,7 +7,7 @@ import pytest
 from scipy import ndimage
 
 from roughcontact.elasticity.influence import ModelTooLarge
-from roughcontact.study.cells import drawn_with, study_plan
+from roughcontact.study.cells import drawn_with, figure_aggregates, study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import BuildSettings, in_unit, load_config, validated
 from roughcontact.study.contact_records import ContactJob, StudyCell
@@ -195,3 +195,15 @@ def test_the_schema_fills_the_axes_of_a_generated_study_only():
     (cell,) = contact_cells(config, "fig12")
     assert (cell.surface.skew, cell.surface.kurt, cell.surface.corr_length) == \
         (0.0, 3.0, (1e-3, 1e-3))
+
+
+def test_a_two_bodies_figure_draws_the_aggregates_of_the_studies_it_lists():
+    config = load_config(REPO / "config" / "two_bodies.yaml")
+    plan = study_plan(config)
+    assert plan.figures == ("two_bodies",) and "two_bodies" not in plan.studies
+    assert figure_aggregates(config, "two_bodies") == ("pad_on_disc", "steel_plates")
+    assert figure_aggregates(config, "fig01") == ()
+    config["figures"]["two_bodies"]["studies"].append("pad_on_dsic")
+    with pytest.raises(ConfigProblems, match="figures.two_bodies.studies: 'pad_on_dsic' is no "
+                                             "sweep or contact figure"):
+        study_plan(config)

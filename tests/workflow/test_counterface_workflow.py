@@ -7,7 +7,8 @@ modulus E/2. Checked: the identical smooth block doubles the compliance, so its
 cell equals the one-body cell of E/2 and each block takes half of the mean-plane
 deflection; the stiff half-space, treated as rigid (as its file and sidecar say),
 gives the one-body numbers bit for bit; the rough counter surface is reported with
-its composite sigma; the audit re-solves pairs and finds them identical.
+its composite sigma; the audit re-solves pairs and finds them identical; the
+two-bodies figure draws both sweeps, and the report's caption names their counter bodies.
 """
 
 import json
@@ -26,7 +27,7 @@ CONFIG = {
     "surfaces": {"grid": [16, 16], "size_mm": [2.4, 2.4]},
     "body": {"E_MPa": 511.0, "nu": 0.0, "mesh": "paper"},
     "contact": {"steps": 12, "pressure_levels": 6},
-    "figures": {},
+    "figures": {"two_bodies": {"studies": ["pair", "half"]}},
     "reports": {},
     "audit": {"verify": True, "verify_sample": 8},
     "sweeps": {
@@ -119,3 +120,24 @@ def test_each_pair_of_bodies_is_summed_once_and_checked_on_read(run):
     other = json.loads(attrs["params"]) | {"modulus_ratio": 2.0}
     with pytest.raises(StoredFileError, match="modulus_ratio"):
         read_pair(block, pair=other)
+
+
+def test_the_two_bodies_figure_and_its_caption_name_each_counter_body(run):
+    import nbformat
+
+    _, _, _, results, _ = run
+    for ext in ("png", "pdf", "ipynb"):
+        assert (results / "figures" / f"two_bodies.{ext}").stat().st_size > 1000, ext
+    notebook = nbformat.read(results / "figures" / "two_bodies.ipynb", as_version=4)
+    printed = "".join(o.get("text", "") for c in notebook.cells if c.cell_type == "code"
+                      for o in c.outputs)
+    assert "half-space E 5.11e+06 MPa nu 0.3 (smooth) (treated as rigid)" in printed
+    assert "rigid smooth flat" in printed and "half:" in printed
+    proc = run_snakemake(results.parent, "--report", "report.html",
+                         config=results.parent / "config.yaml")
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    report = (results.parent / "report.html").read_text()
+    assert ("pair (first body: sigma 24.5 um, E 511 MPa, nu 0, a 10 mm block on the paper's "
+            "mesh (5 uniform trilinear layers)) against the block E 511 MPa nu 0 10 mm paper "
+            "(sigma 12 um), the block E 511 MPa nu 0 10 mm paper (smooth), the half-space "
+            "E 5.11e+06 MPa nu 0.3 (smooth) and the rigid smooth flat; half") in report

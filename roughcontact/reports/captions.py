@@ -1,0 +1,291 @@
+"""The caption of every figure in the report, written from the study's own settings.
+
+A caption states what its figure draws as the configuration made it: the
+meshes of its panels in their order, the surfaces per curve, the (Sk, Ku)
+pairs, sigma, b, the nominal areas, the counter bodies. Nothing in it is
+fixed text that one study makes true and another false (the quick study
+draws the refined mesh where the default one draws the converged mesh).
+:func:`figure_caption` is called by the workflow (``rules/common.smk``:
+``get_figure_caption``, the figure rule's ``params.caption``) and read by
+``report/figure.rst``; it takes the validated configuration and its
+:class:`~roughcontact.study.cells.StudyPlan`, the cells the figure draws.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Sequence
+
+from roughcontact.units import MPA
+
+#: The bands of every curve against nominal pressure (Figs 7, 9, 11-14 and beyond).
+BANDS = "Bands: 95 % confidence interval of the mean over the surfaces."
+
+
+def join(items: Iterable[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    items = list(items)
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
+
+
+def numbers(values: Iterable[float], unit: str = "") -> str:
+    """Distinct values in their order, ``%g`` each, joined, with the unit once."""
+    text = join(f"{v:g}" for v in dict.fromkeys(values))
+    return f"{text} {unit}" if unit else text
+
+
+def mesh_name(mesh: str) -> str:
+    """The mesh preset as a caption names it."""
+    return "the paper's mesh (5 uniform trilinear layers)" if mesh == "paper" else \
+        f"the {mesh} mesh"
+
+
+def panels(meshes: Sequence[str]) -> str:
+    """Which mesh each panel shows, left to right."""
+    if len(meshes) == 1:
+        return f"one panel, {mesh_name(meshes[0])}"
+    if len(meshes) == 2:
+        return f"left {mesh_name(meshes[0])}, right {mesh_name(meshes[1])}"
+    return f"from left to right {join(mesh_name(m) for m in meshes)}"
+
+
+def counter_label(row) -> str:
+    """The counter body of a cell, from its columns (``StudyCell.columns()`` or a row of
+    an aggregate table): ``rigid smooth flat`` (the paper's), or the counter body with
+    its surface in brackets (sigma, and Sk, Ku unless Gaussian; or smooth), e.g.
+    ``half-space E 110000 MPa nu 0.26 (sigma 1.5 um)``."""
+    body = row.get("counter_body")
+    if body is None or (isinstance(body, float) and math.isnan(body)):
+        return "rigid smooth flat"
+    sigma = float(row.get("counter_sigma_um") or 0.0)
+    surface = "smooth" if not sigma > 0 else f"sigma {sigma:g} um"
+    skew, kurt = row.get("counter_skew"), row.get("counter_kurt")
+    if sigma > 0 and not (skew == 0 and kurt == 3) and not math.isnan(float(skew)):
+        surface += f", Sk {skew:g}, Ku {kurt:g}"
+    return f"{body} ({surface})"
+
+
+def _columns(cells) -> list[dict]:
+    """Each study cell's columns (as the aggregate table has them) and its surface count."""
+    return [{**cell.columns(), "surfaces": cell.surface.count, "cap": cell.hardness}
+            for cell in cells]
+
+
+def _surfaces(rows) -> str:
+    counts = [row["surfaces"] for row in rows]
+    low, high = min(counts), max(counts)
+    return f"{low} surfaces per curve" if low == high else f"{low}-{high} surfaces per curve"
+
+
+def _pairs(rows) -> str:
+    pairs = dict.fromkeys((row["skew"], row["kurt"]) for row in rows)
+    return join(f"({s:g}, {k:g})" for s, k in pairs)
+
+
+def _meshes(rows) -> list[str]:
+    """The meshes in the order of the cells (the order of the panels of ``plot_by_mesh``)."""
+    return list(dict.fromkeys(row["mesh"] for row in rows))
+
+
+def _study(rows) -> str:
+    """sigma, b and the mesh of a study's cells."""
+    meshes = _meshes(rows)
+    return (f"sigma {numbers((r['sigma_um'] for r in rows), 'um')}, "
+            f"b {numbers((r['b_mm'] for r in rows), 'mm')}, "
+            f"{join(mesh_name(m) for m in meshes)}")
+
+
+def _by_mesh(title: str, rows, finding: Callable[[list[str]], str] = lambda meshes: "") -> str:
+    """Figs 7, 12, 13 and the gaps: one panel per mesh of the (Sk, Ku) cells."""
+    meshes = _meshes(rows)
+    return (f"{title} for (Sk, Ku) = {_pairs(rows)}, sigma "
+            f"{numbers((r['sigma_um'] for r in rows), 'um')}, b "
+            f"{numbers((r['b_mm'] for r in rows), 'mm')}; {panels(meshes)}"
+            f"{finding(meshes)}. {_surfaces(rows)}. {BANDS}")
+
+
+def _paper_beside(verb: str) -> Callable[[list[str]], str]:
+    """Fig 12's and 13's finding, where the paper's mesh is drawn beside a finer one."""
+    def finding(meshes):
+        others = [m for m in meshes if m != "paper"]
+        if "paper" not in meshes or not others:
+            return ""
+        return f": the paper's mesh, locally far too stiff, {verb} it"
+    return finding
+
+
+def _fig01(config, plan, name):
+    s = config["figures"][name]
+    return (f"Fig 1: regions of the Johnson families (SU, SB, SL, ST) in the (Sk, Ku) plane "
+            f"of the surface, for b = {s['b_mm']:g} mm on a {s['grid']} x "
+            f"{s['grid']} grid over {s['size_mm']:g} mm x {s['size_mm']:g} mm.")
+
+
+def _fig02(config, plan, name):
+    s = config["figures"][name]
+    return (f"Fig 2: minimum reachable kurtosis against skewness for b = "
+            f"{numbers(s['b_mm'], 'mm')} on a {s['grid']} x {s['grid']} grid over "
+            f"{s['size_mm']:g} mm x {s['size_mm']:g} mm; it depends on b / dx (the paper's "
+            f"grid spacing is not stated).")
+
+
+def _grid(config) -> str:
+    surfaces = config["surfaces"]
+    (nx, ny), (lx, ly) = surfaces["grid"], surfaces["size_mm"]
+    return f"{nx} x {ny} points over {lx:g} mm x {ly:g} mm"
+
+
+def _fig03(config, plan, name):
+    s = config["figures"][name]
+    return (f"Fig 3: Gaussian surfaces, sigma {s['sigma_um']:g} um, for b = "
+            f"{numbers(s['b_mm'], 'mm')} ({_grid(config)}); realised moments in the titles.")
+
+
+def _fig04(config, plan, name):
+    s = config["figures"]["fig04"]
+    b = s["b_mm"] if isinstance(s["b_mm"], list) else [s["b_mm"]]
+    pairs = join(f"({sk:g}, {ku:g})" for sk, ku in s["moments"])
+    return (f"Fig 4: surfaces with sigma {s['sigma_um']:g} um, b {' x '.join(f'{v:g}' for v in b)}"
+            f" mm and (Sk, Ku) = {pairs} ({_grid(config)}), target and realised moments in "
+            f"the titles.")
+
+
+def _fig05(config, plan, name):
+    count = plan.figure_surfaces[name][0].count
+    return (f"Fig 5: height distributions of the Fig 4 surfaces: the surface Fig 4 shows and "
+            f"all {count} surfaces of its cell pooled, with the Johnson density of the target "
+            f"moments.")
+
+
+def _fig07(config, plan, name):
+    return _by_mesh("Fig 7: normalized stiffness k_P = (L/A_n) dF/dd against nominal pressure",
+                    _columns(plan.cells[name]))
+
+
+def _fig09(config, plan, name):
+    rows = _columns(plan.cells[name])
+    return (f"Fig 9: mean-plane deflection d_b and asperity deflection d_a = d - d_b against "
+            f"nominal pressure for (Sk, Ku) = {_pairs(rows)}, {_study(rows)}. "
+            f"{_surfaces(rows)}. {BANDS}")
+
+
+def _fig10(config, plan, name):
+    rows = _columns(plan.cells[name])
+    return (f"Fig 10: cumulative height distributions as depth below the highest point of the "
+            f"surfaces of (Sk, Ku) = {_pairs(rows)}, sigma "
+            f"{numbers((r['sigma_um'] for r in rows), 'um')}, b "
+            f"{numbers((r['b_mm'] for r in rows), 'mm')} (the Fig 9 cells), pooled over the "
+            f"{numbers(r['surfaces'] for r in rows)} surfaces of each.")
+
+
+def _fig11(config, plan, name):
+    rows = _columns(plan.cells[name])
+    return (f"Fig 11: normalized stiffness for the correlation lengths b = "
+            f"{numbers((r['b_mm'] for r in rows), 'mm')}, surfaces of (Sk, Ku) = "
+            f"{_pairs(rows)}, sigma {numbers((r['sigma_um'] for r in rows), 'um')}, "
+            f"{join(mesh_name(m) for m in _meshes(rows))}. {_surfaces(rows)}. {BANDS}")
+
+
+def _fig11_resolved(config, plan, name):
+    rows = _columns(plan.cells[name])
+    return (f"Beyond the paper: Fig 11 on a grid that resolves the ACF ({_grid(config)}): "
+            f"k_P, real area, peak pressure, the number of contact spots, their mean area "
+            f"and the real area corrected by its perimeter, for b = "
+            f"{numbers((r['b_mm'] for r in rows), 'mm')}, sigma "
+            f"{numbers((r['sigma_um'] for r in rows), 'um')}, "
+            f"{join(mesh_name(m) for m in _meshes(rows))}. {_surfaces(rows)}. {BANDS}")
+
+
+def _fig12(config, plan, name):
+    return _by_mesh("Fig 12: maximum contact pressure against nominal pressure",
+                    _columns(plan.cells[name]), _paper_beside("overestimates"))
+
+
+def _fig13(config, plan, name):
+    return _by_mesh("Fig 13: real contact area against nominal pressure",
+                    _columns(plan.cells[name]), _paper_beside("underestimates"))
+
+
+def _fig14(config, plan, name):
+    rows = _columns(plan.cells[name])
+    areas = join(f"{r['size_mm']:g} mm x {r['size_mm']:g} mm"
+                 for r in {r["size_mm"]: r for r in rows}.values())
+    return (f"Fig 14: normalized stiffness for the nominal areas {areas} on the same contact "
+            f"elements, surfaces of (Sk, Ku) = {_pairs(rows)}, sigma "
+            f"{numbers((r['sigma_um'] for r in rows), 'um')}, b "
+            f"{numbers((r['b_mm'] for r in rows), 'mm')}, nu = "
+            f"{numbers(r['nu'] for r in rows)}. {_surfaces(rows)}. {BANDS}")
+
+
+def _gaps(config, plan, name):
+    return _by_mesh("Beyond the paper: the mean gap (mean interfacial separation) against "
+                    "nominal pressure", _columns(plan.cells[name]))
+
+
+def _table_eu(config, plan, name):
+    rows = _columns(plan.cells[name])
+    return (f"Mean-plane modulus E_u = P L / d_b (Eq 36) for nu = "
+            f"{numbers(r['nu'] for r in rows)} (for nu = 0 it equals E), surfaces of "
+            f"(Sk, Ku) = {_pairs(rows)}, {join(mesh_name(m) for m in _meshes(rows))}, as a "
+            f"table (also {name}.csv): per cell, the mean over its "
+            f"{numbers(r['surfaces'] for r in rows)} surfaces with their standard deviation.")
+
+
+def _hardness(config, plan, name):
+    rows = _columns(plan.cells[name])
+    caps = sorted({r["cap"] for r in rows if r["cap"] is not None})
+    capped = [m for m in _meshes(rows) if any(r["cap"] is not None and r["mesh"] == m
+                                                for r in rows)]
+    H = numbers((c / MPA for c in caps), "MPa")
+    return (f"Beyond the paper: k_P, real area and peak pressure of the cells (Sk, Ku) = "
+            f"{_pairs(rows)}, elastic (solid) and with the pressure capped at H = {H} (dashed, "
+            f"on {join(mesh_name(m) for m in capped)}), and the validity map: the share of "
+            f"the elastic real area (solid) and load (dotted) above H; one row per mesh, "
+            f"{join(mesh_name(m) for m in _meshes(rows))}. {_surfaces(rows)}. {BANDS}")
+
+
+def _measured(config, plan, name):
+    cells = plan.cells[name]
+    measured = [c for c in cells if c.surface.source_label]  # "measured <file>: "
+    twins = [c for c in cells if not c.surface.source_label]
+    what = join(dict.fromkeys(c.surface.source_label.rstrip(": ") for c in measured)) \
+        if measured else "a measured surface"
+    twin = (f"against its synthetic twin (the same sigma, Sk, Ku and correlation lengths, "
+            f"{twins[0].surface.count} generated surfaces)" if twins
+            else "alone (compare_synthetic: false)")
+    return (f"The {what} {twin}: height maps, height distributions and spectra, and k_P, "
+            f"real area and peak pressure against nominal pressure.")
+
+
+def _two_bodies(config, plan, name):
+    parts = []
+    for study in config["figures"][name]["studies"]:
+        rows = _columns(plan.cells[study])
+        first = rows[0]
+        body = (f"first body: sigma {numbers((r['sigma_um'] for r in rows), 'um')}, E "
+                f"{first['E_MPa']:g} MPa, nu {first['nu']:g}, a {first['thickness_mm']:g} mm "
+                f"block on {mesh_name(first['mesh'])}")
+        counters = join(f"the {label}" for label in dict.fromkeys(map(counter_label, rows)))
+        parts.append(f"{study} ({body}) against {counters}")
+    rows = [row for study in config["figures"][name]["studies"]
+            for row in _columns(plan.cells[study])]
+    return (f"Beyond the paper: two rough, elastic bodies (Eq 17-18), one row per study: "
+            f"{'; '.join(parts)}. Columns: k_P, real area, mean gap, and each body's share "
+            f"of the mean-plane deflection (the counter body's solid, the first body's "
+            f"dashed with crosses) against nominal pressure. {_surfaces(rows)}. {BANDS}")
+
+
+#: The caption writer of each figure: ``(config, plan, name) -> str``.
+CAPTIONS: dict[str, Callable] = {
+    "fig01": _fig01, "fig02": _fig02, "fig03": _fig03, "fig04": _fig04, "fig05": _fig05,
+    "fig07": _fig07, "fig09": _fig09, "fig10": _fig10, "fig11": _fig11,
+    "fig11_resolved": _fig11_resolved, "fig12": _fig12, "fig13": _fig13, "fig14": _fig14,
+    "gaps": _gaps, "table_Eu": _table_eu, "hardness": _hardness, "measured": _measured,
+    "two_bodies": _two_bodies,
+}
+
+
+def figure_caption(name: str, config: dict, plan) -> str:
+    """The caption of figure ``name`` of a validated ``config`` whose plan is ``plan``
+    (:func:`~roughcontact.study.cells.study_plan`), one paragraph of plain text."""
+    return CAPTIONS[name](config, plan, name)

@@ -1,0 +1,105 @@
+"""The report's captions are written from each study's own settings.
+
+report/figure.rst's captions were fixed text: "left the paper's mesh, right
+the converged mesh" for Fig 7 and the mean gap, while config/quick.yaml
+draws the refined mesh on the right. They now come from the cells each
+figure draws (roughcontact.reports.captions, the figure rule's
+params.caption), so that each is true for every shipped config.
+"""
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import jinja2
+import pytest
+
+from roughcontact.reports.captions import CAPTIONS, counter_label, figure_caption, panels
+from roughcontact.study.cells import (
+    CONTACT_FIGURES,
+    STUDIES_FIGURES,
+    SURFACE_ONLY_FIGURES,
+    study_plan,
+)
+from roughcontact.study.config import load_config
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def plan_of(name):
+    config = load_config(REPO / "config" / f"{name}.yaml")
+    return config, study_plan(config)
+
+
+def test_every_figure_has_a_caption_writer():
+    assert set(CAPTIONS) == {*SURFACE_ONLY_FIGURES, *CONTACT_FIGURES, *STUDIES_FIGURES}
+
+
+@pytest.mark.parametrize(("name", "right", "wrong", "surfaces", "b"), [
+    ("quick", "refined", "converged", 4, 0.5),
+    ("config", "converged", "refined", 60, 1.0),
+])
+def test_fig07_and_gaps_captions_name_the_meshes_of_their_config(name, right, wrong, surfaces,
+                                                                 b):
+    config, plan = plan_of(name)
+    assert config["figures"]["fig07"]["meshes"] == ["paper", right]
+    for figure in ("fig07", "gaps", "fig12", "fig13"):
+        caption = figure_caption(figure, config, plan)
+        assert (f"left the paper's mesh (5 uniform trilinear layers), right the {right} mesh"
+                in caption), caption
+        assert wrong not in caption
+        assert f"{surfaces} surfaces per curve" in caption
+        assert f"b {b:g} mm" in caption
+    assert "left" not in figure_caption("fig11", config, plan)  # one panel, one mesh
+    assert f"the {right} mesh" in figure_caption("hardness", config, plan)
+
+
+@pytest.mark.parametrize("name", ["quick", "config", "measured", "two_bodies"])
+def test_every_figure_of_a_shipped_config_has_its_caption(name):
+    config, plan = plan_of(name)
+    for figure in plan.figures:
+        caption = figure_caption(figure, config, plan)
+        assert caption.endswith(".") and "{" not in caption and "nan" not in caption, caption
+
+
+def test_captions_of_surface_figures_follow_their_settings():
+    config, plan = plan_of("quick")  # Fig 4: b 0.5 mm here, 1 mm in the default study
+    assert "sigma 40 um, b 0.5 mm and (Sk, Ku) = (0, 3) and (-0.8, 4)" in figure_caption(
+        "fig04", config, plan)
+    assert "32 x 32 grid over 4.8 mm x 4.8 mm" in figure_caption("fig01", config, plan)
+    assert "nu = 0 and 0.3" in figure_caption("table_Eu", config, plan)
+    assert "standard deviation" in figure_caption("table_Eu", config, plan)
+
+
+def test_the_two_bodies_caption_names_each_study_and_its_counter_bodies():
+    config, plan = plan_of("two_bodies")
+    caption = figure_caption("two_bodies", config, plan)
+    assert ("pad_on_disc (first body: sigma 5 um, E 2000 MPa, nu 0.25, a 10 mm block on the "
+            "refined mesh) against the half-space E 110000 MPa nu 0.26 (sigma 1.5 um) and the "
+            "rigid smooth flat") in caption
+    assert ("steel_plates (first body: sigma 0.8 um, E 210000 MPa, nu 0.3, a 10 mm block on "
+            "the refined mesh) against the block E 210000 MPa nu 0.3 10 mm refined (sigma 0.8 "
+            "um) and the rigid smooth flat") in caption
+    assert "20 surfaces per curve" in caption
+
+
+def test_counter_labels_and_panels():
+    assert counter_label({}) == "rigid smooth flat"
+    assert counter_label({"counter_body": float("nan")}) == "rigid smooth flat"
+    assert counter_label({"counter_body": "rigid", "counter_sigma_um": 2.0, "counter_skew": -0.5,
+                          "counter_kurt": 4.0}) == "rigid (sigma 2 um, Sk -0.5, Ku 4)"
+    assert counter_label({"counter_body": "half-space E 1 MPa nu 0.3", "counter_sigma_um": 0.0,
+                          "counter_skew": float("nan")}) == "half-space E 1 MPa nu 0.3 (smooth)"
+    assert panels(["refined"]) == "one panel, the refined mesh"
+    assert panels(["paper", "graded", "converged"]) == (
+        "from left to right the paper's mesh (5 uniform trilinear layers), the graded mesh "
+        "and the converged mesh")
+
+
+def test_the_report_template_shows_the_caption_of_the_job():
+    """report/figure.rst (rendered by Snakemake's report with the job's params)."""
+    template = jinja2.Template((REPO / "report" / "figure.rst").read_text())
+    job = SimpleNamespace(params=SimpleNamespace(caption="Fig 7: right the refined mesh."),
+                          wildcards=SimpleNamespace(fig="fig07"))
+    text = template.render(snakemake=job)
+    assert text.startswith("Fig 7: right the refined mesh.")
+    assert "results/figures/fig07.ipynb" in text
