@@ -38,8 +38,8 @@ DOUBLE_BYTES = 8
 
 # A counter body is its surface and its body, each a value: a rough counter surface
 # or the smooth one, an elastic counter body or the rigid one; the paper's rigid smooth
-# flat is the null counter body (:data:`NO_COUNTERFACE` on a study cell,
-# :data:`NO_COUNTER` on a job), whose methods give the one-body answers. Each record
+# flat is the null counter body (:data:`NO_COUNTERFACE`, on a study cell and its job),
+# whose methods give the one-body answers. Each record
 # answers what the study asks of it (its files, its parameters, its label, its share of
 # a job's memory and time), so the code that asks never needs to know which it holds.
 
@@ -294,13 +294,15 @@ def _counter_body(params: dict, scale: str) -> _Rigid | ElasticCounter:
 @dataclass(frozen=True)
 class Counterface:
     """The body a study cell's surfaces are pressed against (Eq 17-18 of Kumar et al.
-    2006; :mod:`roughcontact.contact.counterface`): its ``surface`` (a
-    :class:`RoughCounter` on the first cell's grid and plan size, generated with the
-    seed stream ``counter`` or measured, or :data:`SMOOTH`) and its ``body`` (an
-    :class:`ElasticCounter`, block or half-space, or :data:`RIGID`). ``rigid_share``:
-    below this share of the pair's compliance the contact job treats the counter body
-    as rigid (and logs it). A smooth rigid counter body is no counterface at all
-    (:data:`NO_COUNTERFACE`: today's case)."""
+    2006; :mod:`roughcontact.contact.counterface`), one record for the cell and its
+    job: its ``surface`` (a :class:`RoughCounter` on the first cell's grid and plan
+    size, generated with the seed stream ``counter`` or measured, or :data:`SMOOTH`)
+    and its ``body`` (an :class:`ElasticCounter`, block or half-space, or
+    :data:`RIGID`), in SI units on a study cell (sigma [m], E [Pa]) and as ratios to
+    the first body's on a job (:meth:`job_form`). ``rigid_share``: below this share of
+    the pair's compliance the contact job treats the counter body as rigid (and logs
+    it). A smooth rigid counter body is no counterface at all (:data:`NO_COUNTERFACE`:
+    today's case)."""
 
     surface: _Smooth | RoughCounter = SMOOTH
     body: _Rigid | ElasticCounter = RIGID
@@ -308,14 +310,35 @@ class Counterface:
 
     @classmethod
     def from_params(cls, params: dict) -> Counterface:
+        """From a cell's ``counterface`` parameters (sigma_um, E_MPa)."""
         return cls(_counter_surface(params, "sigma_um"), _counter_body(params, "E_MPa"),
                    float(params["rigid_share"]))
 
+    @classmethod
+    def from_job_params(cls, params: dict) -> Counterface:
+        """From a job's ``counter`` parameters (sigma_ratio, modulus_ratio)."""
+        return cls(_counter_surface(params, "sigma_ratio"),
+                   _counter_body(params, "modulus_ratio"), float(params["rigid_share"]))
+
     def params(self) -> dict:
-        """The cell's ``counterface`` parameters (um, MPa)."""
+        """What the counter body adds to a cell's parameters (um, MPa)."""
         return {"counterface": {**self.surface.params(),
                                 "sigma_um": in_unit(self.surface.sigma, UM),
                                 **self.body.params(), "rigid_share": self.rigid_share}}
+
+    def counter_params(self) -> dict:
+        """The job form's parameters (the ratios), stored with the job and hashed."""
+        return {**self.surface.job_params(), **self.body.job_params(),
+                "rigid_share": self.rigid_share}
+
+    def job_params(self) -> dict:
+        """What the counter body adds to a job's parameters."""
+        return {"counter": self.counter_params()}
+
+    def key(self) -> str:
+        """What the counter body adds to a job's key: both bodies' parameters, hashed
+        (names stay short)."""
+        return f"__cf{short_hash(self.counter_params(), 10)}"
 
     @property
     def label(self) -> str:
@@ -331,11 +354,11 @@ class Counterface:
     def height_scale(self, sigma: float) -> float:
         return self.surface.height_scale(sigma)
 
-    def job_form(self, sigma: float, E: float) -> CounterJob:
+    def job_form(self, sigma: float, E: float) -> Counterface:
         """The counter body in a job's form: ratios to the first body's ``sigma`` [m]
         and ``E`` [Pa]."""
-        return CounterJob(self.surface.job_form(sigma), self.body.job_form(E),
-                          self.rigid_share)
+        return Counterface(self.surface.job_form(sigma), self.body.job_form(E),
+                           self.rigid_share)
 
     def summary(self, attrs: dict, height_scale: float) -> dict:
         """What the contact file records about the two bodies (:data:`COUNTER_ATTRIBUTES`),
@@ -346,68 +369,6 @@ class Counterface:
             out["equivalent_sample_sigma_um"] = (float(attrs["equivalent_sigma_over_scale"])
                                                  * in_unit(height_scale, UM))
         return out
-
-
-#: What a contact file of two bodies records about them (:meth:`Counterface.summary`).
-COUNTER_ATTRIBUTES = ("counter_compliance_share", "counter_treated_as_rigid",
-                      "equivalent_skew", "equivalent_kurt")
-
-
-class _NoCounterface:
-    """The paper's counter body, a rigid smooth flat: no counterface (the null)."""
-
-    label = ""
-    surface, body = SMOOTH, RIGID
-
-    def params(self) -> dict:
-        return {}
-
-    def columns(self, height_scale: float) -> dict:
-        return {}
-
-    def height_scale(self, sigma: float) -> float:
-        return sigma
-
-    def job_form(self, sigma: float, E: float) -> _NoCounter:
-        return NO_COUNTER
-
-    def summary(self, attrs: dict, height_scale: float) -> dict:
-        return {}
-
-
-#: A study cell against the rigid smooth flat.
-NO_COUNTERFACE = _NoCounterface()
-
-
-@dataclass(frozen=True)
-class CounterJob:
-    """The counter body of a contact job, in the job's non-dimensional form: its
-    ``surface`` (:class:`RoughCounter` with ``sigma_ratio`` sigma2 / sigma1, or
-    :data:`SMOOTH`), its ``body`` (:class:`ElasticCounter` with ``modulus_ratio``
-    E1 / E2, or :data:`RIGID`) and the ``rigid_share`` below which the job treats the
-    body as rigid."""
-
-    surface: _Smooth | RoughCounter
-    body: _Rigid | ElasticCounter
-    rigid_share: float
-
-    @classmethod
-    def from_params(cls, params: dict) -> CounterJob:
-        return cls(_counter_surface(params, "sigma_ratio"),
-                   _counter_body(params, "modulus_ratio"), float(params["rigid_share"]))
-
-    def params(self) -> dict:
-        return {**self.surface.job_params(), **self.body.job_params(),
-                "rigid_share": self.rigid_share}
-
-    def job_params(self) -> dict:
-        """What the counter body adds to a job's parameters."""
-        return {"counter": self.params()}
-
-    def key(self) -> str:
-        """What the counter body adds to a job's key: both bodies' parameters, hashed
-        (names stay short)."""
-        return f"__cf{short_hash(self.params(), 10)}"
 
     def cells(self) -> dict:
         return self.surface.cells()
@@ -436,14 +397,38 @@ class CounterJob:
         return self.surface.bytes(count, n) + self.body.bytes(dense, n)
 
 
-class _NoCounter:
-    """A job against the rigid smooth flat (the null): nothing added."""
+#: What a contact file of two bodies records about them (:meth:`Counterface.summary`).
+COUNTER_ATTRIBUTES = ("counter_compliance_share", "counter_treated_as_rigid",
+                      "equivalent_skew", "equivalent_kurt")
+
+
+class _NoCounterface:
+    """The paper's counter body, a rigid smooth flat: no counterface (the null), on a
+    cell and on its job; nothing added to parameters, keys, files or costs."""
+
+    label = ""
+    surface, body = SMOOTH, RIGID
+
+    def params(self) -> dict:
+        return {}
 
     def job_params(self) -> dict:
         return {}
 
     def key(self) -> str:
         return ""
+
+    def columns(self, height_scale: float) -> dict:
+        return {}
+
+    def height_scale(self, sigma: float) -> float:
+        return sigma
+
+    def job_form(self, sigma: float, E: float) -> _NoCounterface:
+        return self
+
+    def summary(self, attrs: dict, height_scale: float) -> dict:
+        return {}
 
     def cells(self) -> dict:
         return {}
@@ -467,14 +452,14 @@ class _NoCounter:
         return 0.0
 
 
-#: A job against the rigid smooth flat.
-NO_COUNTER = _NoCounter()
+#: A study cell, or a job, against the rigid smooth flat.
+NO_COUNTERFACE = _NoCounterface()
 
 
-def counter_job_from_params(params: dict) -> CounterJob | _NoCounter:
-    """A job's counter body from its stored parameters (none: :data:`NO_COUNTER`)."""
+def counter_from_params(params: dict) -> Counterface | _NoCounterface:
+    """A job's counter body from its stored parameters (none: :data:`NO_COUNTERFACE`)."""
     counter = params.get("counter")
-    return NO_COUNTER if counter is None else CounterJob.from_params(counter)
+    return NO_COUNTERFACE if counter is None else Counterface.from_job_params(counter)
 
 
 def counterface_from_params(params: dict) -> Counterface | _NoCounterface:
@@ -547,7 +532,7 @@ class ContactJob:
     pressure_end: float
     accuracy: Accuracy = Accuracy()
     nondim_hardness: float | None = None
-    counter: CounterJob | _NoCounter = NO_COUNTER
+    counter: Counterface | _NoCounterface = NO_COUNTERFACE
 
     @classmethod
     def from_params(cls, params: dict) -> ContactJob:
@@ -557,7 +542,7 @@ class ContactJob:
                    accuracy=Accuracy(params["accuracy"],
                                      tuple(params["expected_error"].items()) or None),
                    nondim_hardness=params.get("hardness"),
-                   counter=counter_job_from_params(params))
+                   counter=counter_from_params(params))
 
     def params(self) -> dict:
         """The job as passed to it and stored with its result (``hardness``: the cap)."""
@@ -692,7 +677,7 @@ class StudyCell:
                           nondim_hardness=self.nondim_hardness, counter=self.counter_job)
 
     @property
-    def counter_job(self) -> CounterJob | _NoCounter:
+    def counter_job(self) -> Counterface | _NoCounterface:
         """The counter body in the job's form (ratios to this cell's sigma and E)."""
         return self.counterface.job_form(self.sigma, self.E)
 

@@ -23,7 +23,6 @@ from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
 from roughcontact.study.contact_jobs import contact_problem
 from roughcontact.study.contact_records import (
-    NO_COUNTER,
     NO_COUNTERFACE,
     RIGID,
     ContactJob,
@@ -45,7 +44,7 @@ def test_a_smooth_rigid_counter_body_plans_todays_jobs():
     explicit = study_plan(config(counterface={"surface": "smooth", "body": "rigid"}))
     assert list(explicit.jobs) == list(today.jobs)
     assert all(cell.counterface is NO_COUNTERFACE for cell in explicit.cells["pair"])
-    assert all(job.counter is NO_COUNTER and set(job.files()) == {"surfaces", "influence"}
+    assert all(job.counter is NO_COUNTERFACE and set(job.files()) == {"surfaces", "influence"}
                for job in today.jobs.values())
     assert all("__cf" not in key for key in today.jobs)
 
