@@ -13,10 +13,7 @@ import logging
 import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
-from roughcontact.study.block_checks import block_problems
-from roughcontact.study.config import BuildSettings, in_unit, in_units
-from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.measured_checks import check_measured_plausible
+from roughcontact.study.config import BuildSettings, in_unit
 from roughcontact.study.records import (
     GeneratedCell,
     Generator,
@@ -45,7 +42,7 @@ from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.spectra import filter_kernel
-from roughcontact.units import GB, MM, MPA, UM
+from roughcontact.units import GB, MM
 
 
 class ConfigProblems(ValueError):
@@ -94,8 +91,10 @@ def check_spectra(config: dict, names) -> list[str]:
 
 def check_studies(config: dict, names) -> list[str]:
     """Messages for contact figures or sweeps the schema cannot check: a ``from:`` that
-    names no study or a cycle, a pressure range, a measured surface, the hybrid
-    operator's mesh, the hardness settings."""
+    names no study or a cycle, a pressure range, a list axis that repeats a value, a
+    measured surface (a study's or a counter body's), the hybrid operator's mesh, the
+    hardness settings; where there are none, the warnings of
+    :func:`warn_single_surfaces`."""
     problems = check_figure_duplicates(config)
     for name in names:
         try:
@@ -113,7 +112,8 @@ def check_studies(config: dict, names) -> list[str]:
         problems += _check_operator(config, name, study)
         problems += _check_hardness(name, study)
         problems += _check_pressure_below_hardness(config, name, study)
-    warn_single_surfaces(config, names)
+    if not problems:  # a refusal comes alone
+        warn_single_surfaces(config, names)
     return list(dict.fromkeys(problems))  # a study drawn from another: its messages once
 
 
@@ -315,55 +315,6 @@ def _check_operator(config: dict, name: str, study: dict) -> list[str]:
             f"'refined' coarse model above)"]
 
 
-#: Accepted ranges of the plausibility check: sigma [um], E [MPa], and the largest
-#: nominal pressure over E of a sweep (beyond it linear elasticity has no meaning).
-PLAUSIBLE = {"sigma_um": (1e-3, 1e3), "E_MPa": (1e-3, 1e7), "pressure_over_E": 0.1}
-#: Units a value is likely typed in by mistake: name, factor to the key's unit.
-_SLIPS = {"sigma_um": (("m", 1e6), ("mm", 1e3), ("nm", 1e-3)),
-          "E_MPa": (("Pa", 1e-6), ("kPa", 1e-3), ("GPa", 1e3))}
-
-
-def _slip(key: str, value: float) -> str:
-    """A sentence naming the unit ``value`` was likely typed in, if one puts it in range."""
-    low, high = PLAUSIBLE[key]
-    for unit, factor in _SLIPS[key]:
-        if low <= value * factor <= high:
-            return (f"; typed in {unit}? then write {value * factor:.6g} "
-                    f"({key.split('_')[-1]})")
-    return ""
-
-
-def check_plausible(cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
-    """Messages for study values that are almost surely a unit slip (:data:`PLAUSIBLE`),
-    in the units they were written in, and for measured maps that are noise or whose
-    measured sigma is out of range
-    (:func:`~roughcontact.study.measured_checks.check_measured_plausible`); ``cells``
-    by study name."""
-    problems = set()
-    for name, study_cells in cells.items():
-        measured, answered = check_measured_plausible(name, study_cells,
-                                                      PLAUSIBLE["sigma_um"])
-        problems.update(measured)
-        for cell in study_cells:
-            values = {"sigma_um": in_unit(cell.sigma, UM), "E_MPa": in_unit(cell.E, MPA)}
-            if cell.sigma in answered:  # the measured sigma: not typed, judged above
-                del values["sigma_um"]
-            for key, value in values.items():
-                low, high = PLAUSIBLE[key]
-                if not low <= value <= high:
-                    problems.add(f"{name}: {key} = {value:g} lies outside {low:g}-{high:g}"
-                                 f"{_slip(key, value)}")
-            p_max = in_unit(cell.pressure_range[1], MPA)
-            ratio = p_max / values["E_MPa"]
-            if ratio > PLAUSIBLE["pressure_over_E"]:
-                problems.add(
-                    f"{name}: pressure_MPa up to {p_max:g} on E_MPa = {values['E_MPa']:g} is "
-                    f"P / E = {ratio:.3g}, beyond {PLAUSIBLE['pressure_over_E']:g}, where the "
-                    "linear elastic model has no meaning; check the units of pressure_MPa and "
-                    "E_MPa")
-    return sorted(problems)
-
-
 # ---------------------------------------------------------------------------
 # Generated surfaces too small for their correlation length
 
@@ -389,15 +340,22 @@ def _pair_text(values) -> str:
     return _numbers(list(values), None if values[0] == values[-1] else list(values))
 
 
-def window_message(config: dict, name: str, cell: GeneratedCell) -> str | None:
+def window_message(config: dict, name: str, cell: GeneratedCell, b_key: str | None = None,
+                   b_written=None) -> str | None:
     """Why a generated cell of the figure or sweep ``name`` has a correlation length
-    longer than :data:`MAX_CORRELATION_FRACTION` of its side, with the fixes, or None."""
+    longer than :data:`MAX_CORRELATION_FRACTION` of its side, with the fixes, or None.
+
+    ``b_key`` names the key of the correlation length (``b_written`` its value as
+    written) where it is not the study's ``b_mm``: a counter surface's
+    (``sweeps.pad.counterface[1].surface.b_mm``), on the study's plan size."""
     b, size = (tuple(in_unit(v, MM) for v in pair) for pair in (cell.corr_length, cell.size))
     limit = tuple(MAX_CORRELATION_FRACTION * side for side in size)
     if all(bi <= li for bi, li in zip(b, limit, strict=True)):
         return None
     entry = {**config["figures"], **config["sweeps"]}[name]
     where = study_path(config, name)
+    b_key = f"{where}.b_mm" if b_key is None else b_key
+    b_written = entry["b_mm"] if b_written is None else b_written
     own_size = entry.get("size_mm") is not None  # a study's own size, else the surfaces'
     size_key = f"{where}.size_mm" if own_size else "surfaces.size_mm"
     spacing = [s / n for s, n in zip(size, cell.grid, strict=True)]
@@ -413,13 +371,14 @@ def window_message(config: dict, name: str, cell: GeneratedCell) -> str | None:
         larger = (f"{size_key}: {_pair_text(sides)} with surfaces.grid: {_pair_text(grid)} "
                   "(the same spacing)")
     shortest = [min(bi, li) for bi, li in zip(b, limit, strict=True)]
-    return (f"{where}: b_mm = {_pair_text(b)} is longer than half the surface, {size_key} = "
+    what = where if b_key == f"{where}.b_mm" else b_key.rsplit(".", 1)[0]
+    return (f"{what}: b_mm = {_pair_text(b)} is longer than half the surface, {size_key} = "
             f"{_pair_text(size)} (L / 2 = {_pair_text(limit)} mm): fewer than two "
             "correlation lengths fit in it: the lag at which the autocorrelation falls to "
             "10 % (Eq 1) lies beyond the L / 2 a window shows, and a window's sigma falls "
             "short of the target (0.88 of it at b = L / 2, 0.57 at b = 2.2 L). Fix: "
-            f"{where}.b_mm: {_pair_text(shortest)} or shorter"
-            f"{_in_place(entry['b_mm'], b)}; or a larger surface, {larger}")
+            f"{b_key}: {_pair_text(shortest)} or shorter"
+            f"{_in_place(b_written, b)}; or a larger surface, {larger}")
 
 
 def _in_place(configured, pair) -> str:
@@ -445,57 +404,6 @@ def check_windows(config: dict, cells) -> list[str]:
                 message = window_message(config, name, cell)
                 problems += [message] if message else []
     return problems
-
-
-def _counter_body_problems(geometry: Geometry, build: BuildSettings) -> list[str]:
-    """Why a counter body cannot be built (none: it can)."""
-    if geometry.operator is InfluenceModel.HYBRID and geometry.mesh not in HYBRID_MESHES:
-        return [f"operator hybrid needs an accurate coarse model: mesh one of "
-                f"{list(HYBRID_MESHES)}, not {geometry.mesh!r} (or operator: dense)"]
-    found = block_problems(geometry, build)
-    if not found:
-        return []
-    return [f"{'; '.join(found)}; give it mesh: refined, or a thickness_mm nearer its "
-            f"plan size ({in_unit(max(geometry.size), MM):g} mm)"]
-
-
-def check_counterfaces(cells, build: BuildSettings) -> list[str]:
-    """Messages for the study cells whose counter body cannot be used: a counter block
-    that cannot be solved reliably (:func:`~roughcontact.study.block_checks.block_problems`)
-    or a hybrid one on an inaccurate mesh, and a counter surface not sampled like the
-    first (:mod:`roughcontact.contact.counterface` adds the two height maps element by
-    element): a measured one on another grid or plan size, with the import keys that
-    fix it. Once per counter body or pair."""
-    problems = {}
-    for cell in cells:
-        counter = cell.counterface
-        if counter is not None and counter.geometry is not None:
-            geometry = counter.geometry
-            for text in _counter_body_problems(geometry, build):
-                (lx, ly), (nx, ny) = in_units(geometry.size), geometry.grid
-                problems[geometry.key] = (
-                    f"counterface.body (a {in_unit(geometry.thickness, MM):g} mm "
-                    f"{geometry.mesh} block under {lx:g} x {ly:g} mm, {nx} x {ny} "
-                    f"elements) cannot be built: {text}")
-        if counter is None or counter.surface is None:
-            continue
-        first, other = cell.surface, counter.surface
-        if other.grid == first.grid and all(math.isclose(a, b, rel_tol=1e-9)
-                                            for a, b in zip(other.size, first.size, strict=True)):
-            continue
-        (nx, ny), (lx, ly) = first.grid, in_units(first.size)
-        (ox, oy), (olx, oly) = other.grid, in_units(other.size)
-        file = getattr(getattr(other, "source", None), "file", other.key)
-        advice = f"resample_grid: [{nx}, {ny}]"
-        if not all(math.isclose(a, b, rel_tol=1e-9) for a, b in ((olx, lx), (oly, ly))):
-            advice = (f"crop_mm: [0, 0, {lx:g}, {ly:g}] (a window of the first surface's "
-                      f"plan size) and {advice}")
-        problems[(first.key, other.key)] = (
-            f"counterface.surface {file}: {ox} x {oy} points over {olx:g} mm x {oly:g} mm, "
-            f"but the surface it meets ({first.key}) has {nx} x {ny} over {lx:g} mm x "
-            f"{ly:g} mm: the two height maps add element by element, so they need the same "
-            f"grid and plan size; add to the counter surface's measured: entry {advice}")
-    return list(problems.values())
 
 
 # ---------------------------------------------------------------------------
