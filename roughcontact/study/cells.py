@@ -151,7 +151,7 @@ def study_plan(config: dict) -> StudyPlan:
     geometries = {c.key: c for g in asked.values() for c in g.candidates(build.max_bytes)}
     planned = {g.candidates(build.max_bytes)[0].key for g in asked.values()}
     _raise("Influence models that do not fit body.max_memory_gb",
-           check_memory(geometries, build))
+           check_memory(asked, build))
     candidates = candidate_jobs(jobs, build)
     return StudyPlan(figures=figures, studies=studies,
                      aggregates=tuple(sorted(set(sources.values()))), cells=cells,

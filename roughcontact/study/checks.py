@@ -12,6 +12,7 @@ import json
 import logging
 import math
 
+from roughcontact.elasticity.influence import MESH_PRESETS
 from roughcontact.elasticity.operators import HYBRID_MESHES
 from roughcontact.study.config import BuildSettings, in_unit
 from roughcontact.study.records import (
@@ -461,19 +462,54 @@ def check_feasible(surfaces: dict) -> list[str]:
 # Influence builds beyond the memory limit
 
 
-def memory_message(geometry: Geometry, build: BuildSettings, peak_bytes: float) -> str:
-    """Why a geometry's influence build does not fit, and the config keys that change it."""
+def _fits(geometry: Geometry, build: BuildSettings) -> float | None:
+    """The estimated peak memory [GB] of a geometry's build if it fits ``build``'s
+    limit, else None."""
+    peak = geometry.influence_cost(build).peak_bytes
+    return peak / GB if peak <= build.max_bytes else None
+
+
+def memory_options(geometry: Geometry, build: BuildSettings, peak_bytes: float,
+                   configured: Geometry) -> list[str]:
+    """The changes, as config text, that bring a build within the memory limit, each
+    estimated here (an option is offered only if its build fits), and none the
+    configuration already has: ``body.operator: auto`` only to a geometry configured
+    dense (``configured``: as the configuration gives it, before ``auto`` resolves)."""
+    options = []
+    if configured.operator is InfluenceModel.DENSE:
+        auto = dataclasses.replace(configured, operator=InfluenceModel.AUTO)
+        fits = _fits(auto.candidates(build.max_bytes)[0], build)
+        if fits is not None:
+            options.append(f"body.operator: auto (matrix-free above 64 x 64 elements: about "
+                           f"{fits:.3g} GB here)")
+    if build.solver == "superlu":  # auto: PARDISO where it loads (on this machine)
+        fits = _fits(geometry, dataclasses.replace(build, solver="auto"))
+        if fits is not None:
+            options.append(f"body.solver: auto (MKL PARDISO: about {fits:.3g} GB here)")
+    presets = list(MESH_PRESETS)
+    coarser = [(mesh, _fits(dataclasses.replace(geometry, mesh=mesh), build))
+               for mesh in presets[:presets.index(geometry.mesh)]
+               if isinstance(geometry.mesh, str) and geometry.mesh in presets]
+    options += [f"mesh {mesh} (body.mesh, or the study's meshes: about {fits:.3g} GB)"
+                for mesh, fits in coarser if fits is not None]
+    needed = math.ceil(peak_bytes / GB * 100) / 100
+    options += [f"body.max_memory_gb: {needed:g} or more (now {in_unit(build.max_bytes, GB):g}, "
+                "on a machine with that memory)",
+                "a smaller grid (surfaces.grid, or for a measured surface surface.crop_mm, "
+                "surface.decimate or surface.resample_grid)"]
+    return options
+
+
+def memory_message(geometry: Geometry, build: BuildSettings, peak_bytes: float,
+                   configured: Geometry | None = None) -> str:
+    """Why a geometry's influence build does not fit, and the config keys that change it
+    (:func:`memory_options`; ``configured`` the geometry as configured, by default
+    ``geometry``)."""
     nx, ny = geometry.grid
     limit_gb = in_unit(build.max_bytes, GB)
     model = geometry.planned_model(build.max_bytes)
-    options = []
-    if model is InfluenceModel.DENSE:
-        auto = dataclasses.replace(geometry, operator=InfluenceModel.AUTO)
-        options.append(f"body.operator: auto (matrix-free above 64 x 64 elements: about "
-                       f"{auto.influence_cost(build).peak_bytes / GB:.3g} GB here)")
-    options += [f"raise body.max_memory_gb (now {limit_gb:g})",
-                "a coarser body.mesh or a smaller grid (surfaces.grid; for a measured surface "
-                "surface.crop_mm, surface.decimate or surface.resample_grid)"]
+    options = memory_options(geometry, build, peak_bytes,
+                             geometry if configured is None else configured)
     return (f"influence geometry {geometry.key}: {nx} x {ny} elements, operator "
             f"{model.value}, mesh {geometry.mesh}: estimated peak memory "
             f"{peak_bytes / GB:.3g} GB, more than body.max_memory_gb = {limit_gb:g} GB. "
@@ -482,10 +518,14 @@ def memory_message(geometry: Geometry, build: BuildSettings, peak_bytes: float) 
 
 def check_memory(geometries: dict[str, Geometry], build: BuildSettings) -> list[str]:
     """Messages for the influence builds whose estimated peak memory exceeds the
-    body's ``max_memory_gb`` (checked when the plan is made)."""
-    problems = []
-    for geometry in geometries.values():
-        peak = geometry.influence_cost(build).peak_bytes
-        if peak > build.max_bytes:
-            problems.append(memory_message(geometry, build, peak))
-    return problems
+    body's ``max_memory_gb`` (checked when the plan is made); ``geometries`` as
+    configured, each judged on its candidates (an ``operator: auto`` geometry on the
+    model it plans)."""
+    problems = {}
+    for configured in geometries.values():
+        for geometry in configured.candidates(build.max_bytes):
+            peak = geometry.influence_cost(build).peak_bytes
+            if peak > build.max_bytes:
+                problems.setdefault(geometry.key,
+                                    memory_message(geometry, build, peak, configured))
+    return list(problems.values())
