@@ -182,8 +182,12 @@ def _branch_defaults(node: dict) -> dict[str, str]:
         condition = branch.get("if", {})
         alternatives = condition.get("anyOf", [condition])
         required = [r for alt in alternatives for r in alt.get("required", [])]
-        for part, when in (("then", "with " + " or ".join(required)),
-                           ("else", "without " + " or ".join(required))):
+        consts = [f"{k}: {flow(v['const'])}" for k, v in condition.get("properties", {}).items()
+                  if isinstance(v, dict) and "const" in v]
+        cases = ((("then", " or ".join(consts)), ("else", "not " + " or ".join(consts)))
+                 if consts else (("then", "with " + " or ".join(required)),
+                                 ("else", "without " + " or ".join(required))))
+        for part, when in cases:
             for key, sub in branch.get(part, {}).get("properties", {}).items():
                 if isinstance(sub, dict) and "default" in sub:
                     out.setdefault(key, []).append(f"``{flow(sub['default'])}`` ({when})")

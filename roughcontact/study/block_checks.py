@@ -50,17 +50,18 @@ def _thickest(geometry: Geometry, build: BuildSettings) -> float | None:
 
 
 def _remedies(where: str, geometry: Geometry, build: BuildSettings,
-              measured: bool) -> list[str]:
+              measured: bool, body: str) -> list[str]:
     """The changes, as config text, that give ``geometry`` a usable block (each tested);
-    ``where`` the study's config path (``sweeps.<name>``)."""
+    ``where`` the study's config path (``sweeps.<name>``), ``body`` the path of the
+    block's keys (``body``, or a counter body's ``counterface.body``)."""
     passes = [] if not measured else [(f"{where}.thickness_mm: {PATCH_THICKNESS}",
                                        max(geometry.size), geometry.mesh)]
     thickest = _thickest(geometry, build)
-    thickness_key = f"{where}.thickness_mm" if measured else "body.thickness_mm"
+    thickness_key = f"{where}.thickness_mm" if measured else f"{body}.thickness_mm"
     if thickest is not None:
         passes.append((f"{thickness_key}: {in_unit(thickest, MM):g}", thickest, geometry.mesh))
     if geometry.mesh != "refined":
-        passes.append(("body.mesh: refined", geometry.thickness, "refined"))
+        passes.append((f"{body}.mesh: refined", geometry.thickness, "refined"))
     out = []
     for text, thickness, mesh in passes:
         changed = dataclasses.replace(geometry, thickness=thickness, mesh=mesh)
@@ -70,14 +71,16 @@ def _remedies(where: str, geometry: Geometry, build: BuildSettings,
 
 
 def block_message(where: str, geometry: Geometry, build: BuildSettings, problems: list[str],
-                  measured: bool) -> str:
+                  measured: bool, body: str = "body") -> str:
     """Why the block of the study at config path ``where`` is refused, and the changes
-    that work."""
+    that work; ``body`` the path of the block's keys (the ``body`` section's, or a
+    counter body's: ``sweeps.pad.counterface[1].body``, then named in its place)."""
     (lx, ly), (nx, ny) = (in_unit(v, MM) for v in geometry.size), geometry.grid
     what = "the measured patch" if measured else "the surfaces"
-    remedies = _remedies(where, geometry, build, measured)
+    remedies = _remedies(where, geometry, build, measured, body)
     if measured:
-        remedies.append("or measure (or crop, surface.crop_mm) a larger patch")
+        remedies.append(f"or measure (or crop, {where}.surface.crop_mm) a larger patch")
+    where = where if body == "body" else f"{body} (a counter block)"
     return (f"{where}: the block under {what} ({lx:.3g} x {ly:.3g} mm, {nx} x {ny} elements, "
             f"{in_unit(geometry.thickness, MM):g} mm thick, {geometry.mesh} mesh) cannot be "
             f"solved reliably: {'; '.join(problems)}. Change "

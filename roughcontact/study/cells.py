@@ -16,18 +16,18 @@ import dataclasses
 from collections.abc import Mapping
 
 from roughcontact.study.block_checks import check_blocks
+from roughcontact.study.body_checks import check_plausible
 from roughcontact.study.checks import (
     ConfigProblems,
-    check_counterfaces,
     check_feasible,
     check_memory,
-    check_plausible,
     check_spectra,
     check_studies,
     check_windows,
 )
 from roughcontact.study.config import BuildSettings, ContactSettings, as_pair, from_unit
 from roughcontact.study.contact_records import ContactJob, PairGeometry, StudyCell
+from roughcontact.study.counter_checks import check_counterfaces
 from roughcontact.study.records import (
     SEEDED_PER_SURFACE,
     Geometry,
@@ -132,7 +132,7 @@ def study_plan(config: dict) -> StudyPlan:
     if config["plausibility_check"]:
         _raise("Values that are almost surely a mistake (a unit slip, or noise in place of a "
                "height map; set plausibility_check: false if they are meant)",
-               check_plausible(cells))
+               check_plausible(config, cells))
     build = BuildSettings.from_section(config["body"])
     section = {name: "sweeps" if name in config["sweeps"] else "figures" for name in by_source}
     _raise("Blocks that do not fit their surfaces",
@@ -144,7 +144,7 @@ def study_plan(config: dict) -> StudyPlan:
     surfaces |= {job.surface.key: job.surface for job in jobs.values()}
     surfaces |= {key: cell for job in jobs.values() for key, cell in job.counter.cells().items()}
     _raise("Counter bodies that do not fit their surfaces",
-           check_counterfaces((cell for name in studies for cell in cells[name]), build))
+           check_counterfaces(config, cells, build))
     # by the figure or sweep whose b_mm they have (Fig 5 draws Fig 4's)
     windows = {name: [c.surface for c in study_cells] for name, study_cells in by_source.items()}
     windows |= {name: figure_cells[name] for name in SURFACE_FIGURES
@@ -158,7 +158,7 @@ def study_plan(config: dict) -> StudyPlan:
     geometries = {c.key: c for g in asked.values() for c in g.candidates(build.max_bytes)}
     planned = {g.candidates(build.max_bytes)[0].key for g in asked.values()}
     _raise("Influence models that do not fit body.max_memory_gb",
-           check_memory(geometries, build))
+           check_memory(asked, build))
     candidates = candidate_jobs(jobs, build)
     return StudyPlan(figures=figures, studies=studies,
                      aggregates=tuple(sorted(set(sources.values()))), cells=cells,

@@ -12,11 +12,9 @@ import json
 import logging
 import math
 
+from roughcontact.elasticity.influence import MESH_PRESETS
 from roughcontact.elasticity.operators import HYBRID_MESHES
-from roughcontact.study.block_checks import block_problems
-from roughcontact.study.config import BuildSettings, in_unit, in_units
-from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.measured_checks import check_measured_plausible
+from roughcontact.study.config import BuildSettings, in_unit
 from roughcontact.study.records import (
     GeneratedCell,
     Generator,
@@ -45,7 +43,7 @@ from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.spectra import filter_kernel
-from roughcontact.units import GB, MM, MPA, UM
+from roughcontact.units import GB, MM
 
 
 class ConfigProblems(ValueError):
@@ -94,8 +92,10 @@ def check_spectra(config: dict, names) -> list[str]:
 
 def check_studies(config: dict, names) -> list[str]:
     """Messages for contact figures or sweeps the schema cannot check: a ``from:`` that
-    names no study or a cycle, a pressure range, a measured surface, the hybrid
-    operator's mesh, the hardness settings."""
+    names no study or a cycle, a pressure range, a list axis that repeats a value, a
+    measured surface (a study's or a counter body's), the hybrid operator's mesh, the
+    hardness settings; where there are none, the warnings of
+    :func:`warn_single_surfaces`."""
     problems = check_figure_duplicates(config)
     for name in names:
         try:
@@ -113,7 +113,8 @@ def check_studies(config: dict, names) -> list[str]:
         problems += _check_operator(config, name, study)
         problems += _check_hardness(name, study)
         problems += _check_pressure_below_hardness(config, name, study)
-    warn_single_surfaces(config, names)
+    if not problems:  # a refusal comes alone
+        warn_single_surfaces(config, names)
     return list(dict.fromkeys(problems))  # a study drawn from another: its messages once
 
 
@@ -315,55 +316,6 @@ def _check_operator(config: dict, name: str, study: dict) -> list[str]:
             f"'refined' coarse model above)"]
 
 
-#: Accepted ranges of the plausibility check: sigma [um], E [MPa], and the largest
-#: nominal pressure over E of a sweep (beyond it linear elasticity has no meaning).
-PLAUSIBLE = {"sigma_um": (1e-3, 1e3), "E_MPa": (1e-3, 1e7), "pressure_over_E": 0.1}
-#: Units a value is likely typed in by mistake: name, factor to the key's unit.
-_SLIPS = {"sigma_um": (("m", 1e6), ("mm", 1e3), ("nm", 1e-3)),
-          "E_MPa": (("Pa", 1e-6), ("kPa", 1e-3), ("GPa", 1e3))}
-
-
-def _slip(key: str, value: float) -> str:
-    """A sentence naming the unit ``value`` was likely typed in, if one puts it in range."""
-    low, high = PLAUSIBLE[key]
-    for unit, factor in _SLIPS[key]:
-        if low <= value * factor <= high:
-            return (f"; typed in {unit}? then write {value * factor:.6g} "
-                    f"({key.split('_')[-1]})")
-    return ""
-
-
-def check_plausible(cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
-    """Messages for study values that are almost surely a unit slip (:data:`PLAUSIBLE`),
-    in the units they were written in, and for measured maps that are noise or whose
-    measured sigma is out of range
-    (:func:`~roughcontact.study.measured_checks.check_measured_plausible`); ``cells``
-    by study name."""
-    problems = set()
-    for name, study_cells in cells.items():
-        measured, answered = check_measured_plausible(name, study_cells,
-                                                      PLAUSIBLE["sigma_um"])
-        problems.update(measured)
-        for cell in study_cells:
-            values = {"sigma_um": in_unit(cell.sigma, UM), "E_MPa": in_unit(cell.E, MPA)}
-            if cell.sigma in answered:  # the measured sigma: not typed, judged above
-                del values["sigma_um"]
-            for key, value in values.items():
-                low, high = PLAUSIBLE[key]
-                if not low <= value <= high:
-                    problems.add(f"{name}: {key} = {value:g} lies outside {low:g}-{high:g}"
-                                 f"{_slip(key, value)}")
-            p_max = in_unit(cell.pressure_range[1], MPA)
-            ratio = p_max / values["E_MPa"]
-            if ratio > PLAUSIBLE["pressure_over_E"]:
-                problems.add(
-                    f"{name}: pressure_MPa up to {p_max:g} on E_MPa = {values['E_MPa']:g} is "
-                    f"P / E = {ratio:.3g}, beyond {PLAUSIBLE['pressure_over_E']:g}, where the "
-                    "linear elastic model has no meaning; check the units of pressure_MPa and "
-                    "E_MPa")
-    return sorted(problems)
-
-
 # ---------------------------------------------------------------------------
 # Generated surfaces too small for their correlation length
 
@@ -389,15 +341,22 @@ def _pair_text(values) -> str:
     return _numbers(list(values), None if values[0] == values[-1] else list(values))
 
 
-def window_message(config: dict, name: str, cell: GeneratedCell) -> str | None:
+def window_message(config: dict, name: str, cell: GeneratedCell, b_key: str | None = None,
+                   b_written=None) -> str | None:
     """Why a generated cell of the figure or sweep ``name`` has a correlation length
-    longer than :data:`MAX_CORRELATION_FRACTION` of its side, with the fixes, or None."""
+    longer than :data:`MAX_CORRELATION_FRACTION` of its side, with the fixes, or None.
+
+    ``b_key`` names the key of the correlation length (``b_written`` its value as
+    written) where it is not the study's ``b_mm``: a counter surface's
+    (``sweeps.pad.counterface[1].surface.b_mm``), on the study's plan size."""
     b, size = (tuple(in_unit(v, MM) for v in pair) for pair in (cell.corr_length, cell.size))
     limit = tuple(MAX_CORRELATION_FRACTION * side for side in size)
     if all(bi <= li for bi, li in zip(b, limit, strict=True)):
         return None
     entry = {**config["figures"], **config["sweeps"]}[name]
     where = study_path(config, name)
+    b_key = f"{where}.b_mm" if b_key is None else b_key
+    b_written = entry["b_mm"] if b_written is None else b_written
     own_size = entry.get("size_mm") is not None  # a study's own size, else the surfaces'
     size_key = f"{where}.size_mm" if own_size else "surfaces.size_mm"
     spacing = [s / n for s, n in zip(size, cell.grid, strict=True)]
@@ -413,13 +372,14 @@ def window_message(config: dict, name: str, cell: GeneratedCell) -> str | None:
         larger = (f"{size_key}: {_pair_text(sides)} with surfaces.grid: {_pair_text(grid)} "
                   "(the same spacing)")
     shortest = [min(bi, li) for bi, li in zip(b, limit, strict=True)]
-    return (f"{where}: b_mm = {_pair_text(b)} is longer than half the surface, {size_key} = "
+    what = where if b_key == f"{where}.b_mm" else b_key.rsplit(".", 1)[0]
+    return (f"{what}: b_mm = {_pair_text(b)} is longer than half the surface, {size_key} = "
             f"{_pair_text(size)} (L / 2 = {_pair_text(limit)} mm): fewer than two "
             "correlation lengths fit in it: the lag at which the autocorrelation falls to "
             "10 % (Eq 1) lies beyond the L / 2 a window shows, and a window's sigma falls "
             "short of the target (0.88 of it at b = L / 2, 0.57 at b = 2.2 L). Fix: "
-            f"{where}.b_mm: {_pair_text(shortest)} or shorter"
-            f"{_in_place(entry['b_mm'], b)}; or a larger surface, {larger}")
+            f"{b_key}: {_pair_text(shortest)} or shorter"
+            f"{_in_place(b_written, b)}; or a larger surface, {larger}")
 
 
 def _in_place(configured, pair) -> str:
@@ -445,59 +405,6 @@ def check_windows(config: dict, cells) -> list[str]:
                 message = window_message(config, name, cell)
                 problems += [message] if message else []
     return problems
-
-
-def _counter_body_problems(geometry: Geometry, build: BuildSettings) -> list[str]:
-    """Why a counter body cannot be built (none: it can)."""
-    if geometry.operator is InfluenceModel.HYBRID and geometry.mesh not in HYBRID_MESHES:
-        return [f"operator hybrid needs an accurate coarse model: mesh one of "
-                f"{list(HYBRID_MESHES)}, not {geometry.mesh!r} (or operator: dense)"]
-    found = block_problems(geometry, build)
-    if not found:
-        return []
-    return [f"{'; '.join(found)}; give it mesh: refined, or a thickness_mm nearer its "
-            f"plan size ({in_unit(max(geometry.size), MM):g} mm)"]
-
-
-def check_counterfaces(cells, build: BuildSettings) -> list[str]:
-    """Messages for the study cells whose counter body cannot be used: a counter block
-    that cannot be solved reliably (:func:`~roughcontact.study.block_checks.block_problems`)
-    or a hybrid one on an inaccurate mesh, and a counter surface not sampled like the
-    first (:mod:`roughcontact.contact.counterface` adds the two height maps element by
-    element): a measured one on another grid or plan size, with the import keys that
-    fix it. Once per counter body or pair."""
-    problems = {}
-    for cell in cells:
-        for geometry in cell.counterface.body.geometries().values():
-            for text in _counter_body_problems(geometry, build):
-                (lx, ly), (nx, ny) = in_units(geometry.size), geometry.grid
-                problems[geometry.key] = (
-                    f"counterface.body (a {in_unit(geometry.thickness, MM):g} mm "
-                    f"{geometry.mesh} block under {lx:g} x {ly:g} mm, {nx} x {ny} "
-                    f"elements) cannot be built: {text}")
-        first = cell.surface
-        for other in cell.counterface.surface.cells().values():
-            if other.grid != first.grid or not all(
-                    math.isclose(a, b, rel_tol=1e-9)
-                    for a, b in zip(other.size, first.size, strict=True)):
-                problems[(first.key, other.key)] = _counter_grid_message(first, other)
-    return list(problems.values())
-
-
-def _counter_grid_message(first, other) -> str:
-    """A counter surface not sampled like the first, with the import keys that fix it."""
-    (nx, ny), (lx, ly) = first.grid, in_units(first.size)
-    (ox, oy), (olx, oly) = other.grid, in_units(other.size)
-    file = getattr(getattr(other, "source", None), "file", other.key)
-    advice = f"resample_grid: [{nx}, {ny}]"
-    if not all(math.isclose(a, b, rel_tol=1e-9) for a, b in ((olx, lx), (oly, ly))):
-        advice = (f"crop_mm: [0, 0, {lx:g}, {ly:g}] (a window of the first surface's "
-                  f"plan size) and {advice}")
-    return (
-        f"counterface.surface {file}: {ox} x {oy} points over {olx:g} mm x {oly:g} mm, "
-        f"but the surface it meets ({first.key}) has {nx} x {ny} over {lx:g} mm x "
-        f"{ly:g} mm: the two height maps add element by element, so they need the same "
-        f"grid and plan size; add to the counter surface's measured: entry {advice}")
 
 
 # ---------------------------------------------------------------------------
@@ -555,19 +462,54 @@ def check_feasible(surfaces: dict) -> list[str]:
 # Influence builds beyond the memory limit
 
 
-def memory_message(geometry: Geometry, build: BuildSettings, peak_bytes: float) -> str:
-    """Why a geometry's influence build does not fit, and the config keys that change it."""
+def _fits(geometry: Geometry, build: BuildSettings) -> float | None:
+    """The estimated peak memory [GB] of a geometry's build if it fits ``build``'s
+    limit, else None."""
+    peak = geometry.influence_cost(build).peak_bytes
+    return peak / GB if peak <= build.max_bytes else None
+
+
+def memory_options(geometry: Geometry, build: BuildSettings, peak_bytes: float,
+                   configured: Geometry) -> list[str]:
+    """The changes, as config text, that bring a build within the memory limit, each
+    estimated here (an option is offered only if its build fits), and none the
+    configuration already has: ``body.operator: auto`` only to a geometry configured
+    dense (``configured``: as the configuration gives it, before ``auto`` resolves)."""
+    options = []
+    if configured.operator is InfluenceModel.DENSE:
+        auto = dataclasses.replace(configured, operator=InfluenceModel.AUTO)
+        fits = _fits(auto.candidates(build.max_bytes)[0], build)
+        if fits is not None:
+            options.append(f"body.operator: auto (matrix-free above 64 x 64 elements: about "
+                           f"{fits:.3g} GB here)")
+    if build.solver == "superlu":  # auto: PARDISO where it loads (on this machine)
+        fits = _fits(geometry, dataclasses.replace(build, solver="auto"))
+        if fits is not None:
+            options.append(f"body.solver: auto (MKL PARDISO: about {fits:.3g} GB here)")
+    presets = list(MESH_PRESETS)
+    coarser = [(mesh, _fits(dataclasses.replace(geometry, mesh=mesh), build))
+               for mesh in presets[:presets.index(geometry.mesh)]
+               if isinstance(geometry.mesh, str) and geometry.mesh in presets]
+    options += [f"mesh {mesh} (body.mesh, or the study's meshes: about {fits:.3g} GB)"
+                for mesh, fits in coarser if fits is not None]
+    needed = math.ceil(peak_bytes / GB * 100) / 100
+    options += [f"body.max_memory_gb: {needed:g} or more (now {in_unit(build.max_bytes, GB):g}, "
+                "on a machine with that memory)",
+                "a smaller grid (surfaces.grid, or for a measured surface surface.crop_mm, "
+                "surface.decimate or surface.resample_grid)"]
+    return options
+
+
+def memory_message(geometry: Geometry, build: BuildSettings, peak_bytes: float,
+                   configured: Geometry | None = None) -> str:
+    """Why a geometry's influence build does not fit, and the config keys that change it
+    (:func:`memory_options`; ``configured`` the geometry as configured, by default
+    ``geometry``)."""
     nx, ny = geometry.grid
     limit_gb = in_unit(build.max_bytes, GB)
     model = geometry.planned_model(build.max_bytes)
-    options = []
-    if model is InfluenceModel.DENSE:
-        auto = dataclasses.replace(geometry, operator=InfluenceModel.AUTO)
-        options.append(f"body.operator: auto (matrix-free above 64 x 64 elements: about "
-                       f"{auto.influence_cost(build).peak_bytes / GB:.3g} GB here)")
-    options += [f"raise body.max_memory_gb (now {limit_gb:g})",
-                "a coarser body.mesh or a smaller grid (surfaces.grid; for a measured surface "
-                "surface.crop_mm, surface.decimate or surface.resample_grid)"]
+    options = memory_options(geometry, build, peak_bytes,
+                             geometry if configured is None else configured)
     return (f"influence geometry {geometry.key}: {nx} x {ny} elements, operator "
             f"{model.value}, mesh {geometry.mesh}: estimated peak memory "
             f"{peak_bytes / GB:.3g} GB, more than body.max_memory_gb = {limit_gb:g} GB. "
@@ -576,10 +518,14 @@ def memory_message(geometry: Geometry, build: BuildSettings, peak_bytes: float) 
 
 def check_memory(geometries: dict[str, Geometry], build: BuildSettings) -> list[str]:
     """Messages for the influence builds whose estimated peak memory exceeds the
-    body's ``max_memory_gb`` (checked when the plan is made)."""
-    problems = []
-    for geometry in geometries.values():
-        peak = geometry.influence_cost(build).peak_bytes
-        if peak > build.max_bytes:
-            problems.append(memory_message(geometry, build, peak))
-    return problems
+    body's ``max_memory_gb`` (checked when the plan is made); ``geometries`` as
+    configured, each judged on its candidates (an ``operator: auto`` geometry on the
+    model it plans)."""
+    problems = {}
+    for configured in geometries.values():
+        for geometry in configured.candidates(build.max_bytes):
+            peak = geometry.influence_cost(build).peak_bytes
+            if peak > build.max_bytes:
+                problems.setdefault(geometry.key,
+                                    memory_message(geometry, build, peak, configured))
+    return list(problems.values())

@@ -48,6 +48,7 @@ class _Smooth:
     """A smooth counter surface (the null): no heights, no file."""
 
     sigma = 0.0
+    cell = None
 
     def job_form(self, sigma: float) -> _Smooth:
         return self
@@ -141,6 +142,7 @@ class _Rigid:
     """A rigid counter body (the null): no compliance, no file."""
 
     E = None
+    geometry = None
 
     def job_form(self, E: float) -> _Rigid:
         return self

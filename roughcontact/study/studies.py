@@ -174,12 +174,14 @@ class CounterfaceEntry:
     """One counter body of a study as configured, every default resolved
     (:func:`counter_defaults`): its ``surface`` and ``body`` entries and the
     configuration keys they are written under (``counterface.surface``, or a study's
-    ``sweeps.pad.counterface[1].body``), for the messages that name them."""
+    ``sweeps.pad.counterface[1].body``), for the messages that name them; ``inherited``
+    the keys of the body that are the ``body`` section's (:data:`BODY_INHERITED`)."""
 
     surface: str | dict
     body: str | dict
     surface_key: str
     body_key: str
+    inherited: tuple[str, ...] = ()
 
     @property
     def is_null(self) -> bool:
@@ -226,8 +228,11 @@ def counterface_entries(config: dict, name: str) -> list[CounterfaceEntry]:
         (surface, surface_key), (body, body_key) = (
             (entry[part], f"{key}.{part}") if part in entry else
             (section[part], f"counterface.{part}") for part in ("surface", "body"))
+        inherited = () if body == "rigid" else tuple(
+            key for key in BODY_INHERITED[body["kind"]] if key not in body)
         out.append(CounterfaceEntry(*counter_defaults(config, surface, body),
-                                    surface_key=surface_key, body_key=body_key))
+                                    surface_key=surface_key, body_key=body_key,
+                                    inherited=inherited))
     return out
 
 

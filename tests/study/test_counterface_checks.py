@@ -10,9 +10,11 @@ and, where it gives advice, the advice is followed here and the plan then passes
 
 import copy
 import logging
+import re
 
 import numpy as np
 import pytest
+import yaml
 from scipy import ndimage
 
 from roughcontact.study.cells import study_plan
@@ -155,3 +157,121 @@ def test_a_single_surface_study_is_warned_once_at_plan_time(caplog):
     with caplog.at_level(logging.WARNING, logger="roughcontact"):
         study_plan(validated(single))
     assert not [r for r in caplog.records if "one surface per cell" in r.getMessage()]
+
+
+def follow(cfg: dict, advice: str) -> dict:
+    """``cfg`` (as written) with ``key: value`` of an advice set (``a.b[1].c: 2``)."""
+    key, value = advice.split(": ", 1)
+    parts = [int(p) if p.isdigit() else p for p in re.split(r"\.|\[|\]\.?", key) if p != ""]
+    out = copy.deepcopy(cfg)
+    node = out
+    for part in parts[:-1]:
+        node = node.setdefault(part, {}) if isinstance(part, str) else node[part]
+    node[parts[-1]] = yaml.safe_load(value)
+    return out
+
+
+def advices(problem: str) -> list[str]:
+    """The ``then write key: value`` advices of a plausibility message."""
+    return re.findall(r"then write (\S+: [^;]+)", problem)
+
+
+STEEL = {"kind": "block", "E_MPa": 210000.0, "nu": 0.3}
+
+
+@pytest.mark.parametrize(("written", "key", "message", "advice"), [
+    # GPa typed into the counter plate's MPa key: the first body's P / E check
+    ({"pressure_MPa": [1.0, 30.0], "counterface": {"body": {**STEEL, "E_MPa": 210}}},
+     "sweeps.pad.counterface.body.E_MPa",
+     "sweeps.pad.pressure_MPa up to 30 on sweeps.pad.counterface.body.E_MPa = 210 is P / E "
+     "= 0.143, beyond 0.1, where the linear elastic model has no meaning",
+     "sweeps.pad.counterface.body.E_MPa: 210000"),
+    ({"counterface": [{"body": "rigid"}, {"body": {**STEEL, "E_MPa": 2.1e11}}]},
+     "sweeps.pad.counterface[1].body.E_MPa",
+     "sweeps.pad.counterface[1].body.E_MPa = 2.1e+11 lies outside 0.001-1e+07 MPa",
+     "sweeps.pad.counterface[1].body.E_MPa: 210000"),
+    ({"counterface": {"surface": {"sigma_um": 0.0008}, "body": STEEL}},
+     "sweeps.pad.counterface.surface.sigma_um",
+     "sweeps.pad.counterface.surface.sigma_um = 0.0008 lies outside 0.001-1000 um",
+     "sweeps.pad.counterface.surface.sigma_um: 0.8"),
+    # metres typed into the counter block's mm key: thinner than one element
+    ({"counterface": {"body": {**STEEL, "thickness_mm": 0.01, "mesh": "refined"}}},
+     "sweeps.pad.counterface.body.thickness_mm",
+     "sweeps.pad.counterface.body.thickness_mm = 0.01 is thinner than one contact element "
+     "(0.15 mm)", "sweeps.pad.counterface.body.thickness_mm: 10"),
+    # the same slips on the first body: the same code, the first body's keys
+    ({"E_MPa": 2.1e11}, "sweeps.pad.E_MPa",
+     "sweeps.pad.E_MPa = 2.1e+11 lies outside 0.001-1e+07 MPa", "sweeps.pad.E_MPa: 210000"),
+    ({"E_MPa": [511.0, 0.5], "pressure_MPa": [0.1, 3.0]}, "sweeps.pad.E_MPa[1]",
+     "sweeps.pad.pressure_MPa up to 3 on sweeps.pad.E_MPa[1] = 0.5 is P / E = 6",
+     "sweeps.pad.E_MPa[1]: 500"),
+])
+def test_a_unit_slip_on_either_body_is_refused_by_the_same_check_and_its_advice_plans(
+        written, key, message, advice):
+    cfg = raw(**written)
+    (problem,) = refusal(validated(cfg))
+    assert problem.startswith(message)
+    assert advice in advices(problem)
+    study_plan(validated(follow(cfg, advice)))  # the advice, followed
+    # and the escape for the rare real case
+    study_plan(validated({**cfg, "plausibility_check": False}))
+
+
+def test_a_thin_inherited_counter_block_names_the_body_key_once():
+    cfg = raw(counterface={"body": {**STEEL, "mesh": "refined"}})
+    cfg["body"] = {"thickness_mm": 0.01, "mesh": "refined"}
+    (problem,) = refusal(validated(cfg))  # the first and the counter block: one message
+    assert problem.startswith("body.thickness_mm = 0.01 is thinner than one contact element")
+    study_plan(validated(follow(cfg, advices(problem)[0])))
+
+
+def test_a_generated_counter_surface_longer_in_b_than_half_the_surface_is_refused():
+    cfg = raw(counterface={"surface": {"sigma_um": 1.0, "b_mm": 2.0}, "body": STEEL})
+    (problem,) = refusal(validated(cfg))
+    assert problem.startswith("sweeps.pad.counterface.surface: b_mm = 2 is longer than half "
+                              "the surface, surfaces.size_mm = 2.4 (L / 2 = 1.2 mm)")
+    advice = problem.split("Fix: ")[1].split(" or shorter")[0]
+    assert advice == "sweeps.pad.counterface.surface.b_mm: 1.2"
+    study_plan(validated(follow(cfg, advice)))
+    # b by default the first surface's: judged with it, once, under the study's key
+    cfg = raw(b_mm=2.0, counterface={"surface": {"sigma_um": 1.0}, "body": STEEL})
+    (problem,) = refusal(validated(cfg))
+    assert problem.startswith("sweeps.pad: b_mm = 2 is longer than half the surface")
+
+
+def test_a_counter_map_smaller_than_the_surface_is_told_an_area_both_have(tmp_path):
+    """The issue's 6.4 mm map under 9 mm surfaces, small: a 1.6 mm map (16 points at
+    0.1 mm) under 2.4 mm surfaces (16 x 16, 0.15 mm): no window of the map has 2.4 mm,
+    so cropping it cannot help; a study area of 1.6 mm on the surfaces' spacing can."""
+    entry = smooth_map(tmp_path / "disc.npy", n=16, spacing=0.1)
+    cfg = raw(counterface={"surface": {"measured": entry}, "body": STEEL})
+    (problem,) = refusal(validated(cfg))
+    key = "sweeps.pad.counterface.surface.measured"
+    assert problem.startswith(f"{key}: {entry['file']}: 16 x 16 points over 1.6 mm x 1.6 mm, "
+                              "but the surface it meets")
+    assert "crop_mm" not in problem
+    size = re.search(r"(sweeps\.pad\.size_mm: [\d.]+) ", problem).group(1)
+    options = problem.split(f"set in {key}: ")[1].split(" and ")
+    assert (size, options) == ("sweeps.pad.size_mm: 1.6", ["resample_grid: [11, 11]"])
+    followed = follow(follow(cfg, size), f"{key}.{options[0]}")
+    (cell,) = study_plan(validated(followed)).cells["pad"]
+    assert cell.surface.grid == cell.counterface.surface.grid == (11, 11)
+
+
+def test_a_counter_map_whose_spacing_does_not_divide_the_surface_gets_a_window_it_has(
+        tmp_path):
+    """A 3.9 mm map (30 points at 0.13 mm) under 2.4 mm surfaces: a crop to 2.4 mm would
+    take 18 points, 2.34 mm, and fail again; the advice is a 2.34 mm area and window."""
+    entry = smooth_map(tmp_path / "disc.npy", n=30, spacing=0.13)
+    cfg = raw(counterface={"surface": {"measured": entry}, "body": STEEL})
+    (problem,) = refusal(validated(cfg))
+    key = "sweeps.pad.counterface.surface.measured"
+    size = re.search(r"(sweeps\.pad\.size_mm: [\d.]+) ", problem).group(1)
+    options = problem.split(f"set in {key}: ")[1].split(" and ")
+    assert size == "sweeps.pad.size_mm: 2.34"
+    assert options == ["crop_mm: [0, 0, 2.34, 2.34]", "resample_grid: [16, 16]"]
+    followed = follow(cfg, size)
+    for option in options:
+        followed = follow(followed, f"{key}.{option}")
+    (cell,) = study_plan(validated(followed)).cells["pad"]
+    assert cell.counterface.surface.grid == cell.surface.grid == (16, 16)

@@ -146,12 +146,19 @@ def test_counter_entries_that_mix_kinds_are_refused_in_plain_words(measured):
 
 def test_a_counter_body_that_cannot_be_built_is_refused_with_its_fix():
     hybrid = {"kind": "block", "E_MPa": 511.0, "operator": "hybrid", "mesh": "paper"}
-    with pytest.raises(ConfigProblems, match="counterface.body .*mesh one of"):
+    with pytest.raises(ConfigProblems, match=r"sweeps.pair.counterface.body: operator hybrid "
+                                             r".*sweeps.pair.counterface.body.mesh one of"):
         study_plan(config(counterface={"body": hybrid}))
     study_plan(config(counterface={"body": {**hybrid, "mesh": "refined"}}))  # followed
     slender = {"kind": "block", "E_MPa": 511.0, "thickness_mm": 200.0}
-    with pytest.raises(ConfigProblems, match="counterface.body .*cannot be built"):
+    with pytest.raises(ConfigProblems) as raised:
         study_plan(config(counterface={"body": slender}))
+    (problem,) = raised.value.problems
+    assert problem.startswith("sweeps.pair.counterface.body (a counter block): the block "
+                              "under the surfaces (2.4 x 2.4 mm, 16 x 16 elements, 200 mm "
+                              "thick, paper mesh) cannot be solved reliably")
+    fix = problem.split("Change sweeps.pair.counterface.body.thickness_mm: ")[1].split(" ")[0]
+    study_plan(config(counterface={"body": {**slender, "thickness_mm": float(fix)}}))
 
 
 def _unit(n):

@@ -167,7 +167,8 @@ def test_a_value_in_the_wrong_unit_stops_before_any_job(copy):
     config["sweeps"]["small"]["sigma_um"] = 2.45e-5  # metres typed into a micrometre key
     proc = run(copy, config=config)
     assert proc.returncode != 0
-    assert "sigma_um = 2.45e-05" in proc.stderr and "typed in m? then write 24.5" in proc.stderr
+    assert "sweeps.small.sigma_um = 2.45e-05" in proc.stderr
+    assert "typed in m? then write sweeps.small.sigma_um: 24.5" in proc.stderr
     assert "plausibility_check: false" in proc.stderr
     assert state(copy / "results" / "contact") == before
 

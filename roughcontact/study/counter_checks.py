@@ -1,0 +1,149 @@
+"""Plan-time checks of the counter bodies of a study's cells (Eq 17-18).
+
+A counter body (:func:`~roughcontact.study.body_checks.counter_bodies`) meets the
+first body's checks, by their code: its block the geometry limits of
+:mod:`~roughcontact.study.block_checks` (with the keys of the counter entry in the
+message), its generated surface the correlation window of
+:func:`~roughcontact.study.checks.window_message`. Besides, its surface must be
+sampled like the first (:mod:`roughcontact.contact.counterface` adds the two height
+maps element by element): a measured counter map on another grid or plan size is
+refused with the import options that bring it onto the first surface's, each tried
+here by importing the map so (an option is offered only if the map it makes fits).
+"""
+
+from __future__ import annotations
+
+import math
+
+from roughcontact.elasticity.operators import HYBRID_MESHES
+from roughcontact.study.block_checks import block_message, block_problems
+from roughcontact.study.body_checks import Body, counter_bodies
+from roughcontact.study.checks import window_message
+from roughcontact.study.config import BuildSettings, as_pair, in_unit, in_units
+from roughcontact.study.contact_records import StudyCell
+from roughcontact.study.records import GeneratedCell, InfluenceModel, MeasuredCell, SurfaceCell
+from roughcontact.study.sources import MeasurementImport, load_measurement
+from roughcontact.study.studies import source_name, study_path
+from roughcontact.units import MM
+
+
+def _block_problems(body: Body, build: BuildSettings) -> list[str]:
+    """Why a counter block cannot be built (none: it can), naming its entry's keys."""
+    geometry, key = body.geometry, body.entry.body_key
+    if geometry.operator is InfluenceModel.HYBRID and geometry.mesh not in HYBRID_MESHES:
+        return [f"{key}: operator hybrid needs an accurate coarse model: {key}.mesh one of "
+                f"{list(HYBRID_MESHES)}, not {geometry.mesh!r} (or {key}.operator: dense)"]
+    found = block_problems(geometry, build)
+    return [block_message(body.where, geometry, build, found, False, body=key)] if found else []
+
+
+def _window_problems(config: dict, name: str, body: Body) -> list[str]:
+    """A generated counter surface of its own ``b_mm`` longer than half the surface (the
+    first surface's check: :func:`~roughcontact.study.checks.window_message`)."""
+    surface, b = body.surface, body.entry.surface
+    if not isinstance(surface, GeneratedCell) or b == "smooth" or b["b_mm"] is None:
+        return []  # b the first surface's: judged with it
+    message = window_message(config, source_name(config, name), surface,
+                             f"{body.entry.surface_key}.b_mm", b["b_mm"])
+    return [] if message is None else [message]
+
+
+def _same_plan(cell: SurfaceCell, grid, size) -> bool:
+    return cell.grid == tuple(grid) and all(
+        math.isclose(a, b, rel_tol=1e-9) for a, b in zip(cell.size, size, strict=True))
+
+
+def _import_fix(entry: dict, grid, size) -> str | None:
+    """The import options, as config text, that bring the measured map of ``entry`` onto
+    ``grid`` and plan ``size`` [m]: a window of that size from its first point (a whole
+    number of its spacings) resampled to the grid; None where no window has it.
+    Tested: the map imported so has that grid and size."""
+    whole = load_measurement(MeasurementImport.from_entry(
+        {**entry, "crop_mm": None, "decimate": None, "resample_grid": None}))
+    points = [length / spacing for length, spacing in zip(size, whole.spacing, strict=True)]
+    if any(abs(p - round(p)) > 1e-6 * p or round(p) > n
+           for p, n in zip(points, whole.grid, strict=True)):
+        return None
+    window = tuple(round(p) for p in points)
+    options = {"crop_mm": None if window == whole.grid else [0, 0, *in_units(size)],
+               "resample_grid": None if window == tuple(grid) else list(grid),
+               "decimate": None}
+    trial = MeasuredCell.from_source(MeasurementImport.from_entry({**entry, **options}))
+    if not _same_plan(trial, grid, size):
+        return None
+    words = [f"{key}: {value}".replace("'", "") for key, value in options.items()
+             if value is not None]
+    words += [f"remove {key}" for key, value in options.items()
+              if value is None and entry.get(key) is not None]  # optional keys
+    return " and ".join(words) if words else None
+
+
+def _smaller_area(config: dict, name: str, entry: dict, first: SurfaceCell):
+    """The study's ``size_mm`` (a square on the surfaces' spacing) and the counter map's
+    import options that make both fit, where the map cannot cover the first surface:
+    the largest side the map's window gives in whole spacings; None for a measured
+    first surface (its size is its file's) or where none fits."""
+    if not isinstance(first, GeneratedCell):
+        return None
+    surfaces = config["surfaces"]
+    spacing = [s / n * MM for s, n in zip(as_pair(surfaces["size_mm"]),
+                                          as_pair(surfaces["grid"]), strict=True)]
+    whole = load_measurement(MeasurementImport.from_entry(
+        {**entry, "crop_mm": None, "decimate": None, "resample_grid": None}))
+    step = max(whole.spacing)  # no larger than the map, nor than the study's area
+    side = min(*(n * d for n, d in zip(whole.grid, whole.spacing, strict=True)), *first.size)
+    side = math.floor(side / step * (1 + 1e-9)) * step
+    side = in_unit(side, MM) * MM
+    grid = tuple(max(4, round(side / h)) for h in spacing)
+    fix = _import_fix(entry, grid, (side, side))
+    return None if fix is None else (in_unit(side, MM), grid, fix)
+
+
+def _grid_problems(config: dict, name: str, cell: StudyCell, body: Body) -> list[str]:
+    """A measured counter map on another grid or plan size than the surface it meets."""
+    first, other = cell.surface, body.surface
+    if not isinstance(other, MeasuredCell) or _same_plan(other, first.grid, first.size):
+        return []
+    key = f"{body.entry.surface_key}.measured"
+    entry = body.entry.surface["measured"]
+    (nx, ny), (lx, ly) = first.grid, in_units(first.size)
+    (ox, oy), (olx, oly) = other.grid, in_units(other.size)
+    text = (f"{key}: {other.source.file}: {ox} x {oy} points over {olx:g} mm x {oly:g} mm, "
+            f"but the surface it meets ({first.key}) has {nx} x {ny} over {lx:g} mm x "
+            f"{ly:g} mm: the two height maps add element by element, so they need the same "
+            f"grid and plan size")
+    fix = _import_fix(entry, first.grid, first.size)
+    if fix is not None:
+        return [f"{text}; set in {key}: {fix}"]
+    smaller = _smaller_area(config, name, entry, first)
+    if smaller is None:
+        return [f"{text}; no window of the counter map has the first surface's plan size: "
+                f"crop both maps to one window of the same size, on the same grid"]
+    side, (gx, gy), fix = smaller
+    where = study_path(config, source_name(config, name))
+    return [f"{text}; no window of the counter map has the first surface's plan size (the "
+            f"map is {olx:g} x {oly:g} mm): make the study's area one it has, "
+            f"{where}.size_mm: {side:g} ({gx} x {gy} elements at the surfaces' spacing), "
+            f"and set in {key}: {fix}"]
+
+
+def check_counterfaces(config: dict, cells: dict[str, tuple[StudyCell, ...]],
+                       build: BuildSettings) -> list[str]:
+    """Messages for the study cells whose counter body cannot be used: a counter block
+    that cannot be solved reliably or a hybrid one on an inaccurate mesh, a generated
+    counter surface longer in b than half the surface, and a measured counter map on
+    another grid or plan size than the first, with the keys that fix it. Each once;
+    ``cells`` by study name."""
+    problems = {}
+    for name, study_cells in cells.items():
+        for cell in study_cells:
+            for body in counter_bodies(config, name, cell):
+                found = _window_problems(config, name, body)
+                found += _grid_problems(config, name, cell, body)
+                if body.geometry is not None:
+                    found += _block_problems(body, build)
+                problems.update(dict.fromkeys(found))
+    return list(problems)
+
+
+__all__ = ["check_counterfaces"]
