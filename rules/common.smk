@@ -8,8 +8,8 @@ import re
 
 from snakemake.exceptions import IncompleteCheckpointException, WorkflowError
 
-from roughcontact.study import grid_convergence, resources
 from roughcontact.reports.captions import figure_caption
+from roughcontact.study import grid_convergence, resources
 from roughcontact.study.cells import (
     convergence_presets,
     drawn_with,

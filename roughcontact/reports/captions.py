@@ -208,8 +208,7 @@ def _fig13(config, plan, name):
 
 def _fig14(config, plan, name):
     rows = _columns(plan.cells[name])
-    areas = join(f"{r['size_mm']:g} mm x {r['size_mm']:g} mm"
-                 for r in {r["size_mm"]: r for r in rows}.values())
+    areas = join(f"{size:g} mm x {size:g} mm" for size in dict.fromkeys(r["size_mm"] for r in rows))
     return (f"Fig 14: normalized stiffness for the nominal areas {areas} on the same contact "
             f"elements, surfaces of (Sk, Ku) = {_pairs(rows)}, sigma "
             f"{numbers((r['sigma_um'] for r in rows), 'um')}, b "
@@ -261,10 +260,11 @@ def _two_bodies(config, plan, name):
     parts = []
     for study in config["figures"][name]["studies"]:
         rows = _columns(plan.cells[study])
-        first = rows[0]
         body = (f"first body: sigma {numbers((r['sigma_um'] for r in rows), 'um')}, E "
-                f"{first['E_MPa']:g} MPa, nu {first['nu']:g}, a {first['thickness_mm']:g} mm "
-                f"block on {mesh_name(first['mesh'])}")
+                f"{numbers((r['E_MPa'] for r in rows), 'MPa')}, nu "
+                f"{numbers(r['nu'] for r in rows)}, a "
+                f"{numbers((r['thickness_mm'] for r in rows), 'mm')} block on "
+                f"{join(mesh_name(m) for m in _meshes(rows))}")
         counters = join(f"the {label}" for label in dict.fromkeys(map(counter_label, rows)))
         parts.append(f"{study} ({body}) against {counters}")
     rows = [row for study in config["figures"][name]["studies"]

@@ -574,11 +574,13 @@ def plot_two_bodies(tables):
         for ax in row_axes:
             ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]")
             ax.grid(True, which="both", alpha=0.3)
-        first = table.iloc[0]
+        first = {column: ", ".join(f"{v:g}" if isinstance(v, float) else str(v)
+                                   for v in dict.fromkeys(table[column]))
+                 for column in ("sigma_um", "E_MPa", "nu", "thickness_mm", "mesh")}
         row_axes[0].set_title(
-            f"{name}: first body $\\sigma$ = {first['sigma_um']:g} µm, $E$ = "
-            f"{first['E_MPa']:g} MPa, $\\nu$ = {first['nu']:g}, {first['thickness_mm']:g} mm "
-            f"{first['mesh']} mesh", fontsize=9, loc="left")
+            f"{name}: first body $\\sigma$ = {first['sigma_um']} µm, $E$ = {first['E_MPa']} "
+            f"MPa, $\\nu$ = {first['nu']}, {first['thickness_mm']} mm {first['mesh']} mesh",
+            fontsize=9, loc="left")
         row_axes[0].legend(fontsize=7)
     fig.tight_layout()
     return fig
