@@ -255,7 +255,7 @@ def test_a_counter_map_smaller_than_the_surface_is_told_an_area_both_have(tmp_pa
     assert (size, options) == ("sweeps.pad.size_mm: 1.6", ["resample_grid: [11, 11]"])
     followed = follow(follow(cfg, size), f"{key}.{options[0]}")
     (cell,) = study_plan(validated(followed)).cells["pad"]
-    assert cell.surface.grid == cell.counterface.surface.grid == (11, 11)
+    assert cell.surface.grid == cell.counterface.surface.cell.grid == (11, 11)
 
 
 def test_a_counter_map_whose_spacing_does_not_divide_the_surface_gets_a_window_it_has(
@@ -274,4 +274,4 @@ def test_a_counter_map_whose_spacing_does_not_divide_the_surface_gets_a_window_i
     for option in options:
         followed = follow(followed, f"{key}.{option}")
     (cell,) = study_plan(validated(followed)).cells["pad"]
-    assert cell.counterface.surface.grid == cell.surface.grid == (16, 16)
+    assert cell.counterface.surface.cell.grid == cell.surface.grid == (16, 16)
