@@ -53,6 +53,6 @@ rule audit_verify:
     params:
         jobs=get_audit_jobs,
         sample=config["audit"]["verify_sample"],
-        seed=config["audit"].get("verify_seed", config["study_seed"]),
+        seed=audit_verify_seed(config),
     script:
         "../scripts/audit_verify.py"

@@ -27,7 +27,7 @@ from roughcontact.study.provenance import canonical_json, config_hash
 from roughcontact.study.records import InfluenceModel
 from roughcontact.study.storage import read_choice
 from roughcontact.study.sources import spectrum_from_entry
-from roughcontact.study.studies import resolve_source
+from roughcontact.study.studies import audit_verify_seed, resolve_source
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = str(config["blas_threads"])

@@ -193,6 +193,13 @@ class CounterfaceEntry:
 BODY_INHERITED = {"block": ("nu", "thickness_mm", "base", "mesh"), "halfspace": ("nu",)}
 
 
+def audit_verify_seed(config: dict) -> int:
+    """The seed of the sample the audit re-solves: ``audit.verify_seed``, by default the
+    ``study_seed`` (another key's value, which the schema cannot write as a default)."""
+    seed = config["audit"].get("verify_seed")  # optional: the study_seed
+    return int(config["study_seed"] if seed is None else seed)
+
+
 def counter_defaults(config: dict, surface, body) -> tuple:
     """A counter ``surface`` and ``body`` entry with the defaults that are another
     section's value, which the schema cannot write (it fills the static ones: skew,
