@@ -276,6 +276,26 @@ def _add_folded(folded: np.ndarray, values: np.ndarray, start: int, scale: float
     folded += scale * values.reshape(values.shape[0], periods, n).sum(axis=1)
 
 
+def _add_image_rows(folded: np.ndarray, xs: np.ndarray, start: int, images_y: int, jy0: int,
+                    dy: float, c: float) -> None:
+    """Add the near image columns' element kernels, image row by image row, to
+    ``folded`` (ny, nx) in place: the corner function at the columns' corners ``xs``
+    [m] and the rows ``|m| <= images_y`` (offset ``jy0`` elements of ``dy`` [m]),
+    times ``c`` = (1 - nu^2) / (pi E), folded from column ``start``. Rows in batches
+    of at most :data:`_CORNER_BUDGET` corners (at least one row), added in order."""
+    ny = folded.shape[0]
+    width = xs.size - 1
+    batch = max(1, _CORNER_BUDGET // ((ny + 1) * (width + 1)))
+    rows = np.arange(-images_y, images_y + 1)
+    for first_row in range(0, rows.size, batch):
+        my = rows[first_row : first_row + batch, None, None]
+        ys = (jy0 + my * ny + np.arange(ny + 1)[None, :, None] - 0.5) * dy
+        g = _corner_function(xs[None, None, :], ys)
+        k = g[:, 1:, 1:] - g[:, :-1, 1:] - g[:, 1:, :-1] + g[:, :-1, :-1]
+        for row in k:
+            _add_folded(folded, row, start, c)
+
+
 def _periodic_kernel(
     nx: int, ny: int, lx: float, ly: float, E: float, nu: float, images: int
 ) -> np.ndarray:
@@ -326,19 +346,8 @@ def _periodic_kernel(
     width = int(last - first + 1)
     start = (lo - jx0) % nx
     xs = (lo + np.arange(width + 1) - 0.5) * dx
-    c = (1.0 - nu**2) / (np.pi * E)
     folded = np.zeros((ny, nx))
-    # Image rows in batches of at most _CORNER_BUDGET corners (at least one
-    # row), added row by row in order.
-    batch = max(1, _CORNER_BUDGET // ((ny + 1) * (width + 1)))
-    rows = np.arange(-images_y, images_y + 1)
-    for first_row in range(0, rows.size, batch):
-        my = rows[first_row : first_row + batch, None, None]
-        ys = (jy0 + my * ny + np.arange(ny + 1)[None, :, None] - 0.5) * dy
-        g = _corner_function(xs[None, None, :], ys)
-        k = g[:, 1:, 1:] - g[:, :-1, 1:] - g[:, 1:, :-1] + g[:, :-1, :-1]
-        for row in k:
-            _add_folded(folded, row, start, c)
+    _add_image_rows(folded, xs, start, images_y, jy0, dy, (1.0 - nu**2) / (np.pi * E))
     rx = (jx0 + np.arange(nx)) * dx
     ry = (jy0 + np.arange(ny)) * dy
     half_height = span_y * ly / 2

@@ -533,7 +533,6 @@ def plot_two_bodies(tables):
     Returns the figure.
     """
     import matplotlib.pyplot as plt
-    from matplotlib.lines import Line2D
 
     names = list(tables)
     fig, axes = plt.subplots(len(names), 4, figsize=(19.0, 4.3 * len(names)), squeeze=False,
@@ -558,32 +557,39 @@ def plot_two_bodies(tables):
                           band="fraction", label=label)
                 plot_band(row_axes[3], body, "body_share", y_scale=100.0, color=color,
                           band="fraction", linestyle="--").set(marker="x", markersize=4)
-        for ax, (_, _, ylabel) in zip(row_axes, panels, strict=False):
-            ax.set_ylabel(ylabel)
-        row_axes[1].set_yscale("log")
-        share = row_axes[3]
-        share.set(ylabel="share of the mean-plane deflection $d_b$ [%]", ylim=(-3.0, 103.0))
-        if not share.lines:
-            share.text(0.5, 0.5, "no counter body modelled", transform=share.transAxes,
-                       ha="center", va="center", color="0.4")
-        handles = share.get_legend_handles_labels()[0] + [
-            Line2D([], [], color="0.3", label="counter body"),
-            Line2D([], [], color="0.3", linestyle="--", marker="x", markersize=4,
-                   label="first body")]
-        share.legend(handles=handles, fontsize=7)
-        for ax in row_axes:
-            ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]")
-            ax.grid(True, which="both", alpha=0.3)
-        first = {column: ", ".join(f"{v:g}" if isinstance(v, float) else str(v)
-                                   for v in dict.fromkeys(table[column]))
-                 for column in ("sigma_um", "E_MPa", "nu", "thickness_mm", "mesh")}
-        row_axes[0].set_title(
-            f"{name}: first body $\\sigma$ = {first['sigma_um']} µm, $E$ = {first['E_MPa']} "
-            f"MPa, $\\nu$ = {first['nu']}, {first['thickness_mm']} mm {first['mesh']} mesh",
-            fontsize=9, loc="left")
-        row_axes[0].legend(fontsize=7)
+        _finish_two_bodies_row(row_axes, panels, name, table)
     fig.tight_layout()
     return fig
+
+
+def _finish_two_bodies_row(row_axes, panels, name: str, table) -> None:
+    """Labels, scales, legends and the title of one row of :func:`plot_two_bodies`."""
+    from matplotlib.lines import Line2D
+
+    for ax, (_, _, ylabel) in zip(row_axes, panels, strict=False):
+        ax.set_ylabel(ylabel)
+    row_axes[1].set_yscale("log")
+    share = row_axes[3]
+    share.set(ylabel="share of the mean-plane deflection $d_b$ [%]", ylim=(-3.0, 103.0))
+    if not share.lines:
+        share.text(0.5, 0.5, "no counter body modelled", transform=share.transAxes,
+                   ha="center", va="center", color="0.4")
+    handles = share.get_legend_handles_labels()[0] + [
+        Line2D([], [], color="0.3", label="counter body"),
+        Line2D([], [], color="0.3", linestyle="--", marker="x", markersize=4,
+               label="first body")]
+    share.legend(handles=handles, fontsize=7)
+    for ax in row_axes:
+        ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]")
+        ax.grid(True, which="both", alpha=0.3)
+    first = {column: ", ".join(f"{v:g}" if isinstance(v, float) else str(v)
+                               for v in dict.fromkeys(table[column]))
+             for column in ("sigma_um", "E_MPa", "nu", "thickness_mm", "mesh")}
+    row_axes[0].set_title(
+        f"{name}: first body $\\sigma$ = {first['sigma_um']} µm, $E$ = {first['E_MPa']} "
+        f"MPa, $\\nu$ = {first['nu']}, {first['thickness_mm']} mm {first['mesh']} mesh",
+        fontsize=9, loc="left")
+    row_axes[0].legend(fontsize=7)
 
 
 def cells_at_pressures(table, quantities, pressures, *, by: str):

@@ -109,13 +109,9 @@ def _raise(title: str, problems: list[str]) -> None:
         raise ConfigProblems(title, problems)
 
 
-def study_plan(config: dict) -> StudyPlan:
-    """The :class:`StudyPlan` of a validated ``config``.
-
-    Raises :class:`~roughcontact.study.checks.ConfigProblems` naming every
-    invalid contact study or infeasible surface cell, before any job is
-    planned to run.
-    """
+def _figures_and_studies(config: dict) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The figures a config draws and its contact studies (its contact figures and
+    sweeps); a figure that lists a study the config does not have is refused."""
     figures = tuple(n for n in (*SURFACE_ONLY_FIGURES, *CONTACT_FIGURES, *STUDIES_FIGURES)
                     if n in config["figures"])
     studies = tuple(n for n in figures if n in CONTACT_FIGURES) + tuple(config["sweeps"])
@@ -124,6 +120,17 @@ def study_plan(config: dict) -> StudyPlan:
         f"(sweeps: {', '.join(config['sweeps']) or 'none'})"
         for name in figures if name in STUDIES_FIGURES
         for study in config["figures"][name]["studies"] if study not in studies])
+    return figures, studies
+
+
+def study_plan(config: dict) -> StudyPlan:
+    """The :class:`StudyPlan` of a validated ``config``.
+
+    Raises :class:`~roughcontact.study.checks.ConfigProblems` naming every
+    invalid contact study or infeasible surface cell, before any job is
+    planned to run.
+    """
+    figures, studies = _figures_and_studies(config)
     _raise("Spectra that cannot be used", check_spectra(config, studies))
     _raise("Invalid contact studies in the config", check_studies(config, studies))
     sources = {name: source_name(config, name) for name in studies}
