@@ -376,7 +376,7 @@ def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path)
         assert time.time() < deadline and proc.poll() is None, "contact job did not start"
         time.sleep(0.05)
     os.killpg(proc.pid, signal.SIGINT)
-    assert proc.wait(timeout=120) != 0  # interrupted while the contact job runs
+    assert proc.wait(timeout=300) != 0  # interrupted while the contact job runs
     assert not (tmp_path / target).exists()  # no partial result under the final name
     again = run_snakemake(tmp_path, target, config=path)
     assert again.returncode == 0, again.stderr[-3000:]
