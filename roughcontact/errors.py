@@ -85,3 +85,8 @@ class DiskFullError(OSError):
 
     def __str__(self) -> str:
         return self.message
+
+
+class FlowNotConverged(RuntimeError):
+    """An iterative solve of the flow through a gap (:mod:`roughcontact.transport.flow`)
+    did not reach its tolerance in its iterations."""
