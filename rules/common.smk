@@ -22,6 +22,7 @@ from roughcontact.study.config import (
     SpeedReportSettings,
     report_section,
 )
+from roughcontact.study.flow_settings import flow_settings
 from roughcontact.study.grid_convergence import GridConvergenceSettings
 from roughcontact.study.provenance import canonical_json, config_hash
 from roughcontact.study.records import InfluenceModel

@@ -47,6 +47,8 @@ rule aggregate:
     params:
         cells=get_aggregate_cells,
         levels=config["contact"]["pressure_levels"],
+        # the seal whose leak rate the table gives (empty with the flow off)
+        flow=canonical(flow_settings(config).params()),
         # version of the stored layout (2: the sidecar holds the tables' SHA-256; 3: the
         # validity table against the hardness)
         layout=3,

@@ -2,6 +2,7 @@
 
 from roughcontact.study.aggregation import aggregate_study
 from roughcontact.study.contact_records import StudyCell
+from roughcontact.study.flow_settings import flow_settings
 from roughcontact.study.logs import route_logging
 
 route_logging(snakemake.log[0])
@@ -19,4 +20,5 @@ aggregate_study(
     snakemake.output.meta,
     config=snakemake.config,
     validity_path=snakemake.output.validity,
+    flow=flow_settings(snakemake.config),
 )

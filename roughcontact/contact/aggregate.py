@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 import scipy.special
 
-from roughcontact.contact.curves import PhysicalSweep
+from roughcontact.contact.curves import PhysicalSweep, flow_arrays
 from roughcontact.contact.result import INTERFACE_UNITS
 
 if TYPE_CHECKING:
@@ -39,6 +39,7 @@ __all__ = [
     "COVERAGE",
     "DISTRIBUTION_QUANTITIES",
     "COUNTER_QUANTITIES",
+    "FLOW_QUANTITIES",
     "INTERFACE_QUANTITIES",
     "QUANTITIES",
     "SPACINGS",
@@ -129,6 +130,29 @@ COUNTER_QUANTITIES = {
                                    "compliance under the contact pressure",
                               ratio=("counter_deflection", "mean_plane_deflection")),
 }
+
+
+def _flow_quantities(direction: str) -> dict:
+    """The aggregated flow quantities along ``direction`` (:mod:`roughcontact.transport`)."""
+    d = direction
+    return {
+        f"flow_conductance_{d}": Quantity(
+            "m^3", f"K_{d}, effective conductance along {d} (Reynolds equation, local cubic "
+                   "law): the cube of the flat gap that carries the same flow"),
+        f"flow_factor_{d}": Quantity("1", f"phi_{d} = K_{d} / mean(g)^3, against a flat gap of "
+                                          "the mean gap (0 where sealed)"),
+        f"pressure_flow_factor_{d}": Quantity(
+            "1", f"phi_{d} = K_{d} / h^3, h = mean(f) - d the nominal separation of the "
+                 "undeformed mean planes (Patir & Cheng 1978; 0 where sealed)"),
+        f"flow_connected_{d}": Quantity(
+            "1", f"share of surfaces whose free space connects inlet to outlet along {d} "
+                 "(still leaking)"),
+    }
+
+
+#: Of a sweep that recorded the flow through its gap: per direction, by name.
+FLOW_QUANTITIES = {name: spec for direction in ("x", "y")
+                   for name, spec in _flow_quantities(direction).items()}
 #: Spacings of :func:`pressure_axis`: name -> ``f(first, last, n)``.
 SPACINGS = {"log": np.geomspace, "linear": np.linspace}
 
@@ -174,16 +198,19 @@ def _check_sweep(sweep) -> PhysicalSweep:
 
 def quantities(sweep: PhysicalSweep) -> dict:
     """The quantities :func:`aggregate_cell` averages for ``sweep``: :data:`QUANTITIES`, and
-    :data:`INTERFACE_QUANTITIES` when the sweep recorded them."""
+    :data:`INTERFACE_QUANTITIES` (and the distribution, counter-body and flow ones) when
+    the sweep recorded them."""
     if sweep.mean_gap is None:
         return QUANTITIES
     counter = {} if sweep.counter_deflection is None else COUNTER_QUANTITIES
+    flow = {name: FLOW_QUANTITIES[name] for name in flow_arrays(sweep)}
     if sweep.gap_quantiles is None:
-        return {**QUANTITIES, **INTERFACE_QUANTITIES, **counter}
-    return {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **counter}
+        return {**QUANTITIES, **INTERFACE_QUANTITIES, **counter, **flow}
+    return {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **counter, **flow}
 
 
-_ALL = {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **COUNTER_QUANTITIES}
+_ALL = {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **COUNTER_QUANTITIES,
+        **FLOW_QUANTITIES}
 
 
 def _values(sweep: PhysicalSweep, quantity: str) -> np.ndarray:

@@ -52,6 +52,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from roughcontact.transport.probe import NO_FLOW, FlowProbe
+
 __all__ = [
     "GAP_PROBABILITIES",
     "SPOT_PROBABILITIES",
@@ -92,11 +94,16 @@ class InterfaceGrid:
         (:func:`~roughcontact.contact.counterface.deflection_weights`); a sweep
         then records it as ``counter_deflection``. None (default): no counter body,
         or a rigid one.
+    flow : FlowProbe
+        The flow through each solution's gap a sweep records
+        (:class:`~roughcontact.transport.probe.FlowProbe`); :data:`NO_FLOW`
+        (default): none.
     """
 
     spacing: tuple[float, float]
     periodic: bool = False
     counter_weights: np.ndarray | None = field(default=None, compare=False, repr=False)
+    flow: FlowProbe = NO_FLOW
 
     def __post_init__(self):
         dx, dy = (float(s) for s in self.spacing)
@@ -122,6 +129,12 @@ class InterfaceGrid:
     def element_area(self) -> float:
         """``dx dy`` [m^2]."""
         return self.spacing[0] * self.spacing[1]
+
+    def flow_columns(self, pressure, gap, separation) -> dict:
+        """The flow columns of :attr:`flow` (:meth:`FlowProbe.columns`) of solutions
+        ``pressure`` and ``gap`` (..., ny, nx) at nominal separations ``separation``
+        (...) on this grid; empty without flow."""
+        return self.flow.columns(pressure, gap, separation, self.spacing, self.periodic)
 
 
 @dataclass(frozen=True)

@@ -78,7 +78,7 @@ from roughcontact.contact.curves import (
     solver_arrays,
 )
 from roughcontact.contact.methods import resolve_method
-from roughcontact.contact.result import INTERFACE
+from roughcontact.contact.result import FLOW, INTERFACE
 from roughcontact.contact.sweeps import sweep
 from roughcontact.elasticity import definiteness
 from roughcontact.elasticity.protocol import DenseInfluence
@@ -115,10 +115,12 @@ SI_SCALES = {
     "plastic_area_fraction": "1",
 }
 #: The scale of each interface quantity (:mod:`roughcontact.contact.interface`): gaps
-#: are heights (sigma); spots, perimeter and areas are lateral, the same in both forms.
+#: are heights (sigma); spots, perimeter and areas are lateral, the same in both forms;
+#: the flow's conductances are gaps cubed (sigma^3), its factors and flags the same.
 INTERFACE_SCALES = {name: "1" for name in INTERFACE} | {"mean_gap": "sigma",
                                                         "gap_quantiles": "sigma",
-                                                        "counter_deflection": "sigma"}
+                                                        "counter_deflection": "sigma"} | {
+    name: "sigma^3" if name.startswith("flow_conductance") else "1" for name in FLOW}
 #: SweepResult field of each array of a NondimSweep: the dimensionless problem has
 #: nominal area 1, so the solver's load is ``Phat`` and its tangent stiffness
 #: ``dPhat / ddhat = k_P / E``.
@@ -515,7 +517,8 @@ def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None
     E = check_positive(E, "E")
     _check_geometry(nd, thickness, area)
     length = nd.thickness
-    scales = {"sigma": sigma, "E sigma / L": E * sigma / length, "E": E, "1": 1.0}
+    scales = {"sigma": sigma, "sigma^3": sigma**3, "E sigma / L": E * sigma / length, "E": E,
+              "1": 1.0}
     cap = _check_cap(nd, hardness, scales["E sigma / L"])
     scaled = {name: scales[scale] * np.asarray(getattr(nd, name), dtype=float)
               for name, scale in SI_SCALES.items()}

@@ -17,8 +17,9 @@ import numpy as np
 from roughcontact.contact import interface, validity
 from roughcontact.contact.kkt import plastic_fraction
 
-__all__ = ["INTERFACE", "INTERFACE_SCALARS", "INTERFACE_UNITS", "Batch", "ContactResult",
-           "InterfaceColumns", "SweepResult", "SweepTable", "zero_plastic_area"]
+__all__ = ["FLOW", "INTERFACE", "INTERFACE_SCALARS", "INTERFACE_UNITS", "Batch",
+           "ContactResult", "FlowColumns", "InterfaceColumns", "SweepResult", "SweepTable",
+           "zero_plastic_area"]
 
 
 @dataclass(frozen=True)
@@ -105,6 +106,27 @@ class InterfaceColumns:
     gap_quantiles: np.ndarray | None = None
 
 
+@dataclass(frozen=True, kw_only=True)
+class FlowColumns:
+    """The flow through the gap (:mod:`roughcontact.transport.probe`) a sweep or a
+    record may hold, (m, k) each, None when not recorded: for each direction ``d`` of
+    x and y the conductance ``flow_conductance_d`` [m^3], the flow factors
+    ``flow_factor_d`` (over the mean gap) and ``pressure_flow_factor_d`` (Patir &
+    Cheng's, over the nominal separation) [-] and ``flow_connected_d`` (bool)."""
+
+    flow_conductance_x: np.ndarray | None = None
+    flow_factor_x: np.ndarray | None = None
+    pressure_flow_factor_x: np.ndarray | None = None
+    flow_connected_x: np.ndarray | None = None
+    flow_conductance_y: np.ndarray | None = None
+    flow_factor_y: np.ndarray | None = None
+    pressure_flow_factor_y: np.ndarray | None = None
+    flow_connected_y: np.ndarray | None = None
+
+
+#: The flow columns' names (the fields of :class:`FlowColumns`).
+FLOW = tuple(field.name for field in fields(FlowColumns))
+
 #: The interface quantities' names (the fields of :class:`InterfaceColumns`), the (m, k)
 #: ones among them, and the unit of each.
 INTERFACE = tuple(field.name for field in fields(InterfaceColumns))
@@ -115,7 +137,7 @@ INTERFACE_UNITS = {"spot_count": "1", "mean_spot_area": "m^2", "perimeter": "m",
 
 
 @dataclass(frozen=True)
-class SweepResult(InterfaceColumns):
+class SweepResult(InterfaceColumns, FlowColumns):
     """Force-deflection sweep of m surfaces over k approaches.
 
     Every array has shape (m, k): surface by approach step, except
@@ -181,6 +203,9 @@ class SweepResult(InterfaceColumns):
         (m, k, S) and (m, k, G): spot areas [m^2] at
         :data:`~roughcontact.contact.interface.SPOT_PROBABILITIES` and gaps [m] at
         :data:`~roughcontact.contact.interface.GAP_PROBABILITIES`, likewise.
+    flow_conductance_x, flow_factor_x, ... : ndarray or None
+        (m, k): the flow through each solution's gap (:class:`FlowColumns`) in the
+        directions of the ``interface`` grid's flow probe; None for the others.
     """
 
     approach: np.ndarray
@@ -313,6 +338,9 @@ class SweepTable:
             columns["gap_quantiles"] = np.zeros((m, k, len(interface.GAP_PROBABILITIES)))
             if interface_grid.counter_weights is not None:
                 columns["counter_deflection"] = np.zeros((m, k))
+            columns.update({name: np.zeros((m, k), dtype=bool if "connected" in name
+                                           else float)
+                            for name in interface_grid.flow.names})
         else:
             columns = {}
         names = ("load", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
@@ -339,13 +367,15 @@ class SweepTable:
         (:mod:`roughcontact.contact.interface`); with fields, the pressure field."""
         columns = self.columns
         if self.interface is not None:
+            # nominal separation mean(f) - d of the flat and the undeformed mean plane
+            separation = np.mean(gap, axis=-1) - displacement.mean(axis=-1)
             if isinstance(rows, int | np.integer):  # one surface: wait for its step's others
                 pending = self._pending.setdefault(step, {})
-                pending[int(rows)] = (np.array(pressure), np.array(gap))
+                pending[int(rows)] = (np.array(pressure), np.array(gap), separation)
                 if len(pending) == self.surfaces:
                     self._describe_pending(step)
             else:
-                self._describe(rows, step, pressure, gap)
+                self._describe(rows, step, pressure, gap, separation)
         n = pressure.shape[-1]
         load = pressure.sum(axis=-1) * element_area
         columns["load"][rows, step] = load
@@ -365,13 +395,16 @@ class SweepTable:
             self.fields[rows, step] = pressure.reshape(*np.shape(pressure)[:-1],
                                                        *self.fields.shape[2:])
 
-    def _describe(self, rows, step: int, pressure, gap) -> None:
-        """The interface quantities of ``rows`` at ``step`` (:mod:`.interface`)."""
-        summary = interface.describe(
-            np.reshape(pressure, (*np.shape(pressure)[:-1], *self.shape)),
-            np.reshape(gap, (*np.shape(gap)[:-1], *self.shape)), self.interface)
+    def _describe(self, rows, step: int, pressure, gap, separation) -> None:
+        """The interface quantities of ``rows`` at ``step`` (:mod:`.interface`), and the
+        flow through their gaps at nominal separations ``separation``."""
+        pressure = np.reshape(pressure, (*np.shape(pressure)[:-1], *self.shape))
+        gap = np.reshape(gap, (*np.shape(gap)[:-1], *self.shape))
+        summary = interface.describe(pressure, gap, self.interface)
         for name in INTERFACE:
             self.columns[name][rows, step] = getattr(summary, name)
+        for name, values in self.interface.flow_columns(pressure, gap, separation).items():
+            self.columns[name][rows, step] = values
 
     def _describe_pending(self, step: int) -> None:
         """The surfaces of ``step`` recorded one at a time, described together (one call
@@ -379,7 +412,8 @@ class SweepTable:
         pending = self._pending.pop(step)
         rows = np.fromiter(pending, dtype=np.intp)
         self._describe(rows, step, np.stack([pending[j][0] for j in rows]),
-                       np.stack([pending[j][1] for j in rows]))
+                       np.stack([pending[j][1] for j in rows]),
+                       np.array([pending[j][2] for j in rows]))
 
     def record_work(self, rows, step: int, iterations, matvecs, converged) -> None:
         """The work of a step's contact solve for ``rows``."""

@@ -27,6 +27,7 @@ import pandas as pd
 from roughcontact import __version__
 from roughcontact.contact.aggregate import pressure_axis
 from roughcontact.contact.cell import SWEEP_OPTIONS, aggregate_sweep
+from roughcontact.contact.curves import flow_arrays
 from roughcontact.contact.plausibility import (
     MAX_PRESSURE_OVER_E_STAR,
     MIN_CONTACT_ELEMENTS,
@@ -36,6 +37,7 @@ from roughcontact.errors import StoredFileError
 from roughcontact.study.aggregation import validity_rows, validity_summary
 from roughcontact.study.contact_jobs import contact_problem, read_counter, sweep_problem
 from roughcontact.study.contact_records import ContactJob, StudyCell
+from roughcontact.study.flow_settings import probe_from_attrs
 from roughcontact.study.jobs import certified_influence
 from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.study.storage import (
@@ -399,6 +401,11 @@ def _compare(stored, again, rows: slice) -> tuple[bool, float]:
         for name in ("spot_count", "perimeter", "corrected_real_area_fraction"):
             identical &= bool(np.array_equal(getattr(stored, name)[rows],
                                              getattr(again, name)))
+    for name in flow_arrays(stored):  # the flow through the gap, where recorded
+        if name.startswith("flow_connected"):
+            identical &= bool(np.array_equal(getattr(stored, name)[rows], getattr(again, name)))
+        elif name.startswith("flow_conductance"):
+            continuous += (name,)
     for name in continuous:
         a = getattr(stored, name)[rows]
         b = getattr(again, name)
@@ -440,7 +447,8 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
                                                   geometry=job["geometry"])[0],
                                    files["influence"], record.geometry)
         counter, _ = read_counter(record, files, study_seed)
-        problem = contact_problem(record, surfaces["heights"], unit, counter)
+        problem = contact_problem(record, surfaces["heights"], unit, counter,
+                                  probe_from_attrs(attrs))
         start = time.perf_counter()
         options = dataclasses.replace(SWEEP_OPTIONS, method=stored.method, tol=stored.tol,
                                       precision=stored.precision, max_iter=stored.max_iter)

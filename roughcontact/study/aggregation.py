@@ -19,9 +19,17 @@ import pandas as pd
 
 from roughcontact.contact import aggregate, plausibility
 from roughcontact.contact import cell as cell_module
+from roughcontact.errors import StoredFileError
 from roughcontact.hashes import file_sha256
 from roughcontact.study.config import in_unit
 from roughcontact.study.contact_records import StudyCell
+from roughcontact.study.flow_settings import (
+    FLOW_OFF,
+    FlowSettings,
+    finite_or_none,
+    percolation_rows,
+    probe_from_attrs,
+)
 from roughcontact.study.provenance import atomic_path, provenance
 from roughcontact.study.storage import read_contact
 from roughcontact.units import MPA
@@ -77,6 +85,7 @@ class _CellTables(NamedTuple):
     summary: dict  # the mean-plane modulus and convergence summary
     validity: list  # one table per hardness it is checked against
     checks: list  # their summaries
+    percolation: list  # one threshold per flow direction (none without flow)
 
 
 def _plausibility(cell: StudyCell, frame: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
@@ -96,15 +105,43 @@ def _plausibility(cell: StudyCell, frame: pd.DataFrame) -> tuple[pd.DataFrame, l
     return frame, reasons
 
 
-def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTables:
-    """Aggregate one cell's contact file at ``levels`` nominal pressures over its range."""
+def _with_leak_rate(frame: pd.DataFrame, flow: FlowSettings) -> pd.DataFrame:
+    """The table with the leak-rate columns of the configured seal (none without flow)."""
+    columns = flow.leak_columns(frame)
+    units = {**frame.attrs["units"],
+             **{name: "1" if name.endswith("_count") else "m^3/s" for name in columns}}
+    frame = frame.assign(**columns)
+    frame.attrs["units"] = units
+    return frame
+
+
+def _check_flow(path, attrs: dict, flow: FlowSettings) -> None:
+    """The contact file must have recorded the flow the configuration asks for."""
+    stored = probe_from_attrs(attrs)
+    if stored != flow.probe:
+        raise StoredFileError(
+            f"{path}: solved with flow {stored.params() if stored.directions else 'off'}, "
+            f"but the configuration asks for "
+            f"{flow.probe.params() if flow.directions else 'no flow'}; delete it and run "
+            "the workflow again to solve it with the configured flow", path)
+
+
+def _aggregate_cell(index: int, cell: StudyCell, path, levels: int,
+                    flow: FlowSettings = FLOW_OFF) -> _CellTables:
+    """Aggregate one cell's contact file at ``levels`` nominal pressures over its range
+    (with the leak rate of the ``flow`` settings' seal and the cell's percolation
+    thresholds, where the flow is on)."""
     nd, attrs = read_contact(path, job=cell.job.params())  # solved for this cell's job
+    _check_flow(path, attrs, flow)
     key, label = cell.contact_key, cell.label
     axis = aggregate.pressure_axis(*cell.pressure_range, levels)
     physical, frame = cell_module.aggregate_sweep(nd, cell.height_scale, cell.E, axis,
                                                   hardness=cell.hardness)
     frame, implausible = _plausibility(cell, frame)
+    frame = _with_leak_rate(frame, flow)
     labels = {"cell": index, "label": label, "contact_key": key, **cell.columns()}
+    percolation = percolation_rows(physical, {"cell": index, "label": label,
+                                              "contact_key": key}, flow.directions)
     if cell.hardness is not None or cell.checked_hardness:
         labels["cap_MPa"] = float("nan") if cell.hardness is None else in_unit(cell.hardness,
                                                                                MPA)
@@ -137,11 +174,12 @@ def _aggregate_cell(index: int, cell: StudyCell, path, levels: int) -> _CellTabl
                         "their rows are NaN with count 0", label, len(short), short.min(),
                         short.max(), reason)
     return _CellTables(frame.assign(**labels), per_surface.assign(seed=attrs["seeds"], **labels),
-                       summary, validity, checks)
+                       summary, validity, checks, percolation)
 
 
 def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, table_path,
-                    moduli_path, meta_path, config=None, validity_path=None) -> pd.DataFrame:
+                    moduli_path, meta_path, config=None, validity_path=None,
+                    flow: FlowSettings = FLOW_OFF) -> pd.DataFrame:
     """Aggregate a figure's or sweep's cells into CSV tables with a JSON sidecar.
 
     ``contact_paths`` maps a contact key to its file. The table has one row per
@@ -152,9 +190,11 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
     ``validity_path``, the validity table (:func:`validity_rows`: the share of
     each elastic cell's real area and load above each hardness it names, no
     extra solve; header only without a hardness) is written there, its
-    flagged cells summarised in the sidecar.
+    flagged cells summarised in the sidecar. With the ``flow`` on
+    (:mod:`roughcontact.study.flow_settings`), the table has the flow columns and the
+    leak rate of its seal, and the sidecar each cell's percolation thresholds.
     """
-    parts = [_aggregate_cell(index, cell, contact_paths[cell.contact_key], levels)
+    parts = [_aggregate_cell(index, cell, contact_paths[cell.contact_key], levels, flow)
              for index, cell in enumerate(cells)]
     table = pd.concat([part.rows for part in parts], ignore_index=True)
     with atomic_path(table_path) as tmp:
@@ -174,6 +214,10 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
         "table_sha256": file_sha256(table_path),
         "moduli_sha256": file_sha256(moduli_path),
     }
+    if flow.directions:
+        meta["flow"] = {**flow.params(), "percolation": [
+            {name: finite_or_none(value) for name, value in row.items()}
+            for part in parts for row in part.percolation]}
     if validity_path is not None:
         meta |= _write_validity([frame for part in parts for frame in part.validity],
                                 [check for part in parts for check in part.checks],

@@ -28,6 +28,7 @@ from roughcontact.study.checks import (
 from roughcontact.study.config import BuildSettings, ContactSettings, as_pair, from_unit
 from roughcontact.study.contact_records import ContactJob, PairGeometry, StudyCell
 from roughcontact.study.counter_checks import check_counterfaces
+from roughcontact.study.flow_settings import check_flow
 from roughcontact.study.records import (
     SEEDED_PER_SURFACE,
     Geometry,
@@ -145,6 +146,8 @@ def study_plan(config: dict) -> StudyPlan:
     _raise("Blocks that do not fit their surfaces",
            check_blocks({f"{section[name]}.{name}": c for name, c in by_source.items()}, build))
     jobs = contact_jobs(cell for name in studies for cell in cells[name])
+    _raise("Flow settings that cannot be used", check_flow(config, {
+        f"the contact grid of {job.geometry.key}": job.geometry.grid for job in jobs.values()}))
     figure_cells = {name: figure_surfaces(config, name, cells) for name in figures}
     surfaces = {cell.key: cell for name in SURFACE_FIGURES if name in figure_cells
                 for cell in figure_cells[name]}

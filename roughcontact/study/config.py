@@ -21,6 +21,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from roughcontact.transport.probe import NO_FLOW, FlowProbe
 from roughcontact.units import GB, MM, MPA, UM
 
 #: The schema of every configuration (with its defaults).
@@ -281,7 +282,9 @@ class ContactSettings:
 
     ``method``, ``tol`` (dimensionless KKT residual) and ``precision`` of
     :func:`roughcontact.contact.nondim.solve_cell`; ``steps`` approaches per
-    sweep; ``pressure_levels`` nominal pressures per aggregated cell.
+    sweep; ``pressure_levels`` nominal pressures per aggregated cell; ``flow`` the
+    flow each sweep records (config section ``flow``,
+    :mod:`roughcontact.study.flow_settings`; :data:`NO_FLOW`: none).
     """
 
     method: str
@@ -289,17 +292,28 @@ class ContactSettings:
     precision: str
     steps: int
     pressure_levels: int
+    flow: FlowProbe = NO_FLOW
 
     @classmethod
     def from_section(cls, section: dict) -> ContactSettings:
+        """The settings of a ``contact`` section, or of a contact job's :meth:`params`
+        (which hold the flow probe's under ``flow`` where the flow is on)."""
+        from roughcontact.study.flow_settings import probe_from_params
+
         return cls(method=str(section["method"]), tol=float(section["tol"]),
                    precision=str(section["precision"]), steps=int(section["steps"]),
-                   pressure_levels=int(section["pressure_levels"]))
+                   pressure_levels=int(section["pressure_levels"]),
+                   flow=probe_from_params(section.get("flow")))
 
     def params(self) -> dict:
-        """The settings as the ``contact`` section writes them (a contact job's params)."""
-        return {"method": self.method, "tol": self.tol, "precision": self.precision,
-                "steps": self.steps, "pressure_levels": self.pressure_levels}
+        """The settings as the ``contact`` section writes them (a contact job's params),
+        with the flow probe's settings where the flow is on (none where it is off: a
+        study without flow keeps its jobs' parameters)."""
+        params = {"method": self.method, "tol": self.tol, "precision": self.precision,
+                  "steps": self.steps, "pressure_levels": self.pressure_levels}
+        if self.flow.directions:
+            params["flow"] = self.flow.params()
+        return params
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,10 @@ Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
     /mean_gap (m, k), /spot_area_quantiles (m, k, S) and /gap_quantiles (m, k, G)
                float32: the interface quantities (:mod:`roughcontact.contact.interface`;
                lateral ones in m and m^2, gaps in units of sigma), when recorded
+    /flow_conductance_<d>, /flow_factor_<d>, /pressure_flow_factor_<d>,
+    /flow_connected_<d> (m, k): the flow through the gap along d = x, y
+               (:mod:`roughcontact.transport.probe`; conductance in units of
+               sigma^3), in the directions recorded
     attributes: job (JSON), the NondimSweep settings (``sweep_*``; ``sweep_hardness``
                 the dimensionless cap ``nondim_hardness`` H L / (E sigma), -1 for an
                 elastic sweep), solver
@@ -98,6 +102,13 @@ INTERFACE_ARRAYS = ("spot_count", "mean_spot_area", "perimeter",
 #: Optional arrays of a contact file: of a pair of elastic bodies, the counter body's
 #: mean-plane deflection (m, k) (:mod:`roughcontact.contact.counterface`).
 COUNTER_ARRAYS = ("counter_deflection",)
+#: Optional arrays of a contact file: the flow through the gap (m, k) along x and y
+#: (:mod:`roughcontact.transport.probe`), in the directions recorded.
+#: (The names of :data:`roughcontact.contact.result.FLOW`, written out: the readers do
+#: not import the solvers.)
+FLOW_ARRAYS = ("flow_conductance_x", "flow_factor_x", "pressure_flow_factor_x",
+               "flow_connected_x", "flow_conductance_y", "flow_factor_y",
+               "pressure_flow_factor_y", "flow_connected_y")
 #: Scalar settings of NondimSweep, stored as ``sweep_<name>`` attributes.
 SWEEP_SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffness_tol",
                   "precision")
@@ -584,7 +595,7 @@ def contact_datasets(sweep: NondimSweep) -> dict:
             single = name.endswith("_quantiles")
             datasets[name] = np.asarray(getattr(sweep, name),
                                         dtype=np.float32 if single else None)
-    for name in COUNTER_ARRAYS:
+    for name in COUNTER_ARRAYS + FLOW_ARRAYS:
         if getattr(sweep, name) is not None:
             datasets[name] = np.asarray(getattr(sweep, name))
     return datasets
@@ -629,7 +640,8 @@ def read_contact(path: str | os.PathLike, *,
             raise StoredFileError(f"{path}: no {', '.join(missing)} (written by an older "
                                   f"version of roughcontact); {rebuild(path)}", path)
         arrays = {name: f[name][...]
-                  for name in CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS + COUNTER_ARRAYS
+                  for name in (CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS
+                               + COUNTER_ARRAYS + FLOW_ARRAYS)
                   if name in f}
     verify(path, attrs, arrays_sha256(arrays))
     if job is not None:

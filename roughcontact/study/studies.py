@@ -35,6 +35,7 @@ from roughcontact.study.contact_records import (
     RoughCounter,
     StudyCell,
 )
+from roughcontact.study.flow_settings import flow_settings
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.records import (
     GeneratedCell,
@@ -95,9 +96,11 @@ def contact_settings(config: dict) -> ContactSettings:
     """The solver settings of the contact jobs: the config's, or the accuracy preset's.
 
     ``contact.cap`` is not among them: it decides which cells are capped, and a
-    capped job carries its own cap.
+    capped job carries its own cap. The flow probe is the ``flow`` section's
+    (:func:`roughcontact.study.flow_settings.flow_settings`).
     """
-    settings = ContactSettings.from_section(config["contact"])
+    settings = dataclasses.replace(ContactSettings.from_section(config["contact"]),
+                                   flow=flow_settings(config).probe)
     preset = accuracy_preset(config)
     if preset is None:
         return settings

@@ -2,7 +2,8 @@
 
 ``flow`` solves the steady Reynolds equation with the local cubic law on a gap
 field and reads off its effective conductance, flow factors (Patir & Cheng
-1978), leak rate and whether the free space percolates; ``references`` holds the
+1978), leak rate and whether the free space percolates; ``probe`` is what a contact sweep
+records of it at every step (:class:`FlowProbe`, :data:`NO_FLOW`); ``references`` holds the
 closed forms it is checked against (a flat channel, series and parallel gaps,
 the Keller-Dykhne checkerboard) and Patir & Cheng's fitted flow factors.
 
@@ -30,21 +31,35 @@ from roughcontact.transport.flow import (
     Sides,
     solve_flow,
 )
+from roughcontact.transport.probe import (
+    FLOW_COLUMNS,
+    FLOW_UNITS,
+    NO_FLOW,
+    SIDE_CHOICES,
+    FlowProbe,
+    flow_column_names,
+)
 
 __all__ = [
     "ARITHMETIC",
     "DIRECT",
     "FACE_RULES",
+    "FLOW_COLUMNS",
     "FLOW_DIRECTIONS",
+    "FLOW_UNITS",
     "HARMONIC",
+    "NO_FLOW",
     "PERIODIC",
     "SEALED",
+    "SIDE_CHOICES",
     "DirectSolver",
     "FaceRule",
+    "FlowProbe",
     "FlowResult",
     "FlowSetup",
     "JacobiCG",
     "Seal",
     "Sides",
+    "flow_column_names",
     "solve_flow",
 ]

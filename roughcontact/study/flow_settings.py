@@ -1,0 +1,170 @@
+"""The study's flow through the contact gap: its settings, checks, leak rate and threshold.
+
+The configuration's ``flow`` section (off by default) gives every contact job a
+:class:`~roughcontact.transport.probe.FlowProbe` (directions, sides, face rule):
+the job's sweep records the conductance, the flow factors and whether the free
+space percolates at every step (:mod:`roughcontact.transport`), and stores them
+in its contact file. The aggregation averages them per cell like every other
+quantity (95 % bands), and adds from this module
+
+- the leak rate of the configured seal, ``Q = K W dp / (12 eta L)`` [m^3/s]
+  (:meth:`~roughcontact.transport.flow.Seal.leak_rate`; linear in ``K``, so its mean
+  and band are those of ``K`` scaled);
+- each cell's percolation threshold (:mod:`roughcontact.transport.percolation`): the
+  real area and the nominal pressure at which half the surfaces have sealed, with a
+  distribution-free 95 % band.
+
+Off, the section changes nothing: the jobs' parameters, files and tables are those
+of a configuration without it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughcontact.transport.flow import FACE_RULES, Seal
+from roughcontact.transport.probe import NO_FLOW, FlowProbe
+from roughcontact.units import MM, MPA
+
+__all__ = ["FLOW_OFF", "FlowSettings", "check_flow", "flow_settings", "percolation_rows",
+           "probe_from_attrs", "probe_from_params"]
+
+#: Plausible ranges of the seal's values (outside: almost surely a unit slip), with the
+#: unit each is likely typed in by mistake and its factor to the key's unit.
+PLAUSIBLE = {
+    "viscosity_Pa_s": ((1e-6, 1e4), (("mPa s", 1e-3),)),
+    "pressure_drop_MPa": ((0.0, 1e3), (("Pa", 1e-6), ("kPa", 1e-3), ("bar", 0.1))),
+    "seal_width_mm": ((1e-3, 1e5), (("m", 1e3), ("um", 1e-3))),
+    "seal_length_mm": ((1e-3, 1e4), (("m", 1e3), ("um", 1e-3))),
+}
+
+
+@dataclass(frozen=True)
+class FlowSettings:
+    """The ``flow`` section as the study uses it: the jobs' ``probe`` and the ``seal``
+    whose leak rate the aggregation reports (None with the flow off)."""
+
+    probe: FlowProbe
+    seal: Seal | None
+
+    @property
+    def directions(self) -> tuple[str, ...]:
+        return self.probe.directions
+
+    def leak_columns(self, rows) -> dict:
+        """The leak-rate columns of a cell's aggregated ``rows`` (a table with the flow
+        conductance columns ``flow_conductance_<d>_mean`` and ``_half_width``):
+        ``leak_rate_<d>_mean`` and ``_half_width`` [m^3/s]; empty with the flow off."""
+        out = {}
+        for d in self.directions:
+            for part in ("mean", "half_width"):
+                out[f"leak_rate_{d}_{part}"] = self.seal.leak_rate(
+                    rows[f"flow_conductance_{d}_{part}"])
+            out[f"leak_rate_{d}_count"] = rows[f"flow_conductance_{d}_count"]
+        return out
+
+    def params(self) -> dict:
+        """The seal's settings in SI units (the aggregation's sidecar)."""
+        if self.seal is None:
+            return {}
+        return {"probe": self.probe.params(), "pressure_drop_Pa": self.seal.pressure_drop,
+                "viscosity_Pa_s": self.seal.viscosity, "seal_width_m": self.seal.width,
+                "seal_length_m": self.seal.length,
+                "leak_rate": "Q = K W dp / (12 eta L) [m^3/s], K the conductance"}
+
+
+#: The flow off: no probe, no seal.
+FLOW_OFF = FlowSettings(NO_FLOW, None)
+
+
+def probe_from_params(params: dict | None) -> FlowProbe:
+    """The probe of stored settings (:meth:`FlowProbe.params`; None or empty: none)."""
+    if not params:
+        return NO_FLOW
+    return FlowProbe(directions=tuple(params["directions"]), sides=str(params["sides"]),
+                     face_rule=FACE_RULES[params["face_rule"]])
+
+
+def probe_from_attrs(attrs: dict) -> FlowProbe:
+    """The probe a contact file was solved with (its ``flow`` attribute, JSON text;
+    none: :data:`NO_FLOW`)."""
+    import json
+
+    stored = attrs.get("flow")
+    return probe_from_params(json.loads(stored) if isinstance(stored, str) else stored)
+
+
+def flow_settings(config: dict) -> FlowSettings:
+    """The :class:`FlowSettings` of a validated ``config`` (its ``flow`` section)."""
+    section = config["flow"]
+    if not section["enabled"]:
+        return FLOW_OFF
+    probe = FlowProbe(directions=tuple(section["directions"]), sides=section["sides"],
+                      face_rule=FACE_RULES[section["face_rule"]])
+    seal = Seal(pressure_drop=section["pressure_drop_MPa"] * MPA,
+                viscosity=section["viscosity_Pa_s"], width=section["seal_width_mm"] * MM,
+                length=section["seal_length_mm"] * MM)
+    return FlowSettings(probe, seal)
+
+
+def _slip(key: str, value: float) -> str | None:
+    """The message for a value of ``flow.<key>`` outside its plausible range, or None."""
+    (low, high), slips = PLAUSIBLE[key]
+    if low <= value <= high:
+        return None
+    guesses = [f"typed in {unit}? then write flow.{key}: {value * factor:.6g}"
+               for unit, factor in slips if low <= value * factor <= high]
+    unit = key.rsplit("_", 1)[-1] if key != "viscosity_Pa_s" else "Pa s"
+    return (f"flow.{key}: {value:g} is outside the plausible {low:g}-{high:g} {unit}"
+            + (f" ({'; '.join(guesses)})" if guesses else "")
+            + " (plausibility_check: false accepts it)")
+
+
+def check_flow(config: dict, grids: dict) -> list[str]:
+    """The problems of the ``flow`` section of a validated ``config``: values that are
+    almost surely a unit slip (with ``plausibility_check``), and contact grids
+    (``grids``: a geometry's configuration key -> its (nx, ny)) too small to carry a
+    flow (at least two elements along and across each direction)."""
+    section = config["flow"]
+    if not section["enabled"]:
+        return []
+    problems = []
+    if config["plausibility_check"]:
+        problems += [message for key in PLAUSIBLE
+                     if (message := _slip(key, float(section[key]))) is not None]
+    if float(section["pressure_drop_MPa"]) == 0.0:
+        problems.append("flow.pressure_drop_MPa: 0 gives no leak rate; give the inlet minus "
+                        "outlet pressure [MPa] (e.g. 0.1 for 1 bar)")
+    for where, (nx, ny) in grids.items():
+        if min(nx, ny) < 2:
+            problems.append(f"{where}: a {nx} x {ny} contact grid cannot carry a flow (it "
+                            "needs at least 2 elements along and across the flow); give it "
+                            "at least 2 x 2 elements or set flow.enabled: false")
+    return problems
+
+
+def percolation_rows(sweep, label_columns: dict, directions) -> list[dict]:
+    """A cell's percolation thresholds (:func:`roughcontact.transport.percolation.threshold`)
+    per flow direction of its SI ``sweep``: the real area fraction [-] and the nominal
+    pressure [MPa] at which half its surfaces have sealed, with 95 % bands."""
+    from roughcontact.transport.percolation import sealing_points, threshold
+
+    rows = []
+    for d in directions:
+        points = sealing_points(getattr(sweep, f"flow_connected_{d}"),
+                                sweep.real_area_fraction, sweep.nominal_pressure,
+                                sweep.converged)
+        found = threshold(points).as_dict()
+        for key in ("pressure", "pressure_low", "pressure_high"):
+            found[f"{key}_MPa"] = found.pop(key) / MPA
+        found["reopened_steps"] = int(np.sum(points.reopened))
+        rows.append({**label_columns, "direction": d, **found})
+    return rows
+
+
+def finite_or_none(value):
+    """A JSON value: None for NaN (the sidecar is strict JSON)."""
+    return None if isinstance(value, float) and not math.isfinite(value) else value

@@ -1,0 +1,143 @@
+"""What a contact sweep records of the flow through each of its solutions' gaps.
+
+A :class:`FlowProbe` is a value the sweep is given (through its interface grid,
+:class:`~roughcontact.contact.interface.InterfaceGrid`): at every step it solves
+the flow (:func:`~roughcontact.transport.flow.solve_flow`) through the gap of
+every surface, in each of its ``directions``, and gives the sweep its columns:
+
+``flow_conductance_<d>``
+    the effective conductance ``K`` along ``d`` [gap unit cubed: m^3 in SI, sigma^3
+    in the dimensionless form];
+``flow_factor_<d>``
+    ``K / mean(g)^3`` [-]: against a flat gap of the same mean gap (0 where sealed,
+    full contact included);
+``pressure_flow_factor_<d>``
+    ``K / h^3`` [-], Patir & Cheng's (1978) pressure flow factor, with ``h`` the
+    nominal separation of the flat and the undeformed mean plane of the rough
+    surface, ``mean(f) - d`` (``f`` the initial separations, ``d`` the approach);
+    0 where sealed, NaN where the gap leaks and ``h <= 0`` (the flat below the
+    undeformed mean plane: the factor is not defined there);
+``flow_connected_<d>``
+    the free space connects inlet to outlet (bool).
+
+The gap a flow sees is the solution's gap with the elements in contact
+(``p > 0``) closed and the rest clipped at zero (the solver's gap is zero in
+contact only to its tolerance). :data:`NO_FLOW` records nothing: a sweep without
+flow has no flow columns and costs nothing more.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import numpy as np
+
+from roughcontact.transport.flow import (
+    DIRECT,
+    FACE_RULES,
+    FLOW_DIRECTIONS,
+    HARMONIC,
+    PERIODIC,
+    SEALED,
+    DirectSolver,
+    FaceRule,
+    FlowSetup,
+    JacobiCG,
+    solve_flow,
+)
+
+__all__ = ["FLOW_COLUMNS", "FLOW_UNITS", "NO_FLOW", "SIDE_CHOICES", "FlowProbe",
+           "flow_column_names"]
+
+#: The quantities of a direction's columns, and the unit of each (``gap^3``: the cube of
+#: the unit of the gaps the sweep was given).
+FLOW_UNITS = MappingProxyType({"flow_conductance": "gap^3", "flow_factor": "1",
+                               "pressure_flow_factor": "1", "flow_connected": "bool"})
+#: The sides a probe may put parallel to the flow: those of the grid (periodic on a
+#: periodic grid, sealed on a finite block's), periodic or sealed.
+SIDE_CHOICES = MappingProxyType({"grid": None, "periodic": PERIODIC, "sealed": SEALED})
+
+
+def flow_column_names(directions) -> tuple[str, ...]:
+    """The columns of a probe flowing along ``directions``, in order."""
+    return tuple(f"{quantity}_{direction}" for direction in directions
+                 for quantity in FLOW_UNITS)
+
+
+#: Every flow column a sweep may hold.
+FLOW_COLUMNS = flow_column_names(FLOW_DIRECTIONS)
+
+
+@dataclass(frozen=True)
+class FlowProbe:
+    """The flow a sweep records at every step (module docstring).
+
+    Parameters
+    ----------
+    directions : tuple of {"x", "y"}
+        Directions of the flow, each solved on its own (empty: :data:`NO_FLOW`).
+    sides : {"grid", "periodic", "sealed"}
+        The sides parallel to the flow (:data:`SIDE_CHOICES`).
+    face_rule : FaceRule
+        :data:`~roughcontact.transport.flow.HARMONIC` (default) or ``ARITHMETIC``.
+    solver : DirectSolver or JacobiCG
+        The linear solver (:mod:`roughcontact.transport.flow`).
+    """
+
+    directions: tuple[str, ...] = FLOW_DIRECTIONS
+    sides: str = "grid"
+    face_rule: FaceRule = HARMONIC
+    solver: DirectSolver | JacobiCG = field(default=DIRECT, repr=False)
+
+    def __post_init__(self):
+        directions = tuple(self.directions)
+        unknown = [d for d in directions if d not in FLOW_DIRECTIONS]
+        if unknown or len(set(directions)) != len(directions):
+            raise ValueError(f"directions must be distinct, each one of {FLOW_DIRECTIONS}, "
+                             f"got {self.directions!r}")
+        object.__setattr__(self, "directions", directions)
+        if self.sides not in SIDE_CHOICES:
+            raise ValueError(f"sides must be one of {tuple(SIDE_CHOICES)}, got {self.sides!r}")
+        if not isinstance(self.face_rule, FaceRule):
+            raise ValueError(f"face_rule must be one of the FaceRule values "
+                             f"{tuple(FACE_RULES)}, got {self.face_rule!r}")
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The columns it records (:func:`flow_column_names`); empty for :data:`NO_FLOW`."""
+        return flow_column_names(self.directions)
+
+    def params(self) -> dict:
+        """Its settings as plain values (a stored file's record of what was solved)."""
+        return {"directions": list(self.directions), "sides": self.sides,
+                "face_rule": self.face_rule.name}
+
+    def columns(self, pressure, gap, separation, spacing, periodic: bool) -> dict:
+        """The flow columns (module docstring) of solutions ``pressure`` and ``gap``
+        (..., ny, nx) whose nominal separations are ``separation`` (...) [gap unit], on
+        elements of sides ``spacing`` ``(dx, dy)`` [m] of a grid that is ``periodic``
+        or not: name -> array of the leading shape."""
+        if not self.directions:
+            return {}
+        open_gap = np.where(np.asarray(pressure) > 0.0, 0.0, np.maximum(gap, 0.0))
+        sides = SIDE_CHOICES[self.sides] or (PERIODIC if periodic else SEALED)
+        h = np.asarray(separation, dtype=float)
+        positive = h > 0.0
+        out = {}
+        for direction in self.directions:
+            result = solve_flow(open_gap, FlowSetup(spacing, direction, sides, self.face_rule,
+                                                    self.solver))
+            sealed = ~result.connected  # no flow: both factors are 0, even at full contact
+            with np.errstate(invalid="ignore", divide="ignore"):
+                pressure_factor = np.where(
+                    positive, result.conductance / np.where(positive, h, 1.0) ** 3, np.nan)
+            out[f"flow_conductance_{direction}"] = result.conductance
+            out[f"flow_factor_{direction}"] = np.where(sealed, 0.0, result.flow_factor)
+            out[f"pressure_flow_factor_{direction}"] = np.where(sealed, 0.0, pressure_factor)
+            out[f"flow_connected_{direction}"] = result.connected
+        return out
+
+
+#: A probe that records nothing (the default of every sweep).
+NO_FLOW = FlowProbe(directions=())
