@@ -37,7 +37,7 @@ __all__ = ["FLOW_OFF", "FlowSettings", "check_flow", "flow_settings", "percolati
 PLAUSIBLE = {
     "viscosity_Pa_s": ((1e-6, 1e4), (("mPa s", 1e-3),)),
     "pressure_drop_MPa": ((0.0, 1e3), (("Pa", 1e-6), ("kPa", 1e-3), ("bar", 0.1))),
-    "seal_width_mm": ((1e-3, 1e5), (("m", 1e3), ("um", 1e-3))),
+    "seal_width_mm": ((1.0, 1e5), (("m", 1e3), ("um", 1e-3))),
     "seal_length_mm": ((1e-3, 1e4), (("m", 1e3), ("um", 1e-3))),
 }
 

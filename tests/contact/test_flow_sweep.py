@@ -1,0 +1,194 @@
+"""The flow a sweep records through its solutions' gaps (roughcontact.transport.probe).
+
+Checked against what the sweep does not compute for it: the gap recomputed here from
+the returned pressure fields through the operator (u = C p, g = u + f - d with the
+elements in contact closed), solved by an independent five-point finite-volume
+system of this file (harmonic faces, scipy's spsolve) on which the probe shares no
+code; the flow off changes no other number, bit for bit; the columns survive the
+dimensionless form (conductance scaled by sigma^3) and the contact file.
+"""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from roughcontact.contact import sweep
+from roughcontact.contact.curves import flow_arrays
+from roughcontact.contact.interface import InterfaceGrid
+from roughcontact.contact.result import FLOW
+from roughcontact.elasticity.halfspace import PeriodicHalfSpace
+from roughcontact.study import storage
+from roughcontact.transport import ARITHMETIC, FLOW_COLUMNS, NO_FLOW, FlowProbe
+
+N, SIZE, E = 32, 1.0e-3, 1.0e9
+
+
+def _surfaces(m=3, seed=4):
+    rng = np.random.default_rng(seed)
+    q = np.fft.fftfreq(N)
+    kernel = np.exp(-(np.hypot(*np.meshgrid(q, q)) / 0.08) ** 2)
+    z = np.real(np.fft.ifft2(np.fft.fft2(rng.standard_normal((m, N, N))) * kernel))
+    z *= 1e-6 / z.std(axis=(1, 2), keepdims=True)
+    return z.max(axis=(1, 2), keepdims=True) - z  # initial separations f >= 0
+
+
+def _reference_conductance(gap, periodic_sides: bool) -> float:
+    """K of one gap field (ny, nx), flow along x, pressure 1 at x = 0 and 0 at x = Lx,
+    square elements, harmonic faces: a plain five-point system over ALL open elements
+    (isolated clusters get a tiny leak to pressure 0 so the matrix is regular; they
+    carry no flow from the inlet)."""
+    ny, nx = gap.shape
+    unit = gap.max()
+    k = (gap / unit) ** 3
+    index = np.arange(ny * nx).reshape(ny, nx)
+    rows, cols, vals = [], [], []
+    diag = np.full(ny * nx, 1e-20)
+    rhs = np.zeros(ny * nx)
+
+    def face(a, b, ka, kb):
+        t = np.where((ka > 0) & (kb > 0), 2 * ka * kb / np.where(ka + kb > 0, ka + kb, 1), 0)
+        np.add.at(diag, a, t)
+        np.add.at(diag, b, t)
+        rows.extend([a, b])
+        cols.extend([b, a])
+        vals.extend([-t, -t])
+
+    face(index[:, :-1].ravel(), index[:, 1:].ravel(), k[:, :-1].ravel(), k[:, 1:].ravel())
+    last = ny if periodic_sides else ny - 1
+    lo, hi = np.arange(last), (np.arange(last) + 1) % ny
+    face(index[lo].ravel(), index[hi].ravel(), k[lo].ravel(), k[hi].ravel())
+    inlet, outlet = index[:, 0], index[:, -1]
+    diag[inlet] += 2 * k[:, 0]
+    rhs[inlet] += 2 * k[:, 0]
+    diag[outlet] += 2 * k[:, -1]
+    closed = (k == 0).ravel()
+    diag[closed] = 1.0
+    matrix = sp.csr_matrix((np.concatenate([diag, *vals]),
+                            (np.concatenate([np.arange(ny * nx), *rows]),
+                             np.concatenate([np.arange(ny * nx), *cols]))))
+    p = spla.spsolve(matrix.tocsc(), rhs)
+    q_in = np.sum(2 * k[:, 0] * (1 - p[inlet]))
+    return q_in * unit**3 * nx / ny  # K = 12 eta Q Lx / (Ly dp), 12 eta = dp = 1, dx = dy
+
+
+@pytest.fixture(scope="module")
+def solved():
+    operator = PeriodicHalfSpace((N, N), (SIZE, SIZE), E=E, nu=0.3)
+    gaps = _surfaces()
+    loads = np.geomspace(2e5, 2e7, 5)
+    grid = InterfaceGrid((SIZE / N, SIZE / N), periodic=True)
+    plain = sweep(operator, gaps, mean_pressures=loads, method="pcg", interface=grid,
+                  return_fields=True, stiffness=False)
+    flowing = sweep(operator, gaps, mean_pressures=loads, method="pcg",
+                    interface=InterfaceGrid(grid.spacing, True, flow=FlowProbe()),
+                    return_fields=True, stiffness=False)
+    return operator, gaps, plain, flowing
+
+
+def test_the_columns_are_the_flow_through_the_solutions_gaps(solved):
+    operator, gaps, _, flowing = solved
+    m, k = flowing.approach.shape
+    checked = 0
+    for j in range(m):
+        for step in range(k):
+            p = flowing.pressure[j, step]
+            u = (operator @ p.ravel()).reshape(N, N)
+            gap = np.where(p > 0, 0.0, np.maximum(u + gaps[j] - flowing.approach[j, step], 0))
+            if not flowing.flow_connected_x[j, step]:
+                assert flowing.flow_conductance_x[j, step] == 0.0
+                continue
+            expected = _reference_conductance(gap, periodic_sides=True)
+            np.testing.assert_allclose(flowing.flow_conductance_x[j, step], expected,
+                                       rtol=1e-8)
+            np.testing.assert_allclose(flowing.flow_factor_x[j, step],
+                                       expected / gap.mean() ** 3, rtol=1e-8)
+            separation = np.mean(gaps[j]) - flowing.approach[j, step]  # mean(f) - d
+            if separation > 0:
+                np.testing.assert_allclose(flowing.pressure_flow_factor_x[j, step],
+                                           expected / separation**3, rtol=1e-6)
+            checked += 1
+    assert checked >= 5  # leaking steps were compared (the sweep also reaches sealing)
+    assert not flowing.flow_connected_x[:, -1].any()  # 2e7 Pa: sealed on every surface
+
+
+def test_flow_off_records_nothing_and_flow_on_changes_no_other_number(solved):
+    _, _, plain, flowing = solved
+    assert all(getattr(plain, name) is None for name in FLOW)
+    assert flow_arrays(plain) == {}
+    assert set(flow_arrays(flowing)) == set(FLOW)
+    for name in ("approach", "nominal_pressure", "real_area_fraction", "mean_gap",
+                 "spot_count", "residual", "pressure"):
+        np.testing.assert_array_equal(getattr(plain, name), getattr(flowing, name))
+
+
+def test_the_conductance_falls_as_the_load_grows(solved):
+    """Rayleigh's monotonicity: a gap closing everywhere passes less (the gap of a
+    frictionless contact under a growing load closes everywhere, checked here)."""
+    operator, gaps, _, flowing = solved
+    p = flowing.pressure
+    u = np.einsum("ij,mkj->mki", operator.dense() if hasattr(operator, "dense") else
+                  np.column_stack([operator @ e for e in np.eye(N * N)]),
+                  p.reshape(*p.shape[:2], -1)).reshape(p.shape)
+    gap = np.maximum(u + gaps[:, None] - flowing.approach[..., None, None], 0.0)
+    assert (np.diff(gap, axis=1) <= 1e-9 * gap.max()).all()  # to the solver's tolerance
+    for name in ("flow_conductance_x", "flow_conductance_y"):
+        assert (np.diff(getattr(flowing, name), axis=1) <= 0.0).all()
+
+
+def test_one_direction_and_the_arithmetic_rule(solved):
+    operator, gaps, _, flowing = solved
+    probe = FlowProbe(directions=("y",), face_rule=ARITHMETIC)
+    assert probe.names == ("flow_conductance_y", "flow_factor_y", "pressure_flow_factor_y",
+                           "flow_connected_y")
+    again = sweep(operator, gaps[:1], mean_pressures=np.geomspace(2e5, 2e7, 5), method="pcg",
+                  interface=InterfaceGrid((SIZE / N, SIZE / N), True, flow=probe),
+                  stiffness=False)
+    assert again.flow_conductance_x is None and again.flow_conductance_y is not None
+    # the arithmetic mean of two conductances is at least their harmonic mean: the
+    # arithmetic rule passes at least as much, and the connectivity is the rule's own
+    harmonic = sweep(operator, gaps[:1], mean_pressures=np.geomspace(2e5, 2e7, 5),
+                     method="pcg", interface=InterfaceGrid((SIZE / N, SIZE / N), True,
+                                                           flow=FlowProbe(directions=("y",))),
+                     stiffness=False)
+    assert (again.flow_conductance_y >= harmonic.flow_conductance_y * (1 - 1e-12)).all()
+    np.testing.assert_array_equal(again.flow_connected_y, harmonic.flow_connected_y)
+
+
+def test_flow_columns_names_agree_everywhere():
+    assert FLOW == FLOW_COLUMNS == storage.FLOW_ARRAYS
+    assert NO_FLOW.names == () and NO_FLOW.columns(None, None, None, None, False) == {}
+
+
+@pytest.mark.parametrize("bad", [{"directions": ("z",)}, {"directions": ("x", "x")},
+                                 {"sides": "open"}, {"face_rule": "harmonic"}])
+def test_a_bad_probe_is_refused_naming_the_setting(bad):
+    with pytest.raises(ValueError, match=next(iter(bad))):
+        FlowProbe(**bad)
+
+
+def test_the_dimensionless_form_scales_the_conductance_by_sigma_cubed(tmp_path):
+    from roughcontact.contact import cell as cell_module
+    from roughcontact.contact.nondim import CellOptions, to_physical
+    from roughcontact.elasticity.halfspace import halfspace_influence
+
+    heights = _surfaces(m=2, seed=9)[:, :16, :16]
+    heights = (heights - heights.mean(axis=(1, 2), keepdims=True)) / heights.std()
+    geometry = type("Block", (), {"thickness": 10e-3, "element_area": (1e-4) ** 2,
+                                  "size": (1.6e-3, 1.6e-3), "grid": (16, 16)})()
+    unit = halfspace_influence((16, 16), (1.6e-3, 1.6e-3), 1.0, 0.0)
+    grid = InterfaceGrid((1e-4, 1e-4), flow=FlowProbe())
+    options = CellOptions(method="pivot", interface=grid)
+    nd = cell_module.sweep_cell(unit, heights, geometry, 0.05, 8, options=options)
+    sigma = 2e-6
+    physical = to_physical(nd, sigma, 1e8)
+    np.testing.assert_allclose(physical.flow_conductance_x, nd.flow_conductance_x * sigma**3,
+                               rtol=1e-15)
+    np.testing.assert_array_equal(physical.flow_factor_x, nd.flow_factor_x)
+    np.testing.assert_array_equal(physical.flow_connected_y, nd.flow_connected_y)
+    # and through a contact file, bit for bit
+    path = tmp_path / "contact.h5"
+    storage.write_contact(path, nd, {"job": "{}"})
+    back, _ = storage.read_contact(path)
+    for name in FLOW:
+        np.testing.assert_array_equal(getattr(back, name), getattr(nd, name))
