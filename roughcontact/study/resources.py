@@ -158,6 +158,15 @@ def matrix_free_solve_seconds(grid) -> float:
                per_solve / contact["matrix_free_reference_elements"])
 
 
+def flow_solve_seconds(grid) -> float:
+    """Wall time [s] of one flow solve through a gap on ``grid`` (one surface, one step,
+    one direction; :mod:`roughcontact.transport`): 8 ms on 60 x 60 by SuperLU, growing
+    as n^1.3 (45 ms measured on 128 x 128, 0.26 s on 256 x 256)."""
+    contact = _MODEL["contact"]
+    scale = grid[0] * grid[1] / contact["reference_elements"]
+    return contact["flow_solve_seconds"] * scale ** contact["flow_exponent"]
+
+
 def _dense(geometry: Geometry, build: BuildSettings) -> bool:
     """Whether a geometry's build is planned as the dense matrix (within ``build``'s limit)."""
     return geometry.planned_model(build.max_bytes) is InfluenceModel.DENSE
@@ -171,17 +180,19 @@ def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSett
     35-186 s per cell of 60 surfaces x 30 steps on 60 x 60 (paper mesh; the
     converged mesh needs fewer iterations) and 4 s on 30 x 30. A sweep beyond
     P L / (E sigma) = 4 (the study's) reaches larger contact fractions, where
-    CG needs more iterations: counted in proportion.
+    CG needs more iterations: counted in proportion. With the flow on, each step's
+    flow solves (:func:`flow_solve_seconds`, one per direction) are added.
     """
     solves = job.surface.count * settings.steps
+    flow = solves * len(settings.flow.directions) * flow_solve_seconds(job.geometry.grid)
     reach = max(1.0, job.pressure_end / _MODEL["contact"]["reference_reach"])
     # a compliant counter body: more contact at the same pressure (cost_model.yaml)
     pair = job.counter.time_factor(_MODEL)
     grid = job.geometry.grid
     if not _dense(job.geometry, build):
         return (solves * matrix_free_solve_seconds(grid) * tolerance_factor(settings)
-                * method_factor(settings) * reach * pair)
-    return solves * dense_solve_seconds(grid, settings) * reach * pair
+                * method_factor(settings) * reach * pair + flow)
+    return solves * dense_solve_seconds(grid, settings) * reach * pair + flow
 
 
 def contact_runtime(job: ContactJob, settings: ContactSettings, build: BuildSettings,
