@@ -720,11 +720,14 @@ def _finish_leakage_row(row_axes, name: str, table, directions) -> None:
     connected.set(ylabel="surfaces still leaking [%]", ylim=(-3.0, 103.0))
     for ax in (leak, factor, connected):
         ax.set(xscale="log", xlabel="nominal pressure $P$ [MPa]")
+    for ax in (leak, connected):  # one P axis: the leak rate's ends where it reaches 0
+        ax.sharex(factor)
     area.set(xlabel="real contact area fraction $A_r / A_n$", yscale="log",
              ylabel=f"{factor.get_ylabel()} (where > 0)", xlim=(0.0, AREA_AXIS_END))
     area.axvline(DAPP_THRESHOLD, color="0.5", linestyle="--", linewidth=1.2)
-    for ax in row_axes:
+    for ax in (leak, factor, connected):
         ax.grid(True, which="both", alpha=0.3)
+    area.grid(True, alpha=0.3)  # major only: its log axis spans many decades
     leak.legend(fontsize=7)
     key = [Line2D([], [], color="0.3", linestyle=DIRECTION_STYLES[d], label=f"along {d}")
            for d in directions]

@@ -389,6 +389,7 @@ def test_plot_leakage_draws_each_cell_along_x_and_y_with_its_threshold():
     np.testing.assert_allclose(span.get_x(), 0.33)
     np.testing.assert_allclose(span.get_width(), 0.41 - 0.33)
     assert "percolation threshold (y)" in [t.get_text() for t in area.get_legend().get_texts()]
+    assert leak.get_xlim() == factor.get_xlim() == connected.get_xlim()  # one P axis
     assert leak.get_title(loc="left").startswith("seal: $\\sigma$ = 5 µm")
     plt.close(fig)
     # along x only: a curve per cell, no y thresholds or their key
