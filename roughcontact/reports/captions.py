@@ -275,13 +275,47 @@ def _two_bodies(config, plan, name):
             f"dashed with crosses) against nominal pressure. {_surfaces(rows)}. {BANDS}")
 
 
+def _leakage(config, plan, name):
+    flow = config["flow"]
+    ordered = [d for d in ("x", "y") if d in flow["directions"]]  # as the figure draws them
+    directions = join(ordered)
+    seal = (f"a fluid of viscosity {flow['viscosity_Pa_s']:g} Pa s through a seal "
+            f"{flow['seal_width_mm']:g} mm wide and {flow['seal_length_mm']:g} mm long with "
+            f"{flow['pressure_drop_MPa']:g} MPa across it (steady Reynolds equation, local "
+            f"cubic law, {flow['face_rule']} face rule, {flow['sides']} sides; along "
+            f"{directions}{', y dashed' if len(ordered) > 1 else ''})")
+    parts = []
+    for study in config["figures"][name]["studies"]:
+        rows = _columns(plan.cells[study])
+        parts.append(f"{study} (sigma {numbers((r['sigma_um'] for r in rows), 'um')}, b "
+                     f"{numbers((r['b_mm'] for r in rows), 'mm')}, E "
+                     f"{numbers((r['E_MPa'] for r in rows), 'MPa')}, nu "
+                     f"{numbers(r['nu'] for r in rows)}, a "
+                     f"{numbers((r['thickness_mm'] for r in rows), 'mm')} block on "
+                     f"{join(mesh_name(m) for m in _meshes(rows))}; (Sk, Ku) = {_pairs(rows)})")
+    rows = [row for study in config["figures"][name]["studies"]
+            for row in _columns(plan.cells[study])]
+    contact = config["contact"]
+    return (f"Beyond the paper: will the seal leak? The flow of {seal}, one row per study: "
+            f"{'; '.join(parts)}. Columns: the leak rate Q against nominal pressure (log "
+            f"axes: the levels where Q > 0 only; Q is 0 once every surface has sealed), the "
+            f"flow factor phi = K / mean gap^3 against nominal pressure, phi against the "
+            f"real area fraction (the cells' mean curves, log, where phi > 0) with each "
+            f"cell's percolation threshold (the real area at which half its surfaces have "
+            f"sealed; along {ordered[0]} a line in the cell's colour, its 95 % band "
+            f"shaded{', along y dotted' if len(ordered) > 1 else ''}) and Dapp et "
+            f"al. 2012's 0.42 (grey dashed), and the share of surfaces still leaking. "
+            f"{_surfaces(rows)}, {contact['steps']} steps each, {contact['pressure_levels']} "
+            f"pressure levels. {BANDS}")
+
+
 #: The caption writer of each figure: ``(config, plan, name) -> str``.
 CAPTIONS: dict[str, Callable] = {
     "fig01": _fig01, "fig02": _fig02, "fig03": _fig03, "fig04": _fig04, "fig05": _fig05,
     "fig07": _fig07, "fig09": _fig09, "fig10": _fig10, "fig11": _fig11,
     "fig11_resolved": _fig11_resolved, "fig12": _fig12, "fig13": _fig13, "fig14": _fig14,
     "gaps": _gaps, "table_Eu": _table_eu, "hardness": _hardness, "measured": _measured,
-    "two_bodies": _two_bodies,
+    "two_bodies": _two_bodies, "leakage": _leakage,
 }
 
 

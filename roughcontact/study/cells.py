@@ -55,8 +55,11 @@ SURFACE_ONLY_FIGURES = ("fig01", "fig02", "fig03", "fig04", "fig05")
 CONTACT_FIGURES = ("fig07", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "table_Eu",
                    "hardness", "measured", "fig11_resolved", "gaps")
 #: Figures drawn from the aggregates of the studies they list (``studies:``), with no cells
-#: of their own ("two_bodies": each counter body of those studies beside the rigid flat).
-STUDIES_FIGURES = ("two_bodies",)
+#: of their own ("two_bodies": each counter body of those studies beside the rigid flat;
+#: "leakage": the flow through the contact gap of those studies, needs the flow on).
+STUDIES_FIGURES = ("two_bodies", "leakage")
+#: The :data:`STUDIES_FIGURES` drawn from the flow columns of their studies' aggregates.
+FLOW_FIGURES = ("leakage",)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -121,6 +124,12 @@ def _figures_and_studies(config: dict) -> tuple[tuple[str, ...], tuple[str, ...]
         f"(sweeps: {', '.join(config['sweeps']) or 'none'})"
         for name in figures if name in STUDIES_FIGURES
         for study in config["figures"][name]["studies"] if study not in studies])
+    _raise("Figures of the flow through the gap with the flow off", [
+        f"figures.{name}.studies: {study!r} is solved without the flow, so its aggregates "
+        f"have no leak rate, flow factor or percolation threshold to draw; set "
+        f"flow.enabled: true (config section flow) or remove the figure {name}"
+        for name in figures if name in FLOW_FIGURES and not config["flow"]["enabled"]
+        for study in config["figures"][name]["studies"]])
     return figures, studies
 
 

@@ -53,7 +53,7 @@ def test_fig07_and_gaps_captions_name_the_meshes_of_their_config(name, right, wr
     assert f"the {right} mesh" in figure_caption("hardness", config, plan)
 
 
-@pytest.mark.parametrize("name", ["quick", "config", "measured", "two_bodies"])
+@pytest.mark.parametrize("name", ["quick", "config", "measured", "two_bodies", "seal"])
 def test_every_figure_of_a_shipped_config_has_its_caption(name):
     config, plan = plan_of(name)
     for figure in plan.figures:
@@ -80,6 +80,23 @@ def test_the_two_bodies_caption_names_each_study_and_its_counter_bodies():
             "the refined mesh) against the block E 210000 MPa nu 0.3 10 mm refined (sigma 0.8 "
             "um) and the rigid smooth flat") in caption
     assert "20 surfaces per curve" in caption
+
+
+def test_the_leakage_caption_names_the_configured_seal_and_its_cells():
+    config, plan = plan_of("seal")
+    config["flow"] |= {"viscosity_Pa_s": 0.0035, "pressure_drop_MPa": 2.5,
+                       "directions": ["x"], "face_rule": "arithmetic"}
+    caption = figure_caption("leakage", config, plan)
+    assert ("a fluid of viscosity 0.0035 Pa s through a seal 100 mm wide and 2 mm long with "
+            "2.5 MPa across it (steady Reynolds equation, local cubic law, arithmetic face "
+            "rule, grid sides; along x)") in caption
+    assert ("seal (sigma 5 um, b 0.5 mm, E 511 MPa, nu 0, a 10 mm block on the refined mesh; "
+            "(Sk, Ku) = (0, 3), (-0.8, 4), (0.8, 4), (0, 4.5) and (1, 4.5))") in caption
+    assert "20 surfaces per curve, 24 steps each, 16 pressure levels" in caption
+    assert "dashed" not in caption.split("Dapp")[0] and "dotted" not in caption
+    shipped = figure_caption("leakage", *plan_of("seal"))
+    assert "viscosity 0.001 Pa s" in shipped and "with 1 MPa across it" in shipped
+    assert "along x and y, y dashed" in shipped and "along y dotted" in shipped
 
 
 def test_counter_labels_and_panels():

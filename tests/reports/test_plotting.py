@@ -18,10 +18,13 @@ from roughcontact.reports.plotting import (  # noqa: E402
     describe_study,
     draw_surfaces,
     draw_table,
+    leakage_pressures,
+    load_percolation,
     load_studies,
     plot_by_mesh,
     plot_cells,
     plot_cells_panels,
+    plot_leakage,
     plot_two_bodies,
     save_table,
     surface_moments,
@@ -313,3 +316,118 @@ def test_load_studies_reads_four_files_per_study_in_order(tmp_path):
     assert list(tables) == ["a", "b"] and tables["b"]["k"].tolist() == [2.0]
     with pytest.raises(ValueError, match="7 aggregate files for 2 studies"):
         load_studies(paths[:7], ["a", "b"])
+
+
+#: Leak rate [m^3/s] along x of two cells at five levels: the first seals at the fourth.
+LEAK = {0: [4e-6, 1e-7, 1e-9, 0.0, 0.0], 1: [6e-6, 5e-7, 3e-8, 2e-10, 5e-12]}
+
+
+def leakage_table(directions=("x", "y")) -> pd.DataFrame:
+    """A leakage study of two cells, (Sk, Ku) = (0, 3) and (-0.8, 4), five levels, every
+    level on all 4 surfaces; the leak rate of :data:`LEAK` (y: half of x), flow factor,
+    real area and the share of surfaces still leaking (0 once sealed)."""
+    rows = []
+    for cell, (skew, kurt) in enumerate(((0.0, 3.0), (-0.8, 4.0))):
+        for level, P in enumerate((1e5, 3e5, 1e6, 3e6, 1e7)):
+            row = {"cell": cell, "skew": skew, "kurt": kurt, "nominal_pressure": P,
+                   "surfaces": 4, "sigma_um": 5.0, "b_mm": 0.5, "E_MPa": 511.0,
+                   "coverage": "all surfaces",
+                   "real_area_fraction_mean": 0.1 * (level + 1),
+                   "real_area_fraction_half_width": 0.01, "real_area_fraction_count": 4,
+                   "mean_gap_mean": 5e-6 / (level + 1), "mean_gap_half_width": 1e-7,
+                   "mean_gap_count": 4}
+            for d, scale in zip(directions, (1.0, 0.5), strict=False):
+                leak = scale * LEAK[cell][level]
+                row |= {f"leak_rate_{d}_mean": leak, f"leak_rate_{d}_half_width": 0.1 * leak,
+                        f"leak_rate_{d}_count": 4,
+                        f"flow_factor_{d}_mean": 0.8 * leak / LEAK[1][0],
+                        f"flow_factor_{d}_half_width": 0.1 * 0.8 * leak / LEAK[1][0],
+                        f"flow_factor_{d}_count": 4,
+                        f"flow_connected_{d}_mean": float(leak > 0),
+                        f"flow_connected_{d}_half_width": 0.0, f"flow_connected_{d}_count": 4}
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+#: Percolation thresholds of the two cells of :func:`leakage_table`: the first sealed inside
+#: the swept range along x and y, the second not (above it: no numbers).
+THRESHOLDS = pd.DataFrame([
+    {"cell": 0, "direction": "x", "area": 0.38, "area_low": 0.33, "area_high": 0.41},
+    {"cell": 0, "direction": "y", "area": 0.40, "area_low": 0.35, "area_high": 0.44},
+    {"cell": 1, "direction": "x", "area": np.nan, "area_low": 0.45, "area_high": np.nan},
+    {"cell": 1, "direction": "y", "area": np.nan, "area_low": 0.45, "area_high": np.nan}])
+
+
+def test_plot_leakage_draws_each_cell_along_x_and_y_with_its_threshold():
+    """Four panels a study: leak rate (the positive levels only, log), flow factor against
+    P, flow factor against real area with the thresholds and Dapp's 0.42, share still
+    leaking; a curve per cell and direction, y dashed; the legend names each (Sk, Ku)."""
+    fig = plot_leakage({"seal": leakage_table()}, {"seal": THRESHOLDS})
+    leak, factor, area, connected = fig.axes
+    assert [t.get_text() for t in leak.get_legend().get_texts()] == [
+        "Sk = 0, Ku = 3", "Sk = -0.8, Ku = 4"]
+    for ax in (leak, factor, connected):  # a curve and a band per cell and direction
+        assert len(ax.lines) == len(ax.collections) == 4
+        assert ax.get_xscale() == "log"
+    assert leak.get_yscale() == "log" and area.get_yscale() == "log"
+    assert [line.get_linestyle() for line in leak.lines] == ["-", "--", "-", "--"]
+    # the sealed cell's leak rate at its three positive levels only, in m^3/s
+    np.testing.assert_allclose(leak.lines[0].get_xdata(), [0.1, 0.3, 1.0])
+    np.testing.assert_allclose(leak.lines[0].get_ydata(), LEAK[0][:3])
+    np.testing.assert_allclose(leak.lines[3].get_ydata(), np.array(LEAK[1]) / 2)
+    np.testing.assert_allclose(connected.lines[0].get_ydata(), [100, 100, 100, 0, 0])
+    # the flow factor against real area: 4 curves (where > 0), the first cell's two
+    # thresholds (x solid, y dotted), none for the cell not sealed, and Dapp et al.'s 0.42
+    marks = [line for line in area.lines if len(set(line.get_xdata())) == 1]  # vertical
+    curves = [line for line in area.lines if line not in marks]
+    assert len(curves) == 4
+    np.testing.assert_allclose(curves[0].get_xdata(), [0.1, 0.2, 0.3])
+    assert [(m.get_xdata()[0], m.get_linestyle()) for m in marks] == [
+        (0.38, "-"), (0.40, ":"), (0.42, "--")]
+    assert marks[0].get_color() == curves[0].get_color() == leak.lines[0].get_color()
+    (span,) = area.patches  # the x threshold's band of the first cell
+    np.testing.assert_allclose(span.get_x(), 0.33)
+    np.testing.assert_allclose(span.get_width(), 0.41 - 0.33)
+    assert "percolation threshold (y)" in [t.get_text() for t in area.get_legend().get_texts()]
+    assert leak.get_xlim() == factor.get_xlim() == connected.get_xlim()  # one P axis
+    assert leak.get_title(loc="left").startswith("seal: $\\sigma$ = 5 µm")
+    plt.close(fig)
+    # along x only: a curve per cell, no y thresholds or their key
+    fig = plot_leakage({"seal": leakage_table(("x",))}, {"seal": THRESHOLDS})
+    leak, _, area, _ = fig.axes
+    assert len(leak.lines) == 2 and len(area.lines) == 2 + 1 + 1 and len(area.patches) == 1
+    assert "percolation threshold (y)" not in [
+        t.get_text() for t in area.get_legend().get_texts()]
+    plt.close(fig)
+
+
+def test_leakage_pressures_span_the_levels_where_every_cell_is_solved_and_one_leaks():
+    table = leakage_table()
+    assert leakage_pressures(table) == [1e5, 1e6, 1e7]  # cell 1 leaks up to 10 MPa
+    table.loc[(table["cell"] == 1) & (table["nominal_pressure"] == 1e5), "coverage"] = \
+        "some surfaces"
+    table.loc[table["nominal_pressure"] == 1e7, [c for c in table if c.startswith("leak")
+                                                 and c.endswith("_mean")]] = 0.0
+    assert leakage_pressures(table) == [3e5, 1e6, 3e6]
+
+
+def test_load_percolation_reads_the_sidecars_thresholds(tmp_path):
+    """The thresholds of each study from its sidecar (checked as the tables are), the
+    sidecar's nulls as NaN; a study without flow has none."""
+    paths = []
+    for name, flow in (("seal", {"percolation": [
+            {"cell": 0, "direction": "x", "area": 0.42, "area_low": 0.4, "area_high": 0.44,
+             "pressure_MPa": 4.6, "pressure_low_MPa": None, "pressure_high_MPa": 4.7}]}),
+            ("dry", None)):
+        table, moduli = tmp_path / f"{name}.csv", tmp_path / f"{name}.moduli.csv"
+        table.write_text("cell\n0\n")
+        moduli.write_text("cell\n0\n")
+        meta = {"table_sha256": file_sha256(table), "moduli_sha256": file_sha256(moduli)}
+        if flow:
+            meta["flow"] = flow
+        (tmp_path / f"{name}.json").write_text(json.dumps(meta))
+        paths += [table, moduli, tmp_path / f"{name}.json", tmp_path / f"{name}.validity.csv"]
+    found = load_percolation(paths, ["seal", "dry"])
+    assert found["seal"]["area"].tolist() == [0.42]
+    assert np.isnan(found["seal"]["pressure_low_MPa"].iloc[0])
+    assert found["dry"].empty

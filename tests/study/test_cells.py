@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from scipy import ndimage
 
 from roughcontact.elasticity.influence import ModelTooLarge
@@ -207,3 +208,19 @@ def test_a_two_bodies_figure_draws_the_aggregates_of_the_studies_it_lists():
     with pytest.raises(ConfigProblems, match="figures.two_bodies.studies: 'pad_on_dsic' is no "
                                              "sweep or contact figure"):
         study_plan(config)
+
+
+def test_a_leakage_figure_of_a_study_solved_without_the_flow_is_refused_before_any_job():
+    """The leakage figure draws its studies' flow columns: with the flow off the plan
+    names the key and the setting that turns it on; set so, it plans the seal's jobs."""
+    raw = yaml.safe_load((REPO / "config" / "seal.yaml").read_text())
+    raw["flow"]["enabled"] = False
+    with pytest.raises(ConfigProblems) as refused:
+        study_plan(validated(raw))
+    (problem,) = refused.value.problems
+    assert problem.startswith("figures.leakage.studies: 'seal' is solved without the flow")
+    assert "set flow.enabled: true" in problem and "no job was started" in str(refused.value)
+    raw["flow"]["enabled"] = True  # the advice, followed
+    plan = study_plan(validated(raw))
+    assert plan.figures == ("leakage",) and figure_aggregates(raw, "leakage") == ("seal",)
+    assert plan.contact.flow.directions == ("x", "y")

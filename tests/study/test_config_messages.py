@@ -110,7 +110,7 @@ def test_an_unknown_key_is_named_with_the_key_it_was_likely_meant_for():
 
 
 @pytest.mark.parametrize("name", ["config", "quick", "large", "measured", "gridconv", "two_bodies",
-                                  "fig11_resolved", "accuracy"])
+                                  "seal", "fig11_resolved", "accuracy"])
 def test_the_defaults_filled_are_snakemakes(name):
     """apply_schema fills the schema's defaults itself, on the schema parsed once: the
     result equals snakemake.utils.validate's on the same config (each config of

@@ -46,7 +46,8 @@ def test_the_documented_targets_are_read_from_the_header():
         "results/figures/fig11_resolved.png"]
     assert documented_targets(REPO / "config" / "large.yaml") == []
     assert {"config.yaml", "quick.yaml", "large.yaml", "measured.yaml", "two_bodies.yaml",
-            "fig11_resolved.yaml", "gridconv.yaml"} <= set(CONFIGS)
+            "fig11_resolved.yaml", "gridconv.yaml", "seal.yaml"} <= set(CONFIGS)
+    assert documented_targets(REPO / "config" / "seal.yaml") == []
 
 
 @pytest.mark.parametrize("name", CONFIGS)
