@@ -66,7 +66,9 @@ class Quantity(NamedTuple):
     the relation holds at every level), their names; ``quantile``: for a point of a
     stored distribution, the sweep's quantile array and its probability
     (:mod:`roughcontact.contact.interface`); ``ratio``: for a quantity averaged as
-    the ratio of two surfaces' curves, their names.
+    the ratio of two surfaces' curves, their names; ``state``: a yes/no state of each
+    step (e.g. still leaking), read at a level from the surface's step nearest in
+    log P, not interpolated (its mean is then the share of surfaces in that state).
     """
 
     unit: str
@@ -75,6 +77,7 @@ class Quantity(NamedTuple):
     difference: tuple[str, str] | None = None
     quantile: tuple[str, float] | None = None
     ratio: tuple[str, str] | None = None
+    state: bool = False
 
 
 #: Aggregated quantities, by name.
@@ -146,7 +149,8 @@ def _flow_quantities(direction: str) -> dict:
                  "undeformed mean planes (Patir & Cheng 1978; 0 where sealed)"),
         f"flow_connected_{d}": Quantity(
             "1", f"share of surfaces whose free space connects inlet to outlet along {d} "
-                 "(still leaking)"),
+                 "(still leaking; each surface's state at its step nearest in log P)",
+            state=True),
     }
 
 
@@ -271,8 +275,9 @@ def surface_curves(sweep_physical: PhysicalSweep, pressures, quantity: str) -> n
     levels = np.asarray(pressures, dtype=float)
     if levels.ndim != 1 or not np.isfinite(levels).all() or (levels <= 0.0).any():
         raise ValueError("pressures must be a 1-d array of finite positive levels [Pa]")
-    return _interpolate(sweep.nominal_pressure, _values(sweep, quantity),
-                        _usable(sweep, quantity), levels)
+    read = _nearest if known[quantity].state else _interpolate
+    return read(sweep.nominal_pressure, _values(sweep, quantity), _usable(sweep, quantity),
+                levels)
 
 
 def interpolate(sweep_physical: PhysicalSweep, values, pressures) -> np.ndarray:
@@ -309,6 +314,28 @@ def _interpolate(nominal_pressure, values, usable, levels) -> np.ndarray:
             out[j, inside] = np.exp(np.interp(x, np.log(P), np.log(y)))
         else:
             out[j, inside] = np.interp(x, np.log(P), y)
+    return out
+
+
+def _nearest(nominal_pressure, values, usable, levels) -> np.ndarray:
+    """Each surface's value at its usable step nearest in log P to each level (a state:
+    no interpolation), over the range of its usable steps (NaN outside, as
+    :func:`_interpolate`)."""
+    out = np.full((values.shape[0], levels.size), np.nan)
+    for j in range(values.shape[0]):
+        P = nominal_pressure[j, usable[j]]
+        y = values[j, usable[j]]
+        if P.size == 0:
+            continue
+        keep = _increasing(P)
+        P, y = np.log(P[keep]), y[keep]
+        x = np.log(levels)
+        inside = (x >= P[0]) & (x <= P[-1])
+        # the step below each level, and whether the one above is nearer
+        below = np.clip(np.searchsorted(P, x[inside], side="right") - 1, 0, P.size - 1)
+        above = np.minimum(below + 1, P.size - 1)
+        nearer = (P[above] - x[inside]) < (x[inside] - P[below])
+        out[j, inside] = y[np.where(nearer, above, below)]
     return out
 
 

@@ -11,7 +11,10 @@ relative contact area of 0.42 for isotropic self-affine roughness; Wang & Mueser
 converged step whose free space is not connected
 (:attr:`~roughcontact.transport.flow.FlowResult.connected`) closes a bracket with
 the converged step before it, which was connected: the surface sealed between
-their real areas (and loads). Its point is the bracket's midpoint, its
+their real areas (and loads). Its point is the bracket's midpoint in real area
+and its geometric midpoint in pressure (the steps are geometric in the approach,
+and the aggregation reads a state at the step nearest in log P, so the share of
+surfaces still leaking at a level is the share whose point lies above it), its
 resolution the bracket's width. A surface that is still connected at its last
 converged step seals above its swept range (:data:`ABOVE`); one sealed at its
 first step, below it (:data:`BELOW`). Steps that connect again after the first
@@ -29,6 +32,8 @@ median or a bound falls outside the swept range, with the reason in ``note``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import math
 
 import numpy as np
 
@@ -102,7 +107,9 @@ def sealing_points(connected, real_area, pressure, converged) -> SealingPoints:
         for name, values in (("area", area), ("pressure", load)):
             low, high = values[j, before], values[j, after]
             columns[f"{name}_low"][j], columns[f"{name}_high"][j] = low, high
-            columns[name][j] = 0.5 * (low + high)
+        columns["area"][j] = 0.5 * (columns["area_low"][j] + columns["area_high"][j])
+        columns["pressure"][j] = math.sqrt(columns["pressure_low"][j]
+                                           * columns["pressure_high"][j])
     return SealingPoints(where=where.astype(str), reopened=reopened, **columns)
 
 

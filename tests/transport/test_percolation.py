@@ -38,7 +38,7 @@ def test_a_sealing_point_is_the_middle_of_its_bracket():
     np.testing.assert_allclose(points.area[[0, 3]], [0.35, 0.15])
     np.testing.assert_allclose(points.area_low[[0, 3]], [0.3, 0.1])
     np.testing.assert_allclose(points.area_high[[0, 3]], [0.4, 0.2])
-    np.testing.assert_allclose(points.pressure[0], 0.5 * (4.0 + 8.0))
+    np.testing.assert_allclose(points.pressure[0], math.sqrt(4.0 * 8.0))  # geometric
     assert np.isnan(points.area[[1, 2]]).all()
 
 
