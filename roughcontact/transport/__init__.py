@@ -30,6 +30,15 @@ from roughcontact.transport.flow import (
     Sides,
     solve_flow,
 )
+from roughcontact.transport.references import (
+    PATIR_CHENG_PRESSURE_FLOW,
+    PatirChengFit,
+    checkerboard_conductance,
+    flat_channel_conductance,
+    parallel_conductance,
+    patir_cheng_phi_x,
+    series_conductance,
+)
 
 __all__ = [
     "ARITHMETIC",
@@ -37,6 +46,7 @@ __all__ = [
     "FACE_RULES",
     "FLOW_DIRECTIONS",
     "HARMONIC",
+    "PATIR_CHENG_PRESSURE_FLOW",
     "PERIODIC",
     "SEALED",
     "DirectSolver",
@@ -44,7 +54,13 @@ __all__ = [
     "FlowResult",
     "FlowSetup",
     "JacobiCG",
+    "PatirChengFit",
     "Seal",
     "Sides",
+    "checkerboard_conductance",
+    "flat_channel_conductance",
+    "parallel_conductance",
+    "patir_cheng_phi_x",
+    "series_conductance",
     "solve_flow",
 ]
