@@ -12,8 +12,8 @@ positive. The free space connects inlet (x = 0) to outlet (x = L) or not
 periodic sides, :attr:`FlowResult.connected`). Connectivity is lost once, as
 ``d`` grows, so each surface's threshold is bracketed by bisection on ``d``
 (``--steps`` halvings from [0, mean initial gap], where the load is
-unbounded); the threshold relative contact area is the mean of the bracket's two areas (their difference is
-reported). Cells: roll-off L / 4 and cut-off L / 16 on 128^2 (8 elements per
+unbounded); the threshold relative contact area is the mean of the bracket's
+two areas (their difference is reported). Cells: roll-off L / 4 and cut-off L / 16 on 128^2 (8 elements per
 cut-off wavelength, 40 surfaces) and on 256^2 (16, 40 surfaces): the grid;
 roll-off L / 8 and cut-off L / 32 on 512^2 (16, 20 surfaces): twice the
 roll-off wavelengths across the cell.
