@@ -2,18 +2,19 @@
 
 Isotropic self-affine surfaces (Hurst 0.8, Gaussian process: ``method="paper"``;
 roll-off and short cut-off wavelengths per cell, ``--cells``; each surface
-zero mean, unit rms) pressed on an elastic half-space that repeats with the surface
-(:class:`roughcontact.elasticity.halfspace.PeriodicHalfSpace`, E = 1, nu = 0:
+zero mean, unit rms) pressed on an elastic half-space that repeats with the
+surface (:class:`roughcontact.elasticity.halfspace.PeriodicHalfSpace`, E = 1, nu = 0:
 the threshold area is scale free). At a rigid approach ``d`` the contact solver
 (:func:`roughcontact.contact.solve`, tol 1e-8) gives the pressure and the gap;
 the flow gap is the solver's gap clipped at 0, and 0 where the pressure is
 positive. The free space connects inlet (x = 0) to outlet (x = L) or not
 (:func:`roughcontact.transport.solve_flow`, open elements 4-connected,
-periodic sides, :attr:`FlowResult.connected`). Connectivity is lost once, as
-``d`` grows, so each surface's threshold is bracketed by bisection on ``d``
-(``--steps`` halvings from [0, mean initial gap], where the load is
-unbounded); the threshold relative contact area is the mean of the bracket's
-two areas (their difference is reported). Cells: roll-off L / 4 and cut-off L / 16 on 128^2 (8 elements per
+periodic sides, :attr:`FlowResult.connected`). Taking connectivity to be lost
+once as ``d`` grows, each surface's threshold is bracketed by bisection on
+``d`` (``--steps`` halvings from [0, mean initial gap], where the load is
+unbounded; a bisection finds one crossing, not all); the threshold relative
+contact area is the mean of the bracket's two areas (their difference is
+reported). Cells: roll-off L / 4 and cut-off L / 16 on 128^2 (8 elements per
 cut-off wavelength, 40 surfaces) and on 256^2 (16, 40 surfaces): the grid;
 roll-off L / 8 and cut-off L / 32 on 512^2 (16, 20 surfaces): twice the
 roll-off wavelengths across the cell.
