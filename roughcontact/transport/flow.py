@@ -372,7 +372,10 @@ class Seal:
     length: float
 
     def __post_init__(self):
-        drop = float(self.pressure_drop)
+        try:
+            drop = float(self.pressure_drop)
+        except (TypeError, ValueError):
+            drop = math.nan
         if not (math.isfinite(drop) and drop >= 0.0):
             raise ValueError(f"pressure_drop must be finite and >= 0 [Pa] (inlet minus "
                              f"outlet), got {self.pressure_drop!r}")

@@ -288,7 +288,8 @@ def test_bad_gap_raises_naming_it(gap, setup, name):
 
 @pytest.mark.parametrize("kwargs, name", [
     (dict(viscosity=-1e-3), "viscosity"), (dict(width=0.0), "width"),
-    (dict(length=np.nan), "length"), (dict(pressure_drop=-1.0), "pressure_drop")])
+    (dict(length=np.nan), "length"), (dict(pressure_drop=-1.0), "pressure_drop"),
+    (dict(pressure_drop=None), "pressure_drop"), (dict(pressure_drop="1 bar"), "pressure_drop")])
 def test_bad_seal_raises_naming_it(kwargs, name):
     values = dict(pressure_drop=1e5, viscosity=1e-3, width=0.01, length=0.001) | kwargs
     with pytest.raises(ValueError, match=name):
