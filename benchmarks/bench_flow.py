@@ -14,7 +14,8 @@ Parts (``--parts``):
 
 - ``table``: 256^2, b = 8 elements, 60 surfaces, h / sigma = 0.5 ... 3, sealed
   and periodic sides, harmonic rule: mean and 95 % t-interval over surfaces;
-- ``resolution``: b = 4, 8, 16, 32 elements on a domain of 16 b (64^2 ... 512^2);
+- ``resolution``: b = 4, 8, 16, 32 elements on a domain of 16 b (64^2 ... 512^2),
+  the same surfaces point sampled from 512^2;
 - ``domain``: b = 8 elements, domains of 8, 16, 32, 64 b (64^2 ... 512^2);
 - ``rule``: harmonic against arithmetic face rule (the table's case);
 - ``acf``: the exponential ACF ``exp(-2.3 r)`` instead (same b);
@@ -115,12 +116,17 @@ def part_table(args) -> list[dict]:
 
 
 def part_resolution(args) -> list[dict]:
+    """The same surfaces on every grid: generated at b = 32 elements (512^2), point
+    sampled every 2, 4, 8 elements (the Gaussian ACF is smooth, so the coarse
+    surface is the fine one at the shared points)."""
+    fine = surfaces(512, (32.0, 32.0), args.study_surfaces, key="res")
     rows = []
     for b in (4, 8, 16, 32):
-        n = 16 * b
-        rows += phi_rows(surfaces(n, (float(b), float(b)), args.study_surfaces, key="res"),
-                         "resolution", ratios=(1.0, 2.0, 3.0), sides=(SEALED,), n=n, b=b,
-                         domain_b=16)
+        stride = 32 // b
+        z = fine[:, ::stride, ::stride]
+        z = (z - z.mean(axis=(1, 2), keepdims=True)) / z.std(axis=(1, 2), keepdims=True)
+        rows += phi_rows(z, "resolution", ratios=(1.0, 2.0, 3.0), sides=(SEALED,),
+                         n=512 // stride, b=b, domain_b=16)
     return rows
 
 
@@ -188,15 +194,21 @@ PARTS = {"table": part_table, "resolution": part_resolution, "domain": part_doma
 
 
 def write(rows: list[dict], stem: str, title: str, args) -> None:
+    """The rows into ``stem``.csv and .md, replacing the rows of the same studies from
+    an earlier run and keeping the others."""
     out = ROOT / "results" / "benchmarks"
     out.mkdir(parents=True, exist_ok=True)
     table = pd.DataFrame(rows)
+    if (out / f"{stem}.csv").exists() and "study" in table:
+        earlier = pd.read_csv(out / f"{stem}.csv")
+        table = pd.concat([earlier[~earlier.study.isin(table.study.unique())], table],
+                          ignore_index=True)
     partial = out / f"{stem}.csv.part"
     table.to_csv(partial, index=False)
     partial.replace(out / f"{stem}.csv")
     header = (f"# {title}\n\n{datetime.date.today()}, {platform.processor() or platform.machine()},"
               f" Python {platform.python_version()}, numpy {np.__version__}, one thread; "
-              f"`benchmarks/bench_flow.py --parts {' '.join(args.parts)}`\n\n")
+              f"`benchmarks/bench_flow.py` (last run: `--parts {' '.join(args.parts)}`)\n\n")
     (out / f"{stem}.md").write_text(header + table.to_markdown(index=False, floatfmt=".4g") + "\n")
     print(f"wrote {out / stem}.csv and .md")
 
