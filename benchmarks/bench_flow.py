@@ -22,15 +22,16 @@ Parts (``--parts``):
 - ``anisotropy``: b_x / b_y = 3 and 1/3 (b_x b_y = 8^2 elements), flow along x,
   against Patir & Cheng's gamma = 3 and 1/3 fits;
 - ``timing``: DirectSolver against JacobiCG at 64^2 ... 1024^2 on the gap at
-  h / sigma = 1 (b = n / 32), alternated runs, minimum of 3.
+  h / sigma = 1 (b = n / 32), alternated runs, minimum of 3;
+- ``ordering``: SuperLU's column orderings (time and fill-in) at 256^2 and 512^2.
 
 Usage::
 
     .venv/bin/python benchmarks/bench_flow.py                  # all parts, ~12 min
     .venv/bin/python benchmarks/bench_flow.py --parts timing
 
-Writes ``results/benchmarks/flow_patir_cheng.csv`` and ``.md`` (the phi_x parts)
-and ``flow_solvers.csv`` / ``.md`` (timing).
+Writes ``results/benchmarks/flow_patir_cheng.csv`` and ``.md`` (the phi_x parts),
+``flow_solvers.csv`` / ``.md`` (timing) and ``flow_ordering.csv`` / ``.md``.
 """
 
 from __future__ import annotations
@@ -50,6 +51,7 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+import scipy.sparse.linalg as spla  # noqa: E402
 from scipy import stats  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -188,9 +190,44 @@ def part_timing(args) -> list[dict]:
     return rows
 
 
+def part_ordering(args) -> list[dict]:
+    """SuperLU's fill-in and time by column ordering, on the timing part's gaps."""
+    rows = []
+    for n in (256, 512):
+        z = surfaces(n, (n / 32, n / 32), 1, key="timing")
+        gap = np.maximum(1.0 - z, 0.0)
+        for ordering in ("MMD_AT_PLUS_A", "COLAMD", "MMD_ATA"):
+            solver = DirectSolver(ordering=ordering)
+            best = np.inf
+            for _ in range(args.repeats):
+                start = time.perf_counter()
+                solve_flow(gap, FlowSetup((1.0, 1.0), solver=solver))
+                best = min(best, time.perf_counter() - start)
+            fill = _fill(gap, ordering)
+            rows.append(dict(study="ordering", n=n, ordering=ordering, solve_s=best,
+                             lu_nonzeros=fill))
+            print(f"  ordering {n}^2 {ordering}: {best:.3f} s, nnz(L+U) {fill}", flush=True)
+    return rows
+
+
+def _fill(gap, ordering: str) -> int:
+    """Non-zeros of SuperLU's factors of the gap's flow system (captured from the solve)."""
+    captured = {}
+
+    class Capture(DirectSolver):
+        def solve(self, matrix, rhs):
+            factor = spla.splu(matrix.tocsc(), permc_spec=self.ordering,
+                               options={"SymmetricMode": True})
+            captured["nnz"] = factor.L.nnz + factor.U.nnz
+            return factor.solve(rhs), 0
+
+    solve_flow(gap, FlowSetup((1.0, 1.0), solver=Capture(ordering=ordering)))
+    return int(captured["nnz"])
+
+
 PARTS = {"table": part_table, "resolution": part_resolution, "domain": part_domain,
          "rule": part_rule, "acf": part_acf, "anisotropy": part_anisotropy,
-         "timing": part_timing}
+         "timing": part_timing, "ordering": part_ordering}
 
 
 def write(rows: list[dict], stem: str, title: str, args) -> None:
@@ -223,14 +260,16 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
     start = time.perf_counter()
-    phi, timing = [], []
+    phi, timing, ordering = [], [], []
     for part in args.parts:
         print(f"{part} ({time.perf_counter() - start:.0f} s)", flush=True)
-        (timing if part == "timing" else phi).extend(PARTS[part](args))
+        {"timing": timing, "ordering": ordering}.get(part, phi).extend(PARTS[part](args))
     if phi:
         write(phi, "flow_patir_cheng", "Patir & Cheng's phi_x of rigid Gaussian surfaces", args)
     if timing:
         write(timing, "flow_solvers", "Flow solvers: SuperLU against Jacobi CG", args)
+    if ordering:
+        write(ordering, "flow_ordering", "SuperLU's column orderings on the flow system", args)
     print(f"done in {time.perf_counter() - start:.0f} s")
 
 
