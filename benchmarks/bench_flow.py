@@ -27,7 +27,7 @@ Parts (``--parts``):
 
 Usage::
 
-    .venv/bin/python benchmarks/bench_flow.py                  # all parts, ~12 min
+    .venv/bin/python benchmarks/bench_flow.py                  # all: ~23 + 15 min
     .venv/bin/python benchmarks/bench_flow.py --parts timing
 
 Writes ``results/benchmarks/flow_patir_cheng.csv`` and ``.md`` (the phi_x parts),

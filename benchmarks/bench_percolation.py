@@ -21,7 +21,7 @@ roll-off wavelengths across the cell.
 
 Usage::
 
-    .venv/bin/python benchmarks/bench_percolation.py               # ~12 min
+    .venv/bin/python benchmarks/bench_percolation.py               # ~14 min
     .venv/bin/python benchmarks/bench_percolation.py --cells 128:4:16:4
 
 Writes ``results/benchmarks/flow_percolation.csv`` (one row per surface) and
