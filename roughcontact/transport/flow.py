@@ -85,9 +85,11 @@ on ``eta`` or the pressures (the equation is linear), so the solver works with
 positive definite) is solved by a value (:class:`DirectSolver`: SuperLU with a
 minimum-degree ordering of ``A^T + A``, default; :class:`JacobiCG`: conjugate
 gradients with a diagonal preconditioner). The direct solve is faster at every
-size measured, and its time does not depend on the conductance contrast, which
-makes CG's iterations grow without bound near percolation (measured in
-``benchmarks/bench_flow.py``). The fields of a stack are solved together, as
+size measured, 3.7 times at 64^2 to 15 times at 1024^2 on a Gaussian gap with
+16 % contact, CG's iterations doubling with each doubling of the grid
+(``benchmarks/bench_flow.py``); the direct solve's time does not depend on the
+conductance contrast, while CG's iterations grow with it (near percolation:
+not measured). The fields of a stack are solved together, as
 one block-diagonal system per batch of at most ``batch_unknowns`` elements.
 
 References
@@ -228,7 +230,9 @@ class DirectSolver:
     ordering : str
         SuperLU's column ordering; ``"MMD_AT_PLUS_A"`` (minimum degree of
         ``A^T + A``, the ordering of a symmetric matrix) fills in least on the
-        five-point systems measured (``benchmarks/bench_flow.py``).
+        five-point systems measured, about half of ``COLAMD``'s and
+        ``MMD_ATA``'s at 256^2 and 512^2 (``benchmarks/bench_flow.py --parts
+        ordering``).
     batch_unknowns : int
         Most elements of the fields solved in one block-diagonal system (at least one
         field). SuperLU's ordering and factorisation grow faster than the unknowns: 60
@@ -376,7 +380,10 @@ class Seal:
     length: float
 
     def __post_init__(self):
-        drop = float(self.pressure_drop)
+        try:
+            drop = float(self.pressure_drop)
+        except (TypeError, ValueError):
+            drop = math.nan
         if not (math.isfinite(drop) and drop >= 0.0):
             raise ValueError(f"pressure_drop must be finite and >= 0 [Pa] (inlet minus "
                              f"outlet), got {self.pressure_drop!r}")
