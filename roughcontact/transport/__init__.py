@@ -4,8 +4,9 @@
 field and reads off its effective conductance, flow factors (Patir & Cheng
 1978), leak rate and whether the free space percolates; ``probe`` is what a
 contact sweep records of it at every step (:class:`FlowProbe`, :data:`NO_FLOW`);
-``references`` holds the closed forms it is checked against (a flat channel, series and parallel gaps,
-the Keller-Dykhne checkerboard) and Patir & Cheng's fitted flow factors.
+``references`` holds the closed forms it is checked against (a flat channel,
+series and parallel gaps, the Keller-Dykhne checkerboard) and Patir & Cheng's
+fitted flow factors.
 
 The stage needs only gap fields (plain arrays, m) and numpy/scipy: it imports
 no other stage, and sits in the lowest stage layer beside ``surfaces`` and

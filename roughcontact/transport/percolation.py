@@ -31,9 +31,8 @@ median or a bound falls outside the swept range, with the reason in ``note``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
