@@ -299,6 +299,10 @@ BAND_NOTE = ("bands: 95 % confidence interval of the mean, drawn in log space (i
              "space for fractions), so that they stay within the quantity's range")
 
 
+#: Largest half width of :func:`positive_band` in log space (e^50 either way).
+MAX_LOG_BAND = 50.0
+
+
 def positive_band(mean, half_width):
     """Lower and upper ends [unit of ``mean``] of the band of a positive quantity.
 
@@ -331,6 +335,9 @@ def positive_band(mean, half_width):
     mean = np.asarray(mean, dtype=float)
     ratio = np.divide(np.nan_to_num(np.asarray(half_width, dtype=float)), mean,
                       out=np.zeros_like(mean), where=mean > 0)
+    # a half width many times its mean (a leak rate where most surfaces have sealed)
+    # would overflow exp: a band of e^50 either way is already off every axis
+    ratio = np.minimum(ratio, MAX_LOG_BAND)
     return mean * np.exp(-ratio), mean * np.exp(ratio)
 
 

@@ -89,6 +89,10 @@ def test_fractions_stay_within_zero_and_one_and_zero_means_have_no_band():
     assert fraction_band([0.0, 1.0], [0.0, 0.0])[1].tolist() == [0.0, 1.0]
     # one surface: no half width, no band
     assert positive_band([5.0], [np.nan]) == ([5.0], [5.0])
+    # a half width 1e3 times its mean (most surfaces sealed): finite, e^50 either way
+    low, high = positive_band([1e-16], [1e-13])
+    assert np.isfinite(high).all() and low[0] > 0.0
+    np.testing.assert_allclose([low[0], high[0]], [1e-16 * np.exp(-50), 1e-16 * np.exp(50)])
 
 
 def measured_layout(low: float, high: float):
