@@ -40,6 +40,7 @@ from roughcontact.transport.flow import (
     HARMONIC,
     PERIODIC,
     SEALED,
+    BandedCholesky,
     DirectSolver,
     FaceRule,
     FlowSetup,
@@ -81,14 +82,14 @@ class FlowProbe:
         The sides parallel to the flow (:data:`SIDE_CHOICES`).
     face_rule : FaceRule
         :data:`~roughcontact.transport.flow.HARMONIC` (default) or ``ARITHMETIC``.
-    solver : DirectSolver or JacobiCG
+    solver : DirectSolver, BandedCholesky or JacobiCG
         The linear solver (:mod:`roughcontact.transport.flow`).
     """
 
     directions: tuple[str, ...] = FLOW_DIRECTIONS
     sides: str = "grid"
     face_rule: FaceRule = HARMONIC
-    solver: DirectSolver | JacobiCG = field(default=DIRECT, repr=False)
+    solver: DirectSolver | BandedCholesky | JacobiCG = field(default=DIRECT, repr=False)
 
     def __post_init__(self):
         directions = tuple(self.directions)
