@@ -85,7 +85,8 @@ def probe_from_params(params: dict | None) -> FlowProbe:
     if not params:
         return NO_FLOW
     return FlowProbe(directions=tuple(params["directions"]), sides=str(params["sides"]),
-                     face_rule=FACE_RULES[params["face_rule"]])
+                     face_rule=FACE_RULES[params["face_rule"]],
+                     closed_below=float(params["closed_below"]))
 
 
 def probe_from_attrs(attrs: dict) -> FlowProbe:

@@ -302,7 +302,8 @@ class BandedCholesky:
     conductance the same to 5e-13; ``benchmarks/bench_flow_cost.py``). Periodic sides
     couple the first row and the last (``w`` about ``n``), and a large grid's ``w``
     is too wide: a system of bandwidth over ``max_bandwidth`` is solved by
-    ``fallback``.
+    ``fallback``, and so a system that rounding leaves without a positive pivot (it
+    is symmetric positive definite in exact arithmetic).
     """
 
     max_bandwidth: int = 256
@@ -317,7 +318,10 @@ class BandedCholesky:
             return self.fallback.solve(matrix, rhs)
         band = np.zeros((width + 1, matrix.shape[0]))
         band[width + upper.row - upper.col, upper.col] = upper.data
-        return linalg.solveh_banded(band, rhs, lower=False, check_finite=False), 0
+        try:
+            return linalg.solveh_banded(band, rhs, lower=False, check_finite=False), 0
+        except np.linalg.LinAlgError:  # not positive definite to rounding: pivot instead
+            return self.fallback.solve(matrix, rhs)
 
 
 # --------------------------------------------------------------------------- setup and seal

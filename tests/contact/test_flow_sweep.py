@@ -155,6 +155,41 @@ def test_one_direction_and_the_arithmetic_rule(solved):
     np.testing.assert_array_equal(again.flow_connected_y, harmonic.flow_connected_y)
 
 
+def test_gaps_of_rounding_size_are_closed():
+    """A chain of elements with p = 0 and a gap of 1e-12 of the largest, through a
+    field otherwise in contact but for two open pools at inlet and outlet: closed by
+    default (no percolation through rounding), open with closed_below=0."""
+    gap = np.zeros((1, 6, 12))
+    pressure = np.ones_like(gap)
+    gap[0, :, :2] = gap[0, :, -2:] = 1e-6  # pools at inlet and outlet
+    pressure[0, :, :2] = pressure[0, :, -2:] = 0.0
+    gap[0, 3, 2:-2] = 1e-18  # the chain
+    pressure[0, 3, 2:-2] = 0.0
+    columns = FlowProbe(directions=("x",)).columns(pressure, gap, [1e-6], (1e-5, 1e-5),
+                                                   False)
+    assert not columns["flow_connected_x"][0] and columns["flow_conductance_x"][0] == 0.0
+    opened = FlowProbe(directions=("x",), closed_below=0.0).columns(
+        pressure, gap, [1e-6], (1e-5, 1e-5), False)
+    # connected, through a chain that passes nothing but rounding: the inlet flow is read
+    # off a pressure drop of 1 - p ~ 1e-16 at the pools (K ~ 1e-15 of the pools' 1e-18)
+    assert opened["flow_connected_x"][0] and opened["flow_conductance_x"][0] < 1e-30
+
+
+def test_the_default_band_solver_gives_superlus_conductance(solved):
+    from roughcontact.transport import DIRECT
+
+    operator, gaps, _, flowing = solved
+    for sides in ("sealed", "periodic"):
+        banded = FlowProbe(sides=sides)
+        lu = FlowProbe(sides=sides, solver=DIRECT)
+        g = np.maximum(gaps - 0.8 * gaps.mean(), 0.0)
+        p = np.where(g == 0.0, 1.0, 0.0)
+        a = banded.columns(p, g, g.mean(axis=(1, 2)), (1e-5, 1e-5), False)
+        b = lu.columns(p, g, g.mean(axis=(1, 2)), (1e-5, 1e-5), False)
+        for name in a:
+            np.testing.assert_allclose(a[name], b[name], rtol=1e-10)
+
+
 def test_flow_columns_names_agree_everywhere():
     assert FLOW == FLOW_COLUMNS == storage.FLOW_ARRAYS
     assert NO_FLOW.names == () and NO_FLOW.columns(None, None, None, None, False) == {}
