@@ -204,10 +204,10 @@ def quantities(sweep: PhysicalSweep) -> dict:
     """The quantities :func:`aggregate_cell` averages for ``sweep``: :data:`QUANTITIES`, and
     :data:`INTERFACE_QUANTITIES` (and the distribution, counter-body and flow ones) when
     the sweep recorded them."""
-    if sweep.mean_gap is None:
-        return QUANTITIES
-    counter = {} if sweep.counter_deflection is None else COUNTER_QUANTITIES
     flow = {name: FLOW_QUANTITIES[name] for name in flow_arrays(sweep)}
+    if sweep.mean_gap is None:
+        return {**QUANTITIES, **flow}
+    counter = {} if sweep.counter_deflection is None else COUNTER_QUANTITIES
     if sweep.gap_quantiles is None:
         return {**QUANTITIES, **INTERFACE_QUANTITIES, **counter, **flow}
     return {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **counter, **flow}
@@ -299,7 +299,10 @@ def interpolate(sweep_physical: PhysicalSweep, values, pressures) -> np.ndarray:
     return _interpolate(sweep.nominal_pressure, values, usable, levels)
 
 
-def _interpolate(nominal_pressure, values, usable, levels) -> np.ndarray:
+def _per_surface(nominal_pressure, values, usable, levels, read) -> np.ndarray:
+    """Each surface's ``values`` (m, k) read at ``levels`` by ``read(log P, y, log
+    level)`` over its usable steps (``P`` strictly increasing), NaN outside their range
+    (no extrapolation) and for a surface without usable steps."""
     out = np.full((values.shape[0], levels.size), np.nan)
     for j in range(values.shape[0]):
         P = nominal_pressure[j, usable[j]]
@@ -309,34 +312,31 @@ def _interpolate(nominal_pressure, values, usable, levels) -> np.ndarray:
         keep = _increasing(P)
         P, y = P[keep], y[keep]
         inside = (levels >= P[0]) & (levels <= P[-1])
-        x = np.log(levels[inside])
-        if (y > 0.0).all():
-            out[j, inside] = np.exp(np.interp(x, np.log(P), np.log(y)))
-        else:
-            out[j, inside] = np.interp(x, np.log(P), y)
+        out[j, inside] = read(np.log(P), y, np.log(levels[inside]))
     return out
+
+
+def _power_law(log_p, y, x) -> np.ndarray:
+    """Linear in log P and log y between the steps (linear in y where some y <= 0)."""
+    if (y > 0.0).all():
+        return np.exp(np.interp(x, log_p, np.log(y)))
+    return np.interp(x, log_p, y)
+
+
+def _nearest_step(log_p, y, x) -> np.ndarray:
+    """The value at the step nearest in log P (a state: no interpolation)."""
+    below = np.clip(np.searchsorted(log_p, x, side="right") - 1, 0, log_p.size - 1)
+    above = np.minimum(below + 1, log_p.size - 1)
+    return y[np.where((log_p[above] - x) < (x - log_p[below]), above, below)]
+
+
+def _interpolate(nominal_pressure, values, usable, levels) -> np.ndarray:
+    return _per_surface(nominal_pressure, values, usable, levels, _power_law)
 
 
 def _nearest(nominal_pressure, values, usable, levels) -> np.ndarray:
-    """Each surface's value at its usable step nearest in log P to each level (a state:
-    no interpolation), over the range of its usable steps (NaN outside, as
-    :func:`_interpolate`)."""
-    out = np.full((values.shape[0], levels.size), np.nan)
-    for j in range(values.shape[0]):
-        P = nominal_pressure[j, usable[j]]
-        y = values[j, usable[j]]
-        if P.size == 0:
-            continue
-        keep = _increasing(P)
-        P, y = np.log(P[keep]), y[keep]
-        x = np.log(levels)
-        inside = (x >= P[0]) & (x <= P[-1])
-        # the step below each level, and whether the one above is nearer
-        below = np.clip(np.searchsorted(P, x[inside], side="right") - 1, 0, P.size - 1)
-        above = np.minimum(below + 1, P.size - 1)
-        nearer = (P[above] - x[inside]) < (x[inside] - P[below])
-        out[j, inside] = y[np.where(nearer, above, below)]
-    return out
+    """Each surface's value at its usable step nearest in log P to each level."""
+    return _per_surface(nominal_pressure, values, usable, levels, _nearest_step)
 
 
 def statistics(samples: np.ndarray, confidence: float = 0.95):

@@ -232,3 +232,27 @@ def test_unconverged_stiffness_is_excluded_from_k_P_only(cell):
     assert (table["normalized_stiffness_count"] == SURFACES - 1).all()
     assert (table["real_area_fraction_count"] == SURFACES).all()
     assert (table["unconverged_stiffness_steps"] == cell.approach.shape[1]).all()
+
+
+def test_still_leaking_is_read_at_the_nearest_step_not_interpolated(cell):
+    """A yes/no state (flow_connected) is each surface's state at its step nearest in
+    log P: the share over surfaces counts whole surfaces, computed here by hand."""
+    import dataclasses
+
+    m, k = cell.nominal_pressure.shape
+    sealed_from = np.arange(m) % (k - 2) + 1  # each surface seals at its own step
+    connected = np.arange(k)[None, :] < sealed_from[:, None]
+    swept = dataclasses.replace(cell, flow_connected_x=connected,
+                                flow_conductance_x=connected * 1.0e-18,
+                                flow_factor_x=connected * 0.5,
+                                pressure_flow_factor_x=connected * 0.5)
+    levels = np.geomspace(cell.nominal_pressure[:, 0].max(),
+                          cell.nominal_pressure[:, -1].min(), 9)
+    curves = aggregate.surface_curves(swept, levels, "flow_connected_x")
+    assert set(np.unique(curves[np.isfinite(curves)])) <= {0.0, 1.0}
+    for j in range(m):
+        log_p = np.log(cell.nominal_pressure[j])
+        nearest = np.abs(log_p[None, :] - np.log(levels)[:, None]).argmin(axis=1)
+        np.testing.assert_array_equal(curves[j], connected[j, nearest])
+    table = aggregate.aggregate_cell(swept, levels)
+    np.testing.assert_allclose(table["flow_connected_x_mean"], curves.mean(axis=0))
