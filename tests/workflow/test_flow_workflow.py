@@ -7,7 +7,9 @@ times W dp / (12 eta L) of the configured seal, by hand; each cell's percolation
 threshold lies inside its sweep and is written to the sidecar; the contact files
 carry the flow columns and the probe they were solved with, and the audit re-solves
 them bit for bit; a change of the seal alone re-runs the aggregation, not the
-contact jobs, and a change of the probe re-solves them.
+contact jobs, and a change of the probe re-solves them; the leakage figure and its
+notebook are made, the notebook prints each cell's leak rate at three pressures
+and the sidecar's thresholds, and the report's caption names the fluid and seal.
 """
 
 import copy
@@ -30,7 +32,7 @@ CONFIG = {
     "body": {"E_MPa": 511.0, "nu": 0.0, "mesh": "paper"},
     "contact": {"steps": 14, "pressure_levels": 8},
     "flow": {"enabled": True, **SEAL},
-    "figures": {},
+    "figures": {"leakage": {"studies": ["seal"]}},
     "reports": {},
     "audit": {"verify": True, "verify_sample": 4},
     "sweeps": {"seal": {"sigma_um": 1.5, "b_mm": 0.5, "pressure_MPa": [2.0, 45.0],
@@ -54,6 +56,8 @@ def runs(tmp_path_factory):
         config = copy.deepcopy(CONFIG)
         config["flow"]["enabled"] = enabled
         config["audit"]["verify"] = enabled  # the audit's re-solve only where there is flow
+        if not enabled:
+            config["figures"] = {}  # the leakage figure needs the flow
         proc = run_snakemake(workdir, config=_write(workdir, config))
         assert proc.returncode == 0, proc.stderr[-4000:]
         out[name] = workdir
@@ -126,3 +130,32 @@ def test_a_seal_change_re_aggregates_and_a_probe_change_re_solves(runs):
                       if line.strip().startswith(("contact ", "aggregate ")))
         assert counts.get("aggregate") == "1", planned[-2000:]
         assert int(counts.get("contact", 0)) == contact_jobs, planned[-2000:]
+
+
+def test_the_leakage_notebook_prints_the_leak_rates_and_the_thresholds(runs):
+    import nbformat
+
+    results = runs["on"] / "results"
+    for ext in ("png", "pdf", "ipynb"):
+        assert (results / "figures" / f"leakage.{ext}").stat().st_size > 1000, ext
+    notebook = nbformat.read(results / "figures" / "leakage.ipynb", as_version=4)
+    printed = [o.get("text", "") for c in notebook.cells if c.cell_type == "code"
+               for o in c.outputs]
+    rates, thresholds = printed[-2], printed[-1]
+    assert rates.startswith("seal:") and "leak_rate_x_mean" in rates and "leak_rate_y_mean" in rates
+    assert len(rates.splitlines()) == 2 + 2 * 3  # the study, the header, 2 cells x 3 levels
+    found = json.loads((results / "aggregates" / "seal.json").read_text())["flow"]["percolation"]
+    assert thresholds.startswith("seal:") and "area_low" in thresholds
+    assert len(thresholds.splitlines()) == 2 + len(found)
+    assert f"{found[0]['area']:.4g}" in thresholds and f"{found[-1]['pressure_MPa']:.4g}" in \
+        thresholds
+
+
+def test_the_report_shows_the_leakage_figure_with_the_seals_caption(runs):
+    workdir = runs["on"]
+    proc = run_snakemake(workdir, "--report", "report.html", config=_write(workdir, CONFIG))
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    report = (workdir / "report.html").read_text()
+    assert "leakage.png" in report
+    assert ("a fluid of viscosity 0.002 Pa s through a seal 50 mm wide and 3 mm long with "
+            "0.5 MPa across it") in report
