@@ -18,16 +18,18 @@ from roughcontact.reports.plotting import (  # noqa: E402
     describe_study,
     draw_surfaces,
     draw_table,
-    leakage_pressures,
-    load_percolation,
-    load_studies,
     plot_by_mesh,
     plot_cells,
     plot_cells_panels,
-    plot_leakage,
-    plot_two_bodies,
     save_table,
     surface_moments,
+)
+from roughcontact.reports.study_figures import (  # noqa: E402
+    leakage_pressures,
+    load_percolation,
+    load_studies,
+    plot_leakage,
+    plot_two_bodies,
 )
 from roughcontact.study import storage  # noqa: E402
 

@@ -27,6 +27,7 @@ def loaded_after(module: str) -> list[str]:
                                     "roughcontact.study.contact_jobs",
                                     "roughcontact.contact",
                                     "roughcontact.reports.plotting",
+                                    "roughcontact.reports.study_figures",
                                     "roughcontact.reports.execution"])
 def test_job_modules_import_no_heavy_library(module):
     assert loaded_after(module) == []
