@@ -26,8 +26,9 @@ from roughcontact.study.checks import (
     check_windows,
 )
 from roughcontact.study.config import BuildSettings, ContactSettings, as_pair, from_unit
-from roughcontact.study.contact_records import ContactJob, PairGeometry, StudyCell
+from roughcontact.study.contact_records import ContactJob, StudyCell
 from roughcontact.study.counter_checks import check_counterfaces
+from roughcontact.study.counter_records import PairGeometry
 from roughcontact.study.flow_settings import check_flow
 from roughcontact.study.records import (
     SEEDED_PER_SURFACE,

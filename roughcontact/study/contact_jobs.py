@@ -102,7 +102,7 @@ class ContactProblem:
 
 class _ModelReader:
     """How a counter body's model files are read (for
-    :meth:`~roughcontact.study.contact_records.Counterface.read`): each checked to have
+    :meth:`~roughcontact.study.counter_records.Counterface.read`): each checked to have
     been made for its geometry or pair, its operator certified."""
 
     @staticmethod

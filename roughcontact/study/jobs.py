@@ -28,7 +28,7 @@ from roughcontact.elasticity.protocol import DenseInfluence
 from roughcontact.errors import FactorizationError
 from roughcontact.study.checks import memory_message
 from roughcontact.study.config import BuildSettings, in_unit
-from roughcontact.study.contact_records import PairGeometry
+from roughcontact.study.counter_records import PairGeometry
 from roughcontact.study.provenance import (
     canonical_json,
     peak_rss_bytes,
@@ -291,7 +291,7 @@ def build_pair(params: dict, first_path, second_path, out_path, config=None) -> 
     """Sum two bodies' influence models once and write the pair (its file is shared by
     every contact job on the pair: ``results/influence/pairs/<key>.h5``).
 
-    ``params``: the pair's :meth:`~roughcontact.study.contact_records.PairGeometry.params`;
+    ``params``: the pair's :meth:`~roughcontact.study.counter_records.PairGeometry.params`;
     each influence file must have been made for its body's geometry. The sum is
     certified positive definite before it is written
     (:func:`~roughcontact.contact.counterface.pair_model`; a counter body treated as

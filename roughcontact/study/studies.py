@@ -26,14 +26,13 @@ from roughcontact.study.config import (
     in_unit,
     in_units,
 )
-from roughcontact.study.contact_records import (
+from roughcontact.study.contact_records import Accuracy, StudyCell
+from roughcontact.study.counter_records import (
     RIGID,
     SMOOTH,
-    Accuracy,
     Counterface,
     ElasticCounter,
     RoughCounter,
-    StudyCell,
 )
 from roughcontact.study.flow_settings import flow_settings
 from roughcontact.study.presets import ACCURACY_PRESETS

@@ -22,12 +22,8 @@ from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
 from roughcontact.study.contact_jobs import contact_problem
-from roughcontact.study.contact_records import (
-    NO_COUNTERFACE,
-    RIGID,
-    ContactJob,
-    StudyCell,
-)
+from roughcontact.study.contact_records import ContactJob, StudyCell
+from roughcontact.study.counter_records import NO_COUNTERFACE, RIGID
 from roughcontact.surfaces.synthetic import derive_seeds
 
 SWEEP = {"sigma_um": 24.5, "b_mm": 0.5, "pressure_MPa": [0.1, 3.0], "count": 3}
