@@ -366,21 +366,20 @@ class SweepTable:
         interface grid, the interface quantities of the gap ``u + f - d`` [m]
         (:mod:`roughcontact.contact.interface`); with fields, the pressure field."""
         columns = self.columns
+        mean_u = displacement.mean(axis=-1)
         if self.interface is not None:
-            # nominal separation mean(f) - d of the flat and the undeformed mean plane
-            separation = np.mean(gap, axis=-1) - displacement.mean(axis=-1)
             if isinstance(rows, int | np.integer):  # one surface: wait for its step's others
                 pending = self._pending.setdefault(step, {})
-                pending[int(rows)] = (np.array(pressure), np.array(gap), separation)
+                pending[int(rows)] = (np.array(pressure), np.array(gap), mean_u)
                 if len(pending) == self.surfaces:
                     self._describe_pending(step)
             else:
-                self._describe(rows, step, pressure, gap, separation)
+                self._describe(rows, step, pressure, gap, mean_u)
         n = pressure.shape[-1]
         load = pressure.sum(axis=-1) * element_area
         columns["load"][rows, step] = load
         columns["nominal_pressure"][rows, step] = load / (n * element_area)
-        columns["mean_plane_deflection"][rows, step] = displacement.mean(axis=-1)
+        columns["mean_plane_deflection"][rows, step] = mean_u
         if "counter_deflection" in columns:  # a pair of bodies: w . p (counterface)
             columns["counter_deflection"][rows, step] = pressure @ self.interface.counter_weights
         columns["real_area_fraction"][rows, step] = np.count_nonzero(pressure > 0.0, axis=-1) / n
@@ -395,14 +394,17 @@ class SweepTable:
             self.fields[rows, step] = pressure.reshape(*np.shape(pressure)[:-1],
                                                        *self.fields.shape[2:])
 
-    def _describe(self, rows, step: int, pressure, gap, separation) -> None:
+    def _describe(self, rows, step: int, pressure, gap, mean_u) -> None:
         """The interface quantities of ``rows`` at ``step`` (:mod:`.interface`), and the
-        flow through their gaps at nominal separations ``separation``."""
+        flow through their gaps at the nominal separations ``mean(g) - mean(u) = mean(f)
+        - d`` of the flat and the undeformed mean plane (``mean_u``: the mean of each
+        displacement field)."""
         pressure = np.reshape(pressure, (*np.shape(pressure)[:-1], *self.shape))
         gap = np.reshape(gap, (*np.shape(gap)[:-1], *self.shape))
         summary = interface.describe(pressure, gap, self.interface)
         for name in INTERFACE:
             self.columns[name][rows, step] = getattr(summary, name)
+        separation = summary.mean_gap - mean_u
         for name, values in self.interface.flow_columns(pressure, gap, separation).items():
             self.columns[name][rows, step] = values
 

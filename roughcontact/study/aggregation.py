@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 from pathlib import Path
 from typing import NamedTuple
 
@@ -26,7 +27,6 @@ from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.flow_settings import (
     FLOW_OFF,
     FlowSettings,
-    finite_or_none,
     percolation_rows,
     probe_from_attrs,
 )
@@ -216,7 +216,7 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
     }
     if flow.directions:
         meta["flow"] = {**flow.params(), "percolation": [
-            {name: finite_or_none(value) for name, value in row.items()}
+            {name: _json_value(value) for name, value in row.items()}
             for part in parts for row in part.percolation]}
     if validity_path is not None:
         meta |= _write_validity([frame for part in parts for frame in part.validity],
@@ -225,6 +225,11 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
     with atomic_path(meta_path) as tmp:
         Path(tmp).write_text(json.dumps(meta, indent=1, default=float))
     return table
+
+
+def _json_value(value):
+    """A value of the strict-JSON sidecar: None for NaN."""
+    return None if isinstance(value, float) and not math.isfinite(value) else value
 
 
 def _write_validity(frames: list, checks: list, path) -> dict:

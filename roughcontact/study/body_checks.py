@@ -22,7 +22,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from roughcontact.study.block_checks import block_problems
-from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.config import BuildSettings, in_unit, unit_slips
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.measured_checks import measured_problems
 from roughcontact.study.records import Geometry, InfluenceModel, MeasuredCell, SurfaceCell
@@ -133,8 +133,7 @@ def cell_bodies(config: dict, name: str, cell: StudyCell) -> list[Body]:
 def _slip(kind: str, key: str, value: float, fits) -> str:
     """The advice naming each unit ``value`` may have been typed in, where the value in
     the key's unit then ``fits`` (passes every check here), else ''."""
-    return "".join(f"; typed in {unit}? then write {key}: {value * factor:.6g}"
-                   for unit, factor in _SLIPS[kind] if fits(value * factor))
+    return "".join(f"; {advice}" for advice in unit_slips(key, value, _SLIPS[kind], fits))
 
 
 def _in_range(kind: str, value: float) -> bool:

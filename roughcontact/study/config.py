@@ -51,6 +51,15 @@ def from_unit(values, unit: float = MM) -> tuple[float, ...] | None:
     return None if values is None else tuple(float(v) * unit for v in values)
 
 
+def unit_slips(key: str, value: float, slips, fits) -> list[str]:
+    """The advice for a value of ``key`` that is almost surely a unit slip: for each
+    ``(unit, factor)`` of ``slips`` (the unit it may have been typed in, and the factor
+    to the key's unit) whose converted value ``fits``, ``typed in <unit>? then write
+    <key>: <value>``."""
+    return [f"typed in {unit}? then write {key}: {value * factor:.6g}"
+            for unit, factor in slips if fits(value * factor)]
+
+
 def in_units(values, unit: float = MM) -> list[float] | None:
     """SI values as a list in ``unit`` (:func:`in_unit`; None stays None)."""
     return None if values is None else [in_unit(v, unit) for v in values]

@@ -20,11 +20,11 @@ of a configuration without it.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from roughcontact.study.config import unit_slips
 from roughcontact.transport.flow import FACE_RULES, Seal
 from roughcontact.transport.probe import NO_FLOW, FlowProbe
 from roughcontact.units import MM, MPA
@@ -116,8 +116,7 @@ def _slip(key: str, value: float) -> str | None:
     (low, high), slips = PLAUSIBLE[key]
     if low <= value <= high:
         return None
-    guesses = [f"typed in {unit}? then write flow.{key}: {value * factor:.6g}"
-               for unit, factor in slips if low <= value * factor <= high]
+    guesses = unit_slips(f"flow.{key}", value, slips, lambda v: low <= v <= high)
     unit = key.rsplit("_", 1)[-1] if key != "viscosity_Pa_s" else "Pa s"
     return (f"flow.{key}: {value:g} is outside the plausible {low:g}-{high:g} {unit}"
             + (f" ({'; '.join(guesses)})" if guesses else "")
@@ -164,8 +163,3 @@ def percolation_rows(sweep, label_columns: dict, directions) -> list[dict]:
         found["reopened_steps"] = int(np.sum(points.reopened))
         rows.append({**label_columns, "direction": d, **found})
     return rows
-
-
-def finite_or_none(value):
-    """A JSON value: None for NaN (the sidecar is strict JSON)."""
-    return None if isinstance(value, float) and not math.isfinite(value) else value
