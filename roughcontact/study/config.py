@@ -21,7 +21,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from roughcontact.transport.probe import NO_FLOW, FlowProbe
+from roughcontact.transport.probe import NO_FLOW, FlowProbe, probe_from_params
 from roughcontact.units import GB, MM, MPA, UM
 
 #: The schema of every configuration (with its defaults).
@@ -307,8 +307,6 @@ class ContactSettings:
     def from_section(cls, section: dict) -> ContactSettings:
         """The settings of a ``contact`` section, or of a contact job's :meth:`params`
         (which hold the flow probe's under ``flow`` where the flow is on)."""
-        from roughcontact.study.flow_settings import probe_from_params
-
         return cls(method=str(section["method"]), tol=float(section["tol"]),
                    precision=str(section["precision"]), steps=int(section["steps"]),
                    pressure_levels=int(section["pressure_levels"]),

@@ -26,11 +26,11 @@ import numpy as np
 
 from roughcontact.study.config import unit_slips
 from roughcontact.transport.flow import FACE_RULES, Seal
-from roughcontact.transport.probe import NO_FLOW, FlowProbe
+from roughcontact.transport.probe import NO_FLOW, FlowProbe, probe_from_params
 from roughcontact.units import MM, MPA
 
 __all__ = ["FLOW_OFF", "FlowSettings", "check_flow", "flow_settings", "percolation_rows",
-           "probe_from_attrs", "probe_from_params"]
+           "probe_from_attrs"]
 
 #: Plausible ranges of the seal's values (outside: almost surely a unit slip), with the
 #: unit each is likely typed in by mistake and its factor to the key's unit.
@@ -78,15 +78,6 @@ class FlowSettings:
 
 #: The flow off: no probe, no seal.
 FLOW_OFF = FlowSettings(NO_FLOW, None)
-
-
-def probe_from_params(params: dict | None) -> FlowProbe:
-    """The probe of stored settings (:meth:`FlowProbe.params`; None or empty: none)."""
-    if not params:
-        return NO_FLOW
-    return FlowProbe(directions=tuple(params["directions"]), sides=str(params["sides"]),
-                     face_rule=FACE_RULES[params["face_rule"]],
-                     closed_below=float(params["closed_below"]))
 
 
 def probe_from_attrs(attrs: dict) -> FlowProbe:

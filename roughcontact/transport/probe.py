@@ -53,7 +53,7 @@ from roughcontact.transport.flow import (
 )
 
 __all__ = ["FLOW_COLUMNS", "FLOW_UNITS", "NO_FLOW", "SIDE_CHOICES", "FlowProbe",
-           "flow_column_names"]
+           "flow_column_names", "probe_from_params"]
 
 #: The quantities of a direction's columns, and the unit of each (``gap^3``: the cube of
 #: the unit of the gaps the sweep was given).
@@ -157,3 +157,12 @@ class FlowProbe:
 
 #: A probe that records nothing (the default of every sweep).
 NO_FLOW = FlowProbe(directions=())
+
+
+def probe_from_params(params: dict | None) -> FlowProbe:
+    """The probe of stored settings (:meth:`FlowProbe.params`; None or empty: none)."""
+    if not params:
+        return NO_FLOW
+    return FlowProbe(directions=tuple(params["directions"]), sides=str(params["sides"]),
+                     face_rule=FACE_RULES[params["face_rule"]],
+                     closed_below=float(params["closed_below"]))

@@ -15,10 +15,10 @@ from roughcontact.study.flow_settings import (
     check_flow,
     flow_settings,
     probe_from_attrs,
-    probe_from_params,
 )
 from roughcontact.study.studies import contact_settings
 from roughcontact.transport import ARITHMETIC, NO_FLOW, SEALED, FlowProbe
+from roughcontact.transport.probe import probe_from_params
 
 STUDY = {"sigma_um": 10.0, "b_mm": 0.5, "pressure_MPa": [0.1, 2.0]}
 BASE = {"study_seed": 0,
