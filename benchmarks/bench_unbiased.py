@@ -47,6 +47,7 @@ sys.path.insert(0, str(ROOT))
 
 from roughcontact.study.cells import study_plan  # noqa: E402
 from roughcontact.study.config import apply_schema  # noqa: E402
+from roughcontact.study.settings import Study  # noqa: E402
 from roughcontact.surfaces import calibration, synthetic  # noqa: E402
 from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402
 
@@ -65,7 +66,7 @@ def windows() -> dict[str, tuple[str, SurfaceSpec]]:
                                      skew=skew, kurt=kurt)
         out[f"{grid}x{grid} over {size:g} mm, b 1 mm, ({skew:g}, {kurt:g})"] = ("issue", spec)
     config = apply_schema(yaml.safe_load((ROOT / "config" / "config.yaml").read_text()))
-    for cell in study_plan(config).surfaces.values():
+    for cell in study_plan(Study.from_config(config)).surfaces.values():
         params = cell.params()
         if params["method"] != "filter":
             continue

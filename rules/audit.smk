@@ -15,8 +15,8 @@ rule audit:
     group:
         "summaries"
     resources:
-        mem_mb=get_audit_mem_mb,
-        runtime=get_audit_runtime,
+        mem_mb=get_mem_mb("audit"),
+        runtime=get_runtime("audit"),
     params:
         studies=get_audit_studies,
         # the hardness check's pressure levels: the aggregates'
@@ -48,11 +48,11 @@ rule audit_verify:
     log:
         "results/logs/audit/verify.log",
     resources:
-        mem_mb=get_audit_verify_mem_mb,
-        runtime=get_audit_verify_runtime,
+        mem_mb=get_mem_mb("audit_verify"),
+        runtime=get_runtime("audit_verify"),
     params:
         jobs=get_audit_jobs,
         sample=config["audit"]["verify_sample"],
-        seed=audit_verify_seed(config),
+        seed=STUDY.audit.verify_seed,
     script:
         "../scripts/audit_verify.py"

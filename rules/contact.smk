@@ -15,10 +15,10 @@ rule contact:
     priority: CONTACT_PRIORITY
     threads: 1
     resources:
-        mem_mb=get_contact_mem_mb,
-        runtime=get_contact_runtime,
+        mem_mb=get_mem_mb("contact"),
+        runtime=get_runtime("contact"),
     params:
-        job=get_contact_params,
+        job=get_params("contact"),
         solver=canonical(PLAN.contact.params()),
         # version of the stored layout (2: plastic area and the solutions' pressure profiles;
         # 3: the interface quantities: spots, perimeter, corrected area, gaps)
@@ -43,12 +43,12 @@ rule aggregate:
     threads: 1
     resources:
         mem_mb=1000,
-        runtime=get_summary_runtime,
+        runtime=get_runtime("summary"),
     params:
         cells=get_aggregate_cells,
         levels=config["contact"]["pressure_levels"],
         # the seal whose leak rate the table gives (empty with the flow off)
-        flow=canonical(flow_settings(config).params()),
+        flow=canonical(STUDY.flow.params()),
         # version of the stored layout (2: the sidecar holds the tables' SHA-256; 3: the
         # validity table against the hardness)
         layout=3,

@@ -1,6 +1,7 @@
 # Last stage: the paper's figures from papermill-parameterised notebooks. Each figure's
 # caption in the report (report/figure.rst) is written from the study's own settings
-# (params.caption: roughcontact.reports.captions).
+# (params.caption: roughcontact.study.captions, named by the figure registry
+# roughcontact.study.figures).
 
 
 rule figure:
@@ -25,7 +26,7 @@ rule figure:
     threads: 1
     resources:
         mem_mb=1000,
-        runtime=get_summary_runtime,
+        runtime=get_runtime("summary"),
     params:
         parameters=get_figure_parameters,
         caption=get_figure_caption,
@@ -65,8 +66,8 @@ rule config_snapshot:
         "summaries"
     resources:
         mem_mb=500,
-        runtime=get_summary_runtime,
+        runtime=get_runtime("summary"),
     params:
-        config_hash=config_hash(config),
+        config_hash=STUDY.config_hash,
     script:
         "../scripts/config_snapshot.py"

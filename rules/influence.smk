@@ -18,10 +18,10 @@ rule influence:
     # 40 % of it), and a second reserved core would idle through the rest
     threads: 1
     resources:
-        mem_mb=get_influence_mem_mb,
-        runtime=get_influence_runtime,
+        mem_mb=get_mem_mb("influence"),
+        runtime=get_runtime("influence"),
     params:
-        geometry=get_geometry_params,
+        geometry=get_params("influence"),
         solver=config["body"]["solver"],
         max_memory_gb=config["body"]["max_memory_gb"],
     script:
@@ -34,7 +34,7 @@ rule influence:
 # geometry that resolves to the model it had keeps its files.
 checkpoint influence_choice:
     input:
-        get_choice_input,
+        lambda wildcards: layout.influence(planned_choice(wildcards).key),
     output:
         "results/influence/choices/{auto}.json",
     log:
@@ -43,11 +43,11 @@ checkpoint influence_choice:
         "results/benchmarks/rules/influence_choice/{auto}.tsv"
     threads: 1
     resources:
-        mem_mb=get_choice_mem_mb,
-        runtime=get_choice_runtime,
+        mem_mb=get_mem_mb("choice"),
+        runtime=get_runtime("choice"),
     params:
-        geometry=get_choice_geometry,
-        planned=get_choice_planned,
+        geometry=get_params("choice"),
+        planned=lambda wildcards: planned_choice(wildcards).params(),
     script:
         "../scripts/choose_influence.py"
 
@@ -57,8 +57,8 @@ checkpoint influence_choice:
 # counterface.rigid_share of the compliance is treated as rigid (no matrix written).
 rule pair_influence:
     input:
-        first=lambda wildcards: f"results/influence/{PLAN.pairs[wildcards.pair].first.key}.h5",
-        second=lambda wildcards: f"results/influence/{PLAN.pairs[wildcards.pair].second.key}.h5",
+        first=lambda wildcards: layout.influence(PLAN.pairs[wildcards.pair].first.key),
+        second=lambda wildcards: layout.influence(PLAN.pairs[wildcards.pair].second.key),
     output:
         "results/influence/pairs/{pair}.h5",
     log:
@@ -68,9 +68,9 @@ rule pair_influence:
     priority: EARLY_PRIORITY
     threads: 1
     resources:
-        mem_mb=get_pair_mem_mb,
-        runtime=get_pair_runtime,
+        mem_mb=get_mem_mb("pair"),
+        runtime=get_runtime("pair"),
     params:
-        pair=lambda wildcards: PLAN.pairs[wildcards.pair].params(),
+        pair=get_params("pair"),
     script:
         "../scripts/build_pair.py"

@@ -3,7 +3,7 @@
 
 rule influence_convergence:
     input:
-        get_convergence_inputs,
+        lambda wildcards: sorted(get_convergence_stored(wildcards).values()),
     output:
         csv="results/reports/influence_convergence.csv",
         png=report(
@@ -17,12 +17,12 @@ rule influence_convergence:
         "results/benchmarks/rules/reports/influence_convergence.tsv"
     threads: 1
     resources:
-        mem_mb=get_convergence_mem_mb,
-        runtime=get_convergence_runtime,
+        mem_mb=get_mem_mb("influence_convergence"),
+        runtime=get_runtime("influence_convergence"),
     params:
-        geometry=get_body_geometry,
+        geometry=PLAN.body.params(),
         stored=get_convergence_stored,
-        settings=canonical(report_section(config, "influence_convergence")),
+        settings=canonical(thawed(STUDY.reports.sections["influence_convergence"])),
         E_MPa=config["body"]["E_MPa"],
     script:
         "../scripts/influence_convergence.py"
@@ -48,10 +48,10 @@ rule speed_vs_error:
         "results/benchmarks/rules/reports/speed_vs_error.tsv"
     threads: 1
     resources:
-        mem_mb=get_speed_vs_error_mem_mb,
-        runtime=get_speed_vs_error_runtime,
+        mem_mb=get_mem_mb("speed_vs_error"),
+        runtime=get_runtime("speed_vs_error"),
     params:
-        geometry=get_body_geometry,
+        geometry=PLAN.body.params(),
         settings=canonical(config["reports"]["speed_vs_error"]),
         E_MPa=config["body"]["E_MPa"],
         study_seed=config["study_seed"],
@@ -74,10 +74,10 @@ rule grid_convergence_surfaces:
         gcgrid=r"\d+",
     threads: 1
     resources:
-        mem_mb=get_grid_convergence_mem_mb,
-        runtime=get_summary_runtime,
+        mem_mb=get_mem_mb("grid_convergence"),
+        runtime=get_runtime("summary"),
     params:
-        settings=canonical(report_section(config, "grid_convergence")),
+        settings=canonical(thawed(STUDY.reports.sections["grid_convergence"])),
         study_seed=config["study_seed"],
     script:
         "../scripts/grid_convergence_surfaces.py"
@@ -96,10 +96,10 @@ rule grid_convergence_contact:
         gcgrid=r"\d+",
     threads: 1
     resources:
-        mem_mb=get_grid_convergence_mem_mb,
-        runtime=get_grid_convergence_runtime,
+        mem_mb=get_mem_mb("grid_convergence"),
+        runtime=get_runtime("grid_convergence"),
     params:
-        settings=canonical(report_section(config, "grid_convergence")),
+        settings=canonical(thawed(STUDY.reports.sections["grid_convergence"])),
         # version of the stored layout (2: the interface quantities)
         layout=2,
     script:
@@ -123,6 +123,6 @@ rule grid_convergence:
     threads: 1
     resources:
         mem_mb=500,
-        runtime=get_summary_runtime,
+        runtime=get_runtime("summary"),
     script:
         "../scripts/grid_convergence.py"

@@ -19,10 +19,10 @@ rule surfaces:
         "surfaces"
     threads: 1
     resources:
-        mem_mb=get_surfaces_mem_mb,
-        runtime=get_surfaces_runtime,
+        mem_mb=get_mem_mb("surfaces"),
+        runtime=get_runtime("surfaces"),
     params:
-        cell=get_surface_params,
+        cell=get_params("surfaces"),
         source=get_surface_source,
         study_seed=config["study_seed"],
         # version of the stored layout: files of an older layout are rebuilt instead of

@@ -1,13 +1,15 @@
 """Snakemake entry point of rule `aggregate`: a figure's or sweep's tables."""
 
+from roughcontact.study import layout
 from roughcontact.study.aggregation import aggregate_study
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.flow_settings import flow_settings
 from roughcontact.study.logs import route_logging
+from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 cells = [StudyCell.from_params(params) for params in snakemake.params.cells]
-paths = {cell.contact_key: f"results/contact/{cell.contact_key}.h5" for cell in cells}
+paths = {cell.contact_key: layout.contact(cell.contact_key) for cell in cells}
 missing = sorted(set(paths.values()) - set(snakemake.input))
 if missing:
     raise RuntimeError(f"contact files not among the rule's inputs: {missing}")
@@ -18,7 +20,7 @@ aggregate_study(
     snakemake.output.table,
     snakemake.output.moduli,
     snakemake.output.meta,
-    config=snakemake.config,
+    run=RunInfo.of(snakemake.config),
     validity_path=snakemake.output.validity,
-    flow=flow_settings(snakemake.config),
+    flow=flow_settings(snakemake.config["flow"]),
 )

@@ -2,6 +2,7 @@
 
 from roughcontact.study.jobs import build_pair
 from roughcontact.study.logs import route_logging
+from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 build_pair(
@@ -9,5 +10,5 @@ build_pair(
     snakemake.input.first,
     snakemake.input.second,
     snakemake.output[0],
-    config=snakemake.config,
+    run=RunInfo.of(snakemake.config),
 )

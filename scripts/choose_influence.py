@@ -2,6 +2,7 @@
 
 from roughcontact.study.jobs import choose_influence
 from roughcontact.study.logs import route_logging
+from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 choose_influence(
@@ -9,5 +10,5 @@ choose_influence(
     snakemake.params.planned,
     snakemake.input[0],
     snakemake.output[0],
-    config=snakemake.config,
+    run=RunInfo.of(snakemake.config),
 )

@@ -2,6 +2,7 @@
 
 from roughcontact.study.grid_convergence import solve_grid
 from roughcontact.study.logs import route_logging
+from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 solve_grid(
@@ -9,5 +10,5 @@ solve_grid(
     snakemake.input[0],
     int(snakemake.wildcards.gcgrid),
     snakemake.output[0],
-    config=snakemake.config,
+    run=RunInfo.of(snakemake.config),
 )

@@ -2,6 +2,7 @@
 
 from roughcontact.study.grid_convergence import build_grid_surfaces
 from roughcontact.study.logs import route_logging
+from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 build_grid_surfaces(
@@ -9,5 +10,5 @@ build_grid_surfaces(
     snakemake.params.study_seed,
     int(snakemake.wildcards.gcgrid),
     snakemake.output[0],
-    config=snakemake.config,
+    run=RunInfo.of(snakemake.config),
 )

@@ -34,6 +34,7 @@ from roughcontact.contact.plausibility import (
     implausible,
 )
 from roughcontact.errors import StoredFileError
+from roughcontact.study import layout
 from roughcontact.study.aggregation import validity_rows, validity_summary
 from roughcontact.study.contact_jobs import contact_problem, read_counter, sweep_problem
 from roughcontact.study.contact_records import ContactJob, StudyCell
@@ -136,9 +137,9 @@ def audit_cell(study: str, index: int, cell: dict, root: str | Path = ".",
     root = Path(root)
     study_cell = StudyCell.from_params(cell)
     key = study_cell.contact_key
-    surf_path = root / "results" / "surfaces" / f"{cell['surface_key']}.h5"
-    infl_path = root / "results" / "influence" / f"{cell['geometry_key']}.h5"
-    cont_path = root / "results" / "contact" / f"{key}.h5"
+    surf_path = root / layout.surfaces(cell["surface_key"])
+    infl_path = root / layout.influence(cell["geometry_key"])
+    cont_path = root / layout.contact(key)
     s, g = cell["surface"], cell["geometry"]
     row = {
         "study": study, "cell": index,
@@ -347,7 +348,7 @@ def _job_files(root: Path, key: str, job: dict, study_seed: int | None = None) -
     surfaces and influence, a counter body's) and its contact file."""
     files = {name: (root / file.path, file.made_for)
              for name, file in ContactJob.from_params(job).files(study_seed).items()}
-    files["contact"] = (root / "results" / "contact" / f"{key}.h5", {"job": job})
+    files["contact"] = (root / layout.contact(key), {"job": job})
     return files
 
 
@@ -381,7 +382,7 @@ def _stored_batches(jobs: dict[str, dict], root: Path) -> list[tuple[str, int, i
     """Every stored batch of the jobs' contact files: (job key, first, end) surfaces."""
     candidates = []
     for key in sorted(jobs):
-        _, attrs = read_contact(root / "results" / "contact" / f"{key}.h5")
+        _, attrs = read_contact(root / layout.contact(key))
         m = len(attrs["seeds"])
         size = int(attrs.get("batch_size", m))
         candidates += [(key, start, min(m, start + size)) for start in range(0, m, size)]

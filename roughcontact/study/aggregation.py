@@ -30,7 +30,7 @@ from roughcontact.study.flow_settings import (
     percolation_rows,
     probe_from_attrs,
 )
-from roughcontact.study.provenance import atomic_path, provenance
+from roughcontact.study.provenance import NO_RUN, RunInfo, atomic_path, provenance
 from roughcontact.study.storage import read_contact
 from roughcontact.units import MPA
 
@@ -178,7 +178,7 @@ def _aggregate_cell(index: int, cell: StudyCell, path, levels: int,
 
 
 def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, table_path,
-                    moduli_path, meta_path, config=None, validity_path=None,
+                    moduli_path, meta_path, run: RunInfo = NO_RUN, validity_path=None,
                     flow: FlowSettings = FLOW_OFF) -> pd.DataFrame:
     """Aggregate a figure's or sweep's cells into CSV tables with a JSON sidecar.
 
@@ -209,7 +209,7 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
         "interpolation": aggregate.INTERPOLATION,
         "cells": [cell.params() for cell in cells],
         "mean_plane_modulus": [part.summary for part in parts],
-        **provenance(config),  # with the config hash
+        **provenance(run),  # with the config hash
         # what the figures check before they read the tables
         "table_sha256": file_sha256(table_path),
         "moduli_sha256": file_sha256(moduli_path),

@@ -24,16 +24,10 @@ from dataclasses import dataclass
 from roughcontact.study.block_checks import block_problems
 from roughcontact.study.config import BuildSettings, in_unit, unit_slips
 from roughcontact.study.contact_records import StudyCell
+from roughcontact.study.counter_entries import CounterfaceEntry
 from roughcontact.study.measured_checks import measured_problems
 from roughcontact.study.records import Geometry, InfluenceModel, MeasuredCell, SurfaceCell
-from roughcontact.study.studies import (
-    CounterfaceEntry,
-    counterface_entries,
-    counterface_of,
-    resolve_source,
-    source_name,
-    study_path,
-)
+from roughcontact.study.settings import Study
 from roughcontact.units import MM, MPA, UM
 
 #: Accepted ranges of the plausibility check: sigma [um], E [MPa], and the largest
@@ -79,10 +73,9 @@ def _axis_key(where: str, entry: dict, key: str, value: float) -> str:
     return f"{where}.{key}[{index}]"
 
 
-def first_body(config: dict, name: str, cell: StudyCell) -> Body:
+def first_body(study: Study, name: str, cell: StudyCell) -> Body:
     """The first body of a study cell (of the figure or sweep ``name``)."""
-    source = source_name(config, name)
-    where, entry = study_path(config, source), resolve_source(config, name)
+    where, entry = study.path(study.source_name(name)), study.source(name)
     keys = {"E_MPa": (_axis_key(where, entry, "E_MPa", in_unit(cell.E, MPA))
                       if "E_MPa" in entry else "body.E_MPa")}
     if "sigma_um" in entry:  # else a measured surface's own sigma
@@ -96,38 +89,19 @@ def first_body(config: dict, name: str, cell: StudyCell) -> Body:
                 cell.pressure_range[1], keys)
 
 
-def counter_bodies(config: dict, name: str, cell: StudyCell) -> list[Body]:
-    """The counter body of a study cell as a :class:`Body` (none for a smooth rigid one),
-    keyed by the configured entry it comes from (found by making each entry's counter
-    body for the cell: :func:`~roughcontact.study.studies.counterface_of`; the rigid
-    smooth flat is no entry's, so none is found for it)."""
-    return [_counter_body(config, name, cell, entry)
-            for entry in counterface_entries(config, name)
-            if not entry.is_null and counterface_of(config, entry, cell) == cell.counterface][:1]
+def counter_body(study: Study, name: str, cell: StudyCell) -> Body:
+    """The counter body of a study cell (of the figure or sweep ``name``) as a
+    :class:`Body`, keyed to the configured entry the plan made it of (``counter_entry``;
+    the rigid smooth flat has no typed value, so no key)."""
+    counter, entry = cell.counterface, cell.counter_entry
+    return Body(study.path(study.source_name(name)), counter.surface.cell,
+                counter.surface.sigma, counter.body.geometry, counter.body.E,
+                cell.pressure_range[1], entry.keys(cell), entry)
 
 
-def _counter_body(config: dict, name: str, cell: StudyCell, entry) -> Body:
-    """The counter body of ``cell`` made by the configuration's ``entry``, keyed to it."""
-    counter = cell.counterface
-    surface, body = counter.surface.cell, counter.body.geometry
-    keys = {}
-    if entry.surface != "smooth" and entry.surface["sigma_um"] is not None:
-        keys["sigma_um"] = f"{entry.surface_key}.sigma_um"
-    if isinstance(surface, MeasuredCell):
-        keys["measured"] = f"{entry.surface_key}.measured"
-    if entry.body != "rigid":
-        keys["E_MPa"] = f"{entry.body_key}.E_MPa"
-        if body.operator is not InfluenceModel.HALFSPACE:
-            keys["thickness_mm"] = ("body.thickness_mm" if "thickness_mm" in entry.inherited
-                                    else f"{entry.body_key}.thickness_mm")
-    where = study_path(config, source_name(config, name))
-    return Body(where, surface, counter.surface.sigma, body, counter.body.E,
-                cell.pressure_range[1], keys, entry)
-
-
-def cell_bodies(config: dict, name: str, cell: StudyCell) -> list[Body]:
-    """The bodies of a study cell: the first, and the counter body where it has one."""
-    return [first_body(config, name, cell), *counter_bodies(config, name, cell)]
+def cell_bodies(study: Study, name: str, cell: StudyCell) -> list[Body]:
+    """The bodies of a study cell: the first and its counter body."""
+    return [first_body(study, name, cell), counter_body(study, name, cell)]
 
 
 def _slip(kind: str, key: str, value: float, fits) -> str:
@@ -199,18 +173,18 @@ def body_problems(body: Body, build: BuildSettings) -> list[str]:
     return problems
 
 
-def check_plausible(config: dict, cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
+def check_plausible(study: Study, cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
     """Messages for the values of every body of the studies' cells (:func:`cell_bodies`)
     that are almost surely a unit slip (:func:`body_problems`), in the units they were
     written in, each once; ``cells`` by study name."""
-    build = BuildSettings.from_section(config["body"])
+    build = study.body.build
     problems = {}
     for name, study_cells in cells.items():
         for cell in study_cells:
-            for body in cell_bodies(config, name, cell):
+            for body in cell_bodies(study, name, cell):
                 problems.update(dict.fromkeys(body_problems(body, build)))
     return list(problems)
 
 
 __all__ = ["PLAUSIBLE", "Body", "body_problems", "cell_bodies", "check_plausible",
-           "counter_bodies", "first_body"]
+           "counter_body", "first_body"]

@@ -15,30 +15,20 @@ import math
 from roughcontact.elasticity.influence import MESH_PRESETS
 from roughcontact.elasticity.operators import HYBRID_MESHES
 from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.counter_entries import counterface_entries, import_problems
 from roughcontact.study.records import (
     GeneratedCell,
     Generator,
     Geometry,
     InfluenceModel,
-    MeasuredCell,
 )
+from roughcontact.study.settings import Study, StudySection
 from roughcontact.study.sources import (
     SPECTRA,
-    MeasurementImport,
     load_measurement,
     spectrum_from_entry,
 )
-from roughcontact.study.studies import (
-    CAP_MODES,
-    as_list,
-    body_geometry,
-    counterface_entries,
-    resolve_source,
-    source_name,
-    study_path,
-    study_section,
-    study_surfaces,
-)
+from roughcontact.study.studies import CAP_MODES, as_list, study_surfaces
 from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
 from roughcontact.surfaces.spec import SurfaceSpec
@@ -59,27 +49,27 @@ class ConfigProblems(ValueError):
 # Studies and spectra
 
 
-def _spectrum_entries(config: dict, names) -> dict:
+def _spectrum_entries(study: Study, names) -> dict:
     """``where -> entry`` of the config's spectrum and of each named study's own."""
-    entries = {"surfaces.spectrum": config["surfaces"]["spectrum"]}
+    entries = {"surfaces.spectrum": study.surfaces.spectrum}
     for name in names:
         try:
-            own = resolve_source(config, name).get("spectrum")
+            own = study.source(name).get("spectrum")
         except (KeyError, ValueError):
             continue  # check_studies names it
         if own is not None:
-            entries[f"{source_name(config, name)}.spectrum"] = own
+            entries[f"{study.source_name(name)}.spectrum"] = own
     return entries
 
 
-def check_spectra(config: dict, names) -> list[str]:
+def check_spectra(study: Study, names) -> list[str]:
     """Messages for spectra that cannot be used: a spectrum with padded surfaces
     (``periodic: false``), a file that is missing or not a valid PSD table."""
     problems = []
-    for where, entry in _spectrum_entries(config, names).items():
+    for where, entry in _spectrum_entries(study, names).items():
         if SPECTRA[entry["kind"]] is None:  # the ACF
             continue
-        if not config["surfaces"]["periodic"]:
+        if not study.surfaces.periodic:
             problems.append(f"{where}: kind {entry['kind']} generates periodic surfaces only; "
                             "set surfaces.periodic: true or remove the spectrum")
             continue
@@ -90,31 +80,31 @@ def check_spectra(config: dict, names) -> list[str]:
     return problems
 
 
-def check_studies(config: dict, names) -> list[str]:
+def check_studies(study: Study, names) -> list[str]:
     """Messages for contact figures or sweeps the schema cannot check: a ``from:`` that
     names no study or a cycle, a pressure range, a list axis that repeats a value, a
     measured surface (a study's or a counter body's), the hybrid operator's mesh, the
     hardness settings; where there are none, the warnings of
     :func:`warn_single_surfaces`."""
-    problems = check_figure_duplicates(config)
+    problems = check_figure_duplicates(study)
     for name in names:
         try:
-            study = study_section(config, name)
+            section = study.section(name)
         except (KeyError, ValueError) as err:
             problems.append(f"{name}: {err}")
             continue
-        low, high = study["pressure_MPa"]
+        low, high = section.pressure_MPa
         if not low < high:
             problems.append(f"{name}.pressure_MPa = [{low}, {high}]: expected [P_min, P_max] "
                             f"with P_min < P_max (MPa)")
-        problems += check_duplicates(config, name)
-        problems += check_measured(config, name, resolve_source(config, name))
-        problems += check_counter_measured(config, name)
-        problems += _check_operator(config, name, study)
-        problems += _check_hardness(name, study)
-        problems += _check_pressure_below_hardness(config, name, study)
+        problems += check_duplicates(study, name)
+        problems += check_measured(study, name, study.source(name))
+        problems += check_counter_measured(study, name)
+        problems += _check_operator(study, name, section)
+        problems += _check_hardness(name, section)
+        problems += _check_pressure_below_hardness(name, section)
     if not problems:  # a refusal comes alone
-        warn_single_surfaces(config, names)
+        warn_single_surfaces(study, names)
     return list(dict.fromkeys(problems))  # a study drawn from another: its messages once
 
 
@@ -138,51 +128,50 @@ def _repeats(where: str, values: list, written: list | None = None) -> list[str]
     return problems
 
 
-def check_duplicates(config: dict, name: str) -> list[str]:
+def check_duplicates(study: Study, name: str) -> list[str]:
     """Messages for a list axis of the study ``name`` (of its source) that names a value
     twice, which would make the same cells twice: each list of :data:`STUDY_AXES`, and
     the counter bodies (compared with their defaults resolved, so ``{body: rigid}`` and
     ``{surface: smooth, body: rigid}`` are the same)."""
-    entry = resolve_source(config, name)
-    where = study_path(config, source_name(config, name))
+    entry = study.source(name)
+    where = study.path(study.source_name(name))
     problems = []
     for key in STUDY_AXES:
         if isinstance(entry.get(key), list):  # optional: a scalar or the inherited value
             problems += _repeats(f"{where}.{key}", entry[key])
     if isinstance(entry.get("counterface"), list):  # optional: the section's
-        resolved = [(e.surface, e.body) for e in counterface_entries(config, name)]
+        resolved = [(e.surface, e.body) for e in counterface_entries(study, name)]
         problems += _repeats(f"{where}.counterface", resolved, entry["counterface"])
     return problems
 
 
-def check_figure_duplicates(config: dict) -> list[str]:
+def check_figure_duplicates(study: Study) -> list[str]:
     """:func:`check_duplicates` of the surface figures' lists (:data:`FIGURE_AXES`)."""
-    return [problem for figure, keys in FIGURE_AXES.items() if figure in config["figures"]
-            for key in keys if isinstance(config["figures"][figure][key], list)
-            for problem in _repeats(f"figures.{figure}.{key}", config["figures"][figure][key])]
+    return [problem for figure, keys in FIGURE_AXES.items() if figure in study.figures
+            for key in keys if isinstance(study.entry(figure)[key], list)
+            for problem in _repeats(f"figures.{figure}.{key}", study.entry(figure)[key])]
 
 
 log = logging.getLogger(__name__)
 
 
-def warn_single_surfaces(config: dict, names) -> None:
+def warn_single_surfaces(study: Study, names) -> None:
     """Log a warning, once per source study, for a study whose generated cells have one
     surface each (``count: 1``): a cell's 95 % band of the mean needs two, so its
     aggregates have none (NaN)."""
-    for source in dict.fromkeys(source_name(config, name) for name in names):
-        study = study_section(config, source)
-        generated = study.get("surface") is None or study["compare_synthetic"]
-        if generated and study["count"] == 1:
-            where = study_path(config, source)
-            key = (f"{where}.count" if "count" in resolve_source(config, source)
-                   else "surfaces.count")
+    for source in dict.fromkeys(study.source_name(name) for name in names):
+        section = study.section(source)
+        generated = not section.measured or section.compare_synthetic
+        if generated and section.count == 1:
+            where = section.where
+            key = f"{where}.count" if "count" in section.own else "surfaces.count"
             log.warning("%s: one surface per cell (%s = 1): a single-surface cell has no "
                         "confidence band (its 95 %% band of the mean is NaN in the "
                         "aggregates); set %s to 2 or more for one", where, key, key)
 
 
-def _check_hardness(name: str, study: dict) -> list[str]:
-    values, cap = study["hardness_MPa"], study["cap"]
+def _check_hardness(name: str, study: StudySection) -> list[str]:
+    values, cap = study.hardness_MPa, study.cap
     elastic, capped = CAP_MODES[cap]
     if name == "hardness" and not (values and elastic and capped):
         return [f"{name}: the hardness figure compares elastic and capped cells; "
@@ -191,7 +180,7 @@ def _check_hardness(name: str, study: dict) -> list[str]:
         return [f"{name}: contact.cap = {cap!r} but no hardness is given; set "
                 f"body.hardness_MPa (or the study's hardness_MPa) to the hardness "
                 f"[MPa] to cap the pressure at, or cap: false"]
-    meshes, listed = as_list(study["meshes"]), study["cap_meshes"]
+    meshes, listed = as_list(study.meshes), study.cap_meshes
     unknown = [m for m in (listed or []) if m not in meshes]
     if unknown:
         return [f"{name}: cap_meshes lists {unknown}, which the study does not solve "
@@ -210,7 +199,7 @@ def _numbers(numbers: list[float], like) -> str:
 _HARDNESS_SLIP = ("GPa", 1e3)
 
 
-def _check_pressure_below_hardness(config: dict, name: str, study: dict) -> list[str]:
+def _check_pressure_below_hardness(name: str, study: StudySection) -> list[str]:
     """Refuse a study whose largest nominal pressure exceeds its smallest hardness.
 
     The cap holds ``0 <= p <= H`` at every point, so the nominal (mean)
@@ -222,18 +211,16 @@ def _check_pressure_below_hardness(config: dict, name: str, study: dict) -> list
     ``cap`` and ``plausibility_check`` say, naming the key the hardness
     comes from (the study's own ``hardness_MPa``, else ``body.hardness_MPa``).
     """
-    values = study["hardness_MPa"]
+    values = study.hardness_MPa
     if values is None:
         return []
     hardness = as_list(values)
-    p_min, p_max = study["pressure_MPa"]
+    p_min, p_max = study.pressure_MPa
     if p_max <= min(hardness):
         return []
-    source = source_name(config, name)
-    where = study_path(config, source)
-    key = (f"{where}.hardness_MPa" if "hardness_MPa" in resolve_source(config, name)
-           else "body.hardness_MPa")
-    elastic, capped = CAP_MODES[study["cap"]]
+    where = study.where
+    key = f"{where}.hardness_MPa" if "hardness_MPa" in study.own else "body.hardness_MPa"
+    elastic, capped = CAP_MODES[study.cap]
     meaningless = ((["cells capped at it cannot reach P_max"] if capped else [])
                    + (["elastic cells checked against it are beyond it at P_max (their mean "
                        "contact pressure exceeds it)"] if elastic else []))
@@ -251,26 +238,15 @@ def _check_pressure_below_hardness(config: dict, name: str, study: dict) -> list
             f"{' and '.join(meaningless)}. Fix: " + "; or ".join(fixes)]
 
 
-def import_problems(where: str, entry: dict) -> list[str]:
-    """The refusal of a measured map that cannot be imported as its ``entry`` (a
-    ``surface:`` or a counter surface's ``measured:``) says, named ``where``."""
-    try:
-        MeasuredCell.from_source(MeasurementImport.from_entry(entry))
-    except (OSError, ValueError) as err:
-        return [f"{where}: {err}"]
-    return []
-
-
-def check_counter_measured(config: dict, name: str) -> list[str]:
+def check_counter_measured(study: Study, name: str) -> list[str]:
     """Messages for the measured counter surfaces of a study that cannot be imported
-    (:func:`import_problems`, as a study's ``surface:``)."""
-    return [problem for entry in counterface_entries(config, name)
-            if entry.surface != "smooth" and "measured" in entry.surface
-            for problem in import_problems(f"{entry.surface_key}.measured.file",
-                                           entry.surface["measured"])]
+    (:func:`~roughcontact.study.counter_entries.import_problems`, as a study's
+    ``surface:``)."""
+    return [problem for entry in counterface_entries(study, name)
+            for problem in entry.surface.import_problems()]
 
 
-def check_measured(config: dict, name: str, entry: dict) -> list[str]:
+def check_measured(study: Study, name: str, entry) -> list[str]:
     """Messages for a study whose measured surface cannot be used as configured
     (``entry``: the study as configured)."""
     if entry.get("surface") is None:
@@ -290,7 +266,7 @@ def check_measured(config: dict, name: str, entry: dict) -> list[str]:
     if problems:
         return problems
     try:
-        surfaces = study_surfaces(config, study_section(config, name))
+        surfaces = study_surfaces(study, study.section(name))
     except (OSError, ValueError) as err:
         return [f"{name}.surface: {err}"]
     bx, by = (in_unit(b, MM) for b in surfaces[0].corr_length)
@@ -302,11 +278,11 @@ def check_measured(config: dict, name: str, entry: dict) -> list[str]:
     return []
 
 
-def _check_operator(config: dict, name: str, study: dict) -> list[str]:
+def _check_operator(study: Study, name: str, section: StudySection) -> list[str]:
     """The hybrid operator needs a coarse model with an accurate near field."""
-    if body_geometry(config).operator is not InfluenceModel.HYBRID:
+    if study.body.geometry.operator is not InfluenceModel.HYBRID:
         return []
-    bad = [m for m in as_list(study["meshes"]) if m not in HYBRID_MESHES]
+    bad = [m for m in as_list(section.meshes) if m not in HYBRID_MESHES]
     if not bad:
         return []
     return [f"{name}: body.operator = hybrid with mesh {bad[0]!r}: the hybrid operator takes "
@@ -341,7 +317,7 @@ def _pair_text(values) -> str:
     return _numbers(list(values), None if values[0] == values[-1] else list(values))
 
 
-def window_message(config: dict, name: str, cell: GeneratedCell, b_key: str | None = None,
+def window_message(study: Study, name: str, cell: GeneratedCell, b_key: str | None = None,
                    b_written=None) -> str | None:
     """Why a generated cell of the figure or sweep ``name`` has a correlation length
     longer than :data:`MAX_CORRELATION_FRACTION` of its side, with the fixes, or None.
@@ -353,8 +329,8 @@ def window_message(config: dict, name: str, cell: GeneratedCell, b_key: str | No
     limit = tuple(MAX_CORRELATION_FRACTION * side for side in size)
     if all(bi <= li for bi, li in zip(b, limit, strict=True)):
         return None
-    entry = {**config["figures"], **config["sweeps"]}[name]
-    where = study_path(config, name)
+    entry = study.entry(name)
+    where = study.path(name)
     b_key = f"{where}.b_mm" if b_key is None else b_key
     b_written = entry["b_mm"] if b_written is None else b_written
     own_size = entry.get("size_mm") is not None  # a study's own size, else the surfaces'
@@ -390,7 +366,7 @@ def _in_place(configured, pair) -> str:
     return ""
 
 
-def check_windows(config: dict, cells) -> list[str]:
+def check_windows(study: Study, cells) -> list[str]:
     """Messages for the generated cells whose correlation length exceeds
     :data:`MAX_CORRELATION_FRACTION` of their side (:func:`window_message`), once per
     cell; ``cells`` the surface cells by the figure or sweep whose ``b_mm`` they have.
@@ -398,11 +374,11 @@ def check_windows(config: dict, cells) -> list[str]:
     twins (whose b is measured: :func:`check_measured`) are not judged here."""
     problems = []
     for name, surfaces in cells.items():
-        if {**config["figures"], **config["sweeps"]}[name].get("surface") is not None:
+        if study.entry(name).get("surface") is not None:
             continue
         for cell in {c.key: c for c in surfaces}.values():
             if isinstance(cell, GeneratedCell) and cell.spectrum is None:
-                message = window_message(config, name, cell)
+                message = window_message(study, name, cell)
                 problems += [message] if message else []
     return problems
 

@@ -31,7 +31,7 @@ from roughcontact.study.jobs import (
     certified_influence,
     read_pair_model,
 )
-from roughcontact.study.provenance import canonical_json, provenance
+from roughcontact.study.provenance import NO_RUN, RunInfo, canonical_json, provenance
 from roughcontact.study.storage import read_influence, read_surfaces, write_contact
 from roughcontact.transport.probe import NO_FLOW, FlowProbe
 
@@ -174,7 +174,7 @@ def sweep_problem(job: ContactJob, problem: ContactProblem, steps: int, options,
 
 
 def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
-                      config=None) -> dict:
+                      run: RunInfo = NO_RUN) -> dict:
     """Solve one contact job and write its non-dimensional sweep to ``out_path``.
 
     ``params``: the job's :meth:`~roughcontact.study.contact_records.ContactJob.params`,
@@ -193,7 +193,7 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
     """
     job, settings = ContactJob.from_params(params), ContactSettings.from_section(settings)
     start = time.perf_counter()
-    study_seed = None if config is None else config["study_seed"]
+    study_seed = run.study_seed
     surfaces, unit, geometry_attrs = _read_first_body(job, inputs, study_seed)
     heights = surfaces["heights"]
     m = heights.shape[0]
@@ -234,7 +234,7 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
         **problem.attrs,
         **({"flow": canonical_json(settings.flow.params())} if settings.flow.directions
            else {}),
-        **provenance(config),
+        **provenance(run),
     }
     return write_contact(out_path, result, attrs)
 

@@ -12,11 +12,12 @@ geometry, sweep end, cap and counter body.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from roughcontact.contact.cell import nondim_pressure
+from roughcontact.study import layout
 from roughcontact.study.config import from_unit, in_unit, in_units
 from roughcontact.study.counter_records import (
     NO_COUNTERFACE,
@@ -96,9 +97,9 @@ class ContactJob:
         for: its surfaces and influence model and its counter body's (the pair's file on
         a dense first body). The one place that decides them: the rules, the plan, the
         audit, the resources and the job take them from here."""
-        return {"surfaces": JobFile(f"results/surfaces/{self.surface.key}.h5",
+        return {"surfaces": JobFile(layout.surfaces(self.surface.key),
                                     {"cell": self.surface.params(), "study_seed": study_seed}),
-                "influence": JobFile(f"results/influence/{self.geometry.key}.h5",
+                "influence": JobFile(layout.influence(self.geometry.key),
                                      {"geometry": self.geometry.params()}),
                 **self.counter.files(self.geometry, study_seed)}
 
@@ -130,7 +131,10 @@ class StudyCell:
     ``hardness`` H [Pa]: the cap 0 <= p <= H a capped cell is solved with (None:
     elastic). ``checked_hardness`` [Pa]: the values an elastic cell's results
     are checked against (the share of real area and load above each, no extra
-    solve), flagged beyond ``hardness_threshold``.
+    solve), flagged beyond ``hardness_threshold``. ``counter_entry``: the configured
+    counter body the plan made ``counterface`` of
+    (:class:`~roughcontact.study.counter_entries.CounterfaceEntry`, with the keys the
+    plan's messages name; not a parameter of the cell).
     """
 
     surface: SurfaceCell
@@ -143,6 +147,7 @@ class StudyCell:
     checked_hardness: tuple[float, ...] = ()
     hardness_threshold: float | None = None
     counterface: AnyCounterface = NO_COUNTERFACE
+    counter_entry: object = field(default=None, compare=False, repr=False)
 
     @classmethod
     def from_params(cls, params: dict) -> StudyCell:

@@ -17,19 +17,20 @@ import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
 from roughcontact.study.block_checks import block_message, block_problems
-from roughcontact.study.body_checks import Body, counter_bodies
+from roughcontact.study.body_checks import Body, counter_body
 from roughcontact.study.checks import window_message
-from roughcontact.study.config import BuildSettings, as_pair, in_unit, in_units
+from roughcontact.study.config import BuildSettings, in_unit, in_units
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.records import GeneratedCell, InfluenceModel, MeasuredCell, SurfaceCell
+from roughcontact.study.settings import Study
 from roughcontact.study.sources import MeasurementImport, load_measurement
-from roughcontact.study.studies import source_name, study_path
 from roughcontact.units import MM
 
 
-def _block_problems(body: Body, build: BuildSettings) -> list[str]:
-    """Why a counter block cannot be built (none: it can), naming its entry's keys."""
-    geometry, key = body.geometry, body.entry.body_key
+def _block_problems(body: Body, geometry, build: BuildSettings) -> list[str]:
+    """Why a counter block ``geometry`` cannot be built (none: it can), naming its entry's
+    keys."""
+    key = body.entry.body_key
     if geometry.operator is InfluenceModel.HYBRID and geometry.mesh not in HYBRID_MESHES:
         return [f"{key}: operator hybrid needs an accurate coarse model: {key}.mesh one of "
                 f"{list(HYBRID_MESHES)}, not {geometry.mesh!r} (or {key}.operator: dense)"]
@@ -37,15 +38,13 @@ def _block_problems(body: Body, build: BuildSettings) -> list[str]:
     return [block_message(body.where, geometry, build, found, False, body=key)] if found else []
 
 
-def _window_problems(config: dict, name: str, body: Body) -> list[str]:
+def _window_problems(study: Study, name: str, body: Body) -> list[str]:
     """A generated counter surface of its own ``b_mm`` longer than half the surface (the
-    first surface's check: :func:`~roughcontact.study.checks.window_message`)."""
-    surface, b = body.surface, body.entry.surface
-    if not isinstance(surface, GeneratedCell) or b == "smooth" or b["b_mm"] is None:
-        return []  # b the first surface's: judged with it
-    message = window_message(config, source_name(config, name), surface,
-                             f"{body.entry.surface_key}.b_mm", b["b_mm"])
-    return [] if message is None else [message]
+    first surface's check: :func:`~roughcontact.study.checks.window_message`); one whose
+    b is the first surface's is judged with it."""
+    messages = (window_message(study, study.source_name(name), body.surface, key, written)
+                for key, written in body.entry.surface.own_b())
+    return [message for message in messages if message]
 
 
 def _same_plan(cell: SurfaceCell, grid, size) -> bool:
@@ -78,16 +77,15 @@ def _import_fix(entry: dict, grid, size) -> str | None:
     return " and ".join(words) if words else None
 
 
-def _smaller_area(config: dict, name: str, entry: dict, first: SurfaceCell):
+def _smaller_area(study: Study, entry: dict, first: SurfaceCell):
     """The study's ``size_mm`` (a square on the surfaces' spacing) and the counter map's
     import options that make both fit, where the map cannot cover the first surface:
     the largest side the map's window gives in whole spacings; None for a measured
     first surface (its size is its file's) or where none fits."""
     if not isinstance(first, GeneratedCell):
         return None
-    surfaces = config["surfaces"]
-    spacing = [s / n * MM for s, n in zip(as_pair(surfaces["size_mm"]),
-                                          as_pair(surfaces["grid"]), strict=True)]
+    surfaces = study.surfaces
+    spacing = [s / n * MM for s, n in zip(surfaces.size_mm, surfaces.grid, strict=True)]
     whole = load_measurement(MeasurementImport.from_entry(
         {**entry, "crop_mm": None, "decimate": None, "resample_grid": None}))
     step = max(whole.spacing)  # no larger than the map, nor than the study's area
@@ -99,13 +97,13 @@ def _smaller_area(config: dict, name: str, entry: dict, first: SurfaceCell):
     return None if fix is None else (in_unit(side, MM), grid, fix)
 
 
-def _grid_problems(config: dict, name: str, cell: StudyCell, body: Body) -> list[str]:
+def _grid_problems(study: Study, name: str, cell: StudyCell, body: Body) -> list[str]:
     """A measured counter map on another grid or plan size than the surface it meets."""
     first, other = cell.surface, body.surface
     if not isinstance(other, MeasuredCell) or _same_plan(other, first.grid, first.size):
         return []
     key = f"{body.entry.surface_key}.measured"
-    entry = body.entry.surface["measured"]
+    entry = body.entry.surface.measured
     (nx, ny), (lx, ly) = first.grid, in_units(first.size)
     (ox, oy), (olx, oly) = other.grid, in_units(other.size)
     text = (f"{key}: {other.source.file}: {ox} x {oy} points over {olx:g} mm x {oly:g} mm, "
@@ -115,20 +113,19 @@ def _grid_problems(config: dict, name: str, cell: StudyCell, body: Body) -> list
     fix = _import_fix(entry, first.grid, first.size)
     if fix is not None:
         return [f"{text}; set in {key}: {fix}"]
-    smaller = _smaller_area(config, name, entry, first)
+    smaller = _smaller_area(study, entry, first)
     if smaller is None:
         return [f"{text}; no window of the counter map has the first surface's plan size: "
                 f"crop both maps to one window of the same size, on the same grid"]
     side, (gx, gy), fix = smaller
-    where = study_path(config, source_name(config, name))
+    where = study.path(study.source_name(name))
     return [f"{text}; no window of the counter map has the first surface's plan size (the "
             f"map is {olx:g} x {oly:g} mm): make the study's area one it has, "
             f"{where}.size_mm: {side:g} ({gx} x {gy} elements at the surfaces' spacing), "
             f"and set in {key}: {fix}"]
 
 
-def check_counterfaces(config: dict, cells: dict[str, tuple[StudyCell, ...]],
-                       build: BuildSettings) -> list[str]:
+def check_counterfaces(study: Study, cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:
     """Messages for the study cells whose counter body cannot be used: a counter block
     that cannot be solved reliably or a hybrid one on an inaccurate mesh, a generated
     counter surface longer in b than half the surface, and a measured counter map on
@@ -137,12 +134,12 @@ def check_counterfaces(config: dict, cells: dict[str, tuple[StudyCell, ...]],
     problems = {}
     for name, study_cells in cells.items():
         for cell in study_cells:
-            for body in counter_bodies(config, name, cell):
-                found = _window_problems(config, name, body)
-                found += _grid_problems(config, name, cell, body)
-                if body.geometry is not None:
-                    found += _block_problems(body, build)
-                problems.update(dict.fromkeys(found))
+            body = counter_body(study, name, cell)
+            found = _window_problems(study, name, body)
+            found += _grid_problems(study, name, cell, body)
+            for geometry in cell.counterface.geometries().values():
+                found += _block_problems(body, geometry, study.body.build)
+            problems.update(dict.fromkeys(found))
     return list(problems)
 
 

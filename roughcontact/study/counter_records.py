@@ -19,6 +19,7 @@ import numpy as np
 
 from roughcontact.contact import counterface
 from roughcontact.elasticity.operators import COARSE_MAX
+from roughcontact.study import layout
 from roughcontact.study.config import in_unit
 from roughcontact.study.provenance import short_hash
 from roughcontact.study.records import (
@@ -122,7 +123,7 @@ class RoughCounter:
 
     def files(self, study_seed=None) -> dict:
         """The counter surfaces' file, with what it must have been made for."""
-        return {"counter_surfaces": JobFile(f"results/surfaces/{self.cell.key}.h5",
+        return {"counter_surfaces": JobFile(layout.surfaces(self.cell.key),
                                             {"cell": self.cell.params(),
                                              "study_seed": study_seed})}
 
@@ -231,9 +232,9 @@ class ElasticCounter:
         """The counter body's file for a job on ``first``: the pair's on a dense first
         body, else its influence file; with what it must have been made for."""
         for pair in self.pairs(first, rigid_share).values():
-            return {"counter_influence": JobFile(f"results/influence/pairs/{pair.key}.h5",
+            return {"counter_influence": JobFile(layout.pair(pair.key),
                                                  {"geometry": pair.params()}, pair)}
-        return {"counter_influence": JobFile(f"results/influence/{self.geometry.key}.h5",
+        return {"counter_influence": JobFile(layout.influence(self.geometry.key),
                                              {"geometry": self.geometry.params()})}
 
     def read(self, paths: dict, first: Geometry, rigid_share: float, reader) -> tuple:
@@ -309,6 +310,14 @@ class Counterface:
     surface: _Smooth | RoughCounter = SMOOTH
     body: _Rigid | ElasticCounter = RIGID
     rigid_share: float = 0.001
+
+    @classmethod
+    def of(cls, surface, body, rigid_share: float = 0.001) -> AnyCounterface:
+        """The counter body of a ``surface`` and a ``body``: the smooth rigid one is no
+        counter body at all (:data:`NO_COUNTERFACE`, the paper's flat)."""
+        if surface is SMOOTH and body is RIGID:
+            return NO_COUNTERFACE
+        return cls(surface, body, rigid_share)
 
     @classmethod
     def from_params(cls, params: dict) -> Counterface:
@@ -477,7 +486,7 @@ class PairGeometry:
     """Two bodies' influence models summed once: the ``first`` body's (dense) and the
     ``second``'s scaled by ``modulus_ratio`` E1 / E2, with the ``rigid_share`` that
     decides whether the second is treated as rigid. Its file
-    (``results/influence/pairs/<key>.h5``) is shared by every contact job on the
+    (:func:`roughcontact.study.layout.pair`) is shared by every contact job on the
     same pair (:func:`roughcontact.study.jobs.build_pair`)."""
 
     first: Geometry

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughcontact.study.config import unit_slips
+from roughcontact.study.config import in_unit, unit_slips
 from roughcontact.transport.flow import FACE_RULES, Seal
 from roughcontact.transport.probe import NO_FLOW, FlowProbe, probe_from_params
 from roughcontact.units import MM, MPA
@@ -53,6 +53,29 @@ class FlowSettings:
     @property
     def directions(self) -> tuple[str, ...]:
         return self.probe.directions
+
+    @property
+    def enabled(self) -> bool:
+        """The flow is on (a probe with directions)."""
+        return bool(self.probe.directions)
+
+    def written(self) -> dict:
+        """The seal's values in the configuration's units, by key (none with the flow
+        off)."""
+        if not self.enabled:
+            return {}
+        seal = self.seal
+        return {"viscosity_Pa_s": seal.viscosity,
+                "pressure_drop_MPa": in_unit(seal.pressure_drop, MPA),
+                "seal_width_mm": in_unit(seal.width, MM),
+                "seal_length_mm": in_unit(seal.length, MM)}
+
+    def seal_text(self) -> str:
+        """The fluid and the seal in words (a caption's)."""
+        w = self.written()
+        return (f"viscosity {w['viscosity_Pa_s']:g} Pa s through a seal "
+                f"{w['seal_width_mm']:g} mm wide and {w['seal_length_mm']:g} mm long with "
+                f"{w['pressure_drop_MPa']:g} MPa across it")
 
     def leak_columns(self, rows) -> dict:
         """The leak-rate columns of a cell's aggregated ``rows`` (a table with the flow
@@ -89,9 +112,8 @@ def probe_from_attrs(attrs: dict) -> FlowProbe:
     return probe_from_params(json.loads(stored) if isinstance(stored, str) else stored)
 
 
-def flow_settings(config: dict) -> FlowSettings:
-    """The :class:`FlowSettings` of a validated ``config`` (its ``flow`` section)."""
-    section = config["flow"]
+def flow_settings(section) -> FlowSettings:
+    """The :class:`FlowSettings` of a validated configuration's ``flow`` section."""
     if not section["enabled"]:
         return FLOW_OFF
     probe = FlowProbe(directions=tuple(section["directions"]), sides=section["sides"],
@@ -114,22 +136,20 @@ def _slip(key: str, value: float) -> str | None:
             + " (plausibility_check: false accepts it)")
 
 
-def check_flow(config: dict, grids: dict) -> list[str]:
-    """The problems of the ``flow`` section of a validated ``config``: values that are
-    almost surely a unit slip (with ``plausibility_check``), and contact grids
-    (``grids``: a geometry's configuration key -> its (nx, ny)) too small to carry a
-    flow (at least two elements along and across each direction)."""
-    section = config["flow"]
-    if not section["enabled"]:
-        return []
+def check_flow(flow: FlowSettings, plausibility_check: bool, grids: dict) -> list[str]:
+    """The problems of the ``flow`` settings: values that are almost surely a unit slip
+    (with ``plausibility_check``), and contact grids (``grids``: a geometry's
+    configuration key -> its (nx, ny)) too small to carry a flow (at least two elements
+    along and across each direction)."""
+    written = flow.written()
     problems = []
-    if config["plausibility_check"]:
-        problems += [message for key in PLAUSIBLE
-                     if (message := _slip(key, float(section[key]))) is not None]
-    if float(section["pressure_drop_MPa"]) == 0.0:
+    if plausibility_check:
+        problems += [message for key, value in written.items()
+                     if (message := _slip(key, float(value))) is not None]
+    if written and written["pressure_drop_MPa"] == 0.0:
         problems.append("flow.pressure_drop_MPa: 0 gives no leak rate; give the inlet minus "
                         "outlet pressure [MPa] (e.g. 0.1 for 1 bar)")
-    for where, (nx, ny) in grids.items():
+    for where, (nx, ny) in grids.items() if written else ():
         if min(nx, ny) < 2:
             problems.append(f"{where}: a {nx} x {ny} contact grid cannot carry a flow (it "
                             "needs at least 2 elements along and across the flow); give it "

@@ -53,7 +53,7 @@ from roughcontact.contact.result import INTERFACE_SCALARS, INTERFACE_UNITS
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import arrays_sha256
-from roughcontact.study.provenance import canonical_json, provenance
+from roughcontact.study.provenance import NO_RUN, RunInfo, canonical_json, provenance
 from roughcontact.study.storage import (
     REBUILD,
     check_attributes,
@@ -165,7 +165,8 @@ def _stats(heights: np.ndarray, size: float) -> dict:
             for name, unit in units.items()}
 
 
-def build_grid_surfaces(params: dict, study_seed: int, grid: int, path, config=None) -> dict:
+def build_grid_surfaces(params: dict, study_seed: int, grid: int, path,
+                        run: RunInfo = NO_RUN) -> dict:
     """Generate the study's surfaces on ``grid`` x ``grid`` and write them to ``path``.
 
     ``params``: the validated ``reports.grid_convergence`` section. Seeds from
@@ -185,7 +186,7 @@ def build_grid_surfaces(params: dict, study_seed: int, grid: int, path, config=N
     attrs = {"params": canonical_json(params), "spec": canonical_json(spec.as_dict()),
              "grid": int(grid), "band_grid": list(band_grid(spec)),
              "study_seed": int(study_seed), "generator": settings.generator,
-             **provenance(config)}
+             **provenance(run)}
     write_h5(path, datasets, attrs)
     log.info("grid %d: %d surfaces in %.2f s (band grid %s)", grid, len(seeds),
              time.perf_counter() - start, attrs["band_grid"])
@@ -229,7 +230,7 @@ def aimed_approaches(settings: GridConvergenceSettings, seeds) -> np.ndarray:
     return out
 
 
-def solve_grid(params: dict, surfaces_path, grid: int, out_path, config=None) -> dict:
+def solve_grid(params: dict, surfaces_path, grid: int, out_path, run: RunInfo = NO_RUN) -> dict:
     """Sweep every surface of ``surfaces_path`` on the periodic half-space; write ``out_path``.
 
     The surfaces file must be this study's (its ``params`` equal ``params``)
@@ -268,7 +269,7 @@ def solve_grid(params: dict, surfaces_path, grid: int, out_path, config=None) ->
              "seeds": surfaces["seeds"].tolist(), "method": result.method, "tol": settings.tol,
              "contact_modulus": settings.contact_modulus, "wall_seconds": wall,
              "cpu_seconds": cpu, "surfaces_content_sha256": surfaces["content_sha256"],
-             **provenance(config)}
+             **provenance(run)}
     write_h5(out_path, datasets, attrs)
     return attrs
 

@@ -30,6 +30,8 @@ from roughcontact.study.checks import memory_message
 from roughcontact.study.config import BuildSettings, in_unit
 from roughcontact.study.counter_records import PairGeometry
 from roughcontact.study.provenance import (
+    NO_RUN,
+    RunInfo,
     canonical_json,
     peak_rss_bytes,
     provenance,
@@ -184,7 +186,7 @@ def _finite_element_matrix(geometry: Geometry, build: BuildSettings, model) -> t
 
 
 def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
-                    config=None) -> dict:
+                    run: RunInfo = NO_RUN) -> dict:
     """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
 
     ``params``: the geometry's :meth:`~roughcontact.study.records.Geometry.params`;
@@ -236,7 +238,7 @@ def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
         "peak_rss_gb": peak_rss_bytes() / GB,
         "solver": build.solver,
         **{f"check_{k}": v for k, v in checks.items()},
-        **provenance(config),
+        **provenance(run),
     }
     return write_influence(path, unit, attrs)
 
@@ -253,7 +255,7 @@ def _criterion_matrix(unit, planned: Geometry) -> tuple:
 
 
 def choose_influence(params: dict, planned: dict, planned_path, out_path,
-                     config=None) -> dict:
+                     run: RunInfo = NO_RUN) -> dict:
     """Resolve an ``operator: auto`` geometry: the half-space, or its planned model.
 
     ``params``: the auto geometry's :meth:`~roughcontact.study.records.Geometry.params`;
@@ -278,7 +280,7 @@ def choose_influence(params: dict, planned: dict, planned_path, out_path,
     choice = {"geometry": geometry.params(), "geometry_key": geometry.key,
               "operator": resolved.operator.value, "resolved": resolved.params(),
               "resolved_key": resolved.key, **criterion, "measured_on": str(planned_path),
-              "measured_on_sha256": attrs["content_sha256"], **provenance(config)}
+              "measured_on_sha256": attrs["content_sha256"], **provenance(run)}
     write_choice(out_path, choice)
     return choice
 
@@ -287,7 +289,7 @@ def choose_influence(params: dict, planned: dict, planned_path, out_path,
 # Pair jobs: two bodies' influence models summed once (Eq 17-18)
 
 
-def build_pair(params: dict, first_path, second_path, out_path, config=None) -> dict:
+def build_pair(params: dict, first_path, second_path, out_path, run: RunInfo = NO_RUN) -> dict:
     """Sum two bodies' influence models once and write the pair (its file is shared by
     every contact job on the pair: ``results/influence/pairs/<key>.h5``).
 
@@ -316,7 +318,7 @@ def build_pair(params: dict, first_path, second_path, out_path, config=None) -> 
              else "summed", seconds)
     attrs = {"pair": pair.key, "params": canonical_json(pair.params()), **hashes,
              **model.attrs, "bulk_ratio": model.bulk_ratio, "build_seconds": seconds,
-             **provenance(config)}
+             **provenance(run)}
     return write_pair(out_path, matrix, model.weights, attrs)
 
 

@@ -2,7 +2,7 @@
 
 Every HDF5 output of the pipeline carries the package version, the git commit
 of the source tree, a hash of the configuration and the creation time as
-attributes, so that a number found in ``results/`` can be traced back.
+attributes, so that a number found in a study's outputs can be traced back.
 """
 
 from __future__ import annotations
@@ -17,12 +17,14 @@ import resource
 import shutil
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from roughcontact import __version__
 from roughcontact.errors import DiskFullError
+from roughcontact.study.layout import ROOT
 
 _SOURCE_DIR = Path(__file__).resolve().parent.parent
 
@@ -78,13 +80,32 @@ def config_hash(config) -> str:
     return hashlib.sha256(canonical_json(config).encode()).hexdigest()[:16]
 
 
-def provenance(config=None) -> dict:
-    """Attributes describing how and when a result was made."""
+@dataclass(frozen=True)
+class RunInfo:
+    """What a job knows of the run that made it: the hash of the run's configuration
+    (:func:`config_hash`; empty outside a run) and its ``study_seed`` (None outside a
+    run: a stored file's seed is then not checked)."""
+
+    config_hash: str = ""
+    study_seed: int | None = None
+
+    @classmethod
+    def of(cls, config: dict) -> RunInfo:
+        """The run of a validated configuration (a job's edge: its script)."""
+        return cls(config_hash(config), int(config["study_seed"]))
+
+
+#: Outside a workflow run: no configuration hash, no study seed.
+NO_RUN = RunInfo()
+
+
+def provenance(run: RunInfo = NO_RUN) -> dict:
+    """Attributes describing how and when a result was made (in which ``run``)."""
     return {
         "package": "roughcontact",
         "package_version": __version__,
         "git_commit": git_commit(),
-        "config_hash": config_hash(config) if config is not None else "",
+        "config_hash": run.config_hash,
         "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         "numpy_version": np.__version__,
     }
@@ -126,7 +147,7 @@ def disk_full(path: Path, tmp: Path, err: OSError) -> DiskFullError:
     except OSError:
         free = "unknown"
     parts = path.parts
-    folder = Path(*parts[:parts.index("results") + 1]) if "results" in parts[:-1] \
+    folder = Path(*parts[:parts.index(ROOT) + 1]) if ROOT in parts[:-1] \
         else path.parent
     largest = ", ".join(f"{p} ({_size(size)})" for size, p in _largest_files(folder))
     return DiskFullError(

@@ -12,7 +12,7 @@ builds (:class:`~roughcontact.study.config.BuildSettings`).
 
 Check the model against a run's benchmarks::
 
-    python -m roughcontact.study.resources --compare results/benchmarks/rules \\
+    python -m roughcontact.study.resources --compare <results>/benchmarks/rules \\
         --configfile config/quick.yaml
 """
 
@@ -39,12 +39,11 @@ from roughcontact.study.config import (
     ContactSettings,
     ConvergenceSettings,
     SpeedReportSettings,
-    load_config,
-    report_section,
 )
 from roughcontact.study.contact_records import ContactJob
-from roughcontact.study.grid_convergence import GridConvergenceSettings, grid_mem_mb
+from roughcontact.study.grid_convergence import grid_mem_mb, sweep_runtime
 from roughcontact.study.records import Generator, Geometry, InfluenceModel
+from roughcontact.study.settings import Study, load_study
 from roughcontact.units import GB
 
 #: The stored cost model of the source tree.
@@ -427,14 +426,88 @@ def speed_vs_error_mem_mb(geometry: Geometry, report: SpeedReportSettings,
 
 
 # ---------------------------------------------------------------------------
+# Every job's request, by the kind of job (its rule) and its wildcards
+
+
+def _planned_choice(plan, wildcards) -> Geometry:
+    """The planned model of an ``operator: auto`` geometry (its first candidate)."""
+    return plan.choices[wildcards["auto"]].candidates(plan.build.max_bytes)[0]
+
+
+def _convergence(plan) -> tuple:
+    return plan.body, plan.study.reports.convergence_presets
+
+
+@dataclasses.dataclass(frozen=True)
+class JobCost:
+    """What a kind of job asks a scheduler for: ``memory(plan, wildcards)`` [MB] and
+    ``runtime(plan, wildcards, attempt)`` [min]."""
+
+    memory: object
+    runtime: object
+
+
+#: The request of each kind of job (the workflow's rules), from the plan's record that
+#: its wildcards name (``job``, ``geometry``, ``pair``, ``auto``, ``cell``, ``gcgrid``).
+JOB_COSTS = MappingProxyType({
+    "contact": JobCost(
+        lambda plan, w: contact_mem_mb(plan.jobs[w["job"]], plan.build),
+        lambda plan, w, a: contact_runtime(plan.jobs[w["job"]], plan.contact, plan.build, a)),
+    "influence": JobCost(
+        lambda plan, w: influence_mem_mb(plan.geometries[w["geometry"]], plan.build),
+        lambda plan, w, a: influence_runtime(plan.geometries[w["geometry"]], plan.build, a)),
+    "pair": JobCost(lambda plan, w: pair_mem_mb(plan.pairs[w["pair"]]),
+                    lambda plan, w, a: pair_runtime(plan.pairs[w["pair"]], a)),
+    "choice": JobCost(
+        lambda plan, w: choice_mem_mb(_planned_choice(plan, w), plan.build),
+        lambda plan, w, a: choice_runtime(_planned_choice(plan, w), plan.build, a)),
+    "surfaces": JobCost(lambda plan, w: surfaces_mem_mb(plan.surfaces[w["cell"]]),
+                        lambda plan, w, a: surfaces_runtime(plan.surfaces[w["cell"]], a)),
+    "summary": JobCost(lambda plan, w: 1000, lambda plan, w, a: summary_runtime(a)),
+    "audit": JobCost(
+        lambda plan, w: audit_mem_mb(plan.geometries.values(), plan.build),
+        # every candidate's files: at most what the audit reads once the choices are made
+        lambda plan, w, a: audit_runtime(len(plan.audit_files(plan.jobs)), a)),
+    "audit_verify": JobCost(
+        lambda plan, w: audit_verify_mem_mb(plan.jobs.values(), plan.geometries.values(),
+                                            plan.build),
+        lambda plan, w, a: audit_verify_runtime(plan.jobs.values(), plan.contact, plan.build,
+                                                plan.study.audit.verify_sample, a)),
+    "influence_convergence": JobCost(
+        lambda plan, w: convergence_mem_mb(*_convergence(plan)),
+        lambda plan, w, a: convergence_runtime(
+            *_convergence(plan), plan.study.reports.influence_convergence, a)),
+    "speed_vs_error": JobCost(
+        lambda plan, w: speed_vs_error_mem_mb(plan.body, plan.study.reports.speed_vs_error,
+                                              plan.build),
+        lambda plan, w, a: speed_vs_error_runtime(plan.body,
+                                                  plan.study.reports.speed_vs_error, a)),
+    "grid_convergence": JobCost(
+        lambda plan, w: grid_mem_mb(plan.study.reports.grid_convergence,
+                                    int(w["gcgrid"])),
+        lambda plan, w, a: sweep_runtime(plan.study.reports.grid_convergence,
+                                         int(w["gcgrid"]), a)),
+})
+
+
+def job_memory_mb(plan, kind: str, wildcards) -> int:
+    """Memory [MB] a job of ``kind`` (:data:`JOB_COSTS`) asks for."""
+    return JOB_COSTS[kind].memory(plan, wildcards)
+
+
+def job_runtime(plan, kind: str, wildcards, attempt: int = 1) -> int:
+    """Wall time [min] a job of ``kind`` (:data:`JOB_COSTS`) asks for at its ``attempt``."""
+    return JOB_COSTS[kind].runtime(plan, wildcards, attempt)
+
+
+# ---------------------------------------------------------------------------
 # Drift: the model against a run's benchmarks
 
 
-def predictions(config: dict, plan=None) -> dict[str, dict[str, tuple[float, int]]]:
+def predictions(plan) -> dict[str, dict[str, tuple[float, int]]]:
     """Rule -> wildcard -> (runtime [s] before the margin, memory [MB]) of the
-    contact, influence and surfaces jobs of a validated ``config`` (of its
-    :func:`~roughcontact.study.cells.study_plan`, made here unless given)."""
-    plan = study_plan(config) if plan is None else plan
+    contact, influence and surfaces jobs of a study's
+    :func:`~roughcontact.study.cells.study_plan`."""
     settings, build = plan.contact, plan.build
     return {
         "contact": {key: (contact_seconds(job, settings, build), contact_mem_mb(job, build))
@@ -479,49 +552,48 @@ MEMORY_KEYS = MappingProxyType({
 })
 
 
-def _report_memory(config: dict, plan) -> dict[str, dict[str, int]]:
+def _report_memory(plan) -> dict[str, dict[str, int]]:
     """Planned memory [MB] of the jobs of the default target besides the study's: the
     choices of ``operator: auto``, the mesh-convergence report when configured, and the
     audits; by kind of job and job."""
-    out = {}
+    out, study = {}, plan.study
     if plan.choices:
         out["influence_choice"] = {
             key: choice_mem_mb(geometry.candidates(plan.build.max_bytes)[0], plan.build)
             for key, geometry in plan.choices.items()}
-    if "influence_convergence" in config["reports"]:  # optional: a report to run
-        presets = list(config["reports"]["influence_convergence"]["presets"])
+    if "influence_convergence" in study.reports.configured:  # optional: a report to run
+        presets = study.reports.convergence_presets
         out["influence_convergence"] = {"influence_convergence":
                                         convergence_mem_mb(plan.body, presets)}
     if plan.studies:
         out["audit"] = {"audit": audit_mem_mb(plan.geometries.values(), plan.build)}
-        if config["audit"]["verify"]:
+        if study.audit.verify:
             out["audit_verify"] = {"audit_verify": audit_verify_mem_mb(
                 plan.jobs.values(), plan.geometries.values(), plan.build)}
     return out
 
 
-def on_demand_memory(config: dict, plan) -> dict[str, dict[str, int]]:
+def on_demand_memory(plan) -> dict[str, dict[str, int]]:
     """Planned memory [MB] of the reports made only when asked for (their targets): the
     speed-against-error report, and the grid-convergence jobs when configured."""
-    section = SpeedReportSettings.from_section(report_section(config, "speed_vs_error"))
-    out = {"speed_vs_error": {"speed_vs_error":
-                              speed_vs_error_mem_mb(plan.body, section, plan.build)}}
-    if "grid_convergence" in config["reports"]:  # optional: a report to run
-        settings = GridConvergenceSettings.from_section(config["reports"]["grid_convergence"])
+    reports = plan.study.reports
+    out = {"speed_vs_error": {"speed_vs_error": speed_vs_error_mem_mb(
+        plan.body, reports.speed_vs_error, plan.build)}}
+    if "grid_convergence" in reports.configured:  # optional: a report to run
+        settings = reports.grid_convergence
         out["grid_convergence"] = {f"grid {g}": grid_mem_mb(settings, g)
                                    for g in settings.grids}
     return out
 
 
-def planned_memory(config: dict, plan=None) -> dict[str, dict[str, int]]:
-    """Planned peak memory [MB] of every job a validated ``config`` (its ``plan``) runs by
-    default, by kind of job (:data:`MEMORY_KEYS`) and job: the contact, influence and
-    surfaces jobs, the choices of ``operator: auto``, the mesh-convergence report when
-    configured and the audits (the reports made on demand: :func:`on_demand_memory`)."""
-    plan = study_plan(config) if plan is None else plan
+def planned_memory(plan) -> dict[str, dict[str, int]]:
+    """Planned peak memory [MB] of every job a study's ``plan`` runs by default, by kind
+    of job (:data:`MEMORY_KEYS`) and job: the contact, influence and surfaces jobs, the
+    choices of ``operator: auto``, the mesh-convergence report when configured and the
+    audits (the reports made on demand: :func:`on_demand_memory`)."""
     jobs = {rule: {key: mem_mb for key, (_, mem_mb) in by_key.items()}
-            for rule, by_key in predictions(config, plan).items()}
-    return jobs | _report_memory(config, plan)
+            for rule, by_key in predictions(plan).items()}
+    return jobs | _report_memory(plan)
 
 
 def _amount(mem_mb: float) -> str:
@@ -532,30 +604,30 @@ def _amount(mem_mb: float) -> str:
     return f"{mem_mb:.0f} MB"
 
 
-def memory_limit_mb(config: dict) -> tuple[float, str]:
+def memory_limit_mb(study: Study) -> tuple[float, str]:
     """The memory [MB] one job may use and where it comes from: ``job_memory_gb``, or
     this machine's physical memory."""
-    configured = config.get("job_memory_gb")  # null: this machine's
+    configured = study.job_memory_gb  # null: this machine's
     if configured is not None:
         return float(configured) * GB / MB, f"job_memory_gb = {configured:g}"
     total = machine_memory_mb()
     return total, f"this machine's {_amount(total)}"
 
 
-def machine_problems(config: dict, total_mb: float | None = None, plan=None,
+def machine_problems(plan, total_mb: float | None = None,
                      jobs: dict | None = None) -> list[str]:
     """The ``jobs`` (default: :func:`planned_memory`'s, every job of the default
-    target, reports included) of a validated ``config`` (its ``plan``) whose planned
-    memory exceeds ``total_mb`` (default: ``job_memory_gb``, else this machine's): one
-    message per kind of job, with the largest, the count and the keys to change."""
+    target, reports included) of a study's ``plan`` whose planned memory exceeds
+    ``total_mb`` (default: ``job_memory_gb``, else this machine's): one message per kind
+    of job, with the largest, the count and the keys to change."""
     if total_mb is None:
-        total_mb, source = memory_limit_mb(config)
+        total_mb, source = memory_limit_mb(plan.study)
     else:
         source = f"the limit of {_amount(total_mb)}"
     if not math.isfinite(total_mb):
         return []
     problems = []
-    for kind, by_key in (planned_memory(config, plan) if jobs is None else jobs).items():
+    for kind, by_key in (planned_memory(plan) if jobs is None else jobs).items():
         over = {key: mem for key, mem in by_key.items() if mem > total_mb}
         if not over:
             continue
@@ -568,15 +640,14 @@ def machine_problems(config: dict, total_mb: float | None = None, plan=None,
     return problems
 
 
-def check_machine(config: dict, plan=None, kinds: tuple[str, ...] | None = None) -> None:
+def check_machine(plan, kinds: tuple[str, ...] | None = None) -> None:
     """Raise :class:`~roughcontact.study.checks.ConfigProblems` naming every kind of job
-    that would not fit (:func:`machine_problems`), before any job runs: the jobs of the
-    default target, or the on-demand reports of ``kinds`` (when their target is asked
-    for)."""
-    plan = study_plan(config) if plan is None else plan
+    of a study's ``plan`` that would not fit (:func:`machine_problems`), before any job
+    runs: the jobs of the default target, or the on-demand reports of ``kinds`` (when
+    their target is asked for)."""
     jobs = None if kinds is None else \
-        {k: v for k, v in on_demand_memory(config, plan).items() if k in kinds}
-    problems = machine_problems(config, plan=plan, jobs=jobs)
+        {k: v for k, v in on_demand_memory(plan).items() if k in kinds}
+    problems = machine_problems(plan, jobs=jobs)
     if problems:
         raise ConfigProblems("Jobs planned beyond the memory a job may use", problems)
 
@@ -594,13 +665,13 @@ def _ratio(predicted: float, measured: float) -> float:
     return predicted / measured if measured > 0 else math.nan
 
 
-def compare(benchmarks: str | os.PathLike, config: dict) -> list[str]:
+def compare(benchmarks: str | os.PathLike, plan) -> list[str]:
     """Lines of a table of predicted against measured time [s] and memory [MB]
     of every job benchmarked under ``benchmarks`` (``<rule>/<wildcard>.tsv``
-    as Snakemake writes them) that the validated ``config`` asks for."""
+    as Snakemake writes them) that a study's ``plan`` asks for."""
     lines = [f"{'rule':10} {'s pred':>9} {'s meas':>9} {'ratio':>6} "
              f"{'MB pred':>8} {'MB meas':>8} {'ratio':>6}  job"]
-    for rule, predicted in predictions(config).items():
+    for rule, predicted in predictions(plan).items():
         for path in sorted((Path(benchmarks) / rule).glob("*.tsv")):
             if path.stem not in predicted:
                 continue
@@ -615,11 +686,12 @@ def compare(benchmarks: str | os.PathLike, config: dict) -> list[str]:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--compare", required=True, help="results/benchmarks/rules of a run")
+    parser.add_argument("--compare", required=True,
+                        help="the benchmarks/rules folder of a run's results")
     parser.add_argument("--configfile", default="config/config.yaml")
     args = parser.parse_args(argv)
-    config = load_config(args.configfile)  # fills the schema's defaults, as Snakemake does
-    print("\n".join(compare(args.compare, config)))
+    study = load_study(args.configfile)  # fills the schema's defaults, as Snakemake does
+    print("\n".join(compare(args.compare, study_plan(study))))
     return 0
 
 

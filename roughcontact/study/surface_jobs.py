@@ -23,7 +23,7 @@ import numpy as np
 
 from roughcontact.errors import MeasurementError
 from roughcontact.study import sources
-from roughcontact.study.provenance import canonical_json, provenance
+from roughcontact.study.provenance import NO_RUN, RunInfo, canonical_json, provenance
 from roughcontact.study.records import (
     SEEDED_PER_SURFACE,
     GeneratedCell,
@@ -59,7 +59,7 @@ class _Surfaces(NamedTuple):
     heights_attrs: dict  # further attributes of the heights
 
 
-def build_surface_cell(params: dict, study_seed: int, path, config=None, *,
+def build_surface_cell(params: dict, study_seed: int, path, run: RunInfo = NO_RUN, *,
                        source: dict | None = None, source_path=None) -> dict:
     """Make a surface cell's surfaces and write them, with statistics, to ``path``.
 
@@ -83,7 +83,7 @@ def build_surface_cell(params: dict, study_seed: int, path, config=None, *,
     cell = surface_cell_from_params(params)
     if source is not None:
         return take_surfaces(cell, surface_cell_from_params(source), study_seed, source_path,
-                             path, config)
+                             path, run)
     start = time.perf_counter()
     made = _SURFACE_JOBS[type(cell)](cell, study_seed)
     stats = height_stats(made.heights)
@@ -106,7 +106,7 @@ def build_surface_cell(params: dict, study_seed: int, path, config=None, *,
         "spec": canonical_json(made.spec),
         "params": canonical_json(cell.params()),
         **{f"spec_{k}": v for k, v in made.spec.items()},
-        **provenance(config),
+        **provenance(run),
     }
     write_surfaces(path, datasets, attrs)
     log.info(
@@ -147,7 +147,7 @@ def check_surface_source(cell, source) -> None:
 
 
 def take_surfaces(cell: GeneratedCell, source: GeneratedCell, study_seed: int, source_path,
-                  path, config=None) -> dict:
+                  path, run: RunInfo = NO_RUN) -> dict:
     """Write the first ``cell.count`` surfaces of the larger cell ``source`` as ``cell``.
 
     A generator of :data:`~roughcontact.study.records.SEEDED_PER_SURFACE`
@@ -173,7 +173,7 @@ def take_surfaces(cell: GeneratedCell, source: GeneratedCell, study_seed: int, s
                          "only the per-surface ones of a generated cell")
     datasets = {name: (values, stored["dataset_attrs"][name])
                 for name, values in arrays.items()}
-    made = provenance(config)
+    made = provenance(run)
     attrs = {
         **{k: v for k, v in stored["attrs"].items() if k not in OWN_ATTRIBUTES + tuple(made)},
         "cell": cell.key,

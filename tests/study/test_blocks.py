@@ -23,6 +23,7 @@ from roughcontact.elasticity.influence import (
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import validated
+from roughcontact.study.settings import Study
 
 PATCH_MM = (0.126, 0.0944)
 
@@ -46,7 +47,7 @@ def patch_config(path, body=None, **sweep) -> dict:
 
 def refusal(config) -> str:
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(validated(config))
+        study_plan(Study.from_config(validated(config)))
     return str(raised.value)
 
 
@@ -91,7 +92,7 @@ def test_a_measured_patch_under_the_default_block_is_refused_and_each_remedy_pla
     assert any(r.startswith("sweeps.opd.thickness_mm: 0.") for r in offered)
     assert "surface.crop_mm" in message
     for remedy in offered:
-        plan = study_plan(validated(follow(patch_config(patch), remedy)))
+        plan = study_plan(Study.from_config(validated(follow(patch_config(patch), remedy))))
         (geometry,) = plan.geometries.values()
         value = remedy.split(": ")[1]
         expected = max(PATCH_MM) if value == "patch" else float(value)
@@ -110,8 +111,8 @@ def test_a_thin_enough_block_with_the_paper_mesh_is_offered_the_refined_mesh(pat
     message = refusal(patch_config(patch, thickness_mm=0.5))
     offered = remedies(message)
     assert "body.mesh: refined" in offered
-    plan = study_plan(validated(follow(patch_config(patch, thickness_mm=0.5),
-                                       "body.mesh: refined")))
+    plan = study_plan(Study.from_config(validated(follow(patch_config(patch, thickness_mm=0.5),
+                                       "body.mesh: refined"))))
     assert {g.mesh for g in plan.geometries.values()} == {"refined"}
 
 
@@ -119,8 +120,8 @@ def test_the_matrix_free_operator_is_checked_on_its_coarse_model(patch):
     # operator auto: the hybrid's coarse finite-element model is the block that is built
     message = refusal(patch_config(patch, body={"operator": "auto", "mesh": "refined"}))
     assert "slender column" in message
-    assert study_plan(validated(patch_config(patch, body={"operator": "auto"},
-                                             thickness_mm="patch"))).jobs
+    assert study_plan(Study.from_config(validated(patch_config(patch, body={"operator": "auto"},
+                                             thickness_mm="patch")))).jobs
 
 
 def test_generated_surfaces_too_small_for_the_body_are_refused_with_body_keys():
@@ -132,8 +133,9 @@ def test_generated_surfaces_too_small_for_the_body_are_refused_with_body_keys():
     offered = remedies(message)
     assert offered and all(r.startswith("body.") for r in offered)
     for remedy in offered:
-        assert study_plan(validated(follow(dict(config, body=dict(config["body"])),
-                                           remedy))).jobs
+        assert study_plan(Study.from_config(
+                validated(follow(dict(config, body=dict(config["body"])),
+                                           remedy)))).jobs
 
 
 def test_thickness_mm_needs_a_measured_surface():
@@ -141,4 +143,4 @@ def test_thickness_mm_needs_a_measured_surface():
                         "sweeps": {"g": {"sigma_um": 1.0, "pressure_MPa": [0.1, 1.0],
                                          "thickness_mm": 2.0}}})
     with pytest.raises(ConfigProblems, match="g: thickness_mm needs a measured surface"):
-        study_plan(config)
+        study_plan(Study.from_config(config))

@@ -15,8 +15,9 @@ from roughcontact.study.contact_records import ContactJob, StudyCell
 from roughcontact.study.jobs import build_influence
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.records import Geometry, InfluenceModel, surface_cell_from_params
+from roughcontact.study.settings import Study
 from roughcontact.study.storage import read_influence
-from roughcontact.study.studies import body_geometry, contact_cells, contact_settings
+from roughcontact.study.studies import contact_cells
 from roughcontact.units import MM, MPA, UM
 
 REPO = Path(__file__).resolve().parents[2]
@@ -45,7 +46,7 @@ def test_every_geometry_parameter_but_young_modulus_changes_the_key():
         keys.add(geometry(**change).key)
     assert len(keys) == 7
     assert geometry(E_MPa=1.0).key == geometry().key == "nu0_L1.2x1.2mm_t2mm_g8x8_clamped_paper"
-    assert body_geometry(CONFIG) == geometry()
+    assert Study.from_config(CONFIG).body.geometry == geometry()
 
 
 def test_geometry_holds_si_values_and_its_params_the_configured_ones():
@@ -68,7 +69,7 @@ def test_values_come_back_in_their_unit_as_written(value):
 
 
 def test_every_record_of_a_plan_round_trips_through_its_params():
-    plan = study_plan(quick_config())
+    plan = study_plan(Study.from_config(quick_config()))
     for job in plan.jobs.values():
         again = ContactJob.from_params(job.params())
         assert again == job and again.params() == job.params() and again.key == job.key
@@ -83,24 +84,24 @@ def test_every_record_of_a_plan_round_trips_through_its_params():
 
 def test_the_plan_computes_each_study_once_and_its_jobs_from_its_cells():
     config = quick_config()
-    plan = study_plan(config)
+    plan = study_plan(Study.from_config(config))
     assert plan.cells["fig12"] is plan.cells["fig07"]  # fig12: {from: fig07}
     assert plan.aggregates == ("fig07", "fig09", "fig11", "fig14", "hardness", "table_Eu")
     keys = {cell.contact_key for name in plan.studies for cell in plan.cells[name]}
     assert keys == set(plan.jobs)
-    assert plan.cells["fig07"] == contact_cells(config, "fig07")
+    assert plan.cells["fig07"] == contact_cells(Study.from_config(config), "fig07")
     # Fig 10 draws the surfaces of its cells (those of Fig 9), Figs 4 and 5 Fig 4's
     assert [s.key for s in plan.figure_surfaces["fig10"]] == \
         [c.surface.key for c in plan.cells["fig09"]]
     assert plan.figure_surfaces["fig05"] == plan.figure_surfaces["fig04"]
     assert plan.figure_surfaces["fig07"] == ()
     # and Fig 5 draws them in Fig 4's sigma: its notebook gets Fig 4's validated settings
-    assert drawn_with(config, "fig05") == {"fig04": config["figures"]["fig04"]}
-    assert all(drawn_with(config, name) == {} for name in plan.figures if name != "fig05")
+    assert drawn_with(plan, "fig05") == {"fig04": config["figures"]["fig04"]}
+    assert all(drawn_with(plan, name) == {} for name in plan.figures if name != "fig05")
 
 
 def test_a_cells_sweep_end_and_key_follow_its_nondimensional_pressure():
-    cell = study_plan(quick_config()).cells["fig07"][0]
+    cell = study_plan(Study.from_config(quick_config())).cells["fig07"][0]
     # P L / (E sigma) = 5 MPa x 10 mm / (511 MPa x 24.5 um) = 3.99 -> 4
     assert cell.sweep_end == 4.0
     assert cell.contact_key == ("sk0_ku3_b0.5x0.5mm_L4.8x4.8mm_g32x32_exp_per_filter_n4"
@@ -127,19 +128,19 @@ def test_build_influence_refuses_a_model_too_large_before_building(tmp_path):
 
 def test_accuracy_preset_sets_mesh_count_and_solver_and_records_its_errors():
     config = quick_config()
-    plain = contact_cells(config, "fig11")
+    plain = contact_cells(Study.from_config(config), "fig11")
     assert {c.geometry.mesh for c in plain} == {config["body"]["mesh"]}
     assert plain[0].accuracy.name == "as configured"
     assert "expected_error" not in plain[0].params()
     config["accuracy"] = "fast"
     preset = ACCURACY_PRESETS["fast"]
-    cells = contact_cells(config, "fig11")
+    cells = contact_cells(Study.from_config(config), "fig11")
     assert {c.geometry.mesh for c in cells} == {preset["mesh"]}
     assert {c.surface.count for c in cells} == {preset["surfaces"]}
     assert cells[0].params()["expected_error"]["real_area_error"] == preset["real_area_error"]
-    assert contact_settings(config).tol == preset["tol"]
+    assert Study.from_config(config).contact.tol == preset["tol"]
     # a figure that names its meshes keeps them
-    named = contact_cells(config, "fig07")
+    named = contact_cells(Study.from_config(config), "fig07")
     assert {c.geometry.mesh for c in named} == set(config["figures"]["fig07"]["meshes"])
     job = cells[0].job.params()
     assert job["accuracy"] == "fast" and job["expected_error"]
@@ -157,7 +158,7 @@ def test_a_measured_map_too_large_for_the_dense_model_stops_when_the_plan_is_mad
               "body": {"thickness_mm": 0.5, "E_MPa": 511.0, "nu": 0.0},
               "sweeps": {"big": {"surface": surface, "pressure_MPa": [1.0, 5.0]}}}
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(validated(config))
+        study_plan(Study.from_config(validated(config)))
     message = str(raised.value)
     # the dense 1024 x 1024 model holds at least its own matrix, 8 n^2 bytes
     # (8.8 TB), against the 16 GB default
@@ -168,7 +169,7 @@ def test_a_measured_map_too_large_for_the_dense_model_stops_when_the_plan_is_mad
         assert key in message, key
     # the matrix-free operator plans the same file within the limit
     config["body"]["operator"] = "auto"
-    plan = study_plan(validated(config))
+    plan = study_plan(Study.from_config(validated(config)))
     (auto,) = plan.choices.values()
     assert auto.grid == (1024, 1024)
     assert auto.planned_model(16e9) is InfluenceModel.HYBRID
@@ -193,21 +194,23 @@ def test_the_schema_fills_the_axes_of_a_generated_study_only():
     measured = config["sweeps"]["m"]
     assert "b_mm" not in measured and "moments" not in measured
     assert measured["compare_synthetic"] is False
-    (cell,) = contact_cells(config, "fig12")
+    (cell,) = contact_cells(Study.from_config(config), "fig12")
     assert (cell.surface.skew, cell.surface.kurt, cell.surface.corr_length) == \
         (0.0, 3.0, (1e-3, 1e-3))
 
 
 def test_a_two_bodies_figure_draws_the_aggregates_of_the_studies_it_lists():
     config = load_config(REPO / "config" / "two_bodies.yaml")
-    plan = study_plan(config)
+    plan = study_plan(Study.from_config(config))
     assert plan.figures == ("two_bodies",) and "two_bodies" not in plan.studies
-    assert figure_aggregates(config, "two_bodies") == ("pad_on_disc", "steel_plates")
-    assert figure_aggregates(config, "fig01") == ()
+    assert figure_aggregates(plan, "two_bodies") == ("pad_on_disc", "steel_plates")
+    quick = study_plan(Study.from_config(quick_config()))
+    assert figure_aggregates(quick, "fig01") == () and figure_aggregates(quick, "fig12") == (
+        "fig07",)  # a surface figure draws none; a study from: another, its source's
     config["figures"]["two_bodies"]["studies"].append("pad_on_dsic")
     with pytest.raises(ConfigProblems, match="figures.two_bodies.studies: 'pad_on_dsic' is no "
                                              "sweep or contact figure"):
-        study_plan(config)
+        study_plan(Study.from_config(config))
 
 
 def test_a_leakage_figure_of_a_study_solved_without_the_flow_is_refused_before_any_job():
@@ -216,11 +219,11 @@ def test_a_leakage_figure_of_a_study_solved_without_the_flow_is_refused_before_a
     raw = yaml.safe_load((REPO / "config" / "seal.yaml").read_text())
     raw["flow"]["enabled"] = False
     with pytest.raises(ConfigProblems) as refused:
-        study_plan(validated(raw))
+        study_plan(Study.from_config(validated(raw)))
     (problem,) = refused.value.problems
     assert problem.startswith("figures.leakage.studies: 'seal' is solved without the flow")
     assert "set flow.enabled: true" in problem and "no job was started" in str(refused.value)
     raw["flow"]["enabled"] = True  # the advice, followed
-    plan = study_plan(validated(raw))
-    assert plan.figures == ("leakage",) and figure_aggregates(raw, "leakage") == ("seal",)
+    plan = study_plan(Study.from_config(validated(raw)))
+    assert plan.figures == ("leakage",) and figure_aggregates(plan, "leakage") == ("seal",)
     assert plan.contact.flow.directions == ("x", "y")

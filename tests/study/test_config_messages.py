@@ -10,6 +10,7 @@ from scipy import ndimage
 from roughcontact.study.cells import study_plan
 from roughcontact.study.config import ConfigError, schema_errors, validated
 from roughcontact.study.records import MeasuredCell
+from roughcontact.study.settings import Study
 from roughcontact.units import MM
 
 REPO = Path(__file__).resolve().parents[2]
@@ -40,7 +41,7 @@ def test_an_npy_map_with_its_spacing_and_no_format_is_accepted(tmp_path, monkeyp
     config["sweeps"]["rough"]["thickness_mm"] = "patch"  # a block that fits the 0.16 mm patch
     config = validated(config)  # format defaults to auto: not xyz
     assert config["sweeps"]["rough"]["surface"]["format"] == "auto"
-    plan = study_plan(config)
+    plan = study_plan(Study.from_config(config))
     (cell,) = (c for c in plan.surfaces.values() if isinstance(c, MeasuredCell))
     assert cell.grid == (16, 12)
     assert cell.size == pytest.approx((16 * 0.01 * MM, 12 * 0.02 * MM))

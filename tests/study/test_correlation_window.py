@@ -14,6 +14,7 @@ import yaml
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import validated
+from roughcontact.study.settings import Study
 
 #: 12 x 12 elements over the paper's 9 mm (0.75 mm spacing) and the paper's generator (no
 #: calibration when the plan is made): each plan takes a fraction of a second.
@@ -24,7 +25,7 @@ BASE = {"study_seed": 0, "surfaces": {"grid": 12, "size_mm": 9.0, "count": 2, "m
 
 def refusal(raw: dict) -> str:
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(validated(raw))
+        study_plan(Study.from_config(validated(raw)))
     (problem,) = raised.value.problems
     return problem
 
@@ -56,10 +57,10 @@ def test_a_correlation_length_longer_than_half_the_surface_is_refused_and_each_f
     assert fixes == ("sweeps.long.b_mm: 4.5 or shorter; or a larger surface, "
                      "surfaces.size_mm: 40 with surfaces.grid: 53 (the same spacing)")
     for fixed in follow(BASE, fixes.replace(" or shorter", "")):
-        assert study_plan(validated(fixed)).jobs
+        assert study_plan(Study.from_config(validated(fixed))).jobs
     at_bound = copy.deepcopy(BASE)
     at_bound["sweeps"]["long"]["b_mm"] = 4.5  # b = L / 2 exactly
-    assert study_plan(validated(at_bound)).jobs
+    assert study_plan(Study.from_config(validated(at_bound))).jobs
 
 
 def test_a_studys_own_size_is_named_and_only_the_short_side_refused():
@@ -73,7 +74,7 @@ def test_a_studys_own_size_is_named_and_only_the_short_side_refused():
         "sweeps.long.size_mm: 6 in place of 4.5 (8 x 8 elements at the surfaces' spacing)")
     for value in ({"b_mm": [1.0, 2.25]}, {"size_mm": [9.0, 6.0]}):
         raw["sweeps"]["long"].update({"b_mm": [1.0, 3.0], "size_mm": [9.0, 4.5], **value})
-        assert study_plan(validated(raw)).jobs
+        assert study_plan(Study.from_config(validated(raw))).jobs
 
 
 def test_fig04_and_its_anisotropic_lengths_on_a_rectangle():
@@ -88,11 +89,11 @@ def test_fig04_and_its_anisotropic_lengths_on_a_rectangle():
                      "surfaces.size_mm: [9, 12] with surfaces.grid: [12, 16] (the same "
                      "spacing)")
     for fixed in follow(raw, fixes.replace(" or shorter", "")):
-        assert study_plan(validated(fixed)).figure_surfaces["fig05"]
+        assert study_plan(Study.from_config(validated(fixed))).figure_surfaces["fig05"]
 
 
 def test_a_length_that_only_labels_a_spectrum_is_not_judged():
     raw = copy.deepcopy(BASE)
     raw["sweeps"]["long"]["spectrum"] = {"kind": "self-affine", "hurst": 0.8,
                                          "rolloff_mm": 3.0, "cutoff_mm": 1.5}
-    assert study_plan(validated(raw)).jobs
+    assert study_plan(Study.from_config(validated(raw))).jobs

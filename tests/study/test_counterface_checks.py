@@ -20,7 +20,9 @@ from scipy import ndimage
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
-from roughcontact.study.studies import counterface_entries
+from roughcontact.study.counter_entries import BlockEntry, GeneratedEntry, counterface_entries
+from roughcontact.study.records import InfluenceModel
+from roughcontact.study.settings import Study
 
 SWEEP = {"sigma_um": 24.5, "b_mm": 0.5, "pressure_MPa": [0.1, 3.0], "count": 3}
 BASE = {"study_seed": 3, "surfaces": {"grid": [16, 16], "size_mm": [2.4, 2.4]},
@@ -41,11 +43,14 @@ def test_the_schema_fills_the_static_defaults_and_one_function_the_body_sections
     written = entry["sweeps"]["pad"]["counterface"]
     assert written["surface"] == {"sigma_um": 1.0, "skew": 0.0, "kurt": 3.0}
     assert written["body"] == {"kind": "block", "E_MPa": 511.0, "operator": "dense"}
-    (resolved,) = counterface_entries(entry, "pad")
+    (resolved,) = counterface_entries(Study.from_config(entry), "pad")
     body = entry["body"]
-    assert resolved.body == {**written["body"], "nu": body["nu"], "base": body["base"],
-                             "thickness_mm": body["thickness_mm"], "mesh": body["mesh"]}
-    assert resolved.surface == {**written["surface"], "b_mm": None}  # the first surface's
+    assert resolved.body == BlockEntry(E_MPa=511.0, nu=body["nu"], base=body["base"],
+                                       thickness_mm=body["thickness_mm"], mesh=body["mesh"],
+                                       operator=InfluenceModel.DENSE)
+    assert resolved.body.inherited == ("nu", "thickness_mm", "base", "mesh")
+    assert resolved.surface == GeneratedEntry(sigma_um=1.0, skew=0.0, kurt=3.0)
+    assert resolved.surface.b_mm is None  # the first surface's
     assert (resolved.surface_key, resolved.body_key) == ("sweeps.pad.counterface.surface",
                                                         "sweeps.pad.counterface.body")
     # a half-space takes no block default; a smooth rigid section none at all
@@ -53,7 +58,7 @@ def test_the_schema_fills_the_static_defaults_and_one_function_the_body_sections
     assert half["sweeps"]["pad"]["counterface"]["body"] == {"kind": "halfspace",
                                                              "E_MPa": 2e5, "nu": 0.3}
     assert half["counterface"]["surface"] == "smooth" and half["counterface"]["body"] == "rigid"
-    (entry,) = counterface_entries(half, "pad")
+    (entry,) = counterface_entries(Study.from_config(half), "pad")
     assert (entry.surface_key, entry.body_key) == ("counterface.surface",
                                                    "sweeps.pad.counterface.body")
     # the plan is the one of the values written out
@@ -63,7 +68,8 @@ def test_the_schema_fills_the_static_defaults_and_one_function_the_body_sections
                                             "mesh": "paper", "operator": "dense"}})
     defaults = config(counterface={"surface": {"sigma_um": 1.0},
                                    "body": {"kind": "block", "E_MPa": 511.0}})
-    assert list(study_plan(explicit).jobs) == list(study_plan(defaults).jobs)
+    assert list(study_plan(Study.from_config(
+            explicit)).jobs) == list(study_plan(Study.from_config(defaults)).jobs)
 
 
 @pytest.mark.parametrize(("counterface", "key"), [
@@ -83,7 +89,7 @@ def test_a_counter_value_of_the_wrong_type_names_its_key_and_that_a_number_is_ex
         validated({**raw(), "counterface": {"surface": {"sigma_um": "1.5"}}})
     fixed = copy.deepcopy(counterface)
     (fixed if isinstance(fixed, dict) else fixed[1])["surface"]["sigma_um"] = 1.5
-    study_plan(config(counterface=fixed))
+    study_plan(Study.from_config(config(counterface=fixed)))
 
 
 def smooth_map(path, n=16, spacing=0.15):
@@ -96,7 +102,7 @@ def smooth_map(path, n=16, spacing=0.15):
 
 def refusal(cfg) -> list[str]:
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(cfg)
+        study_plan(Study.from_config(cfg))
     return raised.value.problems
 
 
@@ -116,7 +122,7 @@ def test_a_counter_map_that_cannot_be_imported_is_refused_naming_its_file_key(tm
                               "data line is not numbers ('h1,h2'): a header? Start header "
                               "lines with #")
     headed.write_text("# h1,h2\n" + rows + "\n")  # the advice, followed
-    (cell,) = study_plan(validated(section)).cells["pad"]
+    (cell,) = study_plan(Study.from_config(validated(section))).cells["pad"]
     assert cell.counterface.surface.cell.grid == (16, 16)
 
 
@@ -127,18 +133,20 @@ def test_an_axis_that_names_a_value_twice_is_refused_naming_the_repeat():
         'sweeps.pad.counterface[2]: {"surface": "smooth", "body": "rigid"} repeats '
         "sweeps.pad.counterface[1]: the same cells twice (a list axis names each value "
         "once); remove sweeps.pad.counterface[2]"]
-    assert len(study_plan(config(counterface=twice[:2])).cells["pad"]) == 2  # followed
+    assert len(study_plan(Study.from_config(
+            config(counterface=twice[:2]))).cells["pad"]) == 2  # followed
     for key, values, repeat in (("b_mm", [0.5, 0.4, 0.5], 2), ("sigma_um", [24.5, 24.50], 1),
                                 ("moments", [[0.0, 3.0], [0, 3]], 1),
                                 ("meshes", ["paper", "paper"], 1)):
         (problem,) = refusal(config(**{key: values}))
         assert problem.startswith(f"sweeps.pad.{key}[{repeat}]: ")
         assert problem.endswith(f"remove sweeps.pad.{key}[{repeat}]")
-        study_plan(config(**{key: values[:repeat] + values[repeat + 1:]}))
+        study_plan(Study.from_config(config(**{key: values[:repeat] + values[repeat + 1:]})))
     figure = {"sigma_um": 24.5, "b_mm": [0.5, 0.5]}
     (problem,) = refusal(validated({**raw(), "figures": {"fig03": figure}}))
     assert problem.startswith("figures.fig03.b_mm[1]: 0.5 repeats figures.fig03.b_mm[0]")
-    study_plan(validated({**raw(), "figures": {"fig03": {**figure, "b_mm": [0.5]}}}))
+    study_plan(Study.from_config(
+            validated({**raw(), "figures": {"fig03": {**figure, "b_mm": [0.5]}}})))
 
 
 def test_a_single_surface_study_is_warned_once_at_plan_time(caplog):
@@ -147,7 +155,7 @@ def test_a_single_surface_study_is_warned_once_at_plan_time(caplog):
     single["surfaces"]["count"] = 1
     single["sweeps"]["again"] = {"from": "pad"}
     with caplog.at_level(logging.WARNING, logger="roughcontact"):
-        study_plan(validated(single))
+        study_plan(Study.from_config(validated(single)))
     (record,) = [r for r in caplog.records if "one surface per cell" in r.getMessage()]
     assert record.getMessage().startswith("sweeps.pad: one surface per cell "
                                           "(surfaces.count = 1): a single-surface cell has "
@@ -155,7 +163,7 @@ def test_a_single_surface_study_is_warned_once_at_plan_time(caplog):
     caplog.clear()
     single["surfaces"]["count"] = 2  # the advice, followed
     with caplog.at_level(logging.WARNING, logger="roughcontact"):
-        study_plan(validated(single))
+        study_plan(Study.from_config(validated(single)))
     assert not [r for r in caplog.records if "one surface per cell" in r.getMessage()]
 
 
@@ -212,9 +220,9 @@ def test_a_unit_slip_on_either_body_is_refused_by_the_same_check_and_its_advice_
     (problem,) = refusal(validated(cfg))
     assert problem.startswith(message)
     assert advice in advices(problem)
-    study_plan(validated(follow(cfg, advice)))  # the advice, followed
+    study_plan(Study.from_config(validated(follow(cfg, advice))))  # the advice, followed
     # and the escape for the rare real case
-    study_plan(validated({**cfg, "plausibility_check": False}))
+    study_plan(Study.from_config(validated({**cfg, "plausibility_check": False})))
 
 
 def test_a_thin_inherited_counter_block_names_the_body_key_once():
@@ -222,7 +230,7 @@ def test_a_thin_inherited_counter_block_names_the_body_key_once():
     cfg["body"] = {"thickness_mm": 0.01, "mesh": "refined"}
     (problem,) = refusal(validated(cfg))  # the first and the counter block: one message
     assert problem.startswith("body.thickness_mm = 0.01 is thinner than one contact element")
-    study_plan(validated(follow(cfg, advices(problem)[0])))
+    study_plan(Study.from_config(validated(follow(cfg, advices(problem)[0]))))
 
 
 def test_a_generated_counter_surface_longer_in_b_than_half_the_surface_is_refused():
@@ -232,7 +240,7 @@ def test_a_generated_counter_surface_longer_in_b_than_half_the_surface_is_refuse
                               "the surface, surfaces.size_mm = 2.4 (L / 2 = 1.2 mm)")
     advice = problem.split("Fix: ")[1].split(" or shorter")[0]
     assert advice == "sweeps.pad.counterface.surface.b_mm: 1.2"
-    study_plan(validated(follow(cfg, advice)))
+    study_plan(Study.from_config(validated(follow(cfg, advice))))
     # b by default the first surface's: judged with it, once, under the study's key
     cfg = raw(b_mm=2.0, counterface={"surface": {"sigma_um": 1.0}, "body": STEEL})
     (problem,) = refusal(validated(cfg))
@@ -254,7 +262,7 @@ def test_a_counter_map_smaller_than_the_surface_is_told_an_area_both_have(tmp_pa
     options = problem.split(f"set in {key}: ")[1].split(" and ")
     assert (size, options) == ("sweeps.pad.size_mm: 1.6", ["resample_grid: [11, 11]"])
     followed = follow(follow(cfg, size), f"{key}.{options[0]}")
-    (cell,) = study_plan(validated(followed)).cells["pad"]
+    (cell,) = study_plan(Study.from_config(validated(followed))).cells["pad"]
     assert cell.surface.grid == cell.counterface.surface.cell.grid == (11, 11)
 
 
@@ -273,5 +281,5 @@ def test_a_counter_map_whose_spacing_does_not_divide_the_surface_gets_a_window_i
     followed = follow(cfg, size)
     for option in options:
         followed = follow(followed, f"{key}.{option}")
-    (cell,) = study_plan(validated(followed)).cells["pad"]
+    (cell,) = study_plan(Study.from_config(validated(followed))).cells["pad"]
     assert cell.counterface.surface.cell.grid == cell.surface.grid == (16, 16)

@@ -24,6 +24,7 @@ from roughcontact.study.config import ConfigError, validated
 from roughcontact.study.contact_jobs import contact_problem
 from roughcontact.study.contact_records import ContactJob, StudyCell
 from roughcontact.study.counter_records import NO_COUNTERFACE, RIGID
+from roughcontact.study.settings import Study
 from roughcontact.surfaces.synthetic import derive_seeds
 
 SWEEP = {"sigma_um": 24.5, "b_mm": 0.5, "pressure_MPa": [0.1, 3.0], "count": 3}
@@ -36,8 +37,9 @@ def config(**sweep) -> dict:
 
 
 def test_a_smooth_rigid_counter_body_plans_todays_jobs():
-    today = study_plan(config())
-    explicit = study_plan(config(counterface={"surface": "smooth", "body": "rigid"}))
+    today = study_plan(Study.from_config(config()))
+    explicit = study_plan(Study.from_config(
+            config(counterface={"surface": "smooth", "body": "rigid"})))
     assert list(explicit.jobs) == list(today.jobs)
     assert all(cell.counterface is NO_COUNTERFACE for cell in explicit.cells["pair"])
     assert all(job.counter is NO_COUNTERFACE and set(job.files()) == {"surfaces", "influence"}
@@ -46,8 +48,8 @@ def test_a_smooth_rigid_counter_body_plans_todays_jobs():
 
 
 def test_a_counter_surface_is_another_realisation_of_its_statistics():
-    plan = study_plan(config(counterface={"surface": {"sigma_um": 10.0},
-                                          "body": {"kind": "halfspace", "E_MPa": 2000.0}}))
+    plan = study_plan(Study.from_config(config(counterface={"surface": {"sigma_um": 10.0},
+                                          "body": {"kind": "halfspace", "E_MPa": 2000.0}})))
     (cell,) = plan.cells["pair"]
     first, counter = cell.surface, cell.counterface.surface.cell
     assert (counter.skew, counter.kurt, counter.corr_length) == (
@@ -69,10 +71,10 @@ def test_a_counter_surface_is_another_realisation_of_its_statistics():
 
 
 def test_a_list_of_counter_bodies_is_an_axis():
-    plan = study_plan(config(counterface=[
+    plan = study_plan(Study.from_config(config(counterface=[
         {"body": {"kind": "block", "E_MPa": 511.0}},
         {"body": {"kind": "block", "E_MPa": 1022.0}},
-        {"body": "rigid"}]))
+        {"body": "rigid"}])))
     cells = plan.cells["pair"]
     assert [c.counterface.body.E for c in cells] == [511e6, 1022e6, None]
     assert cells[2].counterface is NO_COUNTERFACE
@@ -95,13 +97,14 @@ def measured_entry(path, **options):
 
 def test_a_measured_counter_surface_on_another_grid_is_refused_with_its_fix(measured):
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(config(counterface=measured_entry(measured)))
+        study_plan(Study.from_config(config(counterface=measured_entry(measured))))
     message = str(raised.value)
     assert "disc.npy: 24 x 24 points over 2.4 mm x 2.4 mm" in message
     assert "16 x 16 over 2.4 mm x 2.4 mm" in message
     assert "resample_grid: [16, 16]" in message
     # the advice, followed
-    plan = study_plan(config(counterface=measured_entry(measured, resample_grid=[16, 16])))
+    plan = study_plan(Study.from_config(
+            config(counterface=measured_entry(measured, resample_grid=[16, 16]))))
     (cell,) = plan.cells["pair"]
     assert cell.counterface.surface.cell.grid == (16, 16)
     assert cell.counterface.surface.sigma == pytest.approx(cell.counterface.surface.cell.sigma)
@@ -120,12 +123,12 @@ def test_a_measured_counter_surface_of_another_size_is_told_to_crop(measured):
         validated_plan = config(counterface=measured_entry(measured, resample_grid=[8, 8]))
         validated_plan["surfaces"]["size_mm"] = [1.2, 1.2]
         validated_plan["surfaces"]["grid"] = [8, 8]
-        study_plan(validated_plan)
+        study_plan(Study.from_config(validated_plan))
     plan = config(counterface=measured_entry(measured, crop_mm=[0, 0, 1.2, 1.2],
                                              resample_grid=[8, 8]))
     plan["surfaces"]["size_mm"] = [1.2, 1.2]
     plan["surfaces"]["grid"] = [8, 8]
-    (cell,) = study_plan(plan).cells["pair"]
+    (cell,) = study_plan(Study.from_config(plan)).cells["pair"]
     assert cell.counterface.surface.cell.grid == (8, 8)
 
 
@@ -144,17 +147,20 @@ def test_a_counter_body_that_cannot_be_built_is_refused_with_its_fix():
     hybrid = {"kind": "block", "E_MPa": 511.0, "operator": "hybrid", "mesh": "paper"}
     with pytest.raises(ConfigProblems, match=r"sweeps.pair.counterface.body: operator hybrid "
                                              r".*sweeps.pair.counterface.body.mesh one of"):
-        study_plan(config(counterface={"body": hybrid}))
-    study_plan(config(counterface={"body": {**hybrid, "mesh": "refined"}}))  # followed
+        study_plan(Study.from_config(
+                                     config(counterface={"body": hybrid})))
+    study_plan(Study.from_config(
+            config(counterface={"body": {**hybrid, "mesh": "refined"}})))  # followed
     slender = {"kind": "block", "E_MPa": 511.0, "thickness_mm": 200.0}
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(config(counterface={"body": slender}))
+        study_plan(Study.from_config(config(counterface={"body": slender})))
     (problem,) = raised.value.problems
     assert problem.startswith("sweeps.pair.counterface.body (a counter block): the block "
                               "under the surfaces (2.4 x 2.4 mm, 16 x 16 elements, 200 mm "
                               "thick, paper mesh) cannot be solved reliably")
     fix = problem.split("Change sweeps.pair.counterface.body.thickness_mm: ")[1].split(" ")[0]
-    study_plan(config(counterface={"body": {**slender, "thickness_mm": float(fix)}}))
+    study_plan(Study.from_config(
+            config(counterface={"body": {**slender, "thickness_mm": float(fix)}})))
 
 
 def _unit(n):
@@ -164,8 +170,9 @@ def _unit(n):
 
 
 def test_identical_bodies_double_the_compliance_and_a_stiff_one_is_rigid():
-    plan = study_plan(config(counterface=[{"body": {"kind": "block", "E_MPa": 511.0}},
-                                          {"body": {"kind": "block", "E_MPa": 511.0e4}}]))
+    plan = study_plan(Study.from_config(config(counterface=[
+        {"body": {"kind": "block", "E_MPa": 511.0}},
+        {"body": {"kind": "block", "E_MPa": 511.0e4}}])))
     twin, stiff = (cell.job for cell in plan.cells["pair"])
     n = 16 * 16
     heights = np.random.default_rng(2).standard_normal((3, 16, 16))
@@ -194,7 +201,7 @@ def test_the_two_bodies_config_plans_a_pair_beside_each_rigid_flat():
 
     root = Path(__file__).resolve().parents[2]
     raw = yaml.safe_load((root / "config" / "two_bodies.yaml").read_text())
-    plan = study_plan(validated(raw))
+    plan = study_plan(Study.from_config(validated(raw)))
     for name in ("pad_on_disc", "steel_plates"):
         pair, flat = plan.cells[name]
         assert flat.counterface is NO_COUNTERFACE and pair.counterface.body is not RIGID

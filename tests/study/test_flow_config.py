@@ -16,7 +16,7 @@ from roughcontact.study.flow_settings import (
     flow_settings,
     probe_from_attrs,
 )
-from roughcontact.study.studies import contact_settings
+from roughcontact.study.settings import Study
 from roughcontact.transport import ARITHMETIC, NO_FLOW, SEALED, FlowProbe
 from roughcontact.transport.probe import probe_from_params
 
@@ -39,16 +39,16 @@ def config(**changes):
 def test_off_by_default_and_off_changes_no_job_parameter(path):
     shipped = load_config(path)
     assert shipped["flow"]["enabled"] is False
-    assert flow_settings(shipped) is FLOW_OFF and FLOW_OFF.params() == {}
-    settings = contact_settings(shipped)
+    assert flow_settings(shipped["flow"]) is FLOW_OFF and FLOW_OFF.params() == {}
+    settings = Study.from_config(shipped).contact
     assert settings.flow is NO_FLOW
     # the contact jobs' solver parameters as before the flow section existed
     assert set(settings.params()) == {"method", "tol", "precision", "steps", "pressure_levels"}
 
 
 def test_on_every_contact_job_gets_the_probe_and_its_parameters_change():
-    settings = contact_settings(config(flow={**ON, "directions": ["y"], "sides": "sealed",
-                                             "face_rule": "arithmetic"}))
+    settings = Study.from_config(config(flow={**ON, "directions": ["y"], "sides": "sealed",
+                                              "face_rule": "arithmetic"})).contact
     assert settings.flow == FlowProbe(directions=("y",), sides="sealed", face_rule=ARITHMETIC)
     params = settings.params()
     assert params["flow"] == {"directions": ["y"], "sides": "sealed",
@@ -65,7 +65,7 @@ def test_on_every_contact_job_gets_the_probe_and_its_parameters_change():
 
 def test_the_seal_in_si_units_and_its_leak_rate():
     flow = flow_settings(config(flow={**ON, "viscosity_Pa_s": 0.05, "pressure_drop_MPa": 2.0,
-                                      "seal_width_mm": 80.0, "seal_length_mm": 4.0}))
+                                      "seal_width_mm": 80.0, "seal_length_mm": 4.0})["flow"])
     assert flow.params()["pressure_drop_Pa"] == 2.0e6
     rows = pd.DataFrame({f"flow_conductance_{d}_{part}": [1e-18, 2e-18]
                          for d in "xy" for part in ("mean", "half_width")}
@@ -85,23 +85,30 @@ def test_the_seal_in_si_units_and_its_leak_rate():
 ])
 def test_a_unit_slip_is_refused_naming_the_key_and_the_advice_works(key, value, fixed):
     with pytest.raises(ConfigProblems) as caught:
-        study_plan(config(flow={**ON, key: value}))
+        study_plan(Study.from_config(config(flow={**ON, key: value})))
     message = str(caught.value)
     assert f"flow.{key}: {value:g}" in message and "no job was started" in message
     advice = f"flow.{key}: {fixed:g}"
     assert advice in message
-    study_plan(config(flow={**ON, key: fixed}))  # following the advice: the plan passes
+    study_plan(Study.from_config(
+            config(flow={**ON, key: fixed})))  # following the advice: the plan passes
+
+
+def flow_problems(validated_config: dict, grids: dict) -> list[str]:
+    """The flow checks of a configuration's study."""
+    study = Study.from_config(validated_config)
+    return check_flow(study.flow, study.plausibility_check, grids)
 
 
 def test_a_zero_pressure_drop_is_refused():
-    problems = check_flow(config(flow={**ON, "pressure_drop_MPa": 0.0}), {})
+    problems = flow_problems(config(flow={**ON, "pressure_drop_MPa": 0.0}), {})
     assert len(problems) == 1 and "flow.pressure_drop_MPa: 0" in problems[0]
 
 
 def test_a_grid_of_one_row_cannot_carry_a_flow():
-    problems = check_flow(config(flow=ON), {"the contact grid of g": (16, 1)})
+    problems = flow_problems(config(flow=ON), {"the contact grid of g": (16, 1)})
     assert len(problems) == 1 and "16 x 1" in problems[0] and "flow.enabled: false" in problems[0]
-    assert check_flow(config(), {"the contact grid of g": (16, 1)}) == []  # off: not checked
+    assert flow_problems(config(), {"the contact grid of g": (16, 1)}) == []  # off: unchecked
 
 
 @pytest.mark.parametrize("bad", [{"directions": ["z"]}, {"directions": []},

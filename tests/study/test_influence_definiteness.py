@@ -20,8 +20,8 @@ from roughcontact.study.cells import study_plan
 from roughcontact.study.config import load_config
 from roughcontact.study.contact_jobs import solve_contact_job
 from roughcontact.study.jobs import build_influence
+from roughcontact.study.settings import Study
 from roughcontact.study.storage import read_contact, read_influence, write_influence
-from roughcontact.study.studies import body_geometry, contact_settings
 from roughcontact.study.surface_jobs import build_surface_cell
 
 REPO = Path(__file__).resolve().parents[2]
@@ -34,7 +34,7 @@ def small_study():
     config = load_config(REPO / "config" / "quick.yaml")
     config["surfaces"]["grid"] = [8, 8]
     config["surfaces"]["size_mm"] = [2.4, 2.4]
-    job = next(iter(study_plan(config).jobs.values()))
+    job = next(iter(study_plan(Study.from_config(config)).jobs.values()))
     return config, job
 
 
@@ -58,7 +58,7 @@ def test_an_indefinite_influence_file_is_refused_naming_it_and_its_advice_works(
     assert smallest < 0
     stored.unlink()
     write_influence(stored, unit, {k: v for k, v in attrs.items() if k != "content_sha256"})
-    settings = contact_settings(config).params()
+    settings = Study.from_config(config).contact.params()
     out = tmp_path / "contact.h5"
     with pytest.raises(IndefiniteOperator) as info:
         solve_contact_job(job.params(), {"surfaces": surfaces, "influence": stored}, out,
@@ -89,7 +89,7 @@ def test_a_build_that_is_not_positive_definite_is_refused_and_its_advice_works(
         return unit
 
     monkeypatch.setattr(jobs.influence, "unit_modulus_influence", unresolved)
-    geometry = body_geometry(config)
+    geometry = Study.from_config(config).body.geometry
     assert geometry.mesh == "paper"
     path = tmp_path / "g.h5"
     with pytest.raises(IndefiniteOperator) as info:
@@ -99,7 +99,8 @@ def test_a_build_that_is_not_positive_definite_is_refused_and_its_advice_works(
     assert "set body.mesh to refined or converged" in message
     assert not path.exists()
     # the advice, followed: body.mesh: refined
-    refined = body_geometry({**config, "body": {**config["body"], "mesh": "refined"}})
+    refined = Study.from_config(
+            {**config, "body": {**config["body"], "mesh": "refined"}}).body.geometry
     assert refined.mesh == "refined"
     attrs = _build(config, refined, path)
     assert attrs["check_positive_definite"] == "cholesky"
@@ -116,7 +117,7 @@ def test_a_failed_factorization_names_the_geometry_and_its_mesh(small_study, tmp
         raise sparse_solve._pardiso_error(-2)
 
     monkeypatch.setattr(jobs.influence, "unit_modulus_influence", failing)
-    geometry = body_geometry(config)
+    geometry = Study.from_config(config).body.geometry
     path = tmp_path / "g.h5"
     with pytest.raises(FactorizationError) as info:
         _build(config, geometry, path)

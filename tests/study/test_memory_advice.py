@@ -9,6 +9,7 @@ import pytest
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import validated
+from roughcontact.study.settings import Study
 
 
 def config(grid, **body) -> dict:
@@ -21,7 +22,7 @@ def config(grid, **body) -> dict:
 
 def options(cfg) -> list[str]:
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(cfg)
+        study_plan(Study.from_config(cfg))
     (problem,) = raised.value.problems
     return problem.split("Options: ")[1].split("; ")
 
@@ -38,7 +39,7 @@ def test_a_dense_build_beyond_the_limit_is_offered_auto_where_that_fits():
     offered = options(cfg)
     assert offered[0].startswith("body.operator: auto (matrix-free above 64 x 64 elements: "
                                  "about 1.59 GB here)")
-    plan = study_plan(followed(cfg, offered[0]))  # the advice, followed
+    plan = study_plan(Study.from_config(followed(cfg, offered[0])))  # the advice, followed
     assert [g.operator.value for g in plan.geometries.values()] == ["hybrid", "halfspace"]
 
 
@@ -50,7 +51,8 @@ def test_auto_is_not_offered_again_and_every_option_offered_plans():
     assert "body.max_memory_gb: 2.52 or more (now 1, on a machine with that memory)" in offered
     for option in offered:
         if option.startswith("body."):
-            study_plan(followed(config(64, operator="auto", max_memory_gb=1.0), option))
+            study_plan(Study.from_config(
+                    followed(config(64, operator="auto", max_memory_gb=1.0), option)))
     # where auto does not fit either, it is not offered to a dense build
     assert not any("operator" in o for o in options(config(100, operator="dense",
                                                            max_memory_gb=1.0)))

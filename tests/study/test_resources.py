@@ -19,6 +19,7 @@ from roughcontact.study.config import (
 )
 from roughcontact.study.contact_records import ContactJob
 from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
+from roughcontact.study.settings import Study
 
 CG = ContactSettings(method="cg", tol=1e-8, precision="mixed", steps=30, pressure_levels=30)
 #: The influence builds of a minimal config, completed by the schema's defaults (16 GB).
@@ -183,7 +184,7 @@ def test_compare_prints_predictions_against_benchmarks(tmp_path, capsys):
     quick = resources.SCHEMA_FILE.parent / "quick.yaml"
     config = yaml.safe_load(quick.read_text())
     validate(config, str(resources.SCHEMA_FILE))
-    key, geometry = sorted(study_plan(config).geometries.items())[0]
+    key, geometry = sorted(study_plan(Study.from_config(config)).geometries.items())[0]
     build = BuildSettings.from_section(config["body"])
     seconds = resources.influence_seconds(geometry, build)
     mem_mb = resources.influence_mem_mb(geometry, build)
@@ -206,19 +207,24 @@ def test_jobs_planned_beyond_the_machine_are_named_with_the_keys_to_change():
     quick = resources.SCHEMA_FILE.parent / "quick.yaml"
     config = yaml.safe_load(quick.read_text())
     validate(config, str(resources.SCHEMA_FILE))
-    plan = study_plan(config)
-    planned = resources.planned_memory(config, plan)
+    plan = study_plan(Study.from_config(config))
+    planned = resources.planned_memory(plan)
     # the study's jobs and, beside them, the configured report and the audit
     assert {"contact", "influence", "surfaces", "influence_convergence", "audit"} <= set(planned)
     largest = max(mem for jobs in planned.values() for mem in jobs.values())
-    assert resources.machine_problems(config, total_mb=largest, plan=plan) == []
-    contact = max(resources.predictions(config, plan)["contact"].values())[1]
-    problems = resources.machine_problems(config, total_mb=contact - 1, plan=plan)
+    assert resources.machine_problems(plan, total_mb=largest) == []
+    contact = max(resources.predictions(plan)["contact"].values())[1]
+    problems = resources.machine_problems(plan, total_mb=contact - 1)
     by_kind = {p.split(" job ")[0]: p for p in problems}
     assert "contact" in by_kind and "body.operator: auto" in by_kind["contact"]
     assert "more than the limit of" in by_kind["contact"]
     assert "reports.influence_convergence" in by_kind["influence_convergence"]
     assert all("set job_memory_gb to their memory" in p for p in problems)
+
+
+def plan_of(config: dict):
+    """The plan of a validated configuration."""
+    return study_plan(Study.from_config(config))
 
 
 def huge_grid_config(**extra):
@@ -233,30 +239,32 @@ def huge_grid_config(**extra):
 def test_a_report_beyond_the_machine_is_refused_before_any_job():
     config = validated(huge_grid_config(job_memory_gb=64))
     with pytest.raises(ConfigProblems) as err:
-        resources.check_machine(config)
+        resources.check_machine(plan_of(config))
     (problem,) = err.value.problems
     assert problem.startswith("influence_convergence job influence_convergence: planned "
                               "6.76 PB of memory, more than job_memory_gb = 64. Remove "
                               "reports.influence_convergence")
     # the advice, followed: without the report the plan fits
     del config["reports"]["influence_convergence"]
-    resources.check_machine(config)
-    assert "influence_convergence" not in resources.planned_memory(config)
+    resources.check_machine(plan_of(config))
+    assert "influence_convergence" not in resources.planned_memory(plan_of(config))
 
 
 def test_a_report_made_on_demand_is_refused_only_when_asked_for():
     config = validated(huge_grid_config(job_memory_gb=64))
     del config["reports"]["influence_convergence"]
-    resources.check_machine(config)  # the default target fits
+    plan = plan_of(config)
+    resources.check_machine(plan)  # the default target fits
     with pytest.raises(ConfigProblems, match=r"speed_vs_error job speed_vs_error: planned "
                                              r"[\d.]+ PB .* reports.speed_vs_error.grids"):
-        resources.check_machine(config, kinds=("speed_vs_error",))
+        resources.check_machine(plan, kinds=("speed_vs_error",))
 
 
 def test_the_memory_a_job_may_use_is_this_machines_unless_configured():
     config = validated(huge_grid_config())
     assert config["job_memory_gb"] is None
-    limit, source = resources.memory_limit_mb(config)
+    limit, source = resources.memory_limit_mb(Study.from_config(config))
     assert limit == resources.machine_memory_mb() and source.startswith("this machine's ")
     config["job_memory_gb"] = 2.5
-    assert resources.memory_limit_mb(config) == (2500.0, "job_memory_gb = 2.5")
+    assert resources.memory_limit_mb(Study.from_config(config)) == (2500.0,
+                                                                    "job_memory_gb = 2.5")

@@ -16,6 +16,7 @@ from roughcontact.errors import MeasurementError
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
+from roughcontact.study.settings import Study
 from roughcontact.study.sources import spectrum_from_entry
 from roughcontact.study.studies import contact_cells
 from roughcontact.study.surface_jobs import build_surface_cell
@@ -53,7 +54,7 @@ def config(surface_spectrum=None, **sweep):
 
 
 def plan_keys(cfg) -> list[str]:
-    return sorted(study_plan(cfg).surfaces)
+    return sorted(study_plan(Study.from_config(cfg)).surfaces)
 
 
 def sha256(path: Path) -> str:
@@ -64,7 +65,7 @@ def test_cells_without_a_spectrum_keep_their_keys_and_parameters():
     cfg = config()
     assert cfg["surfaces"]["spectrum"] == {"kind": "acf"}  # the schema's default
     # the key and the parameters of a cell as they were before spectra existed
-    (cell,) = study_plan(cfg).surfaces.values()
+    (cell,) = study_plan(Study.from_config(cfg)).surfaces.values()
     assert cell.key == "sk0_ku3_b1x1mm_L4.8x4.8mm_g16x16_exp_per_paper_n2"
     assert sorted(cell.params()) == ["acf", "b_mm", "count", "grid", "kurt", "method",
                                      "periodic", "size_mm", "skew"]
@@ -76,7 +77,7 @@ def test_a_table_spectrum_puts_the_file_hash_in_the_key_and_a_new_file_a_new_key
     (key,) = plan_keys(cfg)
     assert key == (f"sk0_ku3_b1x1mm_L4.8x4.8mm_g16x16_psd_per_paper_tab-{sha256(path)[:12]}"
                    "_n2")
-    cell = study_plan(cfg).surfaces[key]
+    cell = study_plan(Study.from_config(cfg)).surfaces[key]
     assert cell.params()["spectrum"] == {"kind": "table", "file": str(path),
                                          "file_sha256": sha256(path)}
     assert cell.input_files == (str(path),)
@@ -90,7 +91,8 @@ def test_a_table_spectrum_puts_the_file_hash_in_the_key_and_a_new_file_a_new_key
 def test_a_study_can_set_its_own_spectrum(tmp_path):
     spectrum = {"kind": "self-affine", "hurst": 0.7, "rolloff_mm": 1.2, "cutoff_mm": 0.6}
     cfg = config(sigma_um=1.0, pressure_MPa=[0.1, 1.0], spectrum=spectrum)
-    plain = {"plain": contact_cells(cfg, "plain"), "own": contact_cells(cfg, "own")}
+    plain = {"plain": contact_cells(Study.from_config(
+            cfg), "plain"), "own": contact_cells(Study.from_config(cfg), "own")}
     assert plain["plain"][0].surface.spectrum is None
     assert "spectrum" not in plain["plain"][0].surface.params()
     own = plain["own"][0].surface
@@ -109,29 +111,31 @@ def test_a_spectrum_on_padded_surfaces_stops_the_plan_in_one_line(tmp_path):
     cfg = config({"kind": "table", "file": str(path)})
     cfg["surfaces"]["periodic"] = False
     with pytest.raises(ConfigProblems) as err:
-        study_plan(cfg)
+        study_plan(Study.from_config(cfg))
     assert err.value.problems == ["surfaces.spectrum: kind table generates periodic surfaces "
                                   "only; set surfaces.periodic: true or remove the spectrum"]
 
 
 def test_missing_or_bad_spectrum_files_stop_the_plan(tmp_path):
     with pytest.raises(ConfigProblems, match=r"surfaces.spectrum: .*missing.csv: no such file"):
-        study_plan(config({"kind": "table", "file": str(tmp_path / "missing.csv")}))
+        study_plan(Study.from_config(
+                config({"kind": "table", "file": str(tmp_path / "missing.csv")})))
     bad = tmp_path / "bad.csv"
     bad.write_text("q_per_mm,C\n1,1\n0.5,2\n")
     with pytest.raises(ConfigProblems, match="q must increase strictly"):
-        study_plan(config({"kind": "table", "file": str(bad)}))
+        study_plan(Study.from_config(config({"kind": "table", "file": str(bad)})))
     with pytest.raises(ConfigError, match=r"surfaces.spectrum: .file. is missing"):
         config({"kind": "table"})
     # the cut-off finer than the grid can carry: the plan names the cell
     with pytest.raises(ConfigProblems, match="cutoff_wavelength .* two grid spacings"):
-        study_plan(config({"kind": "self-affine", "hurst": 0.5, "rolloff_mm": 1.0,
-                           "cutoff_mm": 0.1}))
+        study_plan(Study.from_config(config({"kind": "self-affine", "hurst": 0.5, "rolloff_mm": 1.0,
+                           "cutoff_mm": 0.1})))
 
 
 def test_the_surfaces_job_writes_the_table_hash_and_refuses_a_changed_file(tmp_path):
     path = write_table(tmp_path / "psd.csv")
-    (cell,) = study_plan(config({"kind": "table", "file": str(path)})).surfaces.values()
+    (cell,) = study_plan(Study.from_config(
+            config({"kind": "table", "file": str(path)}))).surfaces.values()
     out = tmp_path / "cell.h5"
     build_surface_cell(cell.params(), 1, out)
     with h5py.File(out, "r") as f:
@@ -161,7 +165,7 @@ def test_a_measured_spectrum_is_keyed_by_the_file_and_its_options():
     assert f"_psd_per_paper_mpsd-{digest[:12]}-" in key
     (other,) = plan_keys(config({**entry, "form_degree": 2}))
     assert other != key and digest[:12] in other
-    cell = study_plan(cfg).surfaces[key]
+    cell = study_plan(Study.from_config(cfg)).surfaces[key]
     assert cell.spectrum.file == str(MEASURED) and cell.input_files == (str(MEASURED),)
     assert cell.spec().acf == "psd"
 
@@ -182,9 +186,9 @@ def test_a_measured_study_gives_its_spectrum_to_the_twin_only(tmp_path):
     spectrum = {"kind": "table", "file": str(path)}
     cfg = config(surface=surface, compare_synthetic=True, count=2, spectrum=spectrum,
                  pressure_MPa=[1.0, 50.0])
-    measured_cell, twin = (c.surface for c in contact_cells(cfg, "own"))
+    measured_cell, twin = (c.surface for c in contact_cells(Study.from_config(cfg), "own"))
     assert measured_cell.spectrum is None and "spectrum" not in measured_cell.params()
     assert twin.spectrum.file_sha256 == sha256(path) and twin.grid == (64, 64)
     lone = config(surface=surface, spectrum=spectrum, pressure_MPa=[1.0, 50.0])
     with pytest.raises(ConfigProblems, match="own: 'spectrum' applies to the generated twin"):
-        study_plan(lone)
+        study_plan(Study.from_config(lone))

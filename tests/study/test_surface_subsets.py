@@ -12,6 +12,7 @@ from roughcontact.study.cells import study_plan, surfaces_from
 from roughcontact.study.config import load_config
 from roughcontact.study.provenance import provenance
 from roughcontact.study.records import GeneratedCell, Generator
+from roughcontact.study.settings import Study
 from roughcontact.study.surface_jobs import build_surface_cell
 
 REPO = Path(__file__).resolve().parents[2]
@@ -40,7 +41,7 @@ def contents(path) -> tuple[dict, dict]:
 
 
 def test_the_plan_takes_each_smaller_cell_from_its_largest_twin():
-    plan = study_plan(load_config(REPO / "config" / "quick.yaml"))
+    plan = study_plan(Study.from_config(load_config(REPO / "config" / "quick.yaml")))
     # Fig 3's one-surface cells and Fig 9's three-surface cells have four-surface twins
     assert plan.surfaces_from == {
         small.key: small.key.rsplit("_n", 1)[0] + "_n4"

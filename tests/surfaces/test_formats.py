@@ -22,6 +22,7 @@ from roughcontact.errors import MeasurementError
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import validated
+from roughcontact.study.settings import Study
 from roughcontact.surfaces.measured import load_measurement
 
 
@@ -62,7 +63,7 @@ def test_random_bytes_are_refused_when_the_plan_is_made(tmp_path):
     config = sweep_config({"file": str(path), "format": "auto", "height_unit": "nm",
                            "spacing_mm": [1e-3, 1e-3]})
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(config)
+        study_plan(Study.from_config(config))
     assert "s.surface" in str(raised.value) and str(path) in str(raised.value)
     assert "X3P" in str(raised.value)
 
@@ -95,13 +96,13 @@ def test_noise_is_refused_without_advice_towards_a_height_unit(tmp_path):
         config = sweep_config({"file": str(path), "format": "npy", "height_unit": unit,
                                "spacing_mm": [0.01, 0.01]})
         with pytest.raises(ConfigProblems) as raised:
-            study_plan(config)
+            study_plan(Study.from_config(config))
         message = str(raised.value)
         assert "uncorrelated" in message and str(path) in message
         assert "height_unit:" not in message and "typed in" not in message
     # the escape for a real surface sampled that coarsely
     config["plausibility_check"] = False
-    assert study_plan(config).jobs
+    assert study_plan(Study.from_config(config)).jobs
 
 
 def test_a_smooth_map_in_the_wrong_unit_gets_the_unit_that_fits(tmp_path):
@@ -112,12 +113,12 @@ def test_a_smooth_map_in_the_wrong_unit_gets_the_unit_that_fits(tmp_path):
     surface = {"file": str(path), "format": "npy", "height_unit": "um",
                "spacing_mm": [0.01, 0.01]}
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(sweep_config(surface))
+        study_plan(Study.from_config(sweep_config(surface)))
     message = str(raised.value)
     assert "measured sigma" in message and "height_unit: nm" in message
     assert "typed in" not in message
     # the advice, followed: a few um (5 um less the plane the import removes)
-    plan = study_plan(sweep_config({**surface, "height_unit": "nm"}))
+    plan = study_plan(Study.from_config(sweep_config({**surface, "height_unit": "nm"})))
     (cell,) = plan.cells["s"]
     assert 3e-6 < cell.sigma < 5e-6
 
@@ -135,7 +136,7 @@ def test_a_constant_map_is_refused_alone_as_flat(tmp_path, caplog, compare_synth
     config = sweep_config(surface)
     config["sweeps"]["s"]["compare_synthetic"] = compare_synthetic
     with pytest.raises(ConfigProblems) as raised:
-        study_plan(config)
+        study_plan(Study.from_config(config))
     (problem,) = raised.value.problems  # alone: no NaN correlation length, no form_degree
     assert problem.startswith(f"s.surface: {path}: the heights are flat (a constant or a "
                               "plane): with the least-squares plane removed their standard "
@@ -149,7 +150,7 @@ def test_a_constant_map_is_refused_alone_as_flat(tmp_path, caplog, compare_synth
     rough = ndimage.gaussian_filter(np.random.default_rng(5).standard_normal((32, 32)), 2.0,
                                     mode="wrap")
     write(path, 3.0 + rough / rough.std())
-    assert study_plan(config).jobs
+    assert study_plan(Study.from_config(config)).jobs
 
 
 def test_a_map_that_is_its_form_or_zero_is_flat(tmp_path):

@@ -19,7 +19,9 @@ from roughcontact.errors import MeasurementError
 from roughcontact.study.cells import contact_jobs
 from roughcontact.study.checks import check_studies
 from roughcontact.study.config import validated
+from roughcontact.study.provenance import RunInfo
 from roughcontact.study.records import MeasuredCell
+from roughcontact.study.settings import Study
 from roughcontact.study.sources import MeasurementImport
 from roughcontact.study.storage import read_surfaces
 from roughcontact.study.studies import contact_cells
@@ -342,8 +344,8 @@ def test_measured_key_follows_content_and_options_not_the_name(tmp_path):
 
 def test_measured_study_cells_follow_the_measurement():
     config = measured_config(EXAMPLE)
-    assert check_studies(config, ["plateau_honed"]) == []
-    cells = contact_cells(config, "plateau_honed")
+    assert check_studies(Study.from_config(config), ["plateau_honed"]) == []
+    cells = contact_cells(Study.from_config(config), "plateau_honed")
     assert len(cells) == 2
     meas, twin = (c.surface for c in cells)
     assert meas.method.value == "measured" and meas.count == 1
@@ -357,7 +359,8 @@ def test_measured_study_cells_follow_the_measurement():
     assert len(contact_jobs(cells)) == 2
     # an explicit sigma rescales both; no twin without compare_synthetic
     config = measured_config(EXAMPLE, sigma_um=[1.0, 2.0], compare_synthetic=False)
-    assert [c.params()["sigma_um"] for c in contact_cells(config, "plateau_honed")] == [1.0, 2.0]
+    assert [c.params()["sigma_um"] for c in contact_cells(Study.from_config(
+            config), "plateau_honed")] == [1.0, 2.0]
 
 
 @pytest.mark.parametrize(
@@ -372,15 +375,15 @@ def test_measured_study_cells_follow_the_measurement():
 )
 def test_check_studies_reports_unusable_measured_studies(change, message):
     config = measured_config(EXAMPLE, **change)
-    problems = check_studies(config, ["plateau_honed"])
+    problems = check_studies(Study.from_config(config), ["plateau_honed"])
     assert len(problems) == 1 and message in problems[0], problems
 
 
 def test_measured_cell_file_has_the_generated_layout(tmp_path):
     config = measured_config(EXAMPLE)
-    surface = contact_cells(config, "plateau_honed")[0].surface
+    surface = contact_cells(Study.from_config(config), "plateau_honed")[0].surface
     path = tmp_path / "cell.h5"
-    build_surface_cell(surface.params(), 7, path, config=config)
+    build_surface_cell(surface.params(), 7, path, run=RunInfo.of(config))
     cell = read_surfaces(path)
     m = measured.load_measurement(EXAMPLE, "xyz", height_unit="um", fill_holes=0.01)
     s = measured.statistics(m)
@@ -435,7 +438,7 @@ def test_measured_surface_runs_end_to_end_beside_its_twin(tmp_path):
     # the measured cell stores the file's detrended statistics and its provenance
     m = measured.load_measurement(data, "xyz", height_unit="um", fill_holes=0.01)
     s = measured.statistics(m)
-    cells = contact_cells(config, "plateau_honed")
+    cells = contact_cells(Study.from_config(config), "plateau_honed")
     meas_key, twin_key = (c.surface.key for c in cells)
     with h5py.File(tmp_path / "results" / "surfaces" / f"{meas_key}.h5", "r") as f:
         attrs = dict(f.attrs)

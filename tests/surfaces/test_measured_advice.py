@@ -23,6 +23,7 @@ from roughcontact.errors import MeasurementError
 from roughcontact.study.checks import check_studies
 from roughcontact.study.config import validated
 from roughcontact.study.records import GeneratedCell, Generator
+from roughcontact.study.settings import Study
 from roughcontact.study.surface_jobs import build_surface_cell
 from roughcontact.surfaces.measured import load_measurement, statistics
 from roughcontact.surfaces.statistics import height_stats
@@ -138,12 +139,13 @@ def twin_config(path, **sweep):
 
 def test_the_twin_refusal_offers_the_form_degree_and_no_twin_and_both_work(tmp_path):
     path = cubic_form(tmp_path)
-    (problem,) = check_studies(twin_config(path), ["m"])
+    (problem,) = check_studies(Study.from_config(twin_config(path)), ["m"])
     assert "no synthetic twin can be made" in problem
     assert "surface.form_degree: 3" in problem and "compare_synthetic: false" in problem
     assert "2 or more" not in problem
-    assert check_studies(twin_config(path, surface={"form_degree": 3}), ["m"]) == []
-    assert check_studies(twin_config(path, compare_synthetic=False), ["m"]) == []
+    assert check_studies(Study.from_config(
+            twin_config(path, surface={"form_degree": 3})), ["m"]) == []
+    assert check_studies(Study.from_config(twin_config(path, compare_synthetic=False)), ["m"]) == []
 
 
 # ------------------------------------------------------------------ spikes and dropouts

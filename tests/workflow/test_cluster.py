@@ -13,8 +13,9 @@ import pandas as pd
 import pytest
 
 from roughcontact.study import resources
-from roughcontact.study.cells import convergence_presets, study_plan
+from roughcontact.study.cells import study_plan
 from roughcontact.study.config import ConvergenceSettings, load_config, report_section
+from roughcontact.study.settings import Study
 from roughcontact.study.studies import contact_cells
 
 REPO = Path(__file__).resolve().parents[2]
@@ -116,7 +117,7 @@ def fig14_runs(tmp_path_factory):
 def test_every_job_went_through_the_submit_script(fig14_runs):
     workdir, _, log, seconds = fig14_runs
     config = load_config(QUICK)
-    cells = contact_cells(config, "fig14")
+    cells = contact_cells(Study.from_config(config), "fig14")
     logdir = workdir / "results" / "logs" / "cluster"
     table = pd.read_csv(logdir / "submissions.tsv", sep="\t")
     singles = table[table["type"] == "single"]
@@ -227,7 +228,7 @@ def _contact(plan, config, job):
 
 
 def _influence_convergence(plan, config, job):
-    presets = convergence_presets(config)
+    presets = Study.from_config(config).reports.convergence_presets
     section = ConvergenceSettings.from_section(report_section(config, "influence_convergence"))
     return (resources.convergence_mem_mb(plan.body, presets),
             resources.convergence_runtime(plan.body, presets, section))
@@ -291,7 +292,7 @@ def test_slurm_profile_gives_every_job_of_the_study_its_resources(tmp_path):
         assert res["slurm_account"] == "CHANGE_ME" and res["slurm_partition"] == "CHANGE_ME"
     # each job asks for what the cost model gives it, through rules/common.smk
     config = load_config(PAPER)
-    plan = study_plan(config)
+    plan = study_plan(Study.from_config(config))
     for job in jobs:
         model = model_request(plan, config, job)
         asked = {name: int(job["resources"][name]) for name in model}

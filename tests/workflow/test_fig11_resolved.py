@@ -7,7 +7,8 @@ import yaml
 
 from roughcontact.study.cells import study_plan
 from roughcontact.study.config import validated
-from roughcontact.study.studies import body_geometry, contact_cells
+from roughcontact.study.settings import Study
+from roughcontact.study.studies import contact_cells
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -23,7 +24,7 @@ def test_the_config_asks_for_the_papers_fig11_cells_on_256_elements():
     the kurtosis bound, about a minute at 256 x 256: not run here)."""
     resolved = config("fig11_resolved.yaml")
     assert list(resolved["figures"]) == ["fig11_resolved"] and not resolved["sweeps"]
-    cells = contact_cells(resolved, "fig11_resolved")
+    cells = contact_cells(Study.from_config(resolved), "fig11_resolved")
     assert [cell.surface.corr_length for cell in cells] == [
         pytest.approx((b, b)) for b in (0.5e-3, 1e-3, 2e-3)]
     assert {(cell.surface.grid, cell.surface.count, cell.surface.skew, cell.surface.kurt)
@@ -31,11 +32,11 @@ def test_the_config_asks_for_the_papers_fig11_cells_on_256_elements():
     for cell in cells:
         assert (cell.sigma, cell.E) == (pytest.approx(24.5e-6), pytest.approx(511e6))
         assert cell.pressure_range == pytest.approx((1e5, 5e6))
-    assert {cell.geometry for cell in cells} == {body_geometry(resolved)}
-    assert body_geometry(resolved).grid == (256, 256)
+    assert {cell.geometry for cell in cells} == {Study.from_config(resolved).body.geometry}
+    assert Study.from_config(resolved).body.geometry.grid == (256, 256)
     assert resolved["body"]["operator"] == "auto"  # the hybrid model above 64 x 64
 
 
 @pytest.mark.parametrize("name", ["config.yaml", "quick.yaml"])
 def test_the_study_is_not_among_the_default_targets(name):
-    assert "fig11_resolved" not in study_plan(config(name)).figures
+    assert "fig11_resolved" not in study_plan(Study.from_config(config(name))).figures

@@ -42,6 +42,7 @@ from test_cluster import (
 
 from roughcontact.study.cells import study_plan
 from roughcontact.study.config import load_config
+from roughcontact.study.settings import Study
 from roughcontact.study.studies import contact_cells
 
 pytestmark = pytest.mark.slurm
@@ -251,7 +252,7 @@ def expected_submissions(dry_run_text):
     from the cost model (:func:`test_cluster.model_request`), the numbers a rule sets
     itself (cores; a summary's memory) from the dry run."""
     config = load_config(QUICK)
-    plan = study_plan(config)
+    plan = study_plan(Study.from_config(config))
     singles, groups = {}, {}
     for job in dry_run_jobs(dry_run_text):
         numbers = {name: int(job["resources"][name]) for name in ("mem_mb", "runtime")}
@@ -341,7 +342,7 @@ def test_a_job_slurm_ends_without_success_stops_the_run(slurm, tmp_path):
     """squeue still lists a finished job (MinJobAge): the plugin reads a cancelled
     job's state and the run stops with it, instead of waiting. (An influence build,
     submitted alone: Snakemake reports a failed group without the plugin's message.)"""
-    geometry = contact_cells(load_config(QUICK), "fig14")[0].geometry.key
+    geometry = contact_cells(Study.from_config(load_config(QUICK)), "fig14")[0].geometry.key
     target = f"results/influence/{geometry}.h5"
     node = f"NodeName={slurm.node}"
     slurm_command("scontrol", "update", node, "State=DRAIN", "Reason=roughcontact-test")

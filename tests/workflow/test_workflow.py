@@ -20,8 +20,9 @@ import yaml
 from roughcontact.study.cells import study_plan
 from roughcontact.study.config import load_config
 from roughcontact.study.records import surface_cell_from_params
+from roughcontact.study.settings import Study
 from roughcontact.study.storage import read_contact, read_influence
-from roughcontact.study.studies import body_geometry, contact_cells, source_name
+from roughcontact.study.studies import contact_cells
 from roughcontact.surfaces import johnson
 from roughcontact.surfaces import synthetic as surface
 from roughcontact.surfaces.statistics import height_stats
@@ -61,7 +62,7 @@ def quick_config():
 def test_surface_files_hold_seeded_surfaces_with_their_moments(quick_run):
     workdir, _ = quick_run
     config = quick_config()
-    for cell in study_plan(config).figure_surfaces["fig04"]:
+    for cell in study_plan(Study.from_config(config)).figure_surfaces["fig04"]:
         path = workdir / "results" / "surfaces" / f"{cell.key}.h5"
         with h5py.File(path, "r") as f:
             heights = f["heights"][()]
@@ -95,7 +96,7 @@ def test_surface_files_hold_seeded_surfaces_with_their_moments(quick_run):
 def test_influence_file_holds_unit_modulus_matrix_of_the_block(quick_run):
     workdir, _ = quick_run
     config = quick_config()
-    geometry = body_geometry(config)
+    geometry = Study.from_config(config).body.geometry
     path = workdir / "results" / "influence" / f"{geometry.key}.h5"
     unit, attrs = read_influence(path)
     nx, ny = geometry.grid
@@ -352,7 +353,7 @@ def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path)
     config = quick_config()
     path = tmp_path / "study.yaml"
     path.write_text(yaml.safe_dump(config))
-    cell = contact_cells(config, "fig14")[0]
+    cell = contact_cells(Study.from_config(config), "fig14")[0]
     key = cell.contact_key
     target = f"results/contact/{key}.h5"
     first = run_snakemake(tmp_path, f"results/surfaces/{cell.surface.key}.h5",
@@ -417,7 +418,7 @@ def test_editing_one_cell_reruns_exactly_its_jobs(quick_run, tmp_path):
 
 def test_a_smaller_cell_takes_its_surfaces_from_its_twin_and_reruns_alone(quick_run, tmp_path):
     workdir, _ = quick_run
-    plan = study_plan(quick_config())
+    plan = study_plan(Study.from_config(quick_config()))
     for small, large in plan.surfaces_from.items():  # Fig 3's n1 and Fig 9's n3 cells
         log = (workdir / "results" / "logs" / "surfaces" / f"{small}.log").read_text()
         assert f"taken from results/surfaces/{large}.h5" in log
@@ -441,8 +442,8 @@ def test_audit_lists_every_cell_and_flags_a_corrupted_result(quick_run, tmp_path
     studies = [n for n in config["figures"] if n in ("fig07", "fig09", "fig10", "fig11",
                                                        "fig12", "fig13", "fig14", "table_Eu",
                                                        "hardness")]
-    sources = sorted({source_name(config, n) for n in studies})  # fig12 is fig07's cells
-    assert len(audit) == sum(len(contact_cells(config, n)) for n in sources)
+    sources = sorted({Study.from_config(config).source_name(n) for n in studies})  # fig12: fig07
+    assert len(audit) == sum(len(contact_cells(Study.from_config(config), n)) for n in sources)
     # a study "from:" another is not listed again (its cells are the same)
     assert set(audit["study"]) == set(sources) and "fig12" not in sources
     assert not audit.duplicated(subset=["study", "cell"]).any()

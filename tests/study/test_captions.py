@@ -3,8 +3,9 @@
 report/figure.rst's captions were fixed text: "left the paper's mesh, right
 the converged mesh" for Fig 7 and the mean gap, while config/quick.yaml
 draws the refined mesh on the right. They now come from the cells each
-figure draws (roughcontact.reports.captions, the figure rule's
-params.caption), so that each is true for every shipped config.
+figure draws (roughcontact.study.captions, named by the figure registry
+roughcontact.study.figures; the figure rule's params.caption), so that each is
+true for every shipped config.
 """
 
 from pathlib import Path
@@ -13,25 +14,28 @@ from types import SimpleNamespace
 import jinja2
 import pytest
 
-from roughcontact.reports.captions import CAPTIONS, counter_label, figure_caption, panels
-from roughcontact.study.cells import (
-    CONTACT_FIGURES,
-    STUDIES_FIGURES,
-    SURFACE_ONLY_FIGURES,
-    study_plan,
-)
+from roughcontact.study.captions import counter_label, panels
+from roughcontact.study.cells import figure_caption, study_plan
 from roughcontact.study.config import load_config
+from roughcontact.study.figures import FIGURES, Kind
+from roughcontact.study.settings import Study
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 def plan_of(name):
     config = load_config(REPO / "config" / f"{name}.yaml")
-    return config, study_plan(config)
+    return config, study_plan(Study.from_config(config))
 
 
-def test_every_figure_has_a_caption_writer():
-    assert set(CAPTIONS) == {*SURFACE_ONLY_FIGURES, *CONTACT_FIGURES, *STUDIES_FIGURES}
+def test_every_figure_of_the_schema_has_a_registry_entry_and_a_notebook():
+    import yaml
+
+    schema = yaml.safe_load((REPO / "config" / "schema.yaml").read_text())
+    assert set(FIGURES) == set(schema["properties"]["figures"]["properties"])
+    for name, figure in FIGURES.items():
+        assert (REPO / "notebooks" / f"{name}.ipynb").exists(), name
+        assert callable(figure.caption) and isinstance(figure.kind, Kind)
 
 
 @pytest.mark.parametrize(("name", "right", "wrong", "surfaces", "b"), [
@@ -43,36 +47,36 @@ def test_fig07_and_gaps_captions_name_the_meshes_of_their_config(name, right, wr
     config, plan = plan_of(name)
     assert config["figures"]["fig07"]["meshes"] == ["paper", right]
     for figure in ("fig07", "gaps", "fig12", "fig13"):
-        caption = figure_caption(figure, config, plan)
+        caption = figure_caption(plan, figure)
         assert (f"left the paper's mesh (5 uniform trilinear layers), right the {right} mesh"
                 in caption), caption
         assert wrong not in caption
         assert f"{surfaces} surfaces per curve" in caption
         assert f"b {b:g} mm" in caption
-    assert "left" not in figure_caption("fig11", config, plan)  # one panel, one mesh
-    assert f"the {right} mesh" in figure_caption("hardness", config, plan)
+    assert "left" not in figure_caption(plan, "fig11")  # one panel, one mesh
+    assert f"the {right} mesh" in figure_caption(plan, "hardness")
 
 
 @pytest.mark.parametrize("name", ["quick", "config", "measured", "two_bodies", "seal"])
 def test_every_figure_of_a_shipped_config_has_its_caption(name):
     config, plan = plan_of(name)
     for figure in plan.figures:
-        caption = figure_caption(figure, config, plan)
+        caption = figure_caption(plan, figure)
         assert caption.endswith(".") and "{" not in caption and "nan" not in caption, caption
 
 
 def test_captions_of_surface_figures_follow_their_settings():
     config, plan = plan_of("quick")  # Fig 4: b 0.5 mm here, 1 mm in the default study
-    assert "sigma 40 um, b 0.5 mm and (Sk, Ku) = (0, 3) and (-0.8, 4)" in figure_caption(
-        "fig04", config, plan)
-    assert "32 x 32 grid over 4.8 mm x 4.8 mm" in figure_caption("fig01", config, plan)
-    assert "nu = 0 and 0.3" in figure_caption("table_Eu", config, plan)
-    assert "standard deviation" in figure_caption("table_Eu", config, plan)
+    caption = figure_caption(plan, "fig04")
+    assert "sigma 40 um, b 0.5 mm and (Sk, Ku) = (0, 3) and (-0.8, 4)" in caption
+    assert "32 x 32 grid over 4.8 mm x 4.8 mm" in figure_caption(plan, "fig01")
+    assert "nu = 0 and 0.3" in figure_caption(plan, "table_Eu")
+    assert "standard deviation" in figure_caption(plan, "table_Eu")
 
 
 def test_the_two_bodies_caption_names_each_study_and_its_counter_bodies():
     config, plan = plan_of("two_bodies")
-    caption = figure_caption("two_bodies", config, plan)
+    caption = figure_caption(plan, "two_bodies")
     assert ("pad_on_disc (first body: sigma 5 um, E 2000 MPa, nu 0.25, a 10 mm block on the "
             "refined mesh) against the half-space E 110000 MPa nu 0.26 (sigma 1.5 um) and the "
             "rigid smooth flat") in caption
@@ -83,10 +87,10 @@ def test_the_two_bodies_caption_names_each_study_and_its_counter_bodies():
 
 
 def test_the_leakage_caption_names_the_configured_seal_and_its_cells():
-    config, plan = plan_of("seal")
+    config = load_config(REPO / "config" / "seal.yaml")
     config["flow"] |= {"viscosity_Pa_s": 0.0035, "pressure_drop_MPa": 2.5,
                        "directions": ["x"], "face_rule": "arithmetic"}
-    caption = figure_caption("leakage", config, plan)
+    caption = figure_caption(study_plan(Study.from_config(config)), "leakage")
     assert ("a fluid of viscosity 0.0035 Pa s through a seal 100 mm wide and 2 mm long with "
             "2.5 MPa across it (steady Reynolds equation, local cubic law, arithmetic face "
             "rule, grid sides; along x)") in caption
@@ -94,7 +98,7 @@ def test_the_leakage_caption_names_the_configured_seal_and_its_cells():
             "(Sk, Ku) = (0, 3), (-0.8, 4), (0.8, 4), (0, 4.5) and (1, 4.5))") in caption
     assert "20 surfaces per curve, 24 steps each, 16 pressure levels" in caption
     assert "dashed" not in caption.split("Dapp")[0] and "dotted" not in caption
-    shipped = figure_caption("leakage", *plan_of("seal"))
+    shipped = figure_caption(plan_of("seal")[1], "leakage")
     assert "viscosity 0.001 Pa s" in shipped and "with 1 MPa across it" in shipped
     assert "along x and y, y dashed" in shipped and "along y dotted" in shipped
 

@@ -5,10 +5,11 @@ meshes of its panels in their order, the surfaces per curve, the (Sk, Ku)
 pairs, sigma, b, the nominal areas, the counter bodies. Nothing in it is
 fixed text that one study makes true and another false (the quick study
 draws the refined mesh where the default one draws the converged mesh).
-:func:`figure_caption` is called by the workflow (``rules/common.smk``:
-``get_figure_caption``, the figure rule's ``params.caption``) and read by
-``report/figure.rst``; it takes the validated configuration and its
-:class:`~roughcontact.study.cells.StudyPlan`, the cells the figure draws.
+Each writer takes the :class:`~roughcontact.study.cells.StudyPlan` (its study's
+settings and the cells the figure draws) and the figure's name; the figure registry
+(:data:`roughcontact.study.figures.FIGURES`) names each figure's writer, and the
+workflow passes its text to the figure rule (``params.caption``, read by
+``report/figure.rst``).
 """
 
 from __future__ import annotations
@@ -114,62 +115,62 @@ def _paper_beside(verb: str) -> Callable[[list[str]], str]:
     return finding
 
 
-def _fig01(config, plan, name):
-    s = config["figures"][name]
+def fig01(plan, name):
+    s = plan.study.entry(name)
     return (f"Fig 1: regions of the Johnson families (SU, SB, SL, ST) in the (Sk, Ku) plane "
             f"of the surface, for b = {s['b_mm']:g} mm on a {s['grid']} x "
             f"{s['grid']} grid over {s['size_mm']:g} mm x {s['size_mm']:g} mm.")
 
 
-def _fig02(config, plan, name):
-    s = config["figures"][name]
+def fig02(plan, name):
+    s = plan.study.entry(name)
     return (f"Fig 2: minimum reachable kurtosis against skewness for b = "
             f"{numbers(s['b_mm'], 'mm')} on a {s['grid']} x {s['grid']} grid over "
             f"{s['size_mm']:g} mm x {s['size_mm']:g} mm; it depends on b / dx (the paper's "
             f"grid spacing is not stated).")
 
 
-def _grid(config) -> str:
-    surfaces = config["surfaces"]
-    (nx, ny), (lx, ly) = surfaces["grid"], surfaces["size_mm"]
+def _grid(plan) -> str:
+    surfaces = plan.study.surfaces
+    (nx, ny), (lx, ly) = surfaces.grid, surfaces.size_mm
     return f"{nx} x {ny} points over {lx:g} mm x {ly:g} mm"
 
 
-def _fig03(config, plan, name):
-    s = config["figures"][name]
+def fig03(plan, name):
+    s = plan.study.entry(name)
     return (f"Fig 3: Gaussian surfaces, sigma {s['sigma_um']:g} um, for b = "
-            f"{numbers(s['b_mm'], 'mm')} ({_grid(config)}); realised moments in the titles.")
+            f"{numbers(s['b_mm'], 'mm')} ({_grid(plan)}); realised moments in the titles.")
 
 
-def _fig04(config, plan, name):
-    s = config["figures"]["fig04"]
+def fig04(plan, name):
+    s = plan.study.entry("fig04")
     b = s["b_mm"] if isinstance(s["b_mm"], list) else [s["b_mm"]]
     pairs = join(f"({sk:g}, {ku:g})" for sk, ku in s["moments"])
     return (f"Fig 4: surfaces with sigma {s['sigma_um']:g} um, b {' x '.join(f'{v:g}' for v in b)}"
-            f" mm and (Sk, Ku) = {pairs} ({_grid(config)}), target and realised moments in "
+            f" mm and (Sk, Ku) = {pairs} ({_grid(plan)}), target and realised moments in "
             f"the titles.")
 
 
-def _fig05(config, plan, name):
+def fig05(plan, name):
     count = plan.figure_surfaces[name][0].count
     return (f"Fig 5: height distributions of the Fig 4 surfaces: the surface Fig 4 shows and "
             f"all {count} surfaces of its cell pooled, with the Johnson density of the target "
             f"moments.")
 
 
-def _fig07(config, plan, name):
+def fig07(plan, name):
     return _by_mesh("Fig 7: normalized stiffness k_P = (L/A_n) dF/dd against nominal pressure",
                     _columns(plan.cells[name]))
 
 
-def _fig09(config, plan, name):
+def fig09(plan, name):
     rows = _columns(plan.cells[name])
     return (f"Fig 9: mean-plane deflection d_b and asperity deflection d_a = d - d_b against "
             f"nominal pressure for (Sk, Ku) = {_pairs(rows)}, {_study(rows)}. "
             f"{_surfaces(rows)}. {BANDS}")
 
 
-def _fig10(config, plan, name):
+def fig10(plan, name):
     rows = _columns(plan.cells[name])
     return (f"Fig 10: cumulative height distributions as depth below the highest point of the "
             f"surfaces of (Sk, Ku) = {_pairs(rows)}, sigma "
@@ -178,7 +179,7 @@ def _fig10(config, plan, name):
             f"{numbers(r['surfaces'] for r in rows)} surfaces of each.")
 
 
-def _fig11(config, plan, name):
+def fig11(plan, name):
     rows = _columns(plan.cells[name])
     return (f"Fig 11: normalized stiffness for the correlation lengths b = "
             f"{numbers((r['b_mm'] for r in rows), 'mm')}, surfaces of (Sk, Ku) = "
@@ -186,9 +187,9 @@ def _fig11(config, plan, name):
             f"{join(mesh_name(m) for m in _meshes(rows))}. {_surfaces(rows)}. {BANDS}")
 
 
-def _fig11_resolved(config, plan, name):
+def fig11_resolved(plan, name):
     rows = _columns(plan.cells[name])
-    return (f"Beyond the paper: Fig 11 on a grid that resolves the ACF ({_grid(config)}): "
+    return (f"Beyond the paper: Fig 11 on a grid that resolves the ACF ({_grid(plan)}): "
             f"k_P, real area, peak pressure, the number of contact spots, their mean area "
             f"and the real area corrected by its perimeter, for b = "
             f"{numbers((r['b_mm'] for r in rows), 'mm')}, sigma "
@@ -196,17 +197,17 @@ def _fig11_resolved(config, plan, name):
             f"{join(mesh_name(m) for m in _meshes(rows))}. {_surfaces(rows)}. {BANDS}")
 
 
-def _fig12(config, plan, name):
+def fig12(plan, name):
     return _by_mesh("Fig 12: maximum contact pressure against nominal pressure",
                     _columns(plan.cells[name]), _paper_beside("overestimates"))
 
 
-def _fig13(config, plan, name):
+def fig13(plan, name):
     return _by_mesh("Fig 13: real contact area against nominal pressure",
                     _columns(plan.cells[name]), _paper_beside("underestimates"))
 
 
-def _fig14(config, plan, name):
+def fig14(plan, name):
     rows = _columns(plan.cells[name])
     areas = join(f"{size:g} mm x {size:g} mm" for size in dict.fromkeys(r["size_mm"] for r in rows))
     return (f"Fig 14: normalized stiffness for the nominal areas {areas} on the same contact "
@@ -216,12 +217,12 @@ def _fig14(config, plan, name):
             f"{numbers(r['nu'] for r in rows)}. {_surfaces(rows)}. {BANDS}")
 
 
-def _gaps(config, plan, name):
+def gaps(plan, name):
     return _by_mesh("Beyond the paper: the mean gap (mean interfacial separation) against "
                     "nominal pressure", _columns(plan.cells[name]))
 
 
-def _table_eu(config, plan, name):
+def table_eu(plan, name):
     rows = _columns(plan.cells[name])
     return (f"Mean-plane modulus E_u = P L / d_b (Eq 36) for nu = "
             f"{numbers(r['nu'] for r in rows)} (for nu = 0 it equals E), surfaces of "
@@ -230,7 +231,7 @@ def _table_eu(config, plan, name):
             f"{numbers(r['surfaces'] for r in rows)} surfaces with their standard deviation.")
 
 
-def _hardness(config, plan, name):
+def hardness(plan, name):
     rows = _columns(plan.cells[name])
     caps = sorted({r["cap"] for r in rows if r["cap"] is not None})
     capped = [m for m in _meshes(rows) if any(r["cap"] is not None and r["mesh"] == m
@@ -243,7 +244,7 @@ def _hardness(config, plan, name):
             f"{join(mesh_name(m) for m in _meshes(rows))}. {_surfaces(rows)}. {BANDS}")
 
 
-def _measured(config, plan, name):
+def measured(plan, name):
     cells = plan.cells[name]
     measured = [c for c in cells if c.surface.source_label]  # "measured <file>: "
     twins = [c for c in cells if not c.surface.source_label]
@@ -256,9 +257,9 @@ def _measured(config, plan, name):
             f"real area and peak pressure against nominal pressure.")
 
 
-def _two_bodies(config, plan, name):
+def two_bodies(plan, name):
     parts = []
-    for study in config["figures"][name]["studies"]:
+    for study in plan.study.entry(name)["studies"]:
         rows = _columns(plan.cells[study])
         body = (f"first body: sigma {numbers((r['sigma_um'] for r in rows), 'um')}, E "
                 f"{numbers((r['E_MPa'] for r in rows), 'MPa')}, nu "
@@ -267,7 +268,7 @@ def _two_bodies(config, plan, name):
                 f"{join(mesh_name(m) for m in _meshes(rows))}")
         counters = join(f"the {label}" for label in dict.fromkeys(map(counter_label, rows)))
         parts.append(f"{study} ({body}) against {counters}")
-    rows = [row for study in config["figures"][name]["studies"]
+    rows = [row for study in plan.study.entry(name)["studies"]
             for row in _columns(plan.cells[study])]
     return (f"Beyond the paper: two rough, elastic bodies (Eq 17-18), one row per study: "
             f"{'; '.join(parts)}. Columns: k_P, real area, mean gap, and each body's share "
@@ -275,17 +276,15 @@ def _two_bodies(config, plan, name):
             f"dashed with crosses) against nominal pressure. {_surfaces(rows)}. {BANDS}")
 
 
-def _leakage(config, plan, name):
-    flow = config["flow"]
-    ordered = [d for d in ("x", "y") if d in flow["directions"]]  # as the figure draws them
+def leakage(plan, name):
+    flow = plan.study.flow
+    ordered = [d for d in ("x", "y") if d in flow.directions]  # as the figure draws them
     directions = join(ordered)
-    seal = (f"a fluid of viscosity {flow['viscosity_Pa_s']:g} Pa s through a seal "
-            f"{flow['seal_width_mm']:g} mm wide and {flow['seal_length_mm']:g} mm long with "
-            f"{flow['pressure_drop_MPa']:g} MPa across it (steady Reynolds equation, local "
-            f"cubic law, {flow['face_rule']} face rule, {flow['sides']} sides; along "
+    seal = (f"a fluid of {flow.seal_text()} (steady Reynolds equation, local cubic law, "
+            f"{flow.probe.face_rule.name} face rule, {flow.probe.sides} sides; along "
             f"{directions}{', y dashed' if len(ordered) > 1 else ''})")
     parts = []
-    for study in config["figures"][name]["studies"]:
+    for study in plan.study.entry(name)["studies"]:
         rows = _columns(plan.cells[study])
         parts.append(f"{study} (sigma {numbers((r['sigma_um'] for r in rows), 'um')}, b "
                      f"{numbers((r['b_mm'] for r in rows), 'mm')}, E "
@@ -293,9 +292,9 @@ def _leakage(config, plan, name):
                      f"{numbers(r['nu'] for r in rows)}, a "
                      f"{numbers((r['thickness_mm'] for r in rows), 'mm')} block on "
                      f"{join(mesh_name(m) for m in _meshes(rows))}; (Sk, Ku) = {_pairs(rows)})")
-    rows = [row for study in config["figures"][name]["studies"]
+    rows = [row for study in plan.study.entry(name)["studies"]
             for row in _columns(plan.cells[study])]
-    contact = config["contact"]
+    contact = plan.study.contact
     return (f"Beyond the paper: will the seal leak? The flow of {seal}, one row per study: "
             f"{'; '.join(parts)}. Columns: the leak rate Q against nominal pressure (log "
             f"axes: the levels where Q > 0 only; Q is 0 once every surface has sealed), the "
@@ -305,21 +304,8 @@ def _leakage(config, plan, name):
             f"sealed; along {ordered[0]} a line in the cell's colour, its 95 % band "
             f"shaded{', along y dotted' if len(ordered) > 1 else ''}) and Dapp et "
             f"al. 2012's 0.42 (grey dashed), and the share of surfaces still leaking. "
-            f"{_surfaces(rows)}, {contact['steps']} steps each, {contact['pressure_levels']} "
+            f"{_surfaces(rows)}, {contact.steps} steps each, {contact.pressure_levels} "
             f"pressure levels. {BANDS}")
 
 
-#: The caption writer of each figure: ``(config, plan, name) -> str``.
-CAPTIONS: dict[str, Callable] = {
-    "fig01": _fig01, "fig02": _fig02, "fig03": _fig03, "fig04": _fig04, "fig05": _fig05,
-    "fig07": _fig07, "fig09": _fig09, "fig10": _fig10, "fig11": _fig11,
-    "fig11_resolved": _fig11_resolved, "fig12": _fig12, "fig13": _fig13, "fig14": _fig14,
-    "gaps": _gaps, "table_Eu": _table_eu, "hardness": _hardness, "measured": _measured,
-    "two_bodies": _two_bodies, "leakage": _leakage,
-}
 
-
-def figure_caption(name: str, config: dict, plan) -> str:
-    """The caption of figure ``name`` of a validated ``config`` whose plan is ``plan``
-    (:func:`~roughcontact.study.cells.study_plan`), one paragraph of plain text."""
-    return CAPTIONS[name](config, plan, name)
