@@ -4,7 +4,6 @@ import os
 
 from roughcontact.study.jobs import build_influence
 from roughcontact.study.logs import route_logging
-from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 # the sparse factorization is the one multithreaded step of the pipeline
@@ -14,5 +13,5 @@ build_influence(
     snakemake.output[0],
     solver=snakemake.params.solver,
     max_memory_gb=snakemake.params.max_memory_gb,
-    run=RunInfo.of(snakemake.config),
+    config=snakemake.config,
 )

@@ -2,7 +2,6 @@
 
 from roughcontact.study.jobs import build_pair
 from roughcontact.study.logs import route_logging
-from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 build_pair(
@@ -10,5 +9,5 @@ build_pair(
     snakemake.input.first,
     snakemake.input.second,
     snakemake.output[0],
-    run=RunInfo.of(snakemake.config),
+    config=snakemake.config,
 )

@@ -2,7 +2,6 @@
 
 from roughcontact.study.jobs import choose_influence
 from roughcontact.study.logs import route_logging
-from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 choose_influence(
@@ -10,5 +9,5 @@ choose_influence(
     snakemake.params.planned,
     snakemake.input[0],
     snakemake.output[0],
-    run=RunInfo.of(snakemake.config),
+    config=snakemake.config,
 )

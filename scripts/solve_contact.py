@@ -2,7 +2,6 @@
 
 from roughcontact.study.contact_jobs import solve_contact_job
 from roughcontact.study.logs import route_logging
-from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 solve_contact_job(
@@ -11,5 +10,5 @@ solve_contact_job(
     dict(snakemake.input.items()),
     snakemake.output[0],
     snakemake.params.solver,
-    run=RunInfo.of(snakemake.config),
+    config=snakemake.config,
 )

@@ -268,11 +268,11 @@ def validated(config: dict) -> dict:
     return apply_schema(copy.deepcopy(config))
 
 
-def report_section(config: dict, name: str) -> dict:
-    """The validated ``reports: <name>`` section, or its schema defaults when it
-    is not configured (another report may need it: the speed report reads the
-    mesh-convergence table)."""
-    section = config["reports"].get(name)  # optional: a report not configured
+def report_section(reports: dict, name: str) -> dict:
+    """The validated ``reports: <name>`` section of a configuration's ``reports``, or its
+    schema defaults when it is not configured (another report may need it: the speed
+    report reads the mesh-convergence table)."""
+    section = reports.get(name)  # optional: a report not configured
     if section is not None:
         return section
     return apply_schema({"reports": {name: {}}})["reports"][name]

@@ -31,7 +31,7 @@ from roughcontact.study.jobs import (
     certified_influence,
     read_pair_model,
 )
-from roughcontact.study.provenance import NO_RUN, RunInfo, canonical_json, provenance
+from roughcontact.study.provenance import RunInfo, canonical_json, provenance
 from roughcontact.study.storage import read_influence, read_surfaces, write_contact
 from roughcontact.transport.probe import NO_FLOW, FlowProbe
 
@@ -174,7 +174,7 @@ def sweep_problem(job: ContactJob, problem: ContactProblem, steps: int, options,
 
 
 def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
-                      run: RunInfo = NO_RUN) -> dict:
+                      config=None) -> dict:
     """Solve one contact job and write its non-dimensional sweep to ``out_path``.
 
     ``params``: the job's :meth:`~roughcontact.study.contact_records.ContactJob.params`,
@@ -191,6 +191,7 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
     solves the equivalent problem (:func:`contact_problem`). Returns the root
     attributes written.
     """
+    run = RunInfo.of(config)  # the job's edge: the run it belongs to
     job, settings = ContactJob.from_params(params), ContactSettings.from_section(settings)
     start = time.perf_counter()
     study_seed = run.study_seed

@@ -30,7 +30,6 @@ from roughcontact.study.checks import memory_message
 from roughcontact.study.config import BuildSettings, in_unit
 from roughcontact.study.counter_records import PairGeometry
 from roughcontact.study.provenance import (
-    NO_RUN,
     RunInfo,
     canonical_json,
     peak_rss_bytes,
@@ -186,7 +185,7 @@ def _finite_element_matrix(geometry: Geometry, build: BuildSettings, model) -> t
 
 
 def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
-                    run: RunInfo = NO_RUN) -> dict:
+                    config=None) -> dict:
     """Build E * C of one geometry and write it, with checks and provenance, to ``path``.
 
     ``params``: the geometry's :meth:`~roughcontact.study.records.Geometry.params`;
@@ -206,6 +205,7 @@ def build_influence(params: dict, path, *, solver: str, max_memory_gb: float,
     options before anything is built (the half-space builds no finite-element
     model). Returns the root attributes.
     """
+    run = RunInfo.of(config)  # the job's edge: the run it belongs to
     geometry = Geometry.from_params(params)
     build = BuildSettings.from_section({"solver": solver, "max_memory_gb": max_memory_gb})
     key, block = geometry.key, geometry.block()
@@ -255,7 +255,7 @@ def _criterion_matrix(unit, planned: Geometry) -> tuple:
 
 
 def choose_influence(params: dict, planned: dict, planned_path, out_path,
-                     run: RunInfo = NO_RUN) -> dict:
+                     config=None) -> dict:
     """Resolve an ``operator: auto`` geometry: the half-space, or its planned model.
 
     ``params``: the auto geometry's :meth:`~roughcontact.study.records.Geometry.params`;
@@ -272,6 +272,7 @@ def choose_influence(params: dict, planned: dict, planned_path, out_path,
     geometry whose choice is its planned model shares that model's file and
     results with a study configured with it.
     """
+    run = RunInfo.of(config)  # the job's edge: the run it belongs to
     geometry, model = Geometry.from_params(params), Geometry.from_params(planned)
     unit, attrs = read_influence(planned_path, geometry=planned)
     fe, fe_model = _criterion_matrix(unit, model)
@@ -289,7 +290,7 @@ def choose_influence(params: dict, planned: dict, planned_path, out_path,
 # Pair jobs: two bodies' influence models summed once (Eq 17-18)
 
 
-def build_pair(params: dict, first_path, second_path, out_path, run: RunInfo = NO_RUN) -> dict:
+def build_pair(params: dict, first_path, second_path, out_path, config=None) -> dict:
     """Sum two bodies' influence models once and write the pair (its file is shared by
     every contact job on the pair: ``results/influence/pairs/<key>.h5``).
 
@@ -299,6 +300,7 @@ def build_pair(params: dict, first_path, second_path, out_path, run: RunInfo = N
     (:func:`~roughcontact.contact.counterface.pair_model`; a counter body treated as
     rigid writes no matrix). Returns the root attributes.
     """
+    run = RunInfo.of(config)  # the job's edge: the run it belongs to
     pair = PairGeometry.from_params(params)
     start = time.perf_counter()
     bodies, hashes = [], {}

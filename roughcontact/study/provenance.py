@@ -90,8 +90,11 @@ class RunInfo:
     study_seed: int | None = None
 
     @classmethod
-    def of(cls, config: dict) -> RunInfo:
-        """The run of a validated configuration (a job's edge: its script)."""
+    def of(cls, config: dict | None) -> RunInfo:
+        """The run of a validated configuration (a job's edge: what it records of the
+        configuration it was run with); None: outside a run (:data:`NO_RUN`)."""
+        if config is None:
+            return cls()
         return cls(config_hash(config), int(config["study_seed"]))
 
 

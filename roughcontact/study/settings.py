@@ -272,7 +272,8 @@ class Study:
             cap_meshes=thawed(config["contact"]["cap_meshes"]),
             flow=flow_settings(config["flow"]),
             accuracy=_accuracy(config.get("accuracy"), preset), preset=preset,
-            audit=_audit(config), reports=_reports(config),
+            audit=_audit(config["audit"], config["study_seed"]),
+            reports=_reports(config["reports"]),
             figures=_frozen(config["figures"]), sweeps=_frozen(config["sweeps"]),
             config_hash=config_hash(config))
 
@@ -331,25 +332,24 @@ def _accuracy(name: str | None, preset: Mapping | None) -> Accuracy:
     return Accuracy(name, errors)
 
 
-def _audit(config: dict) -> AuditSettings:
+def _audit(section: dict, study_seed: int) -> AuditSettings:
     """The ``audit`` section; ``verify_seed`` by default the ``study_seed`` (another key's
     value, which the schema cannot write as a default)."""
-    section = config["audit"]
     seed = section.get("verify_seed")  # optional: the study_seed
     return AuditSettings(verify=bool(section["verify"]), strict=bool(section["strict"]),
                          verify_sample=int(section["verify_sample"]),
-                         verify_seed=int(config["study_seed"] if seed is None else seed))
+                         verify_seed=int(study_seed if seed is None else seed))
 
 
-def _reports(config: dict) -> ReportSettings:
+def _reports(reports: dict) -> ReportSettings:
     """The ``reports`` section's settings records (schema defaults where not configured)."""
-    sections = {name: report_section(config, name)
+    sections = {name: report_section(reports, name)
                 for name in ("influence_convergence", "speed_vs_error", "grid_convergence")}
     return ReportSettings(
         influence_convergence=ConvergenceSettings.from_section(sections["influence_convergence"]),
         speed_vs_error=SpeedReportSettings.from_section(sections["speed_vs_error"]),
         grid_convergence=GridConvergenceSettings.from_section(sections["grid_convergence"]),
-        configured=frozenset(config["reports"]), sections=_frozen(sections))
+        configured=frozenset(reports), sections=_frozen(sections))
 
 
 def load_study(path) -> Study:

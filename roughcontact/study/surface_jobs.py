@@ -59,7 +59,7 @@ class _Surfaces(NamedTuple):
     heights_attrs: dict  # further attributes of the heights
 
 
-def build_surface_cell(params: dict, study_seed: int, path, run: RunInfo = NO_RUN, *,
+def build_surface_cell(params: dict, study_seed: int, path, config=None, *,
                        source: dict | None = None, source_path=None) -> dict:
     """Make a surface cell's surfaces and write them, with statistics, to ``path``.
 
@@ -80,6 +80,7 @@ def build_surface_cell(params: dict, study_seed: int, path, run: RunInfo = NO_RU
     one surface (seed -1) with its import and measured statistics. Returns
     the root attributes.
     """
+    run = RunInfo.of(config)  # the job's edge: the run it belongs to
     cell = surface_cell_from_params(params)
     if source is not None:
         return take_surfaces(cell, surface_cell_from_params(source), study_seed, source_path,

@@ -19,7 +19,6 @@ from roughcontact.errors import MeasurementError
 from roughcontact.study.cells import contact_jobs
 from roughcontact.study.checks import check_studies
 from roughcontact.study.config import validated
-from roughcontact.study.provenance import RunInfo
 from roughcontact.study.records import MeasuredCell
 from roughcontact.study.settings import Study
 from roughcontact.study.sources import MeasurementImport
@@ -383,7 +382,7 @@ def test_measured_cell_file_has_the_generated_layout(tmp_path):
     config = measured_config(EXAMPLE)
     surface = contact_cells(Study.from_config(config), "plateau_honed")[0].surface
     path = tmp_path / "cell.h5"
-    build_surface_cell(surface.params(), 7, path, run=RunInfo.of(config))
+    build_surface_cell(surface.params(), 7, path, config=config)
     cell = read_surfaces(path)
     m = measured.load_measurement(EXAMPLE, "xyz", height_unit="um", fill_holes=0.01)
     s = measured.statistics(m)

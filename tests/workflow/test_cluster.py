@@ -229,7 +229,8 @@ def _contact(plan, config, job):
 
 def _influence_convergence(plan, config, job):
     presets = Study.from_config(config).reports.convergence_presets
-    section = ConvergenceSettings.from_section(report_section(config, "influence_convergence"))
+    section = ConvergenceSettings.from_section(
+        report_section(config["reports"], "influence_convergence"))
     return (resources.convergence_mem_mb(plan.body, presets),
             resources.convergence_runtime(plan.body, presets, section))
 
