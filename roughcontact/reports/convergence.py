@@ -18,7 +18,11 @@ small. :func:`influence_convergence` measures, per mesh preset,
    peak pressure and the asperity deflection ``d_a = d - d_b`` (Eq 35, 45),
 
 and the relative error of every number against a reference mesh (by default
-the ``"converged"`` preset). Love's elastic half-space (``halfspace_influence``)
+the ``"converged"`` preset). It takes the block and the report's section as a
+record, :class:`~roughcontact.study.config.ConvergenceSettings` (presets,
+surfaces, sigma, b, pressures; the schema's defaults), e.g.
+``influence_convergence(BlockGeometry(), ConvergenceSettings(presets=("paper",
+"refined")))``. Love's elastic half-space (``halfspace_influence``)
 is added as a row for comparison: it is the thick-block limit of the near
 field, not of the bulk (its rows do not sum to L).
 
@@ -422,28 +426,22 @@ def influence_convergence(
     base : BlockGeometry
         Block, grid, E, nu and support; its ``mesh`` is replaced by each preset.
     settings : ConvergenceSettings
-        The report's section (:class:`~roughcontact.study.config.ConvergenceSettings`):
-        ``presets`` (keys of ``influence.MESH_PRESETS`` or explicit
-        ``MeshSpec`` objects, coarse to fine), ``surfaces`` per mesh (0: no
-        contact part, its columns NaN), their height standard deviation
-        ``sigma`` and ACF correlation length ``corr_length`` [m], and the
-        nominal ``pressures`` P [Pa] at which the contact quantities are read.
-        Default: the schema's.
+        The report's section (default: the schema's): ``presets`` (keys of
+        ``influence.MESH_PRESETS`` or explicit ``MeshSpec`` objects, coarse to
+        fine), ``surfaces`` per mesh (0: no contact part, its columns NaN),
+        their height std ``sigma`` and ACF correlation length ``corr_length``
+        [m], and the nominal ``pressures`` P [Pa] where the contact is read.
     build : BuildSettings
         Sparse solver and memory limit [bytes] of ``influence.unit_modulus_influence``
-        (an estimate above it raises ``ModelTooLarge`` before building);
-        default :data:`DEFAULT_BUILD`.
+        (an estimate above it raises ``ModelTooLarge`` before building).
     halfspace : bool
         Add Love's half-space (``kind == "halfspace"``) as a row.
     reference : str, optional
         Mesh label the ``*_error`` columns compare against; default
         ``"converged"`` when present, else the last mesh of the presets.
-    far : int
-        x offset of ``far_entry`` [contact elements], clipped to the grid.
-    tol : float
-        KKT tolerance of the contact solves.
-    seed : int
-        Root seed of the surfaces.
+    far, tol, seed : int, float, int
+        x offset of ``far_entry`` [contact elements], clipped to the grid; the
+        KKT tolerance of the contact solves; the surfaces' root seed.
     isolate : bool
         Build each matrix in a fresh Python process (default: an honest
         per-build peak memory); ``False`` builds here and leaves the memory

@@ -44,7 +44,12 @@ from roughcontact.reports.speed.grid import grid_study
 from roughcontact.reports.speed.machine import describe_machine
 from roughcontact.reports.speed.recommend import derive_presets, recommend
 from roughcontact.reports.speed.render import write_report
-from roughcontact.reports.speed.sweeps import CellSurfaces, SweepSettings, reporter
+from roughcontact.reports.speed.sweeps import (
+    DEFAULT_SURFACES,
+    CellSurfaces,
+    SweepSettings,
+    reporter,
+)
 from roughcontact.study.config import SpeedReportSettings
 from roughcontact.study.presets import load_presets
 from roughcontact.study.provenance import atomic_path, git_commit
@@ -162,7 +167,7 @@ class SpeedSpecimen:
     nu: float = 0.0
     grid: int = 60
     cells: Sequence[tuple[float, float]] = DEFAULT_CELLS
-    generator: CellSurfaces = CellSurfaces()
+    generator: CellSurfaces = DEFAULT_SURFACES
 
     @classmethod
     def of_block(cls, block: BlockGeometry, **fields) -> SpeedSpecimen:
