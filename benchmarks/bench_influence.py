@@ -251,9 +251,11 @@ def convergence_study() -> None:
     import logging
 
     from roughcontact.reports.convergence import influence_convergence, plot_influence_convergence
+    from roughcontact.study.config import ConvergenceSettings
 
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
-    table = influence_convergence(paper_block("paper"), list(MESH_PRESETS))
+    table = influence_convergence(paper_block("paper"),
+                                  ConvergenceSettings(presets=tuple(MESH_PRESETS)))
     OUT.mkdir(parents=True, exist_ok=True)
     tmp = OUT / "influence_convergence.csv.tmp"
     table.to_csv(tmp, index=False)

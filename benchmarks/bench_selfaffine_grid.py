@@ -5,7 +5,7 @@ E = 511 MPa, nu = 0) meshed with 30, 60, 120 and 240 elements per side, solved
 on Love's half-space (matrix-free FFT operator,
 :func:`roughcontact.elasticity.operators.halfspace_operator`, through
 :func:`roughcontact.reports.speed.grid.grid_study` with
-``influence="halfspace_fft"``) at nominal pressures 0.3, 1 and 3 MPa, for
+``GridOptions(influence="halfspace_fft")``) at nominal pressures 0.3, 1 and 3 MPa, for
 
 - ``self-affine``: isotropic PSD, roll-off 3 mm, cut-off 0.6 mm, H = 0.8
   (``SurfaceSpec(acf="self-affine", ...)``): the cut-off is two spacings on
@@ -82,7 +82,8 @@ sys.path.insert(0, str(ROOT))
 
 from roughcontact import contact  # noqa: E402
 from roughcontact.elasticity import operators  # noqa: E402
-from roughcontact.reports.speed.grid import grid_study  # noqa: E402
+from roughcontact.reports.speed.grid import GridOptions, grid_study  # noqa: E402
+from roughcontact.reports.speed.sweeps import CellSurfaces, SweepSettings  # noqa: E402
 from roughcontact.surfaces import synthetic  # noqa: E402
 from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402
 
@@ -93,9 +94,10 @@ COLUMNS = ["spectrum", "grid", "pressure_Pa", "real_area_fraction", "real_area_c
 
 def run(spectrum: dict | None, label: str, args) -> pd.DataFrame:
     start = time.perf_counter()
-    table = grid_study(grids=args.grids, influence="halfspace_fft", surfaces=args.surfaces,
-                       pressures=[p * 1e6 for p in args.pressures_mpa], size=9 * MM,
-                       sigma=24.5e-6, b=1 * MM, spectrum=spectrum, progress=print)
+    table = grid_study(grids=args.grids, surfaces=args.surfaces,
+                       generator=CellSurfaces(sigma=24.5e-6, b=1 * MM, spectrum=spectrum),
+                       sweep=SweepSettings(pressures=tuple(p * 1e6 for p in args.pressures_mpa)),
+                       options=GridOptions(influence="halfspace_fft"), progress=print)
     print(f"{label}: {time.perf_counter() - start:.1f} s", flush=True)
     table.insert(0, "spectrum", label)
     return table[COLUMNS]

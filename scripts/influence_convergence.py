@@ -18,16 +18,7 @@ body = Geometry.from_params(snakemake.params.geometry)
 for mesh, path in snakemake.params.stored.items():  # each made for the body with that mesh
     check_parameters(path, geometry=dataclasses.replace(body, mesh=mesh).params())
 base = body.block(E=snakemake.params.E_MPa * MPA)
-table = influence_convergence(
-    base,
-    list(settings.presets),
-    surfaces=settings.surfaces,
-    sigma=settings.sigma,
-    corr_length=settings.corr_length,
-    pressures=list(settings.pressures),
-    progress=log.info,
-    stored=snakemake.params.stored,
-)
+table = influence_convergence(base, settings, stored=snakemake.params.stored, progress=log.info)
 with atomic_path(snakemake.output.csv) as tmp:
     table.to_csv(tmp, index=False)
 with atomic_path(snakemake.output.png) as tmp:

@@ -18,7 +18,11 @@ small. :func:`influence_convergence` measures, per mesh preset,
    peak pressure and the asperity deflection ``d_a = d - d_b`` (Eq 35, 45),
 
 and the relative error of every number against a reference mesh (by default
-the ``"converged"`` preset). Love's elastic half-space (``halfspace_influence``)
+the ``"converged"`` preset). It takes the block and the report's section as a
+record, :class:`~roughcontact.study.config.ConvergenceSettings` (presets,
+surfaces, sigma, b, pressures; the schema's defaults), e.g.
+``influence_convergence(BlockGeometry(), ConvergenceSettings(presets=("paper",
+"refined")))``. Love's elastic half-space (``halfspace_influence``)
 is added as a row for comparison: it is the thick-block limit of the near
 field, not of the bulk (its rows do not sum to L).
 
@@ -66,6 +70,7 @@ from roughcontact.elasticity.influence import GB, BlockGeometry, MeshSpec
 from roughcontact.reports.build_worker import HALFSPACE, build, centre_entries, run_isolated
 from roughcontact.reports.execution import dead_writers
 from roughcontact.reports.plotting import save_figure
+from roughcontact.study.config import BuildSettings, ConvergenceSettings
 from roughcontact.study.storage import read_influence
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.synthetic import derive_seeds, generate_many
@@ -74,6 +79,8 @@ __all__ = [
     "COLUMNS",
     "CONTACT_COLUMNS",
     "CONTACT_QUANTITIES",
+    "DEFAULT_BUILD",
+    "DEFAULT_SETTINGS",
     "ENTRY_QUANTITIES",
     "HALFSPACE",
     "SCRATCH_PREFIX",
@@ -142,6 +149,12 @@ COLUMNS = {
 
 #: Rigid approaches per sweep (``pipeline.sweep_approaches``: geometric up to the end).
 _SWEEP_STEPS = 40
+
+#: The report's settings by default: the schema's (``reports.influence_convergence``).
+DEFAULT_SETTINGS = ConvergenceSettings()
+#: How the report builds its matrices by default: the sparse solver chosen by the
+#: platform ("auto") and an estimated peak memory of at most 16 GB.
+DEFAULT_BUILD = BuildSettings(solver="auto", max_bytes=16 * GB)
 
 #: Scratch folders of the isolated builds (task and result files), in the system's
 #: temporary folder: ``<SCRATCH_PREFIX><host>-<pid>-<random>``, one per build.
@@ -352,14 +365,15 @@ def _reference_label(labels: list[str], reference: str | None, halfspace: bool) 
     return reference
 
 
-def _study_surfaces(base: BlockGeometry, surfaces: int, seed: int, sigma: float,
-                    corr_length: float) -> np.ndarray | None:
-    """The Gaussian surfaces [m] every mesh is pressed with (None without a contact part)."""
-    if not surfaces:
+def _study_surfaces(base: BlockGeometry, settings: ConvergenceSettings,
+                    seed: int) -> np.ndarray | None:
+    """The Gaussian surfaces [m] of ``settings`` every mesh is pressed with (None without a
+    contact part)."""
+    if not settings.surfaces:
         return None
-    spec = SurfaceSpec(grid=base.grid, size=base.size, corr_length=(corr_length,) * 2,
-                       sigma=sigma)
-    return generate_many(spec, derive_seeds(seed, "influence_convergence", surfaces))
+    spec = SurfaceSpec(grid=base.grid, size=base.size,
+                       corr_length=(settings.corr_length,) * 2, sigma=settings.sigma)
+    return generate_many(spec, derive_seeds(seed, "influence_convergence", settings.surfaces))
 
 
 def _measure(jobs: list[_MeshJob], common: Mapping, contact: bool,
@@ -390,56 +404,54 @@ def _measure(jobs: list[_MeshJob], common: Mapping, contact: bool,
 
 
 def influence_convergence(
-    base: BlockGeometry, presets: Sequence[str | MeshSpec], *, halfspace: bool = True,
-    surfaces: int = 3, seed: int = 2006, sigma: float = 24.5e-6, corr_length: float = 1e-3,
-    pressures: Sequence[float] = (0.3e6, 1e6, 2e6), reference: str | None = None,
-    far: int = 10, solver: str = "auto", max_bytes: float = 16 * GB, tol: float = 1e-10,
-    isolate: bool = True, progress: Callable[[str], None] | None = None,
+    base: BlockGeometry, settings: ConvergenceSettings = DEFAULT_SETTINGS, *,
+    build: BuildSettings = DEFAULT_BUILD, halfspace: bool = True, reference: str | None = None,
+    far: int = 10, tol: float = 1e-10, seed: int = 2006, isolate: bool = True,
     stored: Mapping[str, str | os.PathLike] | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> pd.DataFrame:
     """Cost, influence entries and rough-contact response per mesh, with errors.
 
-    For each mesh in ``presets`` (and Love's half-space when ``halfspace``),
-    ``E * C`` of ``base`` with that mesh: its cost, its centre row's entries
-    and the response of ``surfaces`` Gaussian surfaces (exponential ACF, Eq 1;
-    seeds ``derive_seeds(seed, "influence_convergence", surfaces)``, the same
-    for every mesh) swept over rigid approaches (Eq 27) and read at each of
-    ``pressures`` as the workflow's contact and aggregate jobs do: k_P (Eq 33),
-    real area fraction, peak pressure, d, d_b (Eq 35) and d_a (Eq 45), each
-    averaged over the surfaces at equal P.
+    For each mesh of ``settings.presets`` (and Love's half-space when
+    ``halfspace``), ``E * C`` of ``base`` with that mesh: its cost, its centre
+    row's entries and the response of ``settings.surfaces`` Gaussian surfaces
+    (exponential ACF, Eq 1; seeds ``derive_seeds(seed, "influence_convergence",
+    surfaces)``, the same for every mesh) swept over rigid approaches (Eq 27)
+    and read at each of ``settings.pressures`` as the workflow's contact and
+    aggregate jobs do: k_P (Eq 33), real area fraction, peak pressure, d, d_b
+    (Eq 35) and d_a (Eq 45), each averaged over the surfaces at equal P.
 
     Parameters
     ----------
     base : BlockGeometry
         Block, grid, E, nu and support; its ``mesh`` is replaced by each preset.
-    presets : sequence of str or MeshSpec
-        Keys of ``influence.MESH_PRESETS`` or explicit meshes, coarse to fine.
+    settings : ConvergenceSettings
+        The report's section (default: the schema's): ``presets`` (keys of
+        ``influence.MESH_PRESETS`` or explicit ``MeshSpec`` objects, coarse to
+        fine), ``surfaces`` per mesh (0: no contact part, its columns NaN),
+        their height std ``sigma`` and ACF correlation length ``corr_length``
+        [m], and the nominal ``pressures`` P [Pa] where the contact is read.
+    build : BuildSettings
+        Sparse solver and memory limit [bytes] of ``influence.unit_modulus_influence``
+        (an estimate above it raises ``ModelTooLarge`` before building).
     halfspace : bool
         Add Love's half-space (``kind == "halfspace"``) as a row.
-    surfaces, sigma, corr_length
-        Rough surfaces per mesh (0: no contact part, its columns NaN), their
-        height standard deviation and ACF correlation length [m].
-    pressures : sequence of float
-        Nominal pressures P [Pa] at which the contact quantities are read.
     reference : str, optional
         Mesh label the ``*_error`` columns compare against; default
-        ``"converged"`` when present, else the last mesh of ``presets``.
-    far : int
-        x offset of ``far_entry`` [contact elements], clipped to the grid.
-    solver, max_bytes, tol
-        Passed to ``influence.unit_modulus_influence`` (an estimate above
-        ``max_bytes`` raises ``ModelTooLarge`` before building); the KKT
-        tolerance of the contact solves.
+        ``"converged"`` when present, else the last mesh of the presets.
+    far, tol, seed : int, float, int
+        x offset of ``far_entry`` [contact elements], clipped to the grid; the
+        KKT tolerance of the contact solves; the surfaces' root seed.
     isolate : bool
         Build each matrix in a fresh Python process (default: an honest
         per-build peak memory); ``False`` builds here and leaves the memory
         columns NaN (ru_maxrss is process-wide and monotone).
-    progress : callable, optional
-        Given a line after each mesh (also logged at INFO on ``roughcontact.convergence``).
     stored : mapping, optional
         Preset name -> influence file of the workflow's ``influence`` rule for
         ``base`` with that mesh: read instead of built, with the build time and
         peak memory that build recorded.
+    progress : callable, optional
+        Given a line after each mesh (also logged at INFO on ``roughcontact.convergence``).
 
     Returns
     -------
@@ -451,14 +463,15 @@ def influence_convergence(
         ``kind == "richardson"`` rows (module docstring);
         ``table.attrs["richardson"]`` says what was done or why nothing was.
     """
-    pressures = _checked_pressures(presets, surfaces, pressures)
+    presets, surfaces = settings.presets, settings.surfaces
+    pressures = _checked_pressures(presets, surfaces, settings.pressures)
     meshes = [(mesh_label(p), dataclasses.replace(base, mesh=p).mesh_spec) for p in presets]
     labels = [label for label, _ in meshes]
     reference = _reference_label(labels, reference, halfspace)
     remove_stale_scratch()
-    common = {"far": far, "solver": solver, "max_bytes": float(max_bytes), "tol": tol,
-              "heights": _study_surfaces(base, surfaces, seed, sigma, corr_length),
-              "sigma": sigma, "pressures": pressures, "isolated": isolate}
+    common = {"far": far, "solver": build.solver, "max_bytes": float(build.max_bytes),
+              "tol": tol, "heights": _study_surfaces(base, settings, seed),
+              "sigma": settings.sigma, "pressures": pressures, "isolated": isolate}
     jobs = _mesh_jobs(base, presets, labels, halfspace, stored or {})
     table = pd.DataFrame(_measure(jobs, common, bool(surfaces), progress))
     table, note = _add_richardson(table, meshes)

@@ -20,9 +20,13 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from roughcontact.transport.probe import NO_FLOW, FlowProbe, probe_from_params
 from roughcontact.units import GB, MM, MPA, UM
+
+if TYPE_CHECKING:
+    from roughcontact.elasticity.influence import MeshSpec
 
 #: The schema of every configuration (with its defaults).
 SCHEMA = Path(__file__).resolve().parents[2] / "config" / "schema.yaml"
@@ -340,16 +344,20 @@ class BuildSettings:
 class ConvergenceSettings:
     """The mesh-convergence report (``reports.influence_convergence``), SI units.
 
-    ``presets`` compared, ``surfaces`` Gaussian surfaces of height standard
-    deviation ``sigma`` [m] and 10 % correlation length ``corr_length`` [m],
-    read at the nominal ``pressures`` [Pa].
+    ``presets`` compared (mesh preset names; a library user may also give
+    :class:`~roughcontact.elasticity.influence.MeshSpec` objects), coarse to
+    fine; ``surfaces`` Gaussian surfaces (0: no contact part) of height
+    standard deviation ``sigma`` [m] and 10 % correlation length
+    ``corr_length`` [m], read at the nominal ``pressures`` [Pa]. The defaults
+    are the schema's (``config/schema.yaml``; a test holds them equal), for
+    library users: the workflow builds the record :meth:`from_section`.
     """
 
-    presets: tuple[str, ...]
-    surfaces: int
-    sigma: float
-    corr_length: float
-    pressures: tuple[float, ...]
+    presets: tuple[str | MeshSpec, ...] = ("paper", "graded", "refined", "converged")
+    surfaces: int = 3
+    sigma: float = 24.5e-6
+    corr_length: float = 1e-3
+    pressures: tuple[float, ...] = (0.3e6, 1e6, 2e6)
 
     @classmethod
     def from_section(cls, section: dict) -> ConvergenceSettings:
@@ -366,16 +374,20 @@ class SpeedReportSettings:
     ``surfaces`` per solver-study cell, the ``grids`` of the grid study,
     ``count_surfaces`` and ``counts`` of the surface-count study, the
     tolerances ``tol_kP`` and ``tol_area`` (relative) of the recommendation,
-    read at the nominal ``pressures`` [Pa].
+    read at the nominal ``pressures`` [Pa]. The record
+    :func:`roughcontact.reports.speed.speed_vs_error_report` takes whole. The
+    defaults are the schema's (``config/schema.yaml``; a test holds them
+    equal), for library users: the workflow builds the record
+    :meth:`from_section`.
     """
 
-    surfaces: int
-    grids: tuple[int, ...]
-    count_surfaces: int
-    counts: tuple[int, ...]
-    tol_kP: float
-    tol_area: float
-    pressures: tuple[float, ...]
+    surfaces: int = 4
+    grids: tuple[int, ...] = (30, 60, 120)
+    count_surfaces: int = 120
+    counts: tuple[int, ...] = (5, 10, 20, 40, 60, 120)
+    tol_kP: float = 0.02
+    tol_area: float = 0.05
+    pressures: tuple[float, ...] = (0.3e6, 1e6, 3e6)
 
     @classmethod
     def from_section(cls, section: dict) -> SpeedReportSettings:
@@ -384,10 +396,3 @@ class SpeedReportSettings:
                    counts=tuple(int(c) for c in section["counts"]),
                    tol_kP=float(section["tol_kP"]), tol_area=float(section["tol_area"]),
                    pressures=tuple(float(p) * MPA for p in section["pressures_MPa"]))
-
-    def as_kwargs(self) -> dict:
-        """Keyword arguments of :func:`roughcontact.reports.speed.speed_vs_error_report`."""
-        return {"surfaces": self.surfaces, "grids": list(self.grids),
-                "count_surfaces": self.count_surfaces, "counts": list(self.counts),
-                "tol_kP": self.tol_kP, "tol_area": self.tol_area,
-                "pressures": list(self.pressures)}

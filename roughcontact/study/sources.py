@@ -30,7 +30,7 @@ from roughcontact.units import MM
 class MeasurementImport:
     """How a measured height map is imported and prepared (a study's ``surface:``).
 
-    The options of :func:`roughcontact.surfaces.measured.load_measurement`,
+    The :class:`~roughcontact.surfaces.measured.ImportOptions` of the file,
     lengths in metres: ``spacing`` (dx, dy) [m] or None (from the file),
     ``crop`` (x0, y0, x1, y1) [m] or None, ``resample_grid`` (nx, ny) or None;
     ``decimate`` a factor or None. Relative file paths are relative to the
@@ -124,14 +124,14 @@ def psd_file(path: str) -> tuple[str, tuple]:
 
 @functools.lru_cache(maxsize=16)
 def _load(source: MeasurementImport, stamp) -> measured.Measurement:
-    return measured.load_measurement(
-        source.file, source.format, height_unit=source.height_unit,
+    return measured.load_measurement(source.file, measured.ImportOptions(
+        format=source.format, height_unit=source.height_unit,
         lateral_unit=source.lateral_unit, spacing=source.spacing,
         fill_holes=source.fill_holes, channel=source.channel, decimal=source.decimal,
         crop=source.crop, form_degree=source.form_degree,
         outliers_sigma=source.outliers_sigma, decimate_by=source.decimate,
         resample_grid=None if source.resample_grid is None else list(source.resample_grid),
-    )
+    ))
 
 
 @functools.lru_cache(maxsize=16)

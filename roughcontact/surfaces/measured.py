@@ -2,11 +2,12 @@
 
 A measured surface (from a profilometer, an optical instrument or an AFM)
 enters the study in place of a generated one. :func:`load_measurement`
-reads it (:mod:`roughcontact.surfaces.readers`: npy, text grids, xyz point
-lists and the instruments' own formats through SurfaceTopography; heights
-and lateral lengths converted to SI at import), prepares it for the contact
-study (:mod:`roughcontact.surfaces.preparation`: crop, fill holes, remove the
-form, outliers, decimate or resample) and returns a :class:`Measurement`.
+reads it as its :class:`ImportOptions` say (:mod:`roughcontact.surfaces.readers`:
+npy, text grids, xyz point lists and the instruments' own formats through
+SurfaceTopography; heights and lateral lengths converted to SI at import),
+prepares it for the contact study (:mod:`roughcontact.surfaces.preparation`:
+crop, fill holes, remove the form, outliers, decimate or resample) and returns
+a :class:`Measurement`.
 
 Its statistics (:func:`statistics`) are those of the generator's targets:
 sigma, skewness and kurtosis (Eq 2-5 of Kumar et al. 2006,
@@ -113,18 +114,12 @@ def _pair_m(value, what: str) -> tuple[float, float]:
 
 
 
-def load_measurement(path: str | os.PathLike, format: str = "auto", *,
-                     height_unit: str | None = None, lateral_unit: str = "mm", spacing=None,
-                     fill_holes: float = 0.0, channel: int | str | None = None,
-                     decimal: str = "auto", crop=None, form_degree: int = 1,
-                     outliers_sigma: float | None = None, decimate_by: int | None = None,
-                     resample_grid=None) -> Measurement:
-    """Import a measured height map and prepare it for the study, in SI units.
+@dataclass(frozen=True)
+class ImportOptions:
+    """How a measured height map is read and prepared (:func:`load_measurement`).
 
-    Parameters
+    Attributes
     ----------
-    path : path-like
-        The file.
     format : {"auto", "instrument", "npy", "text", "xyz"}
         See :mod:`roughcontact.surfaces.readers`; ``auto`` chooses by the file.
     height_unit : {"nm", "um", "mm", "m"}, optional
@@ -154,6 +149,74 @@ def load_measurement(path: str | os.PathLike, format: str = "auto", *,
     resample_grid : (nx, ny), optional
         Linear interpolation onto this grid over the same plan size (:func:`preparation.resample`).
 
+    The defaults read the file as it says and remove the mean plane only.
+    A study builds these options from a ``surface:`` entry
+    (:class:`roughcontact.study.sources.MeasurementImport`).
+    """
+
+    format: str = "auto"
+    height_unit: str | None = None
+    lateral_unit: str = "mm"
+    spacing: tuple[float, float] | None = None
+    fill_holes: float = 0.0
+    channel: int | str | None = None
+    decimal: str = "auto"
+    crop: tuple[float, float, float, float] | None = None
+    form_degree: int = 1
+    outliers_sigma: float | None = None
+    decimate_by: int | None = None
+    resample_grid: tuple[int, int] | None = None
+
+    def check(self) -> None:
+        """ValueError for an option out of its range (before the file is read)."""
+        if self.height_unit is not None:
+            unit_scale(self.height_unit, HEIGHT_UNITS, "height_unit")
+        if not 0.0 <= float(self.fill_holes) < 1.0:
+            raise ValueError(f"fill_holes must be a fraction in [0, 1); got {self.fill_holes!r}")
+        degree = self.form_degree
+        if int(degree) != degree or not 1 <= degree <= 6:
+            raise ValueError(f"form_degree must be an integer from 1 (plane) to 6; got "
+                             f"{degree!r}")
+        if self.decimate_by is not None and self.resample_grid is not None:
+            raise ValueError("give decimate or resample_grid, not both")
+
+    def given_spacing(self) -> tuple[float, float] | None:
+        """``spacing`` (dx, dy) [m] checked positive and finite, or None (from the file)."""
+        return None if self.spacing is None else _pair_m(self.spacing, "spacing")
+
+    def record(self) -> dict:
+        """The options as given, plain values for the provenance (:attr:`Measurement.options`)."""
+        spacing, crop, grid = self.given_spacing(), self.crop, self.resample_grid
+        return {"format": self.format, "height_unit": self.height_unit,
+                "lateral_unit": self.lateral_unit,
+                "spacing": None if spacing is None else list(spacing),
+                "fill_holes": float(self.fill_holes), "channel": self.channel,
+                "decimal": self.decimal,
+                "crop": None if crop is None else [float(v) for v in crop],
+                "form_degree": int(self.form_degree), "outliers_sigma": self.outliers_sigma,
+                "decimate": self.decimate_by,
+                "resample_grid": None if grid is None else list(grid)}
+
+
+#: The default import: the file read as it says, the mean plane removed.
+DEFAULT_IMPORT = ImportOptions()
+
+
+def load_measurement(path: str | os.PathLike,
+                     options: ImportOptions = DEFAULT_IMPORT) -> Measurement:
+    """Import a measured height map and prepare it for the study, in SI units.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    options : ImportOptions
+        How it is read (format, units, spacing, channel, decimal mark) and
+        prepared (crop, holes, form, outliers, decimation or resampling); the
+        default reads the file as it says and removes the mean plane, e.g.
+        ``load_measurement("map.npy", ImportOptions(height_unit="um",
+        spacing=(1e-6, 1e-6)))`` for a bare array.
+
     Raises
     ------
     MeasurementError
@@ -164,43 +227,24 @@ def load_measurement(path: str | os.PathLike, format: str = "auto", *,
         missing, or contradicting the file).
     """
     path = Path(path)
-    kind = resolve_format(path, format)
-    _check_options(height_unit, fill_holes, form_degree, decimate_by, resample_grid)
+    kind = resolve_format(path, options.format)
+    options.check()
     if not path.is_file():
         raise MeasurementError(f"{path}: no such file", path)
-    given = None if spacing is None else _pair_m(spacing, "spacing")
-    raw, spacing, absent, said = read_heights(path, kind, height_unit=height_unit,
-                                              lateral_unit=lateral_unit, spacing=given,
-                                              channel=channel, decimal=decimal)
+    raw, spacing, absent, said = read_heights(path, kind, height_unit=options.height_unit,
+                                              lateral_unit=options.lateral_unit,
+                                              spacing=options.given_spacing(),
+                                              channel=options.channel, decimal=options.decimal)
     heights, spacing, filled, plane, steps = prepare(
-        raw, spacing, source=path, absent=absent, crop=crop, fill_holes=fill_holes,
-        form_degree=form_degree, outliers_sigma=outliers_sigma, decimate_by=decimate_by,
-        resample_grid=resample_grid)
+        raw, spacing, source=path, absent=absent, crop=options.crop,
+        fill_holes=options.fill_holes, form_degree=options.form_degree,
+        outliers_sigma=options.outliers_sigma, decimate_by=options.decimate_by,
+        resample_grid=options.resample_grid)
     if "masked_points" in said:  # the instrument's mask: counted in the window used
         said = {**said, "file_masked_points": said["masked_points"],
                 "masked_points": steps["missing_points"]}
-    options = {"format": format, "height_unit": height_unit, "lateral_unit": lateral_unit,
-               "spacing": None if given is None else list(given),
-               "fill_holes": float(fill_holes), "channel": channel, "decimal": decimal,
-               "crop": None if crop is None else [float(v) for v in crop],
-               "form_degree": int(form_degree), "outliers_sigma": outliers_sigma,
-               "decimate": decimate_by,
-               "resample_grid": None if resample_grid is None else list(resample_grid)}
     return Measurement(heights, (float(spacing[0]), float(spacing[1])), str(path),
-                       file_sha256(path), options, filled, plane, {**said, **steps})
-
-
-def _check_options(height_unit, fill_holes, form_degree, decimate_by, resample_grid) -> None:
-    """ValueError for an option of :func:`load_measurement` out of its range."""
-    if height_unit is not None:
-        unit_scale(height_unit, HEIGHT_UNITS, "height_unit")
-    if not 0.0 <= float(fill_holes) < 1.0:
-        raise ValueError(f"fill_holes must be a fraction in [0, 1); got {fill_holes!r}")
-    if int(form_degree) != form_degree or not 1 <= form_degree <= 6:
-        raise ValueError(f"form_degree must be an integer from 1 (plane) to 6; got "
-                         f"{form_degree!r}")
-    if decimate_by is not None and resample_grid is not None:
-        raise ValueError("give decimate or resample_grid, not both")
+                       file_sha256(path), options.record(), filled, plane, {**said, **steps})
 
 
 def statistics(measurement: Measurement, spectral: bool = False) -> dict:
@@ -397,6 +441,8 @@ def read_psd_table(path: str | os.PathLike) -> tuple[tuple[float, float], ...]:
 
 __all__ = [
     "PSD_COLUMNS",
+    "DEFAULT_IMPORT",
+    "ImportOptions",
     "Measurement",
     "finite_form_degree",
     "form_advice",

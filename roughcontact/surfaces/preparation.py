@@ -387,7 +387,7 @@ def prepare(raw: np.ndarray, spacing, *, source, absent: int = 0, crop=None,
 
     ``spacing`` (dx, dy) [m]; ``source`` names the data (the file) in messages;
     ``absent`` counts the holes that were absent from a point list; the other
-    options as :func:`roughcontact.surfaces.measured.load_measurement` takes
+    options as :class:`roughcontact.surfaces.measured.ImportOptions` holds
     them. Returns ``(heights [m] of zero mean, spacing [m], points filled,
     removed plane (a, b, c), steps)``, ``steps`` a dict for the provenance
     (``file_grid``, ``crop_points``, ``missing_points`` (in the cropped window),

@@ -16,6 +16,7 @@ import yaml
 
 from roughcontact.errors import MeasurementError
 from roughcontact.surfaces import measured, preparation
+from roughcontact.surfaces.measured import ImportOptions
 
 SCHEMA = Path(__file__).resolve().parents[2] / "config" / "schema.yaml"
 
@@ -65,8 +66,8 @@ def test_all_missing_file_names_the_file(tmp_path):
     path = tmp_path / "all_nan_scan.npy"
     np.save(path, np.full((16, 16), np.nan))
     with pytest.raises(MeasurementError) as info:
-        measured.load_measurement(path, "npy", height_unit="um", spacing=(1e-6, 1e-6),
-                                  fill_holes=0.5)
+        measured.load_measurement(path, ImportOptions("npy", height_unit="um",
+                                                      spacing=(1e-6, 1e-6), fill_holes=0.5))
     _assert_cannot_be_filled(str(info.value), str(path))
 
 

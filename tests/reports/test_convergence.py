@@ -19,6 +19,7 @@ from roughcontact.reports.convergence import (
     plot_influence_convergence,
     richardson,
 )
+from roughcontact.study.config import ConvergenceSettings
 
 H = 0.15e-3  # contact element size of the paper's model [m]
 PRESSURES = (0.3e6, 1e6)
@@ -32,9 +33,9 @@ def thick_block(**kwargs) -> BlockGeometry:
 @pytest.fixture(scope="module")
 def study():
     messages = []
-    table = influence_convergence(thick_block(), ["paper", "refined"], surfaces=2,
-                                  corr_length=0.5e-3, pressures=PRESSURES,
-                                  progress=messages.append)
+    settings = ConvergenceSettings(presets=("paper", "refined"), surfaces=2,
+                                   corr_length=0.5e-3, pressures=PRESSURES)
+    table = influence_convergence(thick_block(), settings, progress=messages.append)
     return table, messages
 
 
@@ -180,7 +181,8 @@ def test_richardson_rows_for_a_refinement_sequence():
     geom = BlockGeometry(size=(6 * H, 6 * H), thickness=6 * H, grid=(6, 6))
     specs = [MeshSpec(element="hex8", refinement=r, layers=None, top_layer=1.0, growth=1.5,
                       coarsen_at=1.0) for r in (1, 2, 4)]
-    table = influence_convergence(geom, specs, halfspace=False, surfaces=0, isolate=False)
+    table = influence_convergence(geom, ConvergenceSettings(presets=tuple(specs), surfaces=0),
+                                  halfspace=False, isolate=False)
     assert "applied to hex8 r1" in table.attrs["richardson"]
     extrapolated = table[table["kind"] == "richardson"]
     assert len(extrapolated) == 1
@@ -199,12 +201,16 @@ def test_richardson_rows_for_a_refinement_sequence():
 
 
 def test_validation():
+    def settings(*presets, **fields):
+        return ConvergenceSettings(presets=presets, **({"surfaces": 0} | fields))
+
     with pytest.raises(ValueError, match="mesh"):
-        influence_convergence(thick_block(), ["finest"], surfaces=0, isolate=False)
+        influence_convergence(thick_block(), settings("finest"), isolate=False)
     with pytest.raises(ValueError, match="reference"):
-        influence_convergence(thick_block(), ["paper"], reference="converged", surfaces=0,
+        influence_convergence(thick_block(), settings("paper"), reference="converged",
                               isolate=False)
     with pytest.raises(ValueError, match="distinct"):
-        influence_convergence(thick_block(), ["paper", "paper"], surfaces=0, isolate=False)
+        influence_convergence(thick_block(), settings("paper", "paper"), isolate=False)
     with pytest.raises(ValueError, match="pressures"):
-        influence_convergence(thick_block(), ["paper"], pressures=(-1.0,), isolate=False)
+        influence_convergence(thick_block(), settings("paper", surfaces=3, pressures=(-1.0,)),
+                              isolate=False)

@@ -32,6 +32,7 @@ from roughcontact.reports.execution import (  # noqa: E402
     remove_stale_temporaries,
 )
 from roughcontact.reports.plotting import save_figure  # noqa: E402
+from roughcontact.study.config import ConvergenceSettings  # noqa: E402
 
 
 def exited_process() -> int:
@@ -136,7 +137,8 @@ def test_convergence_report_removes_the_scratch_a_killed_report_left(tmp_path, m
     for folder in kept:
         plant(folder, "task.pkl")
     block = BlockGeometry(size=(0.6e-3, 0.6e-3), thickness=1e-3, grid=(4, 4))
-    table = influence_convergence(block, ["paper"], halfspace=False, surfaces=0)
+    table = influence_convergence(block, ConvergenceSettings(presets=("paper",), surfaces=0),
+                                  halfspace=False)
     assert table["dofs"].iloc[0] > 0  # built in a fresh process, from a scratch folder
     assert not stale.exists()
     assert all((folder / "task.pkl").exists() for folder in kept)

@@ -9,6 +9,7 @@ from matplotlib.image import imread
 from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.reports import speed
+from roughcontact.study.config import SpeedReportSettings
 from roughcontact.study.presets import ACCURACY_PRESETS, PRESETS_FILE
 
 H = 0.15e-3  # contact element size of the paper's model [m]
@@ -25,9 +26,11 @@ def solver_table():
     geometry = small_block()
     unit = unit_modulus_influence(geometry)
     return speed.solver_speed_vs_error(
-        unit, geometry, [(0.0, 3.0)], surfaces=3, b=0.3e-3, pressures=PRESSURES,
-        tolerances={"exact": (1e-12,), "cg": (1e-2, 1e-4, 1e-8, 1e-12), "steepest": (1e-4,)},
-        methods=("exact", "cg", "steepest"), steps=8, seed=1)
+        unit, geometry, [(0.0, 3.0)], surfaces=3, generator=speed.CellSurfaces(b=0.3e-3, seed=1),
+        sweep=speed.SweepSettings(pressures=PRESSURES, steps=8),
+        comparison=speed.SolverComparison(
+            methods=("exact", "cg", "steepest"),
+            tolerances={"exact": (1e-12,), "cg": (1e-2, 1e-4, 1e-8, 1e-12), "steepest": (1e-4,)}))
 
 
 def test_solver_table_shape_and_reference(solver_table):
@@ -180,9 +183,10 @@ def test_mesh_errors_fallback_and_table(tmp_path):
 
 
 def test_grid_study_nested_is_zero_change_on_the_finest(tmp_path):
-    table = speed.grid_study([(0.0, 3.0)], grids=(6, 12), size=12 * H, thickness=2e-3,
-                             influence="halfspace", surfaces=2, b=0.3e-3, steps=8,
-                             pressures=(1e6,), seed=1)
+    table = speed.grid_study(small_block(), [(0.0, 3.0)], grids=(6, 12), surfaces=2,
+                             generator=speed.CellSurfaces(b=0.3e-3, seed=1),
+                             sweep=speed.SweepSettings(pressures=(1e6,), steps=8),
+                             options=speed.GridOptions(influence="halfspace"))
     assert sorted(table["grid"]) == [6, 12]
     finest = table[table["grid"] == 12]
     assert (finest[["k_P_change", "real_area_change"]].to_numpy() == 0).all()
@@ -192,15 +196,19 @@ def test_grid_study_nested_is_zero_change_on_the_finest(tmp_path):
 def test_grid_study_self_affine_spectrum_and_fft_halfspace_match_dense():
     spectrum = dict(acf="self-affine", hurst=0.8, rolloff_wavelength=0.9e-3,
                     cutoff_wavelength=0.6e-3)
-    common = dict(grids=(6, 12), size=12 * H, thickness=2e-3, surfaces=2, steps=8,
-                  pressures=(1e6,), seed=1, spectrum=spectrum, tol=1e-10, precision="double")
-    dense = speed.grid_study([(0.0, 3.0)], influence="halfspace", **common)
-    fft = speed.grid_study([(0.0, 3.0)], influence="halfspace_fft", **common)
+    generator = speed.CellSurfaces(seed=1, spectrum=spectrum)
+    common = dict(grids=(6, 12), surfaces=2,
+                  sweep=speed.SweepSettings(pressures=(1e6,), steps=8, tol=1e-10,
+                                            precision="double"))
+    dense = speed.grid_study(small_block(), generator=generator,
+                             options=speed.GridOptions(influence="halfspace"), **common)
+    fft = speed.grid_study(small_block(), generator=generator,
+                           options=speed.GridOptions(influence="halfspace_fft"), **common)
     assert fft.attrs["spectrum"] == spectrum
     for column in ("k_P_Pa", "real_area_fraction", "max_pressure_Pa"):
         np.testing.assert_allclose(fft[column], dense[column], rtol=1e-6)
-    exponential = speed.grid_study([(0.0, 3.0)], influence="halfspace",
-                                   **(common | dict(spectrum=None)))
+    exponential = speed.grid_study(small_block(), generator=speed.CellSurfaces(seed=1),
+                                   options=speed.GridOptions(influence="halfspace"), **common)
     assert not np.allclose(exponential["k_P_Pa"], dense["k_P_Pa"])
 
 
@@ -262,10 +270,14 @@ def quick_report(tmp_path_factory):
     """The Snakemake entry point, scaled down (seconds): output folder and tables."""
     out = tmp_path_factory.mktemp("speed") / "reports"
     tables = speed.speed_vs_error_report(
-        out / "s.md", out / "s.csv", out / "s.png", grid=12, surfaces=2, cells=((0.0, 3.0),),
-        tolerances={"cg": (1e-4, 1e-8), "steepest": (1e-4,)}, steps=6, grids=(6, 12),
-        count_surfaces=8, counts=(4, 8), size=12 * H, thickness=2e-3, b=0.3e-3, seed=1,
-        spectrum=REPORT_SPECTRUM)
+        speed.ReportFiles(out / "s.md", out / "s.csv", out / "s.png"),
+        SpeedReportSettings(surfaces=2, grids=(6, 12), count_surfaces=8, counts=(4, 8)),
+        speed.SpeedSpecimen.of_block(small_block(), cells=((0.0, 3.0),),
+                                     generator=speed.CellSurfaces(b=0.3e-3, seed=1)),
+        speed.SpeedOptions(
+            comparison=speed.SolverComparison(tolerances={"cg": (1e-4, 1e-8),
+                                                          "steepest": (1e-4,)}),
+            steps=6, grid_spectrum=REPORT_SPECTRUM))
     return out, tables
 
 

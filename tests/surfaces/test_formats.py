@@ -23,7 +23,7 @@ from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import validated
 from roughcontact.study.settings import Study
-from roughcontact.surfaces.measured import load_measurement
+from roughcontact.surfaces.measured import ImportOptions, load_measurement
 
 
 def random_file(path, size, seed=0):
@@ -49,13 +49,13 @@ def test_random_bytes_named_as_an_instrument_file_are_refused(tmp_path, suffix, 
     # with the keys a file without units would need: still refused, by its format
     for keys in ({}, {"height_unit": "nm", "spacing": (1e-6, 1e-6)}):
         with pytest.raises(MeasurementError) as raised:
-            load_measurement(path, **keys)
+            load_measurement(path, ImportOptions(**keys))
         message = str(raised.value)
         assert str(path) in message and format_name in message and f".{suffix}" in message
         assert raised.value.path == str(path)
     # by content (format: instrument), no format claims it either
     with pytest.raises(MeasurementError, match="not a format SurfaceTopography recognises"):
-        load_measurement(path, "instrument", height_unit="nm", spacing=(1e-6, 1e-6))
+        load_measurement(path, ImportOptions("instrument", height_unit="nm", spacing=(1e-6, 1e-6)))
 
 
 def test_random_bytes_are_refused_when_the_plan_is_made(tmp_path):
@@ -72,7 +72,7 @@ def test_a_file_with_an_unclaimed_suffix_is_read_by_its_content_only(tmp_path):
     # the size of a 100 x 100 map of 16-bit heights: read as one only if named .hgt
     path = random_file(tmp_path / "noise.bin", 2 * 100**2)
     with pytest.raises(MeasurementError, match="hgt"):
-        load_measurement(path, height_unit="nm", spacing=(1e-6, 1e-6))
+        load_measurement(path, ImportOptions(height_unit="nm", spacing=(1e-6, 1e-6)))
 
 
 @needs_data
@@ -83,7 +83,7 @@ def test_a_real_file_under_another_suffix_is_refused_and_format_instrument_reads
         load_measurement(path)
     assert "format: instrument" in str(raised.value)
     # the advice, followed: read by its content, as the X3P file it is
-    m = load_measurement(path, "instrument")
+    m = load_measurement(path, ImportOptions("instrument"))
     assert m.preparation["reader"] == "X3PReader"
     assert m.grid == load_measurement(DATA / "x3p-2.x3p").grid
 
@@ -162,5 +162,6 @@ def test_a_map_that_is_its_form_or_zero_is_flat(tmp_path):
         form = "a plane" if degree == 1 else f"a polynomial of degree {degree}"
         with pytest.raises(MeasurementError, match=f"{name}.npy: the heights are flat "
                                                    rf"\(a constant or {form}\)"):
-            load_measurement(tmp_path / f"{name}.npy", "npy", height_unit="um",
-                             spacing=(1e-5, 1e-5), form_degree=degree)
+            load_measurement(tmp_path / f"{name}.npy", ImportOptions("npy", height_unit="um",
+                                                                     spacing=(1e-5, 1e-5),
+                                                                     form_degree=degree))

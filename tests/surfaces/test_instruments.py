@@ -19,7 +19,7 @@ from topographies import DATA, needs_data
 
 from roughcontact.errors import MeasurementError
 from roughcontact.surfaces import measured
-from roughcontact.surfaces.measured import load_measurement, statistics
+from roughcontact.surfaces.measured import ImportOptions, load_measurement, statistics
 from roughcontact.surfaces.preparation import remove_polynomial
 from roughcontact.surfaces.readers import read_instrument, read_text_grid
 
@@ -44,7 +44,7 @@ def reference(name):
 @functools.cache
 def loaded(name):
     """The loader's default import of a shared file (holes filled where there are any)."""
-    return load_measurement(DATA / name, fill_holes=0.4)
+    return load_measurement(DATA / name, ImportOptions(fill_holes=0.4))
 
 
 def plane_removed(z, spacing):
@@ -127,7 +127,7 @@ def test_a_line_scan_is_refused(tmp_path):
     np.savetxt(path, np.column_stack([x, 1e-8 * np.sin(x / 3e-6)]))
     assert open_topography(str(path)).default_channel.dim == 1  # a profile for ST too
     with pytest.raises(MeasurementError, match="line scan") as err:
-        load_measurement(path, height_unit="m", spacing=(0.5e-6, 0.5e-6))
+        load_measurement(path, ImportOptions(height_unit="m", spacing=(0.5e-6, 0.5e-6)))
     assert err.value.path == str(path)
     with pytest.raises(MeasurementError, match="line scan"):
         read_instrument(path)
@@ -160,7 +160,8 @@ def test_decimal_commas_and_points_read_the_same_grid(tmp_path):
         grid = read_text_grid(path)
         assert grid.shape == (48, 64), name
         np.testing.assert_array_equal(grid, expected, err_msg=name)
-        m = load_measurement(path, format="text", height_unit="um", spacing=(1e-5, 1e-5))
+        m = load_measurement(path, ImportOptions(format="text", height_unit="um",
+                                                 spacing=(1e-5, 1e-5)))
         assert m.grid == (64, 48)
         sigmas.append(statistics(m)["sigma"])
     independent = plane_removed(expected * 1e-6, (1e-5, 1e-5)).std()
@@ -187,7 +188,7 @@ def test_a_header_line_in_a_text_grid_is_refused_naming_it(tmp_path):
     with pytest.raises(MeasurementError, match="header"):
         read_text_grid(path)
     with pytest.raises(MeasurementError, match="header"):
-        load_measurement(path, height_unit="um", spacing=(1e-5, 1e-5))
+        load_measurement(path, ImportOptions(height_unit="um", spacing=(1e-5, 1e-5)))
 
 
 # --------------------------------------------------------------------------- form
@@ -219,7 +220,7 @@ def _dome(tmp_path):
 
 def test_a_dome_left_in_gives_nan_correlation_length_and_a_warning(tmp_path, caplog):
     path, _ = _dome(tmp_path)
-    m = load_measurement(path, height_unit="um", spacing=(1e-6, 1e-6))
+    m = load_measurement(path, ImportOptions(height_unit="um", spacing=(1e-6, 1e-6)))
     with caplog.at_level(logging.WARNING, logger=measured.__name__):
         stats = statistics(m)
     assert math.isnan(stats["corr_length_x"])  # not the domain length, not half of it
@@ -230,7 +231,7 @@ def test_a_dome_left_in_gives_nan_correlation_length_and_a_warning(tmp_path, cap
 
 def test_removing_the_quadratic_form_gives_finite_correlation_lengths(tmp_path, caplog):
     path, side = _dome(tmp_path)
-    m = load_measurement(path, height_unit="um", spacing=(1e-6, 1e-6), form_degree=2)
+    m = load_measurement(path, ImportOptions(height_unit="um", spacing=(1e-6, 1e-6), form_degree=2))
     with caplog.at_level(logging.WARNING, logger=measured.__name__):
         stats = statistics(m)
     for key, length in zip(("corr_length_x", "corr_length_y"), side, strict=True):
@@ -257,9 +258,9 @@ def test_remove_polynomial_removes_an_exact_quadratic():
 @needs_data
 def test_a_height_unit_contradicting_the_file_is_refused():
     with pytest.raises(ValueError, match="contradicts") as err:
-        load_measurement(DATA / "x3p-2.x3p", height_unit="nm")
+        load_measurement(DATA / "x3p-2.x3p", ImportOptions(height_unit="nm"))
     assert not isinstance(err.value, MeasurementError)
-    assert load_measurement(DATA / "x3p-2.x3p", height_unit="m").grid == (650, 650)
+    assert load_measurement(DATA / "x3p-2.x3p", ImportOptions(height_unit="m")).grid == (650, 650)
 
 
 @needs_data
@@ -268,9 +269,10 @@ def test_a_spacing_contradicting_the_file_is_refused():
     nx, ny = topography.nb_grid_pts
     lx, ly = (float(s) * scale for s in topography.physical_sizes)
     with pytest.raises(ValueError, match="contradicts") as err:
-        load_measurement(DATA / "x3p-2.x3p", spacing=(1.1 * lx / nx, ly / ny))
+        load_measurement(DATA / "x3p-2.x3p", ImportOptions(spacing=(1.1 * lx / nx, ly / ny)))
     assert not isinstance(err.value, MeasurementError)
-    m = load_measurement(DATA / "x3p-2.x3p", spacing=(lx / nx, ly / ny))  # agreeing: accepted
+    agreeing = ImportOptions(spacing=(lx / nx, ly / ny))
+    m = load_measurement(DATA / "x3p-2.x3p", agreeing)  # accepted
     assert m.size == pytest.approx([lx, ly], rel=1e-9, abs=0.0)
 
 
@@ -278,7 +280,7 @@ def test_an_npy_file_needs_a_height_unit(tmp_path):
     path = tmp_path / "heights.npy"
     np.save(path, np.random.default_rng(2).standard_normal((8, 8)))
     with pytest.raises(ValueError, match="height_unit") as err:
-        load_measurement(path, spacing=(1e-6, 1e-6))
+        load_measurement(path, ImportOptions(spacing=(1e-6, 1e-6)))
     assert not isinstance(err.value, MeasurementError)
 
 
@@ -297,7 +299,7 @@ def grid_and_spacing(name):
 def test_crop_takes_the_window_rounded_to_whole_points():
     (nx, ny), (dx, dy) = grid_and_spacing("plu-1.plu")
     x0, y0, lx, ly = 100e-6, 50e-6, 500e-6, 300e-6
-    m = load_measurement(DATA / "plu-1.plu", crop=(x0, y0, lx, ly))
+    m = load_measurement(DATA / "plu-1.plu", ImportOptions(crop=(x0, y0, lx, ly)))
     ix0, iy0, cx, cy = round(x0 / dx), round(y0 / dy), round(lx / dx), round(ly / dy)
     assert m.grid == (cx, cy)
     assert m.preparation["crop_points"] == [ix0, iy0, cx, cy]
@@ -310,13 +312,13 @@ def test_crop_takes_the_window_rounded_to_whole_points():
 @needs_data
 def test_a_crop_outside_the_measurement_is_refused():
     with pytest.raises(MeasurementError, match="crop window"):
-        load_measurement(DATA / "plu-1.plu", crop=(1e-3, 0.0, 0.5e-3, 0.5e-3))
+        load_measurement(DATA / "plu-1.plu", ImportOptions(crop=(1e-3, 0.0, 0.5e-3, 0.5e-3)))
 
 
 @needs_data
 def test_decimate_by_4_averages_blocks_and_multiplies_the_spacing():
     _, (dx, dy) = grid_and_spacing("matrix-3.txt")
-    m = load_measurement(DATA / "matrix-3.txt", decimate_by=4)
+    m = load_measurement(DATA / "matrix-3.txt", ImportOptions(decimate_by=4))
     assert m.grid == (64, 64)
     assert m.spacing == pytest.approx([4 * dx, 4 * dy], rel=1e-12, abs=0.0)
     assert m.preparation["decimated_by"] == 4
@@ -330,7 +332,7 @@ def test_decimate_by_4_averages_blocks_and_multiplies_the_spacing():
 def test_resample_keeps_the_physical_size():
     _, topography, scale = reference("matrix-3.txt")
     size = [float(s) * scale for s in topography.physical_sizes]
-    m = load_measurement(DATA / "matrix-3.txt", resample_grid=(100, 80))
+    m = load_measurement(DATA / "matrix-3.txt", ImportOptions(resample_grid=(100, 80)))
     assert m.heights.shape == (80, 100)
     assert m.size == pytest.approx(size, rel=1e-12, abs=0.0)
     assert m.spacing == pytest.approx([size[0] / 100, size[1] / 80], rel=1e-12, abs=0.0)
@@ -339,8 +341,8 @@ def test_resample_keeps_the_physical_size():
 
 @needs_data
 def test_outliers_are_counted_and_lower_the_kurtosis():
-    before = statistics(load_measurement(DATA / "sur-2.sur", fill_holes=0.01))
-    m = load_measurement(DATA / "sur-2.sur", fill_holes=0.01, outliers_sigma=5)
+    before = statistics(load_measurement(DATA / "sur-2.sur", ImportOptions(fill_holes=0.01)))
+    m = load_measurement(DATA / "sur-2.sur", ImportOptions(fill_holes=0.01, outliers_sigma=5))
     after = statistics(m)
     assert before["kurt"] > 500  # the file's spikes (Ku ~ 786)
     assert m.preparation["outliers"] > 0

@@ -26,6 +26,7 @@ from roughcontact.study.storage import read_surfaces
 from roughcontact.study.studies import contact_cells
 from roughcontact.study.surface_jobs import build_surface_cell
 from roughcontact.surfaces import johnson, measured, preparation, readers, statistics
+from roughcontact.surfaces.measured import ImportOptions
 
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLE = REPO / "data" / "example_plateau_honed.xyz"
@@ -64,7 +65,8 @@ def test_npy_round_trip_converts_units_and_keeps_the_orientation(tmp_path):
     z_um = with_plane(rough_field(), (0.1, 0.2))  # (ny, nx) = (12, 16), heights in um
     path = tmp_path / "map.npy"
     np.save(path, z_um)
-    m = measured.load_measurement(path, "npy", height_unit="um", spacing=(0.1 * MM, 0.2 * MM))
+    m = measured.load_measurement(path, ImportOptions("npy", height_unit="um",
+                                                      spacing=(0.1 * MM, 0.2 * MM)))
     expected, _ = preparation.remove_plane(z_um * UM, (0.1 * MM, 0.2 * MM))
     assert m.heights.shape == (12, 16) and m.grid == (16, 12)
     assert m.spacing == pytest.approx((1e-4, 2e-4))
@@ -82,7 +84,8 @@ def test_text_grid_round_trip_with_comments_in_nanometres(tmp_path, separator):
     path.write_text("# exported by a profilometer\n# unit: nm\n\n" + "\n".join(rows[:3])
                     + "\n# a comment between rows\n" + "\n".join(rows[3:]) + "  # trailing\n")
     assert np.array_equal(readers.read_text_grid(path), z_nm)  # rows = y, columns = x
-    m = measured.load_measurement(path, "text", height_unit="nm", spacing=(2e-6, 2e-6))
+    m = measured.load_measurement(path, ImportOptions("text", height_unit="nm",
+                                                      spacing=(2e-6, 2e-6)))
     assert np.allclose(m.heights, preparation.remove_plane(z_nm * 1e-9, (2e-6, 2e-6))[0],
                        rtol=0, atol=1e-21)
     assert m.grid == (9, 7)
@@ -97,7 +100,7 @@ def test_xyz_round_trip_infers_the_spacing_from_shuffled_points(tmp_path):
     raw, spacing, absent = readers.read_xyz(path, "um")
     assert np.array_equal(raw, z_mm) and absent == 0
     assert spacing == pytest.approx((dx_um, dy_um), rel=1e-12)
-    m = measured.load_measurement(path, "xyz", height_unit="mm", lateral_unit="um")
+    m = measured.load_measurement(path, ImportOptions("xyz", height_unit="mm", lateral_unit="um"))
     assert m.spacing == pytest.approx((2.5e-6, 4e-6), rel=1e-12)
     assert np.allclose(m.heights, preparation.remove_plane(z_mm * MM, m.spacing)[0],
                        rtol=0, atol=1e-18)
@@ -126,7 +129,7 @@ def test_plane_removal_removes_an_added_plane_exactly():
 
 
 def test_statistics_are_those_of_the_surface_module_and_the_johnson_fit():
-    m = measured.load_measurement(EXAMPLE, "xyz", height_unit="um", fill_holes=0.01)
+    m = measured.load_measurement(EXAMPLE, ImportOptions("xyz", height_unit="um", fill_holes=0.01))
     s = measured.statistics(m)
     moments = statistics.height_stats(m.heights)
     assert s["sigma"] == pytest.approx(moments["sigma"], rel=1e-14)
@@ -151,8 +154,8 @@ def test_johnson_law_matches_scipy_moments(tmp_path, transform):
     z = -np.exp(0.6 * field) if transform == "sb" else np.sinh(0.9 * field + 0.4)
     path = tmp_path / "map.npy"
     np.save(path, z)
-    s = measured.statistics(measured.load_measurement(path, "npy", height_unit="um",
-                                                      spacing=(1e-5, 1e-5)))
+    s = measured.statistics(measured.load_measurement(path, ImportOptions("npy", height_unit="um",
+                                                                          spacing=(1e-5, 1e-5))))
     gamma, delta, xi, lam = s["johnson_params"]
     family = s["johnson_family"]
     assert family == transform.upper()
@@ -181,8 +184,8 @@ def test_hole_filling_reproduces_a_smooth_field_and_records_the_count(tmp_path):
     path = tmp_path / "holes.csv"
     path.write_text("\n".join(",".join("nan" if np.isnan(v) else f"{v:.17g}" for v in row)
                               for row in holes))
-    m = measured.load_measurement(path, "text", height_unit="um", spacing=(1e-4, 1e-4),
-                                  fill_holes=0.01)
+    m = measured.load_measurement(path, ImportOptions("text", height_unit="um",
+                                                      spacing=(1e-4, 1e-4), fill_holes=0.01))
     assert m.filled == 12 and m.filled_fraction == pytest.approx(12 / 2000)
     s = measured.statistics(m)
     assert s["filled_points"] == 12 and s["filled_fraction"] == pytest.approx(0.006)
@@ -206,12 +209,13 @@ def test_too_many_holes_are_refused_with_count_and_fraction(tmp_path):
     np.save(path, z)
     with pytest.raises(MeasurementError, match=r"holey\.npy: 9 of 100 points \(9 %\) are "
                                                r"missing.*fill_holes = 0\.05"):
-        measured.load_measurement(path, "npy", height_unit="um", spacing=(1e-4, 1e-4),
-                                  fill_holes=0.05)
+        measured.load_measurement(path, ImportOptions("npy", height_unit="um",
+                                                      spacing=(1e-4, 1e-4), fill_holes=0.05))
     with pytest.raises(MeasurementError, match=r"fill_holes is 0"):
-        measured.load_measurement(path, "npy", height_unit="um", spacing=(1e-4, 1e-4))
-    m = measured.load_measurement(path, "npy", height_unit="um", spacing=(1e-4, 1e-4),
-                                  fill_holes=0.1)
+        measured.load_measurement(path, ImportOptions("npy", height_unit="um",
+                                                      spacing=(1e-4, 1e-4)))
+    m = measured.load_measurement(path, ImportOptions("npy", height_unit="um",
+                                                      spacing=(1e-4, 1e-4), fill_holes=0.1))
     assert m.filled == 9
 
 
@@ -221,8 +225,8 @@ def test_points_missing_from_an_xyz_list_are_counted_and_filled(tmp_path):
     write_xyz(path, z, 0.1, 0.1, drop={(3, 4), (10, 10), (19, 19)})
     with pytest.raises(MeasurementError, match=r"gappy\.xyz: 3 of 400 points \(0\.75 %\).*"
                                                r"3 grid points absent from the point list"):
-        measured.load_measurement(path, "xyz", height_unit="um")
-    m = measured.load_measurement(path, "xyz", height_unit="um", fill_holes=0.01)
+        measured.load_measurement(path, ImportOptions("xyz", height_unit="um"))
+    m = measured.load_measurement(path, ImportOptions("xyz", height_unit="um", fill_holes=0.01))
     assert m.filled == 3
 
 
@@ -256,7 +260,7 @@ def test_bad_text_files_name_the_file_and_the_line(tmp_path, name, fmt, text, pa
     path = bad_text(tmp_path, name, text)
     spacing = None if fmt == "xyz" else (1e-4, 1e-4)
     with pytest.raises(MeasurementError, match=pattern) as info:
-        measured.load_measurement(path, fmt, height_unit="um", spacing=spacing)
+        measured.load_measurement(path, ImportOptions(fmt, height_unit="um", spacing=spacing))
     assert isinstance(info.value, ValueError) and info.value.path == str(path)
 
 
@@ -267,12 +271,12 @@ def test_non_uniform_spacing_names_the_axis_and_the_spacings(tmp_path):
     with pytest.raises(MeasurementError,
                        match=r"stretched\.xyz: the x spacing is not uniform: spacings seen "
                              r"0\.1, 0\.15 mm"):
-        measured.load_measurement(path, "xyz", height_unit="um")
+        measured.load_measurement(path, ImportOptions("xyz", height_unit="um"))
     # a missing column is not a non-uniform grid: it is missing points
     lines = [f"{x} {y} 1" for y in (0.0, 0.1, 0.2, 0.3) for x in (0.0, 0.1, 0.3, 0.4)]
     path = bad_text(tmp_path, "column.xyz", "\n".join(lines))
     with pytest.raises(MeasurementError, match=r"4 of 20 points \(20 %\)"):
-        measured.load_measurement(path, "xyz", height_unit="um")
+        measured.load_measurement(path, ImportOptions("xyz", height_unit="um"))
 
 
 def test_repeated_point_names_both_lines(tmp_path):
@@ -280,26 +284,29 @@ def test_repeated_point_names_both_lines(tmp_path):
     path = bad_text(tmp_path, "twice.xyz", "\n".join(lines))
     with pytest.raises(MeasurementError, match=r"twice\.xyz, line 17: the point \(x, y\) = "
                                                r"\(2, 1\) mm repeats line 7"):
-        measured.load_measurement(path, "xyz", height_unit="um")
+        measured.load_measurement(path, ImportOptions("xyz", height_unit="um"))
 
 
 def test_bad_npy_files_and_options(tmp_path):
     path = tmp_path / "cube.npy"
     np.save(path, np.zeros((4, 4, 4)))
     with pytest.raises(MeasurementError, match=r"cube\.npy: expected a 2-D array.*\(4, 4, 4\)"):
-        measured.load_measurement(path, "npy", height_unit="um", spacing=(1e-4, 1e-4))
+        measured.load_measurement(path, ImportOptions("npy", height_unit="um",
+                                                      spacing=(1e-4, 1e-4)))
     flat = tmp_path / "flat.npy"
     np.save(flat, np.add.outer(np.arange(5.0), np.arange(6.0)))
     with pytest.raises(MeasurementError,
                        match=r"flat\.npy: the heights are flat \(a constant or a plane\)"):
-        measured.load_measurement(flat, "npy", height_unit="um", spacing=(1e-4, 1e-4))
+        measured.load_measurement(flat, ImportOptions("npy", height_unit="um",
+                                                      spacing=(1e-4, 1e-4)))
     with pytest.raises(ValueError, match="needs its spacing"):
-        measured.load_measurement(flat, "npy", height_unit="um")
+        measured.load_measurement(flat, ImportOptions("npy", height_unit="um"))
     with pytest.raises(ValueError, match="height_unit"):
-        measured.load_measurement(flat, "npy", height_unit="inch", spacing=(1e-4, 1e-4))
+        measured.load_measurement(flat, ImportOptions("npy", height_unit="inch",
+                                                      spacing=(1e-4, 1e-4)))
     with pytest.raises(MeasurementError, match=r"missing\.npy: no such file"):
-        measured.load_measurement(tmp_path / "missing.npy", "npy", height_unit="um",
-                                  spacing=(1e-4, 1e-4))
+        measured.load_measurement(tmp_path / "missing.npy", ImportOptions("npy", height_unit="um",
+                                                                          spacing=(1e-4, 1e-4)))
 
 
 # ------------------------------------------------------------------ the study's measured cells
@@ -384,7 +391,7 @@ def test_measured_cell_file_has_the_generated_layout(tmp_path):
     path = tmp_path / "cell.h5"
     build_surface_cell(surface.params(), 7, path, config=config)
     cell = read_surfaces(path)
-    m = measured.load_measurement(EXAMPLE, "xyz", height_unit="um", fill_holes=0.01)
+    m = measured.load_measurement(EXAMPLE, ImportOptions("xyz", height_unit="um", fill_holes=0.01))
     s = measured.statistics(m)
     assert cell["heights"].shape == (1, 64, 64)
     assert np.allclose(cell["heights"][0] * s["sigma"], m.heights, rtol=0, atol=1e-18)
@@ -435,7 +442,7 @@ def test_measured_surface_runs_end_to_end_beside_its_twin(tmp_path):
     assert proc.returncode == 0, proc.stderr[-4000:]
 
     # the measured cell stores the file's detrended statistics and its provenance
-    m = measured.load_measurement(data, "xyz", height_unit="um", fill_holes=0.01)
+    m = measured.load_measurement(data, ImportOptions("xyz", height_unit="um", fill_holes=0.01))
     s = measured.statistics(m)
     cells = contact_cells(Study.from_config(config), "plateau_honed")
     meas_key, twin_key = (c.surface.key for c in cells)

@@ -25,7 +25,7 @@ from roughcontact.study.config import validated
 from roughcontact.study.records import GeneratedCell, Generator
 from roughcontact.study.settings import Study
 from roughcontact.study.surface_jobs import build_surface_cell
-from roughcontact.surfaces.measured import load_measurement, statistics
+from roughcontact.surfaces.measured import ImportOptions, load_measurement, statistics
 from roughcontact.surfaces.statistics import height_stats
 
 REPO = Path(__file__).resolve().parents[2]
@@ -53,15 +53,15 @@ def test_holes_at_the_edge_are_refused_with_a_crop_that_leaves_them_out(tmp_path
     z[-5:, -4:] = np.nan
     path = save(tmp_path / "edge.npy", z)
     with pytest.raises(MeasurementError) as raised:
-        load_measurement(path, **NPY)
+        load_measurement(path, ImportOptions(**NPY))
     message = str(raised.value)
     crop = [float(v) for v in re.search(r"crop_mm: \[([^\]]+)\]", message)[1].split(",")]
     fill = float(re.search(r"fill_holes to at least ([0-9.e-]+)", message)[1])
     # both, followed: no point missing in the window; every point filled with fill_holes
-    window = load_measurement(path, **NPY, crop=[v * 1e-3 for v in crop])
+    window = load_measurement(path, ImportOptions(**NPY, crop=[v * 1e-3 for v in crop]))
     # columns 3-45, every row (43 x 40), larger than columns 3-49 above the corner (47 x 35)
     assert window.filled == 0 and window.grid == (43, 40)
-    assert load_measurement(path, **NPY, fill_holes=fill).filled == 120 + 20
+    assert load_measurement(path, ImportOptions(**NPY, fill_holes=fill)).filled == 120 + 20
 
 
 def test_a_suggested_fill_holes_is_rounded_up_so_that_it_admits_the_holes(tmp_path):
@@ -69,10 +69,10 @@ def test_a_suggested_fill_holes_is_rounded_up_so_that_it_admits_the_holes(tmp_pa
     z.ravel()[::997] = np.nan  # 2 of 1517: 0.13184 %
     path = save(tmp_path / "holes.npy", z)
     with pytest.raises(MeasurementError) as raised:
-        load_measurement(path, **NPY)
+        load_measurement(path, ImportOptions(**NPY))
     fill = float(re.search(r"fill_holes to at least ([0-9.e-]+)", str(raised.value))[1])
     assert fill >= 2 / 1517
-    assert load_measurement(path, **NPY, fill_holes=fill).filled == 2
+    assert load_measurement(path, ImportOptions(**NPY, fill_holes=fill)).filled == 2
 
 
 @needs_data
@@ -81,7 +81,7 @@ def test_the_sur_refusal_names_crop_mm_and_it_works():
         load_measurement(DATA / "sur-2.sur")
     crop = [float(v) * 1e-3 for v in
             re.search(r"crop_mm: \[([^\]]+)\]", str(raised.value))[1].split(",")]
-    m = load_measurement(DATA / "sur-2.sur", crop=crop)
+    m = load_measurement(DATA / "sur-2.sur", ImportOptions(crop=crop))
     assert m.filled == 0 and m.preparation["masked_points"] == 0
 
 
@@ -95,8 +95,8 @@ def test_masked_points_are_counted_in_the_cropped_window():
     dx = topography.physical_sizes[0] / topography.nb_grid_pts[0] * metres
     start, points = round(0.1e-3 / dx), round(1.5e-3 / dx)
     inside = int(mask[start:start + points, start:start + points].sum())
-    m = load_measurement(DATA / "sur-2.sur", crop=(0.1e-3, 0.1e-3, 1.5e-3, 1.5e-3),
-                         fill_holes=0.01)
+    m = load_measurement(DATA / "sur-2.sur", ImportOptions(crop=(0.1e-3, 0.1e-3, 1.5e-3, 1.5e-3),
+                                                           fill_holes=0.01))
     assert m.preparation["masked_points"] == inside == m.filled == 10
     assert m.preparation["file_masked_points"] == int(mask.sum()) == 117
 
@@ -116,12 +116,12 @@ def test_the_form_advice_names_the_degree_that_works(tmp_path, caplog):
     path = cubic_form(tmp_path)
     for degree in (1, 2):
         with caplog.at_level(logging.WARNING):
-            stats = statistics(load_measurement(path, **NPY, form_degree=degree))
+            stats = statistics(load_measurement(path, ImportOptions(**NPY, form_degree=degree)))
         assert not np.isfinite([stats["corr_length_x"], stats["corr_length_y"]]).all()
         assert "surface.form_degree: 3 removes it" in caplog.text
         caplog.clear()
     with caplog.at_level(logging.WARNING):  # followed
-        stats = statistics(load_measurement(path, **NPY, form_degree=3))
+        stats = statistics(load_measurement(path, ImportOptions(**NPY, form_degree=3)))
     assert np.isfinite([stats["corr_length_x"], stats["corr_length_y"]]).all()
     assert "autocorrelation" not in caplog.text
 
@@ -162,17 +162,17 @@ XYZ = {"format": "xyz", "height_unit": "um", "fill_holes": 0.01}
 
 
 def test_dropouts_are_reported_with_the_outliers_sigma_that_removes_them(tmp_path, caplog):
-    clean = height_stats(load_measurement(stand_in(tmp_path), **XYZ).heights)["kurt"]
+    clean = height_stats(load_measurement(stand_in(tmp_path), ImportOptions(**XYZ)).heights)["kurt"]
     path = stand_in(tmp_path, "--spikes", "3")  # 3 points written at -20 um
     with caplog.at_level(logging.WARNING):
-        m = load_measurement(path, **XYZ)
+        m = load_measurement(path, ImportOptions(**XYZ))
     kurt = height_stats(m.heights)["kurt"]
     assert kurt > 100 and m.preparation["spikes"] == 3
     assert f"Ku = {kurt:.4g}" in caplog.text and str(path) in caplog.text
     sigmas = float(re.search(r"surface\.outliers_sigma: ([0-9.]+)", caplog.text)[1])
     caplog.clear()
     with caplog.at_level(logging.WARNING):  # followed
-        m = load_measurement(path, **XYZ, outliers_sigma=sigmas)
+        m = load_measurement(path, ImportOptions(**XYZ, outliers_sigma=sigmas))
     assert "spikes" not in caplog.text and m.preparation["outliers"] == 3
     assert height_stats(m.heights)["kurt"] == pytest.approx(clean, rel=0.02)
 
@@ -180,7 +180,7 @@ def test_dropouts_are_reported_with_the_outliers_sigma_that_removes_them(tmp_pat
 def test_a_heavy_tailed_surface_is_not_reported(caplog):
     # the plateau-honed stand-in: Ku 7.8 from its grooves, no spike
     with caplog.at_level(logging.WARNING):
-        m = load_measurement(REPO / "data" / "example_plateau_honed.xyz", **XYZ)
+        m = load_measurement(REPO / "data" / "example_plateau_honed.xyz", ImportOptions(**XYZ))
     assert m.preparation["spikes"] == 0 and "spikes" not in caplog.text
 
 
@@ -188,12 +188,12 @@ def test_a_heavy_tailed_surface_is_not_reported(caplog):
 def test_the_dropouts_of_the_sur_file_are_reported_and_removed(caplog):
     window = {"crop": (0.1e-3, 0.1e-3, 1.5e-3, 1.5e-3), "fill_holes": 0.01}
     with caplog.at_level(logging.WARNING):
-        m = load_measurement(DATA / "sur-2.sur", **window)
+        m = load_measurement(DATA / "sur-2.sur", ImportOptions(**window))
     assert height_stats(m.heights)["kurt"] > 300 and "spikes or dropouts" in caplog.text
     sigmas = float(re.search(r"surface\.outliers_sigma: ([0-9.]+)", caplog.text)[1])
     caplog.clear()
     with caplog.at_level(logging.WARNING):
-        m = load_measurement(DATA / "sur-2.sur", **window, outliers_sigma=sigmas)
+        m = load_measurement(DATA / "sur-2.sur", ImportOptions(**window, outliers_sigma=sigmas))
     assert "spikes" not in caplog.text and height_stats(m.heights)["kurt"] < 4
 
 

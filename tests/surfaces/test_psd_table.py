@@ -16,6 +16,7 @@ import pytest
 
 from roughcontact.errors import MeasurementError
 from roughcontact.surfaces import measured, spec, spectra, synthetic
+from roughcontact.surfaces.measured import ImportOptions
 from roughcontact.surfaces.spec import SurfaceSpec
 
 MM = 1e-3
@@ -184,8 +185,8 @@ def test_measured_psd_table_follows_the_measured_surface(tmp_path):
                                  rolloff_wavelength=3.2 * MM, cutoff_wavelength=0.4 * MM,
                                  sigma=1e-6)
     np.save(tmp_path / "map.npy", synthetic.generate(spec, 3, method="paper"))
-    measurement = measured.load_measurement(tmp_path / "map.npy", height_unit="m",
-                                            spacing=(0.1 * MM, 0.1 * MM))
+    measurement = measured.load_measurement(
+        tmp_path / "map.npy", ImportOptions(height_unit="m", spacing=(0.1 * MM, 0.1 * MM)))
     table = np.array(measured.psd_table_from_measurement(measurement))
     assert np.all(table > 0) and np.all(np.diff(table[:, 0]) > 0)
     q, c = table.T

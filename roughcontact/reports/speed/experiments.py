@@ -36,6 +36,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from types import MappingProxyType
@@ -46,11 +47,18 @@ import pandas as pd
 import scipy.stats
 
 from roughcontact.contact import aggregate, nondim
-from roughcontact.contact.cell import nondim_pressure
 from roughcontact.contact.curves import NondimSweep, PhysicalSweep
 from roughcontact.elasticity.influence import BlockGeometry
 from roughcontact.reports.speed.machine import describe_machine
-from roughcontact.reports.speed.sweeps import cell_heights, cell_key, reporter, timed_sweep
+from roughcontact.reports.speed.sweeps import (
+    DEFAULT_SURFACES,
+    DEFAULT_SWEEP,
+    CellSurfaces,
+    SweepSettings,
+    cell_key,
+    reporter,
+    timed_sweep,
+)
 from roughcontact.study.contact_jobs import BATCH_SIZE
 from roughcontact.study.presets import FALLBACK_MESH_ERRORS
 
@@ -59,8 +67,10 @@ __all__ = [
     "DEFAULT_COUNTS",
     "DEFAULT_TOLERANCES",
     "REFERENCE_STIFFNESS_TOL",
+    "REPORT_COMPARISON",
     "REFERENCE_TOL",
     "SOLVER_QUANTITIES",
+    "SolverComparison",
     "band_vs_count",
     "mesh_errors",
     "solver_speed_vs_error",
@@ -161,21 +171,62 @@ def _reference_run(sweep: Callable, name: str, cell: str, say: Callable[[str], N
     return _Run("exact", REFERENCE_TOL, "double", True, result, seconds)
 
 
-def _compared_runs(sweep: Callable, name: str, say: Callable[[str], None], *, methods,
-                   tolerances, max_iter, precision: str, stiffness_tol: float) -> list[_Run]:
-    """One run per method and tolerance (as :func:`solver_speed_vs_error` takes them)."""
+@dataclass(frozen=True)
+class SolverComparison:
+    """What :func:`solver_speed_vs_error` compares against the exact solution.
+
+    Attributes
+    ----------
+    methods : sequence of str
+        Methods compared; ``"exact"`` may be included (errors ~0).
+    tolerances : sequence of float, or mapping method -> sequence
+        Dimensionless KKT tolerances (Eq 27) of every method, or of each (a
+        method missing is skipped).
+    max_iter : int, mapping method -> int, or None
+        Iteration limit per solve (None: the solver's); a run that hits it
+        reports ``converged_fraction < 1``.
+    stiffness_tol : float
+        Residual of the stiffness CG of every compared run, which floors a
+        tight solve's k_P error.
+
+    The defaults: steepest descent and CG at 1e-4 ... 1e-12; the report
+    compares at :data:`DEFAULT_TOLERANCES` (:data:`REPORT_COMPARISON`).
+    """
+
+    methods: Sequence[str] = ("steepest", "cg")
+    tolerances: Sequence[float] | Mapping = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12)
+    max_iter: int | Mapping | None = None
+    stiffness_tol: float = 1e-6
+
+    def runs(self, precision: str) -> list[tuple[str, float, str, int | None]]:
+        """``(method, tol, precision, max_iter)`` of every run, in order: the iterative
+        methods in ``precision``, those of :data:`FIXED_PRECISION` in theirs."""
+        runs = []
+        for method in self.methods:
+            own = (self.tolerances.get(method, ()) if isinstance(self.tolerances, Mapping)
+                   else self.tolerances)
+            limit = (self.max_iter.get(method) if isinstance(self.max_iter, Mapping)
+                     else self.max_iter)
+            runs += [(method, float(tol), FIXED_PRECISION.get(method, precision), limit)
+                     for tol in own]
+        return runs
+
+
+#: The comparison of the speed-against-error report: :data:`DEFAULT_TOLERANCES`.
+REPORT_COMPARISON = SolverComparison(tolerances=DEFAULT_TOLERANCES)
+
+
+def _compared_runs(sweep: Callable, name: str, say: Callable[[str], None],
+                   comparison: SolverComparison, precision: str) -> list[_Run]:
+    """One run per method and tolerance of ``comparison``, the iterative ones in ``precision``."""
     runs = []
-    for method in methods:
-        own = tolerances.get(method, ()) if isinstance(tolerances, Mapping) else tolerances
-        limit = max_iter.get(method) if isinstance(max_iter, Mapping) else max_iter
-        own_precision = FIXED_PRECISION.get(method, precision)
-        for tol in own:
-            result, seconds = sweep(method=method, tol=float(tol), precision=own_precision,
-                                    stiffness_tol=stiffness_tol, max_iter=limit)
-            runs.append(_Run(method, float(tol), own_precision, False, result, seconds))
-            say(f"{name}: {method} tol {tol:.0e} {seconds:.1f} s, "
-                f"{result.iterations.mean():.0f} iterations per solve, "
-                f"{100 * result.converged.mean():.0f} % converged")
+    for method, tol, own_precision, limit in comparison.runs(precision):
+        result, seconds = sweep(method=method, tol=tol, precision=own_precision,
+                                stiffness_tol=comparison.stiffness_tol, max_iter=limit)
+        runs.append(_Run(method, tol, own_precision, False, result, seconds))
+        say(f"{name}: {method} tol {tol:.0e} {seconds:.1f} s, "
+            f"{result.iterations.mean():.0f} iterations per solve, "
+            f"{100 * result.converged.mean():.0f} % converged")
     return runs
 
 
@@ -213,44 +264,42 @@ def _solver_rows(run: _Run, reference: _Run, levels: np.ndarray, chosen: Mapping
 
 def _solver_cell(sweep: Callable, fields: Mapping, levels: np.ndarray,
                  geometry: BlockGeometry, sigma: float, say: Callable[[str], None],
-                 compared: Mapping) -> list[dict]:
+                 compared: tuple[SolverComparison, str]) -> list[dict]:
     """The rows of one cell: its exact reference and every compared run, each at every level.
 
-    ``sweep`` is :func:`timed_sweep` bound to the cell's surfaces and approaches.
+    ``sweep`` is :func:`timed_sweep` bound to the cell's surfaces and approaches;
+    ``compared`` the comparison and the precision of its iterative runs.
     """
     name, cell = fields["influence"], cell_key(fields["skew"], fields["kurt"])
     reference = _reference_run(sweep, name, cell, say)
     P_ref = reference.sweep.nominal_pressure * geometry.E * sigma / geometry.thickness
     chosen = {level: _nearest_steps(P_ref, level) for level in levels}
-    runs = [reference, *_compared_runs(sweep, f"{name} {cell}", say, **compared)]
+    runs = [reference, *_compared_runs(sweep, f"{name} {cell}", say, *compared)]
     return [row for run in runs
             for row in _solver_rows(run, reference, levels, chosen, P_ref, fields)]
 
 
 def solver_speed_vs_error(
     unit_influence, geometry: BlockGeometry, cells: Sequence[tuple[float, float]] = DEFAULT_CELLS,
-    *, surfaces: int = 4, sigma: float = 24.5e-6, b: float = 1e-3,
-    pressures: Sequence[float] = (0.3e6, 1e6, 3e6),
-    tolerances: Sequence[float] | Mapping = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12),
-    methods: Sequence[str] = ("steepest", "cg"), precision: str = "mixed", steps: int = 30,
-    stiffness_tol: float = 1e-6, max_iter: int | Mapping | None = None, seed: int = 2006,
+    *, surfaces: int = 4, generator: CellSurfaces = DEFAULT_SURFACES,
+    sweep: SweepSettings = DEFAULT_SWEEP, comparison: SolverComparison = SolverComparison(),
     label: str | None = None, progress: Callable[[str], None] | None = None,
 ) -> pd.DataFrame:
     """Wall time and error of each solver and tolerance against the exact solution.
 
-    Per cell, ``surfaces`` surfaces (exponential ACF, Eq 1, std ``sigma`` and
-    10 % correlation length ``b`` [m] on ``geometry``'s grid; seeds
+    Per cell, ``surfaces`` surfaces of ``generator`` (:class:`CellSurfaces`:
+    std sigma and 10 % correlation length b [m] on ``geometry``'s grid; seeds
     ``derive_seeds(seed, "speed_vs_error|<cell>")``) are swept as a contact
-    job sweeps them (:func:`roughcontact.contact.cell.sweep_cell`: ``steps``
-    geometric approaches up to one carrying ``max(pressures)`` on every
-    surface, warm starts, tangent stiffness): first by the reference,
-    ``method="exact"`` (block principal pivoting at ``REFERENCE_TOL``,
-    stiffness CG at ``REFERENCE_STIFFNESS_TOL``), then by each method at each
-    of its tolerances (stiffness CG at ``stiffness_tol``, which floors a
-    tight solve's k_P error). Errors at equal approach: per level of
-    ``pressures`` and surface, the step whose exact P is nearest the level in
-    log P; ``<q>_error`` is the largest ``|q / q_exact - 1|`` over the
-    surfaces for q in :data:`SOLVER_QUANTITIES`, dimensionless (Eq 28-32).
+    job sweeps them (:func:`roughcontact.contact.cell.sweep_cell`: the
+    ``steps`` geometric approaches of ``sweep`` up to one carrying its largest
+    pressure on every surface, warm starts, tangent stiffness): first by the
+    reference, ``method="exact"`` (block principal pivoting at
+    ``REFERENCE_TOL``, stiffness CG at ``REFERENCE_STIFFNESS_TOL``), then by
+    each method of ``comparison`` at each of its tolerances (in
+    ``sweep.precision``). Errors at equal approach: per pressure level of
+    ``sweep`` and surface, the step whose exact P is nearest the level in log
+    P; ``<q>_error`` is the largest ``|q / q_exact - 1|`` over the surfaces for
+    q in :data:`SOLVER_QUANTITIES`, dimensionless (Eq 28-32).
 
     Parameters
     ----------
@@ -258,18 +307,13 @@ def solver_speed_vs_error(
         ``E * C`` [m] of ``geometry`` (plan size [m], L [m], grid, E [Pa]).
     cells : sequence of (skew, kurt)
         Height statistics (Eq 4-5).
-    pressures : sequence of float
-        Nominal pressures P [Pa] at which the errors are read.
-    tolerances : sequence of float, or dict method -> sequence
-        KKT tolerances of every method, or of each (a method missing is skipped).
-    methods : sequence of str
-        Methods compared; ``"exact"`` may be included (errors ~0).
-    precision, steps : str, int
-        Precision of the iterative solvers and approaches per sweep (the
-        pipeline's: mixed, 30).
-    max_iter : int, dict method -> int, or None
-        Iteration limit per solve (None: the solver's); a run that hits it
-        reports ``converged_fraction < 1``.
+    surfaces : int
+        Surfaces per cell.
+    generator, sweep, comparison
+        :class:`CellSurfaces`, :class:`SweepSettings` (its ``pressures`` [Pa]
+        where the errors are read, ``steps`` and the ``precision`` of the
+        iterative solvers; its method and tol unused) and
+        :class:`SolverComparison` (methods, tolerances, iteration limits).
     label, progress
         Name of the influence operator (column ``influence``); a callable
         given a line after each run.
@@ -289,23 +333,24 @@ def solver_speed_vs_error(
     """
     if surfaces < 1:
         raise ValueError(f"surfaces must be >= 1, got {surfaces!r}")
-    levels = _positive_levels(pressures)
+    levels = _positive_levels(sweep.pressures)
     label = label or (geometry.mesh if isinstance(geometry.mesh, str) else "custom")
     say = reporter(progress)
-    end = nondim_pressure(levels.max(), thickness=geometry.thickness, E=geometry.E, sigma=sigma)
-    compared = dict(methods=methods, tolerances=tolerances, max_iter=max_iter,
-                    precision=precision, stiffness_tol=stiffness_tol)
+    end = sweep.end(geometry, generator.sigma)
     rows = []
     for skew, kurt in cells:
-        heights = cell_heights(geometry.grid, geometry.size, b, skew, kurt, surfaces, seed,
-                               "speed_vs_error")
+        heights = generator.heights(geometry.grid, geometry.size, (skew, kurt), surfaces,
+                                    "speed_vs_error")
         fields = {"influence": label, "grid_x": geometry.grid[0], "grid_y": geometry.grid[1],
-                  "skew": float(skew), "kurt": float(kurt), "surfaces": surfaces, "steps": steps}
-        rows += _solver_cell(partial(timed_sweep, unit_influence, heights, geometry, end, steps),
-                             fields, levels, geometry, sigma, say, compared)
+                  "skew": float(skew), "kurt": float(kurt), "surfaces": surfaces,
+                  "steps": sweep.steps}
+        rows += _solver_cell(
+            partial(timed_sweep, unit_influence, heights, geometry, end, sweep.steps), fields,
+            levels, geometry, generator.sigma, say, (comparison, sweep.precision))
     table = pd.DataFrame(rows)
-    table.attrs.update(comparison=SOLVER_COMPARISON, stiffness_tol=stiffness_tol, sigma=sigma,
-                       b=b, seed=seed, machine=describe_machine())
+    table.attrs.update(comparison=SOLVER_COMPARISON, stiffness_tol=comparison.stiffness_tol,
+                       sigma=generator.sigma, b=generator.b, seed=generator.seed,
+                       machine=describe_machine())
     return table
 
 
@@ -457,44 +502,31 @@ def band_vs_count(
 
 
 def surfaces_per_cell(
-    unit_influence,
-    geometry: BlockGeometry,
-    cell: tuple[float, float] = (0.0, 3.0),
-    *,
-    surfaces: int = 120,
-    counts: Sequence[int] = DEFAULT_COUNTS,
-    sigma: float = 24.5e-6,
-    b: float = 1e-3,
-    pressures: Sequence[float] = (0.3e6, 1e6, 3e6),
-    method: str = "cg",
-    tol: float = 1e-8,
-    precision: str = "mixed",
-    steps: int = 30,
-    batch_size: int = BATCH_SIZE,
-    draws: int = 200,
-    seed: int = 2006,
+    unit_influence, geometry: BlockGeometry, cell: tuple[float, float] = (0.0, 3.0), *,
+    surfaces: int = 120, counts: Sequence[int] = DEFAULT_COUNTS,
+    generator: CellSurfaces = DEFAULT_SURFACES, sweep: SweepSettings = DEFAULT_SWEEP,
+    batch_size: int = BATCH_SIZE, draws: int = 200,
     progress: Callable[[str], None] | None = None,
 ) -> pd.DataFrame:
     """Solve ``surfaces`` surfaces of one cell once, then :func:`band_vs_count`.
 
-    Surfaces as in :func:`solver_speed_vs_error` (seeds
+    Surfaces of ``generator`` as in :func:`solver_speed_vs_error` (seeds
     ``derive_seeds(seed, "surfaces_per_cell|<cell>")``), swept like a contact
-    job (batches of ``batch_size``). Adds columns ``skew``, ``kurt`` and
+    job (``sweep``: its method, tol, precision and steps; batches of
+    ``batch_size``), read at ``sweep.pressures`` [Pa] and subsampled to each of
+    ``counts`` (``draws`` subsets each). Adds columns ``skew``, ``kurt`` and
     ``solve_s`` (all surfaces).
     """
     skew, kurt = cell
-    heights = cell_heights(geometry.grid, geometry.size, b, skew, kurt, surfaces, seed,
-                           "surfaces_per_cell")
-    end = nondim_pressure(max(pressures), thickness=geometry.thickness, E=geometry.E,
-                          sigma=sigma)
-    nd, solve_s = timed_sweep(unit_influence, heights, geometry, end, steps, method=method,
-                              tol=tol, precision=precision, batch_size=batch_size)
+    heights = generator.heights(geometry.grid, geometry.size, cell, surfaces, "surfaces_per_cell")
+    nd, solve_s = timed_sweep(unit_influence, heights, geometry,
+                              sweep.end(geometry, generator.sigma), sweep.steps,
+                              method=sweep.method, tol=sweep.tol, precision=sweep.precision,
+                              batch_size=batch_size)
     reporter(progress)(f"{cell_key(skew, kurt)}: {surfaces} surfaces swept in {solve_s:.1f} s")
-    table = band_vs_count(nondim.to_physical(nd, sigma, geometry.E), pressures, counts,
-                          draws=draws, seed=seed)
+    table = band_vs_count(nondim.to_physical(nd, generator.sigma, geometry.E), sweep.pressures,
+                          counts, draws=draws, seed=generator.seed)
     table.insert(0, "kurt", float(kurt))
     table.insert(0, "skew", float(skew))
     table["solve_s"] = solve_s
     return table
-
-

@@ -4,26 +4,38 @@
 grids over the same nominal area and reports the change of k_P (Eq 33), real
 area and peak pressure at equal nominal pressure against the finest grid;
 :data:`GRID_INFLUENCES` and :data:`PAIRINGS` hold its influence models and
-its ways of pairing the surfaces across the grids.
+its ways of pairing the surfaces across the grids, :class:`GridOptions` the
+choice among them.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
 import pandas as pd
 
-from roughcontact.contact.cell import aggregate_sweep, nondim_pressure
+from roughcontact.contact.cell import aggregate_sweep
 from roughcontact.elasticity import operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.reports.speed.machine import describe_machine
-from roughcontact.reports.speed.sweeps import cell_heights, cell_key, reporter, timed_sweep
+from roughcontact.reports.speed.sweeps import (
+    DEFAULT_SURFACES,
+    DEFAULT_SWEEP,
+    CellSurfaces,
+    SweepSettings,
+    cell_key,
+    reporter,
+    timed_sweep,
+)
 
-__all__ = ["GRID_COLUMNS", "GRID_INFLUENCES", "PAIRINGS", "grid_study"]
+__all__ = ["GRID_COLUMNS", "GRID_INFLUENCES", "PAIRINGS", "PAPER_BLOCK", "GridOptions",
+           "grid_study"]
 
 
 def _hybrid_operator(geometry: BlockGeometry, coarsening: int):
@@ -109,6 +121,48 @@ GRID_COLUMNS = MappingProxyType({
 })
 
 
+#: The paper's block (Table 1: 9 mm x 9 mm x 10 mm, E = 511 MPa, nu = 0, clamped):
+#: :func:`grid_study`'s default.
+PAPER_BLOCK = BlockGeometry()
+
+
+@dataclass(frozen=True)
+class GridOptions:
+    """How :func:`grid_study` models its grids and pairs their surfaces.
+
+    Attributes
+    ----------
+    influence : str
+        Influence model of every grid, a key of :data:`GRID_INFLUENCES`
+        (default ``"hybrid"``: the matrix-free hybrid operator).
+    mesh : str
+        Mesh preset of the finite-element part (``"hybrid"``, ``"fe"``; default
+        ``"refined"``).
+    coarsening : int
+        How many times coarser the hybrid's finite-element grid is (default 2).
+    pairing : str
+        How the surfaces are paired across the grids, a key of :data:`PAIRINGS`
+        (default ``"nested"``).
+    """
+
+    influence: str = "hybrid"
+    mesh: str = "refined"
+    coarsening: int = 2
+    pairing: str = "nested"
+
+    def __post_init__(self) -> None:
+        if self.pairing not in PAIRINGS:
+            raise ValueError(f"pairing must be 'nested' or 'independent', got {self.pairing!r}")
+        if self.influence not in GRID_INFLUENCES:
+            raise ValueError("influence must be 'hybrid', 'halfspace', 'halfspace_fft' or "
+                             f"'fe', got {self.influence!r}")
+
+    def model_name(self) -> str:
+        """The influence model's name in the table, e.g. ``hybrid (refined, coarsening 2)``."""
+        return GRID_INFLUENCES[self.influence][1].format(mesh=self.mesh,
+                                                         coarsening=self.coarsening)
+
+
 def _grid_rows(frame: pd.DataFrame, fields: Mapping) -> list[dict]:
     """The grid table's rows of one aggregated sweep ``frame``, after the shared ``fields``."""
     return [dict(fields) | {"pressure_Pa": float(agg["nominal_pressure"])}
@@ -130,76 +184,69 @@ def _changes_against_finest(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def grid_study(
-    cells: Sequence[tuple[float, float]] = ((0.0, 3.0),), *, grids: Sequence[int] = (30, 60, 120),
-    size: float = 9e-3, thickness: float = 10e-3, E: float = 5.11e8, nu: float = 0.0,
-    base: str = "clamped", influence: str = "hybrid", mesh: str = "refined",
-    coarsening: int = 2, surfaces: int = 4, sigma: float = 24.5e-6, b: float = 1e-3,
-    pressures: Sequence[float] = (0.3e6, 1e6, 3e6), pairing: str = "nested",
-    method: str = "cg", tol: float = 1e-8, precision: str = "mixed", steps: int = 30,
-    seed: int = 2006, progress: Callable[[str], None] | None = None,
-    spectrum: Mapping | None = None,
+    block: BlockGeometry = PAPER_BLOCK, cells: Sequence[tuple[float, float]] = ((0.0, 3.0),),
+    *, grids: Sequence[int] = (30, 60, 120), surfaces: int = 4,
+    generator: CellSurfaces = DEFAULT_SURFACES, sweep: SweepSettings = DEFAULT_SWEEP,
+    options: GridOptions = GridOptions(), progress: Callable[[str], None] | None = None,
 ) -> pd.DataFrame:
     """k_P, real area and peak pressure of the same statistics on several contact grids.
 
-    A square block ``size`` x ``size`` [m], ``thickness`` L [m], meshed with
-    ``g`` x ``g`` contact elements for each ``g`` in ``grids``, its influence
-    coefficients from ``influence`` (:data:`GRID_INFLUENCES`; default: the
-    matrix-free hybrid of ``mesh``, ``coarsening`` times coarser). ``surfaces``
-    surfaces per cell (exponential ACF, Eq 1; ``sigma``, ``b`` [m]) are paired
-    across the grids by ``pairing`` (:data:`PAIRINGS`; default: generated on
-    the finest grid, point-sampled on the coarser ones). ``spectrum``, a
-    mapping of :class:`~roughcontact.surfaces.spec.SurfaceSpec` fields
-    (e.g. ``{"acf": "self-affine", "hurst": 0.8, "rolloff_wavelength": 3e-3,
-    "cutoff_wavelength": 0.6e-3}``), replaces the exponential ACF (``b`` is then
-    unused): with the cut-off resolved, real area and peak pressure converge
-    with the grid, which they do not for Eq 1. Each grid is swept as a
-    contact job (:func:`~roughcontact.contact.cell.sweep_cell`: ``method``,
-    ``tol``, ``precision``, ``steps``) and averaged at equal P
+    The square ``block`` (plan size [m], thickness L [m], E [Pa], nu, base;
+    default: the paper's 9 mm x 9 mm x 10 mm), meshed with ``g`` x ``g``
+    contact elements for each ``g`` in ``grids`` (its own grid and mesh are
+    replaced), its influence coefficients from ``options``
+    (:class:`GridOptions`; default: the matrix-free hybrid of the refined
+    mesh, twice coarser). ``surfaces`` surfaces per cell of ``cells`` (skew,
+    kurt), generated by ``generator`` (:class:`CellSurfaces`: exponential ACF,
+    Eq 1, or a spectrum, e.g. ``{"acf": "self-affine", "hurst": 0.8,
+    "rolloff_wavelength": 3e-3, "cutoff_wavelength": 0.6e-3}``, with which real
+    area and peak pressure converge with the grid, which they do not for Eq 1),
+    are paired across the grids by ``options.pairing`` (:data:`PAIRINGS`;
+    default: generated on the finest grid, point-sampled on the coarser ones).
+    Each grid is swept as a contact job (``sweep``, :class:`SweepSettings`:
+    :func:`~roughcontact.contact.cell.sweep_cell` with its method, tol,
+    precision and steps) and averaged at its pressures
     (:func:`~roughcontact.contact.cell.aggregate_sweep`).
 
     Returns
     -------
     pandas.DataFrame
         One row per (cell, grid, pressure): ``skew``, ``kurt``, ``grid``,
-        ``element_size_m``, ``influence_model``, ``pairing``, ``build_s``
+        ``element_size_m`` (Lx / g), ``influence_model``, ``pairing``, ``build_s``
         (influence), ``solve_s`` (all surfaces), ``surfaces``,
         ``converged_fraction``, ``pressure_Pa``, the columns of
         :data:`GRID_COLUMNS` (means and 95 % half-widths), and ``k_P_change``,
         ``real_area_change``, ``max_pressure_change``: ``q / q_finest - 1``.
     """
     grids = sorted(int(g) for g in grids)
-    if pairing not in PAIRINGS:
-        raise ValueError(f"pairing must be 'nested' or 'independent', got {pairing!r}")
-    if influence not in GRID_INFLUENCES:
-        raise ValueError("influence must be 'hybrid', 'halfspace', 'halfspace_fft' or 'fe', "
-                         f"got {influence!r}")
-    build, model = GRID_INFLUENCES[influence]
-    model = model.format(mesh=mesh, coarsening=coarsening)
-    heights = PAIRINGS[pairing](cells, grids, lambda g, skew, kurt, tag: cell_heights(
-        (g, g), (size, size), b, skew, kurt, surfaces, seed, tag, spectrum))
-    levels = np.asarray(pressures, dtype=float)
-    end = nondim_pressure(levels.max(), thickness=thickness, E=E, sigma=sigma)
+    build, _ = GRID_INFLUENCES[options.influence]
+    model = options.model_name()
+    heights = PAIRINGS[options.pairing](cells, grids, lambda g, skew, kurt, tag: (
+        generator.heights((g, g), block.size, (skew, kurt), surfaces, tag)))
+    levels = np.asarray(sweep.pressures, dtype=float)
+    end = sweep.end(block, generator.sigma)
     say, rows = reporter(progress), []
     for g in reversed(grids):
-        geometry = BlockGeometry(size=(size, size), thickness=thickness, grid=(g, g), E=E,
-                                 nu=nu, base=base, mesh=mesh)
+        geometry = dataclasses.replace(block, grid=(g, g), mesh=options.mesh)
         start = time.perf_counter()
-        unit = build(geometry, coarsening)
+        unit = build(geometry, options.coarsening)
         build_s = time.perf_counter() - start
         for skew, kurt in cells:
-            nd, solve_s = timed_sweep(unit, heights(g, skew, kurt), geometry, end, steps,
-                                      method=method, tol=tol, precision=precision,
-                                      stiffness_tol=1e-6, max_iter=None)
-            _, frame = aggregate_sweep(nd, sigma, E, levels)
+            nd, solve_s = timed_sweep(unit, heights(g, skew, kurt), geometry, end, sweep.steps,
+                                      method=sweep.method, tol=sweep.tol,
+                                      precision=sweep.precision, stiffness_tol=1e-6,
+                                      max_iter=None)
+            _, frame = aggregate_sweep(nd, generator.sigma, block.E, levels)
             say(f"grid {g} x {g} {cell_key(skew, kurt)}: influence {build_s:.1f} s, "
                 f"sweep {solve_s:.1f} s")
             rows += _grid_rows(frame, {
-                "skew": float(skew), "kurt": float(kurt), "grid": g, "element_size_m": size / g,
-                "influence_model": model, "pairing": pairing, "build_s": build_s,
-                "solve_s": solve_s, "surfaces": surfaces,
-                "converged_fraction": float(nd.converged.mean())})
+                "skew": float(skew), "kurt": float(kurt), "grid": g,
+                "element_size_m": block.size[0] / g, "influence_model": model,
+                "pairing": options.pairing, "build_s": build_s, "solve_s": solve_s,
+                "surfaces": surfaces, "converged_fraction": float(nd.converged.mean())})
         del unit
     table = _changes_against_finest(pd.DataFrame(rows))
-    table.attrs.update(influence_model=model, pairing=pairing, method=method, tol=tol,
-                       spectrum=dict(spectrum or {}), machine=describe_machine())
+    table.attrs.update(influence_model=model, pairing=options.pairing, method=sweep.method,
+                       tol=sweep.tol, spectrum=dict(generator.spectrum or {}),
+                       machine=describe_machine())
     return table
