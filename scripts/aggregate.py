@@ -2,8 +2,8 @@
 
 from roughcontact.study.aggregation import aggregate_study
 from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.flow_settings import flow_settings
 from roughcontact.study.logs import route_logging
+from roughcontact.study.probes import study_probes
 
 route_logging(snakemake.log[0])
 cells = [StudyCell.from_params(params) for params in snakemake.params.cells]
@@ -20,5 +20,5 @@ aggregate_study(
     snakemake.output.meta,
     config=snakemake.config,
     validity_path=snakemake.output.validity,
-    flow=flow_settings(snakemake.config),
+    probes=study_probes(snakemake.config),
 )
