@@ -398,7 +398,8 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
     pandas.DataFrame
         One row per level: ``nominal_pressure`` [Pa]; for each quantity ``q`` of
         :func:`quantities` (``QUANTITIES``, and the interface, distribution and
-        counter-body ones the sweep recorded; units in ``frame.attrs["units"]``)
+        counter-body ones and the probe columns the sweep recorded; units in
+        ``frame.attrs["units"]``)
         ``q_mean``, ``q_half_width`` (same unit) and ``q_count`` (surfaces used:
         fewer where the level lies outside some surfaces' swept range, 0 with NaN
         values outside all); ``coverage`` (:func:`coverage`: why a count is

@@ -27,6 +27,9 @@ geometry and nu only) and the block thickness ``L`` [m], define
 - normalized stiffness: ``k_P / E = dPhat / ddhat``; back: ``k_P = E dPhat/ddhat``
   [Pa] (Eq 33), contact stiffness ``dF/dd = k_P A_n / L`` [N/m]
 - hardness cap: ``nondim_hardness = H L / (E sigma)``; back: ``H`` [Pa]
+- a probe column (:mod:`roughcontact.contact.probes`) of lengths to the power
+  ``k`` (its ``length_power``; the gaps it reads are in units of sigma): back:
+  times ``sigma**k`` (e.g. a flow conductance, a gap cubed [m^3])
 
 Substituting, ``u / sigma = K phat`` and the contact conditions (Eq 19-22)
 ``u + f - d = 0`` where ``p > 0``, ``>= 0`` elsewhere, become
