@@ -19,7 +19,7 @@ run, the minimum of ``--repeats`` runs of each:
     compared bit for bit;
 (b) *on at 60 x 60*: the same sweep with ``FlowProbe()`` (x and y, sides of the grid:
     sealed) against ``NO_FLOW``, alternated in one process, and, in the runs with flow,
-    the time inside :meth:`FlowProbe.columns` (timed around each call) over the sweep's;
+    the time inside :meth:`FlowProbe.measure` (timed around each call) over the sweep's;
 (c) *on at 1024 x 1024*: one periodic cell (b = 1/32 of the period) of 2 Gaussian
     surfaces on :class:`~roughcontact.elasticity.halfspace.PeriodicHalfSpace`, method
     "pcg", tol 1e-8, no stiffness, 4 mean pressures from about 1 % to 30 % real area,
@@ -41,7 +41,7 @@ Measured (2026-12-02, 2 shared cores, one thread; see flow_cost.md):
   flow (x 1.075; a first run gave x 0.69: within the machine's noise), all 27 arrays of
   the two sweeps bit-identical. Off costs nothing.
 - on, 60 x 60: 29.9 s against 5.6 s off, +432 % (budget 25 %); 24.4 s inside
-  FlowProbe.columns, 82 % of the sweep with flow. About 3/4 of the flow is SuperLU
+  FlowProbe.measure, 82 % of the sweep with flow. About 3/4 of the flow is SuperLU
   (one 60 x 60 field a factorisation, ordering included), the rest the per-field
   assembly and clusters. ``BandedCholesky`` (band Cholesky, sealed sides): +265 %;
   with it and ``directions=("x",)``: +170 %; conductances the same to 7e-13.
@@ -102,8 +102,8 @@ def study_job():
                                   precision="mixed", batch_size=BATCH)
 
     def run(flow=None):
-        grid = True if flow is None else dataclasses.replace(cell.block_interface(geometry),
-                                                             flow=flow)
+        grid = True if flow is None else dataclasses.replace(
+            cell.block_interface(geometry), probes=(flow,) if flow.columns else ())
         return cell.sweep_cell(unit, heights, geometry, PRESSURE_END, STEPS,
                                options=dataclasses.replace(options, interface=grid))
 
@@ -155,7 +155,7 @@ def off_vs_baseline(baseline: Path, repeats: int) -> dict:
 
 class _Timed:
     """A function with the wall time of its calls added up in ``seconds``; the
-    ``(pressure, gap)`` arguments of :meth:`FlowProbe.columns` kept in ``calls`` when
+    ``(pressure, gap)`` arguments of :meth:`FlowProbe.measure` kept in ``calls`` when
     ``keep``."""
 
     def __init__(self, function, keep=False):
@@ -163,7 +163,7 @@ class _Timed:
 
     def __call__(self, *args, **kwargs):
         if self.keep:
-            self.calls.append((np.array(args[1]), np.array(args[2])))
+            self.calls.append((np.array(args[1].pressure), np.array(args[1].gap)))
         start = time.perf_counter()
         try:
             return self.function(*args, **kwargs)
@@ -173,24 +173,24 @@ class _Timed:
 
 def alternated(runs: dict, repeats: int, kept: list | None = None) -> dict:
     """Minimum wall time [s] of each callable of ``runs``, called in turn ``repeats``
-    times, and ``probe``: the time inside :meth:`FlowProbe.columns` of the fastest
+    times, and ``probe``: the time inside :meth:`FlowProbe.measure` of the fastest
     ``"on"`` run, with ``share`` its ratio to that run's wall time; the arguments of
     the first ``"on"`` run's calls appended to ``kept``."""
     from roughcontact.transport.probe import FlowProbe
 
     best = dict.fromkeys(runs, np.inf)
     probe = share = np.inf
-    original = FlowProbe.columns
+    original = FlowProbe.measure
     for repeat in range(repeats):
         for name, run in runs.items():
             timed = _Timed(original, keep=kept is not None and repeat == 0 and name == "on")
-            FlowProbe.columns = lambda self, *a, _t=timed, **k: _t(self, *a, **k)
+            FlowProbe.measure = lambda self, *a, _t=timed, **k: _t(self, *a, **k)
             try:
                 start = time.perf_counter()
                 run()
                 elapsed = time.perf_counter() - start
             finally:
-                FlowProbe.columns = original
+                FlowProbe.measure = original
             if timed.keep:
                 kept.extend(timed.calls)
             print(f"  {name}: {elapsed:.2f} s (probe {timed.seconds:.2f} s)", flush=True)
@@ -223,8 +223,9 @@ def on_60(repeats: int) -> dict:
     for name in ("on, banded", "on, banded, x only"):
         other = last[flows[name]]
         times[f"{name} relative difference"] = float(np.nanmax(np.abs(
-            other.flow_conductance_x / np.where(swept.flow_conductance_x > 0,
-                                                swept.flow_conductance_x, np.nan) - 1.0)))
+            other.probe_columns["flow_conductance_x"]
+            / np.where(swept.probe_columns["flow_conductance_x"] > 0,
+                       swept.probe_columns["flow_conductance_x"], np.nan) - 1.0)))
     return {"sweep": "60 x 60 study job, 60 surfaces x 30 steps, pivot, block (sealed sides)",
             **times, "area_first": float(swept.real_area_fraction[:, 0].mean()),
             "area_last": float(swept.real_area_fraction[:, -1].mean())}
@@ -266,7 +267,8 @@ def on_1024(repeats: int) -> tuple[dict, object]:
     op, gaps, pressures = cell_1024()
 
     def run(flow):
-        grid = dataclasses.replace(interface.InterfaceGrid.of(op, (PERIOD, PERIOD)), flow=flow)
+        grid = dataclasses.replace(interface.InterfaceGrid.of(op, (PERIOD, PERIOD)),
+                                   probes=(flow,) if flow.columns else ())
         return contact.sweep(op, gaps, mean_pressures=pressures, method="pcg", tol=1e-8,
                              stiffness=False, interface=grid)
 
@@ -407,12 +409,12 @@ def remedies_60(repeats: int) -> list[dict]:
     from roughcontact.transport import flow
     from roughcontact.transport.probe import FlowProbe
 
-    timed = _Timed(FlowProbe.columns, keep=True)
-    FlowProbe.columns = lambda self, *a, **k: timed(self, *a, **k)
+    timed = _Timed(FlowProbe.measure, keep=True)
+    FlowProbe.measure = lambda self, *a, **k: timed(self, *a, **k)
     try:
         study_job()(FlowProbe(directions=("x",)))
     finally:
-        FlowProbe.columns = timed.function
+        FlowProbe.measure = timed.function
     gaps = [np.where(p > 0.0, 0.0, np.maximum(g, 0.0)) for p, g in timed.calls[::10]]
     spacing = (9e-3 / 60,) * 2
     order = _nested_dissection(60, 60, False)
@@ -524,7 +526,7 @@ def write(results: dict, repeats: dict) -> str:
     if on_rows:
         lines += ["## On: FlowProbe() (x and y) against NO_FLOW", "",
                   "| sweep | runs each | off [s] | on [s] | (on - off) / off | "
-                  "in FlowProbe.columns [s] | its share of the sweep with flow | "
+                  "in FlowProbe.measure [s] | its share of the sweep with flow | "
                   "real area, first to last step |",
                   "|---|---|---|---|---|---|---|---|"]
         for key in ("60", "1024"):

@@ -18,8 +18,11 @@ a cell's surfaces at equal nominal pressure; ``cell`` is the one
 sweep-then-aggregate recipe the workflow, the reports and the audit share;
 ``halfspace_criterion`` measures, by solving, whether the half-space model
 is enough for a geometry; ``interface`` reads off a solution its contact
-spots, perimeter, perimeter-corrected real area and gaps; ``counterface``
-makes the equivalent problem of two rough, elastic bodies (Eq 17-18).
+spots, perimeter, perimeter-corrected real area and gaps; ``probes`` says what
+a probe is (what a sweep measures beyond pressure and load, e.g. the flow of
+:mod:`roughcontact.transport`: columns the sweep stores without naming them);
+``counterface`` makes the equivalent problem of two rough, elastic bodies (Eq
+17-18).
 
 The solver's public names are importable from here: ``from roughcontact
 import contact; contact.solve(...)``.

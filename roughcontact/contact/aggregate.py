@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 import scipy.special
 
-from roughcontact.contact.curves import PhysicalSweep, flow_arrays
+from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.contact.result import INTERFACE_UNITS
 
 if TYPE_CHECKING:
@@ -39,7 +39,6 @@ __all__ = [
     "COVERAGE",
     "DISTRIBUTION_QUANTITIES",
     "COUNTER_QUANTITIES",
-    "FLOW_QUANTITIES",
     "INTERFACE_QUANTITIES",
     "QUANTITIES",
     "SPACINGS",
@@ -51,6 +50,7 @@ __all__ = [
     "mean_plane_modulus",
     "modulus_summary",
     "pressure_axis",
+    "probe_quantities",
     "quantities",
     "statistics",
     "surface_curves",
@@ -135,28 +135,6 @@ COUNTER_QUANTITIES = {
 }
 
 
-def _flow_quantities(direction: str) -> dict:
-    """The aggregated flow quantities along ``direction`` (:mod:`roughcontact.transport`)."""
-    d = direction
-    return {
-        f"flow_conductance_{d}": Quantity(
-            "m^3", f"K_{d}, effective conductance along {d} (Reynolds equation, local cubic "
-                   "law): the cube of the flat gap that carries the same flow"),
-        f"flow_factor_{d}": Quantity("1", f"phi_{d} = K_{d} / mean(g)^3, against a flat gap of "
-                                          "the mean gap (0 where sealed)"),
-        f"pressure_flow_factor_{d}": Quantity(
-            "1", f"phi_{d} = K_{d} / h^3, h = mean(f) - d the nominal separation of the "
-                 "undeformed mean planes (Patir & Cheng 1978; 0 where sealed)"),
-        f"flow_connected_{d}": Quantity(
-            "1", f"share of surfaces whose free space connects inlet to outlet along {d} "
-                 "(still leaking; each surface's state at its step nearest in log P)",
-            state=True),
-    }
-
-
-#: Of a sweep that recorded the flow through its gap: per direction, by name.
-FLOW_QUANTITIES = {name: spec for direction in ("x", "y")
-                   for name, spec in _flow_quantities(direction).items()}
 #: Spacings of :func:`pressure_axis`: name -> ``f(first, last, n)``.
 SPACINGS = {"log": np.geomspace, "linear": np.linspace}
 
@@ -200,29 +178,42 @@ def _check_sweep(sweep) -> PhysicalSweep:
     return sweep
 
 
+def probe_quantities(sweep: PhysicalSweep) -> dict:
+    """The aggregated columns of the sweep's probes (:mod:`roughcontact.contact.probes`),
+    by name in their order: each :class:`~roughcontact.contact.probes.Column`'s unit and
+    meaning, a yes/no column read as a ``state``."""
+    return {column.name: Quantity(column.unit, column.meaning, state=column.state)
+            for column in sweep.probe_columns.specs}
+
+
 def quantities(sweep: PhysicalSweep) -> dict:
     """The quantities :func:`aggregate_cell` averages for ``sweep``: :data:`QUANTITIES`, and
-    :data:`INTERFACE_QUANTITIES` (and the distribution, counter-body and flow ones) when
-    the sweep recorded them."""
-    flow = {name: FLOW_QUANTITIES[name] for name in flow_arrays(sweep)}
+    :data:`INTERFACE_QUANTITIES` (and the distribution and counter-body ones) when the
+    sweep recorded them, and last its probes' columns (:func:`probe_quantities`)."""
+    probed = probe_quantities(sweep)
     if sweep.mean_gap is None:
-        return {**QUANTITIES, **flow}
+        return {**QUANTITIES, **probed}
     counter = {} if sweep.counter_deflection is None else COUNTER_QUANTITIES
     if sweep.gap_quantiles is None:
-        return {**QUANTITIES, **INTERFACE_QUANTITIES, **counter, **flow}
-    return {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **counter, **flow}
+        return {**QUANTITIES, **INTERFACE_QUANTITIES, **counter, **probed}
+    return {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **counter,
+            **probed}
 
 
-_ALL = {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **COUNTER_QUANTITIES,
-        **FLOW_QUANTITIES}
+_ALL = {**QUANTITIES, **INTERFACE_QUANTITIES, **DISTRIBUTION_QUANTITIES, **COUNTER_QUANTITIES}
+
+
+def _quantity(sweep: PhysicalSweep, quantity: str) -> Quantity:
+    """How ``quantity`` is read: one of :data:`_ALL`, or a column of the sweep's probes."""
+    return _ALL[quantity] if quantity in _ALL else probe_quantities(sweep)[quantity]
 
 
 def _values(sweep: PhysicalSweep, quantity: str) -> np.ndarray:
-    """The (m, k) values of ``quantity``: a field of the sweep, or a point of one of its
-    stored distributions."""
-    source = _ALL[quantity].quantile
+    """The (m, k) values of ``quantity``: a field or probe column of the sweep, or a point
+    of one of its stored distributions."""
+    source = _quantity(sweep, quantity).quantile
     if source is None:
-        return np.asarray(getattr(sweep, quantity), dtype=float)
+        return np.asarray(sweep.column(quantity), dtype=float)
     from roughcontact.contact.interface import GAP_PROBABILITIES, SPOT_PROBABILITIES
 
     name, probability = source
@@ -234,7 +225,7 @@ def _usable(sweep: PhysicalSweep, quantity: str) -> np.ndarray:
     """(m, k) mask of steps a quantity may be interpolated from."""
     P = sweep.nominal_pressure
     mask = np.isfinite(P) & (P > 0.0)
-    for flag in _ALL[quantity].flags:
+    for flag in _quantity(sweep, quantity).flags:
         mask &= getattr(sweep, flag)
     return mask & np.isfinite(_values(sweep, quantity))
 
@@ -407,7 +398,8 @@ def aggregate_cell(sweep_physical: PhysicalSweep, pressures, *,
     pandas.DataFrame
         One row per level: ``nominal_pressure`` [Pa]; for each quantity ``q`` of
         :func:`quantities` (``QUANTITIES``, and the interface, distribution and
-        counter-body ones the sweep recorded; units in ``frame.attrs["units"]``)
+        counter-body ones and the probe columns the sweep recorded; units in
+        ``frame.attrs["units"]``)
         ``q_mean``, ``q_half_width`` (same unit) and ``q_count`` (surfaces used:
         fewer where the level lies outside some surfaces' swept range, 0 with NaN
         values outside all); ``coverage`` (:func:`coverage`: why a count is

@@ -26,16 +26,14 @@ import numpy as np
 
 from roughcontact.contact.checks import check_positive
 from roughcontact.contact.result import (
-    FLOW,
     INTERFACE,
     INTERFACE_SCALARS,
     INTERFACE_UNITS,
-    FlowColumns,
     InterfaceColumns,
+    ProbedColumns,
     SweepResult,
     zero_plastic_area,
 )
-from roughcontact.transport.probe import FLOW_UNITS
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -47,7 +45,6 @@ __all__ = [
     "CellSweep",
     "NondimSweep",
     "PhysicalSweep",
-    "flow_arrays",
     "interface_arrays",
     "solver_arrays",
 ]
@@ -66,7 +63,7 @@ _DTYPES = {"iterations": int, "matvecs": int, "converged": bool, "stiffness_conv
 
 
 @dataclass(frozen=True, kw_only=True)
-class CellSweep(InterfaceColumns, FlowColumns):
+class CellSweep(InterfaceColumns, ProbedColumns):
     """The per-step arrays of a swept cell, shared by :class:`NondimSweep` and
     :class:`PhysicalSweep` (units: SI, and in brackets the dimensionless form).
 
@@ -114,11 +111,11 @@ class CellSweep(InterfaceColumns, FlowColumns):
     counter_deflection : ndarray or None
         Of a pair of elastic bodies: the counter body's mean-plane deflection [m]
         (``/ sigma``; :mod:`roughcontact.contact.counterface`); None with a rigid one.
-    flow_conductance_x, flow_factor_x, ... : ndarray or None
-        The flow through the gap along x and y
-        (:class:`~roughcontact.contact.result.FlowColumns`): conductance [m^3]
-        (``/ sigma^3``), flow factors [-] and percolation (bool); None when not
-        recorded.
+    probe_columns : ProbeColumns
+        The columns of the probes the sweep was given
+        (:mod:`roughcontact.contact.probes`), by name: in SI units (in units of
+        ``sigma**length_power`` of each :class:`~roughcontact.contact.probes.Column`);
+        empty without probes.
     """
 
     approach: np.ndarray
@@ -241,7 +238,7 @@ class PhysicalSweep(CellSweep):
                                         "nominal_pressure": "nominal_pressure",
                                         "contact_stiffness": "contact_stiffness"},
                                stiffness="contact_stiffness")
-        return cls(**arrays, **interface_arrays(result),
+        return cls(**arrays, **interface_arrays(result), probe_columns=result.probe_columns,
                    normalized_stiffness=thickness / nominal_area * arrays["contact_stiffness"],
                    sigma=float(sigma), E=float(E), thickness=thickness,
                    nominal_area=nominal_area, hardness=result.hardness)
@@ -258,8 +255,10 @@ class PhysicalSweep(CellSweep):
         ``plastic_area_fraction``, ``plastic_load_fraction`` [-] and, when
         recorded, the (m, k) interface quantities (``spot_count``,
         ``mean_spot_area`` [m^2], ``perimeter`` [m], ``corrected_real_area_fraction``
-        [-], ``mean_gap`` [m]) and flow columns (``flow_conductance_x`` [m^3], ...). The units
-        are also in ``frame.attrs["units"]``, the scales in ``frame.attrs``.
+        [-], ``mean_gap`` [m]) and the probe columns (in their
+        :class:`~roughcontact.contact.probes.Column` units; ``bool`` for a yes/no
+        state). The units are also in ``frame.attrs["units"]``, the scales in
+        ``frame.attrs``.
         """
         m, k = self.approach.shape
         columns = {
@@ -269,10 +268,10 @@ class PhysicalSweep(CellSweep):
         units = dict(_PHYSICAL_UNITS)
         if self.mean_gap is not None:
             units.update({name: INTERFACE_UNITS[name] for name in INTERFACE_SCALARS})
-        units.update({name: FLOW_UNITS[name.rsplit("_", 1)[0]].replace("gap^3", "m^3")
-                      for name in flow_arrays(self)})
+        units.update({column.name: "bool" if column.state else column.unit
+                      for column in self.probe_columns.specs})
         for name in units:
-            columns[name] = np.asarray(getattr(self, name)).ravel()
+            columns[name] = np.asarray(self.column(name)).ravel()
         import pandas as pd
 
         frame = pd.DataFrame(columns)
@@ -309,14 +308,7 @@ def interface_arrays(result) -> dict:
     arrays = {name: np.asarray(getattr(result, name)) for name in INTERFACE}
     if result.counter_deflection is not None:  # a pair of elastic bodies
         arrays["counter_deflection"] = np.asarray(result.counter_deflection)
-    return arrays | flow_arrays(result)
-
-
-def flow_arrays(result) -> dict:
-    """The flow columns (:data:`~roughcontact.contact.result.FLOW`) a sweep or record
-    holds, by name; empty when it recorded no flow."""
-    return {name: np.asarray(getattr(result, name)) for name in FLOW
-            if getattr(result, name) is not None}
+    return arrays
 
 
 def solver_arrays(result, names: Mapping[str, str], stiffness: str) -> dict:

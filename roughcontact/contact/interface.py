@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from roughcontact.transport.probe import NO_FLOW, FlowProbe
+from roughcontact.contact.probes import Probe, column_names
 
 __all__ = [
     "GAP_PROBABILITIES",
@@ -94,16 +94,17 @@ class InterfaceGrid:
         (:func:`~roughcontact.contact.counterface.deflection_weights`); a sweep
         then records it as ``counter_deflection``. None (default): no counter body,
         or a rigid one.
-    flow : FlowProbe
-        The flow through each solution's gap a sweep records
-        (:class:`~roughcontact.transport.probe.FlowProbe`); :data:`NO_FLOW`
-        (default): none.
+    probes : tuple of Probe
+        What a sweep records at every step beyond the interface quantities
+        (:mod:`roughcontact.contact.probes`, e.g. the flow through the gap,
+        :class:`~roughcontact.transport.probe.FlowProbe`), their columns' names
+        distinct; empty (default): nothing more.
     """
 
     spacing: tuple[float, float]
     periodic: bool = False
     counter_weights: np.ndarray | None = field(default=None, compare=False, repr=False)
-    flow: FlowProbe = NO_FLOW
+    probes: tuple[Probe, ...] = ()
 
     def __post_init__(self):
         dx, dy = (float(s) for s in self.spacing)
@@ -112,6 +113,8 @@ class InterfaceGrid:
                              f"got {self.spacing!r}")
         object.__setattr__(self, "spacing", (dx, dy))
         object.__setattr__(self, "periodic", bool(self.periodic))
+        object.__setattr__(self, "probes", tuple(self.probes))
+        column_names(self.probes)  # distinct
 
     @classmethod
     def of(cls, operator, size) -> InterfaceGrid:
@@ -129,12 +132,6 @@ class InterfaceGrid:
     def element_area(self) -> float:
         """``dx dy`` [m^2]."""
         return self.spacing[0] * self.spacing[1]
-
-    def flow_columns(self, pressure, gap, separation) -> dict:
-        """The flow columns of :attr:`flow` (:meth:`FlowProbe.columns`) of solutions
-        ``pressure`` and ``gap`` (..., ny, nx) at nominal separations ``separation``
-        (...) on this grid; empty without flow."""
-        return self.flow.columns(pressure, gap, separation, self.spacing, self.periodic)
 
 
 @dataclass(frozen=True)

@@ -27,6 +27,9 @@ geometry and nu only) and the block thickness ``L`` [m], define
 - normalized stiffness: ``k_P / E = dPhat / ddhat``; back: ``k_P = E dPhat/ddhat``
   [Pa] (Eq 33), contact stiffness ``dF/dd = k_P A_n / L`` [N/m]
 - hardness cap: ``nondim_hardness = H L / (E sigma)``; back: ``H`` [Pa]
+- a probe column (:mod:`roughcontact.contact.probes`) of lengths to the power
+  ``k`` (its ``length_power``; the gaps it reads are in units of sigma): back:
+  times ``sigma**k`` (e.g. a flow conductance, a gap cubed [m^3])
 
 Substituting, ``u / sigma = K phat`` and the contact conditions (Eq 19-22)
 ``u + f - d = 0`` where ``p > 0``, ``>= 0`` elsewhere, become
@@ -78,7 +81,8 @@ from roughcontact.contact.curves import (
     solver_arrays,
 )
 from roughcontact.contact.methods import resolve_method
-from roughcontact.contact.result import FLOW, INTERFACE
+from roughcontact.contact.probes import ProbeColumns
+from roughcontact.contact.result import INTERFACE
 from roughcontact.contact.sweeps import sweep
 from roughcontact.elasticity import definiteness
 from roughcontact.elasticity.protocol import DenseInfluence
@@ -115,12 +119,12 @@ SI_SCALES = {
     "plastic_area_fraction": "1",
 }
 #: The scale of each interface quantity (:mod:`roughcontact.contact.interface`): gaps
-#: are heights (sigma); spots, perimeter and areas are lateral, the same in both forms;
-#: the flow's conductances are gaps cubed (sigma^3), its factors and flags the same.
+#: are heights (sigma); spots, perimeter and areas are lateral, the same in both forms.
+#: (A probe column's scale is ``sigma**length_power`` of its
+#: :class:`~roughcontact.contact.probes.Column`.)
 INTERFACE_SCALES = {name: "1" for name in INTERFACE} | {"mean_gap": "sigma",
                                                         "gap_quantiles": "sigma",
-                                                        "counter_deflection": "sigma"} | {
-    name: "sigma^3" if name.startswith("flow_conductance") else "1" for name in FLOW}
+                                                        "counter_deflection": "sigma"}
 #: SweepResult field of each array of a NondimSweep: the dimensionless problem has
 #: nominal area 1, so the solver's load is ``Phat`` and its tangent stiffness
 #: ``dPhat / ddhat = k_P / E``.
@@ -428,10 +432,10 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
 
 def _sweep_batches(operator, gaps, steps, options: CellOptions) -> dict:
     """:func:`roughcontact.contact.sweep` of ``options.batch_size`` surfaces at a time
-    (:func:`solve_cell`): the (m, k) arrays of a NondimSweep, and with ``profile``
-    its (m, k, R) profiles."""
+    (:func:`solve_cell`): the (m, k) arrays of a NondimSweep, with ``profile`` its
+    (m, k, R) profiles, and its ``probe_columns``."""
     m, n = gaps.shape[0], gaps[0].size
-    batches = []
+    batches, probed = [], []
     start = time.perf_counter()
     for first in range(0, m, options.batch_size):
         rows = slice(first, min(m, first + options.batch_size))
@@ -443,7 +447,9 @@ def _sweep_batches(operator, gaps, steps, options: CellOptions) -> dict:
         batch.update(interface_arrays(result))
         _report_batch(batch, rows, m, time.perf_counter() - start, options.progress)
         batches.append(batch)
-    return {name: np.concatenate([batch[name] for batch in batches]) for name in batches[0]}
+        probed.append(result.probe_columns)
+    return {**{name: np.concatenate([batch[name] for batch in batches]) for name in batches[0]},
+            "probe_columns": ProbeColumns.concatenated(probed)}
 
 
 def _report_batch(batch: dict, rows: slice, m: int, elapsed: float,
@@ -487,7 +493,8 @@ def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None
     ``d = sigma dhat``, ``d_b = sigma dhat_b``, ``P = E sigma Phat / L``,
     ``p_max = E sigma phat_max / L``, ``F = P A_n``, real area unchanged,
     ``k_P = E dPhat/ddhat`` (Eq 33) and ``dF/dd = k_P A_n / L`` (module
-    docstring; Eq 28-32 of Kumar et al. 2006).
+    docstring; Eq 28-32 of Kumar et al. 2006); each probe column times
+    ``sigma**length_power`` (:meth:`~roughcontact.contact.probes.ProbeColumns.in_length`).
 
     Parameters
     ----------
@@ -517,8 +524,7 @@ def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None
     E = check_positive(E, "E")
     _check_geometry(nd, thickness, area)
     length = nd.thickness
-    scales = {"sigma": sigma, "sigma^3": sigma**3, "E sigma / L": E * sigma / length, "E": E,
-              "1": 1.0}
+    scales = {"sigma": sigma, "E sigma / L": E * sigma / length, "E": E, "1": 1.0}
     cap = _check_cap(nd, hardness, scales["E sigma / L"])
     scaled = {name: scales[scale] * np.asarray(getattr(nd, name), dtype=float)
               for name, scale in SI_SCALES.items()}
@@ -529,6 +535,7 @@ def to_physical(nd: NondimSweep, sigma: float, E: float, thickness: float | None
     return PhysicalSweep(
         **scaled,
         **interface,
+        probe_columns=nd.probe_columns.in_length(sigma),
         **{name: np.array(getattr(nd, name)) for name in DIAGNOSTICS},
         load=scaled["nominal_pressure"] * nd.nominal_area,
         contact_stiffness=scaled["normalized_stiffness"] * nd.nominal_area / length,

@@ -10,15 +10,16 @@ pressures in Pa, lengths in m, loads in N, stiffnesses in N/m.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from roughcontact.contact import interface, validity
+from roughcontact.contact import interface, probes, validity
 from roughcontact.contact.kkt import plastic_fraction
+from roughcontact.contact.probes import ProbeColumns
 
-__all__ = ["FLOW", "INTERFACE", "INTERFACE_SCALARS", "INTERFACE_UNITS", "Batch",
-           "ContactResult", "FlowColumns", "InterfaceColumns", "SweepResult", "SweepTable",
+__all__ = ["INTERFACE", "INTERFACE_SCALARS", "INTERFACE_UNITS", "Batch", "ContactResult",
+           "InterfaceColumns", "ProbedColumns", "SweepResult", "SweepTable",
            "zero_plastic_area"]
 
 
@@ -107,25 +108,18 @@ class InterfaceColumns:
 
 
 @dataclass(frozen=True, kw_only=True)
-class FlowColumns:
-    """The flow through the gap (:mod:`roughcontact.transport.probe`) a sweep or a
-    record may hold, (m, k) each, None when not recorded: for each direction ``d`` of
-    x and y the conductance ``flow_conductance_d`` [m^3], the flow factors
-    ``flow_factor_d`` (over the mean gap) and ``pressure_flow_factor_d`` (Patir &
-    Cheng's, over the nominal separation) [-] and ``flow_connected_d`` (bool)."""
+class ProbedColumns:
+    """The columns of the probes (:mod:`roughcontact.contact.probes`) a sweep or a record
+    holds: ``probe_columns``, name -> (m, k) array, empty without probes."""
 
-    flow_conductance_x: np.ndarray | None = None
-    flow_factor_x: np.ndarray | None = None
-    pressure_flow_factor_x: np.ndarray | None = None
-    flow_connected_x: np.ndarray | None = None
-    flow_conductance_y: np.ndarray | None = None
-    flow_factor_y: np.ndarray | None = None
-    pressure_flow_factor_y: np.ndarray | None = None
-    flow_connected_y: np.ndarray | None = None
+    probe_columns: ProbeColumns = field(default_factory=ProbeColumns)
 
+    def column(self, name: str) -> np.ndarray:
+        """The per-step array ``name``: a field, or a probe column."""
+        if name in self.probe_columns:
+            return self.probe_columns[name]
+        return getattr(self, name)
 
-#: The flow columns' names (the fields of :class:`FlowColumns`).
-FLOW = tuple(field.name for field in fields(FlowColumns))
 
 #: The interface quantities' names (the fields of :class:`InterfaceColumns`), the (m, k)
 #: ones among them, and the unit of each.
@@ -137,7 +131,7 @@ INTERFACE_UNITS = {"spot_count": "1", "mean_spot_area": "m^2", "perimeter": "m",
 
 
 @dataclass(frozen=True)
-class SweepResult(InterfaceColumns, FlowColumns):
+class SweepResult(InterfaceColumns, ProbedColumns):
     """Force-deflection sweep of m surfaces over k approaches.
 
     Every array has shape (m, k): surface by approach step, except
@@ -203,9 +197,9 @@ class SweepResult(InterfaceColumns, FlowColumns):
         (m, k, S) and (m, k, G): spot areas [m^2] at
         :data:`~roughcontact.contact.interface.SPOT_PROBABILITIES` and gaps [m] at
         :data:`~roughcontact.contact.interface.GAP_PROBABILITIES`, likewise.
-    flow_conductance_x, flow_factor_x, ... : ndarray or None
-        (m, k): the flow through each solution's gap (:class:`FlowColumns`) in the
-        directions of the ``interface`` grid's flow probe; None for the others.
+    probe_columns : ProbeColumns
+        (m, k) each: the columns of the ``interface`` grid's probes
+        (:mod:`roughcontact.contact.probes`), by name; empty without probes.
     """
 
     approach: np.ndarray
@@ -313,10 +307,12 @@ class Batch:
 class SweepTable:
     """The (m, k) columns of a :class:`SweepResult` being filled step by step (mutable).
 
-    ``columns`` holds every array field of the result by name; ``fields``
-    the pressure fields ``(m, k, *shape)`` or None; ``ranks`` the profile ranks
-    or None; ``interface`` the :class:`~roughcontact.contact.interface.InterfaceGrid`
-    of the interface quantities, or None.
+    ``columns`` holds every array field of the result by name; ``probe_columns``
+    the columns of the interface grid's probes (:mod:`roughcontact.contact.probes`;
+    empty without); ``fields`` the pressure fields ``(m, k, *shape)`` or None;
+    ``ranks`` the profile ranks or None; ``interface`` the
+    :class:`~roughcontact.contact.interface.InterfaceGrid` of the interface quantities,
+    or None.
     """
 
     def __init__(self, m: int, k: int, shape, return_fields: bool, profile: bool,
@@ -338,11 +334,10 @@ class SweepTable:
             columns["gap_quantiles"] = np.zeros((m, k, len(interface.GAP_PROBABILITIES)))
             if interface_grid.counter_weights is not None:
                 columns["counter_deflection"] = np.zeros((m, k))
-            columns.update({name: np.zeros((m, k), dtype=bool if "connected" in name
-                                           else float)
-                            for name in interface_grid.flow.names})
+            self.probe_columns = ProbeColumns.allocated(interface_grid.probes, (m, k))
         else:
             columns = {}
+            self.probe_columns = ProbeColumns()
         names = ("load", "nominal_pressure", "mean_plane_deflection", "real_area_fraction",
                  "max_pressure", "residual", "plastic_area_fraction")
         self.columns = {name: np.zeros((m, k)) for name in names}
@@ -396,17 +391,18 @@ class SweepTable:
 
     def _describe(self, rows, step: int, pressure, gap, mean_u) -> None:
         """The interface quantities of ``rows`` at ``step`` (:mod:`.interface`), and the
-        flow through their gaps at the nominal separations ``mean(g) - mean(u) = mean(f)
-        - d`` of the flat and the undeformed mean plane (``mean_u``: the mean of each
-        displacement field)."""
+        columns of the interface grid's probes (:mod:`.probes`), which read the fields
+        at the nominal separations ``mean(g) - mean(u) = mean(f) - d`` of the flat and
+        the undeformed mean plane (``mean_u``: the mean of each displacement field)."""
         pressure = np.reshape(pressure, (*np.shape(pressure)[:-1], *self.shape))
         gap = np.reshape(gap, (*np.shape(gap)[:-1], *self.shape))
         summary = interface.describe(pressure, gap, self.interface)
         for name in INTERFACE:
             self.columns[name][rows, step] = getattr(summary, name)
-        separation = summary.mean_gap - mean_u
-        for name, values in self.interface.flow_columns(pressure, gap, separation).items():
-            self.columns[name][rows, step] = values
+        fields = probes.SolvedFields(pressure, gap, summary.mean_gap - mean_u,
+                                     self.interface.spacing, self.interface.periodic)
+        for name, values in probes.measure(self.probe_columns.probes, fields).items():
+            self.probe_columns[name][rows, step] = values
 
     def _describe_pending(self, step: int) -> None:
         """The surfaces of ``step`` recorded one at a time, described together (one call
@@ -434,4 +430,4 @@ class SweepTable:
             self._describe_pending(step)
         return SweepResult(approach=np.array(steps), pressure=self.fields, method=method,
                            tol=tol, hardness=hardness, profile_ranks=self.ranks,
-                           **self.columns)
+                           probe_columns=self.probe_columns, **self.columns)

@@ -27,7 +27,6 @@ import pandas as pd
 from roughcontact import __version__
 from roughcontact.contact.aggregate import pressure_axis
 from roughcontact.contact.cell import SWEEP_OPTIONS, aggregate_sweep
-from roughcontact.contact.curves import flow_arrays
 from roughcontact.contact.plausibility import (
     MAX_PRESSURE_OVER_E_STAR,
     MIN_CONTACT_ELEMENTS,
@@ -38,7 +37,6 @@ from roughcontact.study import layout
 from roughcontact.study.aggregation import validity_rows, validity_summary
 from roughcontact.study.contact_jobs import contact_problem, read_counter, sweep_problem
 from roughcontact.study.contact_records import ContactJob, StudyCell
-from roughcontact.study.flow_settings import probe_from_attrs
 from roughcontact.study.jobs import certified_influence
 from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.study.storage import (
@@ -391,7 +389,9 @@ def _stored_batches(jobs: dict[str, dict], root: Path) -> list[tuple[str, int, i
 
 def _compare(stored, again, rows: slice) -> tuple[bool, float]:
     """Whether the re-solved batch ``again`` equals the ``rows`` of the ``stored``
-    sweep bit for bit, and its largest relative difference in the continuous columns."""
+    sweep bit for bit, and its largest relative difference in the continuous columns
+    (the probes' float columns among them; their yes/no states compared bit for bit
+    only, and NaN equal to NaN, e.g. a factor not defined where it was not)."""
     worst, identical = 0.0, True
     continuous = ("approach", "nominal_pressure", "mean_plane_deflection",
                   "real_area_fraction", "max_pressure", "normalized_stiffness")
@@ -402,18 +402,30 @@ def _compare(stored, again, rows: slice) -> tuple[bool, float]:
         for name in ("spot_count", "perimeter", "corrected_real_area_fraction"):
             identical &= bool(np.array_equal(getattr(stored, name)[rows],
                                              getattr(again, name)))
-    for name in flow_arrays(stored):  # the flow through the gap, where recorded
-        if name.startswith("flow_connected"):
-            identical &= bool(np.array_equal(getattr(stored, name)[rows], getattr(again, name)))
-        elif name.startswith("flow_conductance"):
-            continuous += (name,)
+    for column in stored.probe_columns.specs:
+        a, b = stored.probe_columns[column.name][rows], again.probe_columns[column.name]
+        identical &= bool(np.array_equal(a, b, equal_nan=not column.state))
+        if not column.state:
+            worst = max(worst, _relative_difference(a, b))
     for name in continuous:
         a = getattr(stored, name)[rows]
         b = getattr(again, name)
         identical &= bool(np.array_equal(a, b))
-        scale = np.maximum(np.abs(a), np.abs(a).max() * 1e-12)
-        worst = max(worst, float(np.nanmax(np.abs(a - b) / scale)))
+        worst = max(worst, _relative_difference(a, b))
     return identical, worst
+
+
+def _relative_difference(stored, again) -> float:
+    """The largest ``|a - b| / max(|a|, 1e-12 max |a|)`` of two columns: 0 where they are
+    equal (NaN and NaN included), infinite where one is NaN and the other not."""
+    a, b = np.asarray(stored, dtype=float), np.asarray(again, dtype=float)
+    same = (a == b) | (np.isnan(a) & np.isnan(b))
+    if same.all():
+        return 0.0
+    scale = np.maximum(np.abs(a), np.nanmax(np.abs(a)) * 1e-12)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.abs(a - b) / scale
+    return float(np.where(same, 0.0, np.where(np.isnan(ratio), np.inf, ratio)).max())
 
 
 def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
@@ -449,7 +461,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
                                    files["influence"], record.geometry)
         counter, _ = read_counter(record, files, study_seed)
         problem = contact_problem(record, surfaces["heights"], unit, counter,
-                                  probe_from_attrs(attrs))
+                                  stored.probe_columns.probes)
         start = time.perf_counter()
         options = dataclasses.replace(SWEEP_OPTIONS, method=stored.method, tol=stored.tol,
                                       precision=stored.precision, max_iter=stored.max_iter)

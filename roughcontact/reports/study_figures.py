@@ -142,9 +142,12 @@ DIRECTION_STYLES = {"x": "-", "y": "--"}
 
 
 def flow_directions(table) -> tuple[str, ...]:
-    """The flow directions an aggregate table has the leak rate of (``leak_rate_<d>_mean``),
-    in the order x, y; none for a study solved without the flow."""
-    return tuple(d for d in DIRECTION_STYLES if f"leak_rate_{d}_mean" in table)
+    """The flow directions an aggregate table has the leak rate of (the ``_mean`` column of
+    :data:`~roughcontact.transport.probe.LEAK_RATE` along each), in the order x, y; none
+    for a study solved without the flow."""
+    from roughcontact.transport.probe import LEAK_RATE, column_name
+
+    return tuple(d for d in DIRECTION_STYLES if f"{column_name(LEAK_RATE, d)}_mean" in table)
 
 
 def cell_label(row) -> str:
@@ -183,19 +186,21 @@ def plot_leakage(tables, thresholds):
     (:func:`flow_directions`); ``thresholds``: study name -> its percolation
     thresholds (:func:`load_percolation`). Panels:
 
-    (a) the leak rate of the seal ``leak_rate_<d>`` [m^3/s] against nominal
+    (a) the leak rate of the seal along ``d`` [m^3/s] against nominal
         pressure P [MPa], both log, with its band (:func:`plot_band`): the
         levels of a positive mean only (the leak rate is 0 once every surface
         has sealed, which a log axis cannot show);
-    (b) the flow factor phi = K / mean(g)^3 (``flow_factor_<d>``) against P;
+    (b) the flow factor phi = K / mean(g)^3 along ``d`` against P;
     (c) the flow factor against the real area fraction up to
         :data:`AREA_AXIS_END`, the cells' mean curves (log, where > 0: the
         approach to sealing), each cell's percolation threshold along x (the
         first direction) a vertical line in its colour with its 95 % band
         (``area_low`` to ``area_high``) shaded (along y a dotted line), and
         :data:`DAPP_THRESHOLD` grey dashed;
-    (d) the share of surfaces still leaking (``flow_connected_<d>``) [%]
-        against P, with its band (:func:`fraction_band`).
+    (d) the share of surfaces still leaking along ``d`` [%] against P, with its
+        band (:func:`fraction_band`).
+
+    The columns are named by :func:`roughcontact.transport.probe.column_name`.
 
     Returns the figure.
     """
@@ -217,16 +222,25 @@ def plot_leakage(tables, thresholds):
     return fig
 
 
+def _leakage_columns(d: str) -> tuple[str, str, str]:
+    """The leak rate's, the flow factor's and the still-leaking share's columns along
+    ``d`` (:func:`roughcontact.transport.probe.column_name`)."""
+    from roughcontact.transport.probe import CONNECTED, FACTOR, LEAK_RATE, column_name
+
+    return tuple(column_name(quantity, d) for quantity in (LEAK_RATE, FACTOR, CONNECTED))
+
+
 def _draw_flow_cell(row_axes, rows, d: str, color: str, label) -> None:
     """One cell's curves along direction ``d`` in the four panels of :func:`plot_leakage`."""
     style = {"color": color, "linestyle": DIRECTION_STYLES[d]}
-    leaking = rows[rows[f"leak_rate_{d}_mean"] > 0]
+    leak, factor, connected = _leakage_columns(d)
+    leaking = rows[rows[f"{leak}_mean"] > 0]
     if len(leaking):
-        plot_band(row_axes[0], leaking, f"leak_rate_{d}", label=label, **style)
-    plot_band(row_axes[1], rows, f"flow_factor_{d}", **style)
-    open_ = rows[(rows[f"flow_factor_{d}_mean"] > 0) & (rows["real_area_fraction_count"] > 0)]
-    row_axes[2].plot(open_["real_area_fraction_mean"], open_[f"flow_factor_{d}_mean"], **style)
-    plot_band(row_axes[3], rows, f"flow_connected_{d}", y_scale=100.0, band="fraction", **style)
+        plot_band(row_axes[0], leaking, leak, label=label, **style)
+    plot_band(row_axes[1], rows, factor, **style)
+    open_ = rows[(rows[f"{factor}_mean"] > 0) & (rows["real_area_fraction_count"] > 0)]
+    row_axes[2].plot(open_["real_area_fraction_mean"], open_[f"{factor}_mean"], **style)
+    plot_band(row_axes[3], rows, connected, y_scale=100.0, band="fraction", **style)
 
 
 def _mark_thresholds(ax, thresholds, cell, color: str, directions) -> None:
@@ -301,7 +315,7 @@ def leak_rates_at(table, pressures):
             row = {"Sk": at["skew"], "Ku": at["kurt"], "P_MPa": level / 1e6,
                    "mean_gap": at["mean_gap_mean"]}
             for d in flow_directions(table):
-                for quantity in (f"leak_rate_{d}", f"flow_factor_{d}", f"flow_connected_{d}"):
+                for quantity in _leakage_columns(d):
                     row[f"{quantity}_mean"] = at[f"{quantity}_mean"]
                     row[f"{quantity}_half_width"] = at[f"{quantity}_half_width"]
             rows.append(row)
@@ -317,7 +331,7 @@ def leakage_pressures(table) -> list[float]:
     every = table.groupby("nominal_pressure")["coverage"].agg(
         lambda coverage: bool((coverage == "all surfaces").all()))
     full = table[table["nominal_pressure"].isin(every.index[every.to_numpy()])]
-    leak = [f"leak_rate_{d}_mean" for d in flow_directions(table)]
+    leak = [f"{_leakage_columns(d)[0]}_mean" for d in flow_directions(table)]
     levels = np.unique(full["nominal_pressure"])
     leaking = np.unique(full.loc[(full[leak] > 0).any(axis=1), "nominal_pressure"])
     low, high = levels[0], (leaking[-1] if len(leaking) else levels[-1])

@@ -7,7 +7,9 @@ cells, contact jobs; ``sources``: measured files and spectra), ``checks``
 refuses what the schema cannot, and ``cells`` makes the plan of every job
 and file key a configuration asks for, once (``cells.study_plan``); ``surface_jobs``
 are the bodies of the workflow's surface jobs, ``jobs`` of its influence and
-contact jobs, ``aggregation`` of its aggregation; ``storage`` has one reader and
+contact jobs, ``aggregation`` of its aggregation; ``probes`` the one registry of
+the probes a contact job records (the flow, ``flow_settings``) and what the
+aggregation adds to their columns; ``storage`` has one reader and
 one writer per stored file kind, with their content hashes; ``provenance`` the version, commit and
 config hash of every output; ``resources`` the memory and time each job asks
 a scheduler for; ``presets`` the measured accuracy presets.

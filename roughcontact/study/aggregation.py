@@ -5,7 +5,10 @@ into SI curves for each cell's sigma and E (Eq 28-32) and averages them on a
 common nominal-pressure axis (:mod:`roughcontact.contact.aggregate`), into
 CSV tables for people with a JSON sidecar; an elastic cell checked against a
 hardness gets its validity table (the share of its real area and load above
-it, from the stored solutions: no extra solve).
+it, from the stored solutions: no extra solve). What a study adds to the columns of
+the probes its contact jobs recorded (the flow's leak rate and percolation
+thresholds) comes from each probe's study-side record
+(:class:`~roughcontact.study.probes.StudyProbe`).
 """
 
 from __future__ import annotations
@@ -24,12 +27,7 @@ from roughcontact.errors import StoredFileError
 from roughcontact.hashes import file_sha256
 from roughcontact.study.config import in_unit
 from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.flow_settings import (
-    FLOW_OFF,
-    FlowSettings,
-    percolation_rows,
-    probe_from_attrs,
-)
+from roughcontact.study.probes import StudyProbe
 from roughcontact.study.provenance import NO_RUN, RunInfo, atomic_path, provenance
 from roughcontact.study.storage import read_contact
 from roughcontact.units import MPA
@@ -85,7 +83,7 @@ class _CellTables(NamedTuple):
     summary: dict  # the mean-plane modulus and convergence summary
     validity: list  # one table per hardness it is checked against
     checks: list  # their summaries
-    percolation: list  # one threshold per flow direction (none without flow)
+    probed: dict  # probe kind -> its rows of the sidecar (e.g. the percolation thresholds)
 
 
 def _plausibility(cell: StudyCell, frame: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
@@ -105,43 +103,49 @@ def _plausibility(cell: StudyCell, frame: pd.DataFrame) -> tuple[pd.DataFrame, l
     return frame, reasons
 
 
-def _with_leak_rate(frame: pd.DataFrame, flow: FlowSettings) -> pd.DataFrame:
-    """The table with the leak-rate columns of the configured seal (none without flow)."""
-    columns = flow.leak_columns(frame)
-    units = {**frame.attrs["units"],
-             **{name: "1" if name.endswith("_count") else "m^3/s" for name in columns}}
-    frame = frame.assign(**columns)
-    frame.attrs["units"] = units
+def _with_probe_columns(frame: pd.DataFrame, probes: tuple) -> pd.DataFrame:
+    """The table with the columns each study-side probe record adds (the flow's leak
+    rate; none without probes)."""
+    for record in probes:
+        columns, units = record.table_columns(frame)
+        units = {**frame.attrs["units"], **units}
+        frame = frame.assign(**columns)
+        frame.attrs["units"] = units
     return frame
 
 
-def _check_flow(path, attrs: dict, flow: FlowSettings) -> None:
-    """The contact file must have recorded the flow the configuration asks for."""
-    stored = probe_from_attrs(attrs)
-    if stored != flow.probe:
+def _shown(probes) -> str:
+    """The probes of a message: each one's settings under its kind, or none."""
+    return str({probe.kind: probe.params() for probe in probes}) if probes else "no probe"
+
+
+def _check_probes(path, stored: tuple, probes: tuple) -> None:
+    """The contact file must have recorded the probes the configuration asks for."""
+    wanted = tuple(record.probe for record in probes)
+    if stored != wanted:
         raise StoredFileError(
-            f"{path}: solved with flow {stored.params() if stored.directions else 'off'}, "
-            f"but the configuration asks for "
-            f"{flow.probe.params() if flow.directions else 'no flow'}; delete it and run "
-            "the workflow again to solve it with the configured flow", path)
+            f"{path}: solved with {_shown(stored)}, but the configuration asks for "
+            f"{_shown(wanted)}; delete it and run the workflow again to solve it with the "
+            "configured probes", path)
 
 
 def _aggregate_cell(index: int, cell: StudyCell, path, levels: int,
-                    flow: FlowSettings = FLOW_OFF) -> _CellTables:
+                    probes: tuple[StudyProbe, ...] = ()) -> _CellTables:
     """Aggregate one cell's contact file at ``levels`` nominal pressures over its range
-    (with the leak rate of the ``flow`` settings' seal and the cell's percolation
-    thresholds, where the flow is on)."""
+    (with what the study-side records of its ``probes`` add: the flow's leak rate and
+    percolation thresholds, where the flow is on)."""
     nd, attrs = read_contact(path, job=cell.job.params())  # solved for this cell's job
-    _check_flow(path, attrs, flow)
+    _check_probes(path, nd.probe_columns.probes, probes)
     key, label = cell.contact_key, cell.label
     axis = aggregate.pressure_axis(*cell.pressure_range, levels)
     physical, frame = cell_module.aggregate_sweep(nd, cell.height_scale, cell.E, axis,
                                                   hardness=cell.hardness)
     frame, implausible = _plausibility(cell, frame)
-    frame = _with_leak_rate(frame, flow)
+    frame = _with_probe_columns(frame, probes)
     labels = {"cell": index, "label": label, "contact_key": key, **cell.columns()}
-    percolation = percolation_rows(physical, {"cell": index, "label": label,
-                                              "contact_key": key}, flow.directions)
+    probed = {record.kind: record.cell_rows(physical, {"cell": index, "label": label,
+                                                       "contact_key": key})
+              for record in probes}
     if cell.hardness is not None or cell.checked_hardness:
         labels["cap_MPa"] = float("nan") if cell.hardness is None else in_unit(cell.hardness,
                                                                                MPA)
@@ -174,12 +178,12 @@ def _aggregate_cell(index: int, cell: StudyCell, path, levels: int,
                         "their rows are NaN with count 0", label, len(short), short.min(),
                         short.max(), reason)
     return _CellTables(frame.assign(**labels), per_surface.assign(seed=attrs["seeds"], **labels),
-                       summary, validity, checks, percolation)
+                       summary, validity, checks, probed)
 
 
 def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, table_path,
                     moduli_path, meta_path, run: RunInfo = NO_RUN, validity_path=None,
-                    flow: FlowSettings = FLOW_OFF) -> pd.DataFrame:
+                    probes: tuple[StudyProbe, ...] = ()) -> pd.DataFrame:
     """Aggregate a figure's or sweep's cells into CSV tables with a JSON sidecar.
 
     ``contact_paths`` maps a contact key to its file. The table has one row per
@@ -190,11 +194,14 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
     ``validity_path``, the validity table (:func:`validity_rows`: the share of
     each elastic cell's real area and load above each hardness it names, no
     extra solve; header only without a hardness) is written there, its
-    flagged cells summarised in the sidecar. With the ``flow`` on
-    (:mod:`roughcontact.study.flow_settings`), the table has the flow columns and the
-    leak rate of its seal, and the sidecar each cell's percolation thresholds.
+    flagged cells summarised in the sidecar. ``probes``: the study-side records of the
+    probes the contact files must have recorded
+    (:func:`~roughcontact.study.probes.study_probes`); the table has their columns and
+    what each record adds (with the flow on, :mod:`roughcontact.study.flow_settings`:
+    the leak rate of its seal), and the sidecar each record's entry under its kind
+    (each cell's percolation thresholds).
     """
-    parts = [_aggregate_cell(index, cell, contact_paths[cell.contact_key], levels, flow)
+    parts = [_aggregate_cell(index, cell, contact_paths[cell.contact_key], levels, probes)
              for index, cell in enumerate(cells)]
     table = pd.concat([part.rows for part in parts], ignore_index=True)
     with atomic_path(table_path) as tmp:
@@ -214,10 +221,10 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
         "table_sha256": file_sha256(table_path),
         "moduli_sha256": file_sha256(moduli_path),
     }
-    if flow.directions:
-        meta["flow"] = {**flow.params(), "percolation": [
+    for record in probes:
+        meta[record.kind] = record.sidecar([
             {name: _json_value(value) for name, value in row.items()}
-            for part in parts for row in part.percolation]}
+            for part in parts for row in part.probed[record.kind]])
     if validity_path is not None:
         meta |= _write_validity([frame for part in parts for frame in part.validity],
                                 [check for part in parts for check in part.checks],

@@ -297,7 +297,8 @@ class ContactSettings:
     :func:`roughcontact.contact.nondim.solve_cell`; ``steps`` approaches per
     sweep; ``pressure_levels`` nominal pressures per aggregated cell; ``flow`` the
     flow each sweep records (config section ``flow``,
-    :mod:`roughcontact.study.flow_settings`; :data:`NO_FLOW`: none).
+    :mod:`roughcontact.study.flow_settings`; :data:`NO_FLOW`: none), its one probe
+    (:attr:`probes`).
     """
 
     method: str
@@ -322,9 +323,16 @@ class ContactSettings:
         study without flow keeps its jobs' parameters)."""
         params = {"method": self.method, "tol": self.tol, "precision": self.precision,
                   "steps": self.steps, "pressure_levels": self.pressure_levels}
-        if self.flow.directions:
-            params["flow"] = self.flow.params()
+        for probe in self.probes:
+            params[probe.kind] = probe.params()
         return params
+
+    @property
+    def probes(self) -> tuple:
+        """The probes every contact job's sweep records
+        (:mod:`roughcontact.contact.probes`): the flow probe where the flow is on, none
+        where it is off."""
+        return (self.flow,) if self.flow.directions else ()
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,6 @@ from roughcontact.study.jobs import (
 )
 from roughcontact.study.provenance import RunInfo, canonical_json, provenance
 from roughcontact.study.storage import read_influence, read_surfaces, write_contact
-from roughcontact.transport.probe import NO_FLOW, FlowProbe
 
 log = logging.getLogger(__name__)
 
@@ -127,17 +126,17 @@ def read_counter(job: ContactJob, paths: dict, study_seed=None) -> tuple:
 
 def contact_problem(job: ContactJob, heights, unit,
                     counter: counterface.Body = counterface.RIGID_FLAT,
-                    flow: FlowProbe = NO_FLOW) -> ContactProblem:
+                    probes: tuple = ()) -> ContactProblem:
     """The problem a contact job sweeps: the pair of its first body (``heights`` in units
     of the cell's sigma, unit-modulus operator ``unit`` [m]) and its ``counter`` body
     (Eq 17-18; :func:`roughcontact.contact.counterface.pair`): the equivalent heights,
     the pair's operator, the interface grid with the counter body's deflection weights
-    and the ``flow`` to record through the gap (:mod:`roughcontact.transport.probe`),
-    and the bulk factor raised by its compliance; against the rigid smooth flat the
-    job's own problem."""
+    and the ``probes`` to record at every step (:mod:`roughcontact.contact.probes`;
+    :attr:`~roughcontact.study.config.ContactSettings.probes`), and the bulk factor
+    raised by its compliance; against the rigid smooth flat the job's own problem."""
     paired = counterface.pair(heights, unit, counter)
     grid = paired.model.interface(
-        dataclasses.replace(cell_module.block_interface(job.geometry), flow=flow),
+        dataclasses.replace(cell_module.block_interface(job.geometry), probes=probes),
         job.geometry.thickness)
     return ContactProblem(paired.heights, paired.model.operator(unit), grid,
                           cell_module.BULK_FACTOR * paired.model.bulk_ratio, paired.attrs)
@@ -200,7 +199,7 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
     m = heights.shape[0]
     name = f"{job.surface.key}__{job.geometry.key}"
     counter, counter_hashes = read_counter(job, inputs, study_seed)
-    problem = contact_problem(job, heights, unit, counter, settings.flow)
+    problem = contact_problem(job, heights, unit, counter, settings.probes)
     hardness = job.nondim_hardness
     log.info("contact %s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
              "method %s, tol %.1e, precision %s, influence %s, %s", name, m, settings.steps,
@@ -208,10 +207,8 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
              geometry_attrs["operator"],
              "elastic" if hardness is None else f"pressure capped at H L / (E sigma) = "
              f"{hardness:.6g}")
-    if settings.flow.directions:
-        log.info("flow through the gap recorded at every step along %s (sides %s, %s "
-                 "faces)", ", ".join(settings.flow.directions), settings.flow.sides,
-                 settings.flow.face_rule.name)
+    for probe in settings.probes:
+        log.info("probe %s recorded at every step: %s", probe.kind, probe.params())
     options = dataclasses.replace(cell_module.SWEEP_OPTIONS, method=settings.method,
                                   tol=settings.tol, precision=settings.precision,
                                   batch_size=min(m, BATCH_SIZE), progress=_progress_log())
@@ -233,8 +230,6 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
         "seeds": surfaces["seeds"].tolist(),
         **counter_hashes,
         **problem.attrs,
-        **({"flow": canonical_json(settings.flow.params())} if settings.flow.directions
-           else {}),
         **provenance(run),
     }
     return write_contact(out_path, result, attrs)

@@ -5,7 +5,8 @@ The configuration's ``flow`` section (off by default) gives every contact job a
 the job's sweep records the conductance, the flow factors and whether the free
 space percolates at every step (:mod:`roughcontact.transport`), and stores them
 in its contact file. The aggregation averages them per cell like every other
-quantity (95 % bands), and adds from this module
+probe column (95 % bands), and adds from this module (:class:`FlowSettings`, the
+flow's study-side record, :class:`~roughcontact.study.probes.StudyProbe`)
 
 - the leak rate of the configured seal, ``Q = K W dp / (12 eta L)`` [m^3/s]
   (:meth:`~roughcontact.transport.flow.Seal.leak_rate`; linear in ``K``, so its mean
@@ -21,16 +22,24 @@ of a configuration without it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from roughcontact.study.config import in_unit, unit_slips
 from roughcontact.transport.flow import FACE_RULES, Seal
-from roughcontact.transport.probe import NO_FLOW, FlowProbe, probe_from_params
+from roughcontact.transport.probe import (
+    CONDUCTANCE,
+    CONNECTED,
+    LEAK_RATE,
+    NO_FLOW,
+    FlowProbe,
+    column_name,
+    probe_from_params,
+)
 from roughcontact.units import MM, MPA
 
-__all__ = ["FLOW_OFF", "FlowSettings", "check_flow", "flow_settings", "percolation_rows",
-           "probe_from_attrs"]
+__all__ = ["FLOW_OFF", "FlowSettings", "check_flow", "flow_settings"]
 
 #: Plausible ranges of the seal's values (outside: almost surely a unit slip), with the
 #: unit each is likely typed in by mistake and its factor to the key's unit.
@@ -45,7 +54,12 @@ PLAUSIBLE = {
 @dataclass(frozen=True)
 class FlowSettings:
     """The ``flow`` section as the study uses it: the jobs' ``probe`` and the ``seal``
-    whose leak rate the aggregation reports (None with the flow off)."""
+    whose leak rate the aggregation reports (None with the flow off). Where the flow is
+    on, the flow's study-side probe record
+    (:class:`~roughcontact.study.probes.StudyProbe`, of ``kind`` "flow"): the leak rate
+    in each cell's table, the percolation thresholds in the sidecar."""
+
+    kind: ClassVar[str] = FlowProbe.kind
 
     probe: FlowProbe
     seal: Seal | None
@@ -77,39 +91,70 @@ class FlowSettings:
                 f"{w['seal_width_mm']:g} mm wide and {w['seal_length_mm']:g} mm long with "
                 f"{w['pressure_drop_MPa']:g} MPa across it")
 
-    def leak_columns(self, rows) -> dict:
+    def table_columns(self, rows) -> tuple[dict, dict]:
         """The leak-rate columns of a cell's aggregated ``rows`` (a table with the flow
-        conductance columns ``flow_conductance_<d>_mean`` and ``_half_width``):
-        ``leak_rate_<d>_mean`` and ``_half_width`` [m^3/s]; empty with the flow off."""
-        out = {}
+        conductance's ``_mean``, ``_half_width`` and ``_count`` columns along each
+        direction, :func:`~roughcontact.transport.probe.column_name`): the leak rate's
+        (``LEAK_RATE`` along each direction) ``_mean`` and ``_half_width`` [m^3/s] and
+        ``_count``, and their units; empty with the flow off."""
+        columns, units = {}, {}
         for d in self.directions:
+            conductance, leak = column_name(CONDUCTANCE, d), column_name(LEAK_RATE, d)
             for part in ("mean", "half_width"):
-                out[f"leak_rate_{d}_{part}"] = self.seal.leak_rate(
-                    rows[f"flow_conductance_{d}_{part}"])
-            out[f"leak_rate_{d}_count"] = rows[f"flow_conductance_{d}_count"]
-        return out
+                columns[f"{leak}_{part}"] = self.seal.leak_rate(rows[f"{conductance}_{part}"])
+                units[f"{leak}_{part}"] = "m^3/s"
+            columns[f"{leak}_count"] = rows[f"{conductance}_count"]
+            units[f"{leak}_count"] = "1"
+        return columns, units
+
+    def cell_rows(self, sweep, labels: dict) -> list[dict]:
+        """A cell's percolation thresholds
+        (:func:`roughcontact.transport.percolation.threshold`) per flow direction of its
+        SI ``sweep``: the real area fraction [-] and the nominal pressure [MPa] at which
+        half its surfaces have sealed, with 95 % bands, each row with the cell's
+        ``labels``."""
+        from roughcontact.transport.percolation import sealing_points, threshold
+
+        rows = []
+        for d in self.directions:
+            points = sealing_points(sweep.probe_columns[column_name(CONNECTED, d)],
+                                    sweep.real_area_fraction, sweep.nominal_pressure,
+                                    sweep.converged)
+            found = threshold(points).as_dict()
+            for key in ("pressure", "pressure_low", "pressure_high"):
+                found[f"{key}_MPa"] = found.pop(key) / MPA
+            found["reopened_steps"] = int(np.sum(points.reopened))
+            rows.append({**labels, "direction": d, **found})
+        return rows
+
+    @classmethod
+    def from_params(cls, params: dict) -> FlowSettings:
+        """The settings of their :meth:`params` (the aggregate rule's; empty: the flow
+        off, :data:`FLOW_OFF`)."""
+        if not params:
+            return FLOW_OFF
+        seal = Seal(pressure_drop=params["pressure_drop_Pa"], viscosity=params["viscosity_Pa_s"],
+                    width=params["seal_width_m"], length=params["seal_length_m"])
+        return cls(probe_from_params(params["probe"]), seal)
 
     def params(self) -> dict:
-        """The seal's settings in SI units (the aggregation's sidecar)."""
-        if self.seal is None:
+        """The seal's settings in SI units (the aggregation's sidecar, the aggregate rule's
+        params)."""
+        if not self.enabled:
             return {}
         return {"probe": self.probe.params(), "pressure_drop_Pa": self.seal.pressure_drop,
                 "viscosity_Pa_s": self.seal.viscosity, "seal_width_m": self.seal.width,
                 "seal_length_m": self.seal.length,
                 "leak_rate": "Q = K W dp / (12 eta L) [m^3/s], K the conductance"}
 
+    def sidecar(self, rows: list[dict]) -> dict:
+        """The sidecar's entry of the flow: the seal's settings and every cell's
+        percolation thresholds ``rows`` (:meth:`cell_rows`)."""
+        return {**self.params(), "percolation": rows}
+
 
 #: The flow off: no probe, no seal.
 FLOW_OFF = FlowSettings(NO_FLOW, None)
-
-
-def probe_from_attrs(attrs: dict) -> FlowProbe:
-    """The probe a contact file was solved with (its ``flow`` attribute, JSON text;
-    none: :data:`NO_FLOW`)."""
-    import json
-
-    stored = attrs.get("flow")
-    return probe_from_params(json.loads(stored) if isinstance(stored, str) else stored)
 
 
 def flow_settings(section) -> FlowSettings:
@@ -155,22 +200,3 @@ def check_flow(flow: FlowSettings, plausibility_check: bool, grids: dict) -> lis
                             "needs at least 2 elements along and across the flow); give it "
                             "at least 2 x 2 elements or set flow.enabled: false")
     return problems
-
-
-def percolation_rows(sweep, label_columns: dict, directions) -> list[dict]:
-    """A cell's percolation thresholds (:func:`roughcontact.transport.percolation.threshold`)
-    per flow direction of its SI ``sweep``: the real area fraction [-] and the nominal
-    pressure [MPa] at which half its surfaces have sealed, with 95 % bands."""
-    from roughcontact.transport.percolation import sealing_points, threshold
-
-    rows = []
-    for d in directions:
-        points = sealing_points(getattr(sweep, f"flow_connected_{d}"),
-                                sweep.real_area_fraction, sweep.nominal_pressure,
-                                sweep.converged)
-        found = threshold(points).as_dict()
-        for key in ("pressure", "pressure_low", "pressure_high"):
-            found[f"{key}_MPa"] = found.pop(key) / MPA
-        found["reopened_steps"] = int(np.sum(points.reopened))
-        rows.append({**label_columns, "direction": d, **found})
-    return rows

@@ -46,11 +46,13 @@ Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
     /mean_gap (m, k), /spot_area_quantiles (m, k, S) and /gap_quantiles (m, k, G)
                float32: the interface quantities (:mod:`roughcontact.contact.interface`;
                lateral ones in m and m^2, gaps in units of sigma), when recorded
-    /flow_conductance_<d>, /flow_factor_<d>, /pressure_flow_factor_<d>,
-    /flow_connected_<d> (m, k): the flow through the gap along d = x, y
-               (:mod:`roughcontact.transport.probe`; conductance in units of
-               sigma^3), in the directions recorded
-    attributes: job (JSON), the NondimSweep settings (``sweep_*``; ``sweep_hardness``
+    /<column>  (m, k): every column of the probes the sweep recorded
+               (:mod:`roughcontact.contact.probes`; in units of
+               ``sigma**length_power``), under its name, e.g. the flow through the gap
+               (:mod:`roughcontact.transport.probe`)
+    attributes: job (JSON), each probe's settings (JSON) under its kind (``flow``; the
+                probes are made again from them, :mod:`roughcontact.study.probes`),
+                the NondimSweep settings (``sweep_*``; ``sweep_hardness``
                 the dimensionless cap ``nondim_hardness`` H L / (E sigma), -1 for an
                 elastic sweep), solver
                 statistics, the content hashes of the contact arrays and of
@@ -79,7 +81,7 @@ import numpy as np
 
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import array_sha256, arrays_sha256
-from roughcontact.study.provenance import atomic_path
+from roughcontact.study.provenance import atomic_path, canonical_json
 
 if TYPE_CHECKING:
     from roughcontact.contact.curves import NondimSweep
@@ -102,13 +104,6 @@ INTERFACE_ARRAYS = ("spot_count", "mean_spot_area", "perimeter",
 #: Optional arrays of a contact file: of a pair of elastic bodies, the counter body's
 #: mean-plane deflection (m, k) (:mod:`roughcontact.contact.counterface`).
 COUNTER_ARRAYS = ("counter_deflection",)
-#: Optional arrays of a contact file: the flow through the gap (m, k) along x and y
-#: (:mod:`roughcontact.transport.probe`), in the directions recorded.
-#: (The names of :data:`roughcontact.contact.result.FLOW`, written out: the readers do
-#: not import the solvers.)
-FLOW_ARRAYS = ("flow_conductance_x", "flow_factor_x", "pressure_flow_factor_x",
-               "flow_connected_x", "flow_conductance_y", "flow_factor_y",
-               "pressure_flow_factor_y", "flow_connected_y")
 #: Scalar settings of NondimSweep, stored as ``sweep_<name>`` attributes.
 SWEEP_SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffness_tol",
                   "precision")
@@ -595,9 +590,10 @@ def contact_datasets(sweep: NondimSweep) -> dict:
             single = name.endswith("_quantiles")
             datasets[name] = np.asarray(getattr(sweep, name),
                                         dtype=np.float32 if single else None)
-    for name in COUNTER_ARRAYS + FLOW_ARRAYS:
+    for name in COUNTER_ARRAYS:
         if getattr(sweep, name) is not None:
             datasets[name] = np.asarray(getattr(sweep, name))
+    datasets.update({name: np.asarray(values) for name, values in sweep.probe_columns.items()})
     return datasets
 
 
@@ -609,13 +605,15 @@ def contact_sha256(sweep: NondimSweep) -> str:
 def write_contact(path: str | os.PathLike, sweep: NondimSweep, attrs: dict) -> dict:
     """Write a contact job's sweep with ``attrs`` and its hash; returns the attributes written.
 
-    The attributes gain ``content_sha256`` (:func:`contact_sha256`) and the
-    sweep's settings as ``sweep_<name>``.
+    The attributes gain ``content_sha256`` (:func:`contact_sha256`), the settings of
+    each of the sweep's probes (JSON) under its ``kind`` and the sweep's settings as
+    ``sweep_<name>``.
     """
     datasets = contact_datasets(sweep)
     attrs = {
         "content_sha256": arrays_sha256(datasets),
         **attrs,
+        **{probe.kind: canonical_json(probe.params()) for probe in sweep.probe_columns.probes},
         **{f"sweep_{k}": getattr(sweep, k) for k in SWEEP_SETTINGS},
         "sweep_max_iter": -1 if sweep.max_iter is None else sweep.max_iter,
         "sweep_hardness": -1.0 if sweep.nondim_hardness is None else float(sweep.nondim_hardness),
@@ -630,7 +628,10 @@ def read_contact(path: str | os.PathLike, *,
 
     With the ``job`` (its ``params()``) the reader expects, the file must have
     been solved for it (:func:`check_parameters`: surfaces, geometry, sweep
-    end and cap), one row per surface of the job's cell.
+    end and cap), one row per surface of the job's cell. The probes it was solved
+    with are made again from their stored settings
+    (:func:`roughcontact.study.probes.probes_from_attrs`), their columns read under
+    their names.
     """
     with open_h5(path) as f:
         attrs = upgraded(path, _decoded(f.attrs), "contact")
@@ -639,11 +640,9 @@ def read_contact(path: str | os.PathLike, *,
         if missing:
             raise StoredFileError(f"{path}: no {', '.join(missing)} (written by an older "
                                   f"version of roughcontact); {rebuild(path)}", path)
-        arrays = {name: f[name][...]
-                  for name in (CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS
-                               + COUNTER_ARRAYS + FLOW_ARRAYS)
-                  if name in f}
+        arrays = _all_datasets(f)
     verify(path, attrs, arrays_sha256(arrays))
+    probed = _probe_columns(path, attrs, arrays)
     if job is not None:
         count = job["surface"]["count"]
         _check_shape(path, "approach", arrays["approach"].shape[:1], (count,), "surfaces")
@@ -659,4 +658,28 @@ def read_contact(path: str | os.PathLike, *,
     from roughcontact.contact.curves import NondimSweep
 
     return NondimSweep(**fields, **settings, max_iter=None if max_iter < 0 else max_iter,
-                       nondim_hardness=None if hardness < 0 else hardness), attrs
+                       nondim_hardness=None if hardness < 0 else hardness,
+                       probe_columns=probed), attrs
+
+
+def _probe_columns(path, attrs: dict, arrays: dict):
+    """The :class:`~roughcontact.contact.probes.ProbeColumns` of a contact file: its
+    probes made again from their stored settings
+    (:func:`roughcontact.study.probes.probes_from_attrs`), their columns taken out of
+    ``arrays`` (every dataset of the file); a column missing, or a dataset that is
+    neither a contact array nor a probe's column, raises :class:`StoredFileError`."""
+    from roughcontact.contact.probes import ProbeColumns
+    from roughcontact.study.probes import probes_from_attrs
+
+    probes = probes_from_attrs(attrs)
+    names = [column.name for probe in probes for column in probe.columns]
+    absent = [name for name in names if name not in arrays]
+    known = CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS + COUNTER_ARRAYS
+    unknown = sorted(set(arrays) - set(known) - set(names))
+    if absent or unknown:
+        raise StoredFileError(
+            f"{path}: " + (f"no {', '.join(absent)} of the probes it names; " if absent
+                           else "")
+            + (f"datasets {', '.join(unknown)} of no probe it names (a probe this "
+               f"roughcontact does not know?); " if unknown else "") + rebuild(path), path)
+    return ProbeColumns(probes, {name: arrays.pop(name) for name in names})

@@ -1,23 +1,25 @@
 """What a contact sweep records of the flow through each of its solutions' gaps.
 
-A :class:`FlowProbe` is a value the sweep is given (through its interface grid,
-:class:`~roughcontact.contact.interface.InterfaceGrid`): at every step it solves
-the flow (:func:`~roughcontact.transport.flow.solve_flow`) through the gap of
-every surface, in each of its ``directions``, and gives the sweep its columns:
+A :class:`FlowProbe` is a probe (:class:`~roughcontact.contact.probes.Probe`) a sweep
+is given (through its interface grid,
+:class:`~roughcontact.contact.interface.InterfaceGrid`, ``probes``): at every step it
+solves the flow (:func:`~roughcontact.transport.flow.solve_flow`) through the gap of
+every surface, in each of its ``directions``, and gives the sweep its columns
+(:func:`flow_columns`, named ``<quantity>_<d>`` by :func:`column_name`):
 
-``flow_conductance_<d>``
+:data:`CONDUCTANCE`
     the effective conductance ``K`` along ``d`` [gap unit cubed: m^3 in SI, sigma^3
     in the dimensionless form];
-``flow_factor_<d>``
+:data:`FACTOR`
     ``K / mean(g)^3`` [-]: against a flat gap of the same mean gap (0 where sealed,
     full contact included);
-``pressure_flow_factor_<d>``
+:data:`PRESSURE_FACTOR`
     ``K / h^3`` [-], Patir & Cheng's (1978) pressure flow factor, with ``h`` the
     nominal separation of the flat and the undeformed mean plane of the rough
     surface, ``mean(f) - d`` (``f`` the initial separations, ``d`` the approach);
     0 where sealed, NaN where the gap leaks and ``h <= 0`` (the flat below the
     undeformed mean plane: the factor is not defined there);
-``flow_connected_<d>``
+:data:`CONNECTED`
     the free space connects inlet to outlet (bool).
 
 The gap a flow sees is the solution's gap with the elements in contact
@@ -27,17 +29,23 @@ the solver's gap is zero in contact only to its tolerance, and an element at the
 edge of a spot may have ``p = 0`` with a gap of rounding size; left open, a chain
 of them would let the free space percolate through gaps that carry ``(1e-7)^3``
 of the flow of the widest, and the sealing point would come late).
-:data:`NO_FLOW` records nothing: a sweep without flow has no flow columns and
-costs nothing more.
+:data:`NO_FLOW` records nothing: the flow setting of a study without flow (a sweep
+without flow is given no probe at all).
+
+These names are the flow's only spelling: the study's leak rate (:data:`LEAK_RATE`,
+:mod:`roughcontact.study.flow_settings`), its percolation thresholds and the leakage
+figure read the columns through :func:`column_name`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import ClassVar
 
 import numpy as np
 
+from roughcontact.contact.probes import Column, SolvedFields
 from roughcontact.transport.flow import (
     FACE_RULES,
     FLOW_DIRECTIONS,
@@ -52,22 +60,59 @@ from roughcontact.transport.flow import (
     solve_flow,
 )
 
-__all__ = ["FLOW_COLUMNS", "FLOW_UNITS", "NO_FLOW", "SIDE_CHOICES", "FlowProbe",
-           "flow_column_names", "probe_from_params"]
+__all__ = ["CONDUCTANCE", "CONNECTED", "FACTOR", "FLOW_COLUMNS", "FLOW_QUANTITIES",
+           "LEAK_RATE", "NO_FLOW", "PRESSURE_FACTOR", "SIDE_CHOICES", "FlowProbe",
+           "column_name", "flow_column_names", "flow_columns", "probe_from_params"]
 
-#: The quantities of a direction's columns, and the unit of each (``gap^3``: the cube of
-#: the unit of the gaps the sweep was given).
-FLOW_UNITS = MappingProxyType({"flow_conductance": "gap^3", "flow_factor": "1",
-                               "pressure_flow_factor": "1", "flow_connected": "bool"})
+#: The quantities of a direction's columns, in order (module docstring).
+CONDUCTANCE, FACTOR, PRESSURE_FACTOR, CONNECTED = (
+    "flow_conductance", "flow_factor", "pressure_flow_factor", "flow_connected")
+FLOW_QUANTITIES = (CONDUCTANCE, FACTOR, PRESSURE_FACTOR, CONNECTED)
+#: The leak rate of a seal, ``Q = K W dp / (12 eta L)`` [m^3/s]
+#: (:meth:`~roughcontact.transport.flow.Seal.leak_rate`), named like the columns
+#: (``leak_rate_<d>``) in the study's tables.
+LEAK_RATE = "leak_rate"
 #: The sides a probe may put parallel to the flow: those of the grid (periodic on a
 #: periodic grid, sealed on a finite block's), periodic or sealed.
 SIDE_CHOICES = MappingProxyType({"grid": None, "periodic": PERIODIC, "sealed": SEALED})
 
 
+def column_name(quantity: str, direction: str) -> str:
+    """The name of ``quantity`` (:data:`FLOW_QUANTITIES` or :data:`LEAK_RATE`) along
+    ``direction``: ``<quantity>_<direction>``."""
+    return f"{quantity}_{direction}"
+
+
+def flow_columns(direction: str) -> tuple[Column, ...]:
+    """The columns (:class:`~roughcontact.contact.probes.Column`) of the flow along
+    ``direction``, in the order of :data:`FLOW_QUANTITIES`."""
+    d = direction
+    return (
+        Column(column_name(CONDUCTANCE, d), "m^3",
+               f"K_{d}, effective conductance along {d} (Reynolds equation, local cubic "
+               "law): the cube of the flat gap that carries the same flow", length_power=3),
+        Column(column_name(FACTOR, d), "1",
+               f"phi_{d} = K_{d} / mean(g)^3, against a flat gap of the mean gap (0 where "
+               "sealed)"),
+        Column(column_name(PRESSURE_FACTOR, d), "1",
+               f"phi_{d} = K_{d} / h^3, h = mean(f) - d the nominal separation of the "
+               "undeformed mean planes (Patir & Cheng 1978; 0 where sealed)"),
+        Column(column_name(CONNECTED, d), "1",
+               f"share of surfaces whose free space connects inlet to outlet along {d} "
+               "(still leaking; each surface's state at its step nearest in log P)",
+               dtype=bool),
+    )
+
+
+def _along(directions) -> tuple[Column, ...]:
+    """The columns of the flow along ``directions``, in the order x, y."""
+    return tuple(column for direction in FLOW_DIRECTIONS if direction in directions
+                 for column in flow_columns(direction))
+
+
 def flow_column_names(directions) -> tuple[str, ...]:
-    """The columns of a probe flowing along ``directions``, in order."""
-    return tuple(f"{quantity}_{direction}" for direction in directions
-                 for quantity in FLOW_UNITS)
+    """The names of the columns of a probe flowing along ``directions``, in the order x, y."""
+    return tuple(column.name for column in _along(directions))
 
 
 #: Every flow column a sweep may hold.
@@ -95,6 +140,9 @@ class FlowProbe:
         Gaps at most this share of the field's largest are closed (module docstring).
     """
 
+    #: The name its settings are stored under (:class:`~roughcontact.contact.probes.Probe`).
+    kind: ClassVar[str] = "flow"
+
     directions: tuple[str, ...] = FLOW_DIRECTIONS
     sides: str = "grid"
     face_rule: FaceRule = HARMONIC
@@ -118,8 +166,14 @@ class FlowProbe:
                              f"{tuple(FACE_RULES)}, got {self.face_rule!r}")
 
     @property
+    def columns(self) -> tuple[Column, ...]:
+        """The columns it records (:func:`flow_columns`), in the order x, y; empty for
+        :data:`NO_FLOW`."""
+        return _along(self.directions)
+
+    @property
     def names(self) -> tuple[str, ...]:
-        """The columns it records (:func:`flow_column_names`); empty for :data:`NO_FLOW`."""
+        """The names of its :attr:`columns` (:func:`flow_column_names`)."""
         return flow_column_names(self.directions)
 
     def params(self) -> dict:
@@ -127,35 +181,36 @@ class FlowProbe:
         return {"directions": list(self.directions), "sides": self.sides,
                 "face_rule": self.face_rule.name, "closed_below": self.closed_below}
 
-    def columns(self, pressure, gap, separation, spacing, periodic: bool) -> dict:
-        """The flow columns (module docstring) of solutions ``pressure`` and ``gap``
-        (..., ny, nx) whose nominal separations are ``separation`` (...) [gap unit], on
-        elements of sides ``spacing`` ``(dx, dy)`` [m] of a grid that is ``periodic``
-        or not: name -> array of the leading shape."""
+    def measure(self, fields: SolvedFields) -> dict:
+        """The flow columns (module docstring) of the solutions of ``fields`` (pressure and
+        gap (..., ny, nx), nominal separations (...) [gap unit], on elements of sides
+        ``spacing`` ``(dx, dy)`` [m] of a grid that is ``periodic`` or not): name ->
+        array of the leading shape."""
         if not self.directions:
             return {}
-        gap = np.maximum(gap, 0.0)
+        gap = np.maximum(fields.gap, 0.0)
         floor = self.closed_below * gap.max(axis=(-2, -1), keepdims=True)
-        open_gap = np.where((np.asarray(pressure) > 0.0) | (gap <= floor), 0.0, gap)
-        sides = SIDE_CHOICES[self.sides] or (PERIODIC if periodic else SEALED)
-        h = np.asarray(separation, dtype=float)
+        open_gap = np.where((np.asarray(fields.pressure) > 0.0) | (gap <= floor), 0.0, gap)
+        sides = SIDE_CHOICES[self.sides] or (PERIODIC if fields.periodic else SEALED)
+        h = np.asarray(fields.separation, dtype=float)
         positive = h > 0.0
         out = {}
         for direction in self.directions:
-            result = solve_flow(open_gap, FlowSetup(spacing, direction, sides, self.face_rule,
-                                                    self.solver))
+            result = solve_flow(open_gap, FlowSetup(fields.spacing, direction, sides,
+                                                    self.face_rule, self.solver))
             sealed = ~result.connected  # no flow: both factors are 0, even at full contact
             with np.errstate(invalid="ignore", divide="ignore"):
                 pressure_factor = np.where(
                     positive, result.conductance / np.where(positive, h, 1.0) ** 3, np.nan)
-            out[f"flow_conductance_{direction}"] = result.conductance
-            out[f"flow_factor_{direction}"] = np.where(sealed, 0.0, result.flow_factor)
-            out[f"pressure_flow_factor_{direction}"] = np.where(sealed, 0.0, pressure_factor)
-            out[f"flow_connected_{direction}"] = result.connected
+            out[column_name(CONDUCTANCE, direction)] = result.conductance
+            out[column_name(FACTOR, direction)] = np.where(sealed, 0.0, result.flow_factor)
+            out[column_name(PRESSURE_FACTOR, direction)] = np.where(sealed, 0.0,
+                                                                    pressure_factor)
+            out[column_name(CONNECTED, direction)] = result.connected
         return out
 
 
-#: A probe that records nothing (the default of every sweep).
+#: A flow probe that records nothing (the flow setting of a study without flow).
 NO_FLOW = FlowProbe(directions=())
 
 

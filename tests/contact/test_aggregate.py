@@ -13,6 +13,7 @@ import scipy.stats
 from approach_targets import target_grid
 
 from roughcontact.contact import aggregate, nondim
+from roughcontact.contact.probes import Column, ProbeColumns
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.synthetic import generate_many
@@ -234,25 +235,40 @@ def test_unconverged_stiffness_is_excluded_from_k_P_only(cell):
     assert (table["unconverged_stiffness_steps"] == cell.approach.shape[1]).all()
 
 
-def test_still_leaking_is_read_at_the_nearest_step_not_interpolated(cell):
-    """A yes/no state (flow_connected) is each surface's state at its step nearest in
-    log P: the share over surfaces counts whole surfaces, computed here by hand."""
-    import dataclasses
+class _StillOpen:
+    """A probe of one yes/no column (a stand-in for the flow's percolation); its values
+    are given to the record by hand."""
 
+    kind = "still_open"
+    columns = (Column("still_open", "1", "share of surfaces still open", dtype=bool),)
+
+    def params(self):
+        return {}
+
+    def measure(self, fields):
+        raise AssertionError("not swept here")
+
+
+def test_still_leaking_is_read_at_the_nearest_step_not_interpolated(cell):
+    """A yes/no state (a probe's bool column, e.g. the flow's percolation) is each
+    surface's state at its step nearest in log P: the share over surfaces counts whole
+    surfaces, computed here by hand."""
     m, k = cell.nominal_pressure.shape
     sealed_from = np.arange(m) % (k - 2) + 1  # each surface seals at its own step
     connected = np.arange(k)[None, :] < sealed_from[:, None]
-    swept = dataclasses.replace(cell, flow_connected_x=connected,
-                                flow_conductance_x=connected * 1.0e-18,
-                                flow_factor_x=connected * 0.5,
-                                pressure_flow_factor_x=connected * 0.5)
+    swept = replace(cell, probe_columns=ProbeColumns((_StillOpen(),),
+                                                     {"still_open": connected}))
     levels = np.geomspace(cell.nominal_pressure[:, 0].max(),
                           cell.nominal_pressure[:, -1].min(), 9)
-    curves = aggregate.surface_curves(swept, levels, "flow_connected_x")
+    curves = aggregate.surface_curves(swept, levels, "still_open")
     assert set(np.unique(curves[np.isfinite(curves)])) <= {0.0, 1.0}
     for j in range(m):
         log_p = np.log(cell.nominal_pressure[j])
         nearest = np.abs(log_p[None, :] - np.log(levels)[:, None]).argmin(axis=1)
         np.testing.assert_array_equal(curves[j], connected[j, nearest])
     table = aggregate.aggregate_cell(swept, levels)
-    np.testing.assert_allclose(table["flow_connected_x_mean"], curves.mean(axis=0))
+    np.testing.assert_allclose(table["still_open_mean"], curves.mean(axis=0))
+    assert table.attrs["units"]["still_open_mean"] == "1"
+    # the probe's column comes last, after every quantity of the sweep itself
+    assert list(table.columns[-7:-4]) == ["still_open_mean", "still_open_half_width",
+                                          "still_open_count"]

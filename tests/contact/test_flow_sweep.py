@@ -14,9 +14,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from roughcontact.contact import sweep
-from roughcontact.contact.curves import flow_arrays
 from roughcontact.contact.interface import InterfaceGrid
-from roughcontact.contact.result import FLOW
+from roughcontact.contact.probes import Probe, SolvedFields
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 from roughcontact.study import storage
 from roughcontact.transport import ARITHMETIC, FLOW_COLUMNS, NO_FLOW, FlowProbe
@@ -81,13 +80,14 @@ def solved():
     plain = sweep(operator, gaps, mean_pressures=loads, method="pcg", interface=grid,
                   return_fields=True, stiffness=False)
     flowing = sweep(operator, gaps, mean_pressures=loads, method="pcg",
-                    interface=InterfaceGrid(grid.spacing, True, flow=FlowProbe()),
+                    interface=InterfaceGrid(grid.spacing, True, probes=(FlowProbe(),)),
                     return_fields=True, stiffness=False)
     return operator, gaps, plain, flowing
 
 
 def test_the_columns_are_the_flow_through_the_solutions_gaps(solved):
     operator, gaps, _, flowing = solved
+    flow = flowing.probe_columns
     m, k = flowing.approach.shape
     checked = 0
     for j in range(m):
@@ -95,28 +95,28 @@ def test_the_columns_are_the_flow_through_the_solutions_gaps(solved):
             p = flowing.pressure[j, step]
             u = (operator @ p.ravel()).reshape(N, N)
             gap = np.where(p > 0, 0.0, np.maximum(u + gaps[j] - flowing.approach[j, step], 0))
-            if not flowing.flow_connected_x[j, step]:
-                assert flowing.flow_conductance_x[j, step] == 0.0
+            if not flow["flow_connected_x"][j, step]:
+                assert flow["flow_conductance_x"][j, step] == 0.0
                 continue
             expected = _reference_conductance(gap, periodic_sides=True)
-            np.testing.assert_allclose(flowing.flow_conductance_x[j, step], expected,
+            np.testing.assert_allclose(flow["flow_conductance_x"][j, step], expected,
                                        rtol=1e-8)
-            np.testing.assert_allclose(flowing.flow_factor_x[j, step],
+            np.testing.assert_allclose(flow["flow_factor_x"][j, step],
                                        expected / gap.mean() ** 3, rtol=1e-8)
             separation = np.mean(gaps[j]) - flowing.approach[j, step]  # mean(f) - d
             if separation > 0:
-                np.testing.assert_allclose(flowing.pressure_flow_factor_x[j, step],
+                np.testing.assert_allclose(flow["pressure_flow_factor_x"][j, step],
                                            expected / separation**3, rtol=1e-6)
             checked += 1
     assert checked >= 5  # leaking steps were compared (the sweep also reaches sealing)
-    assert not flowing.flow_connected_x[:, -1].any()  # 2e7 Pa: sealed on every surface
+    assert not flow["flow_connected_x"][:, -1].any()  # 2e7 Pa: sealed on every surface
 
 
 def test_flow_off_records_nothing_and_flow_on_changes_no_other_number(solved):
     _, _, plain, flowing = solved
-    assert all(getattr(plain, name) is None for name in FLOW)
-    assert flow_arrays(plain) == {}
-    assert set(flow_arrays(flowing)) == set(FLOW)
+    assert len(plain.probe_columns) == 0 and plain.probe_columns.probes == ()
+    assert list(flowing.probe_columns) == list(FLOW_COLUMNS)
+    assert flowing.probe_columns.probes == (FlowProbe(),)
     for name in ("approach", "nominal_pressure", "real_area_fraction", "mean_gap",
                  "spot_count", "residual", "pressure"):
         np.testing.assert_array_equal(getattr(plain, name), getattr(flowing, name))
@@ -133,7 +133,7 @@ def test_the_conductance_falls_as_the_load_grows(solved):
     gap = np.maximum(u + gaps[:, None] - flowing.approach[..., None, None], 0.0)
     assert (np.diff(gap, axis=1) <= 1e-9 * gap.max()).all()  # to the solver's tolerance
     for name in ("flow_conductance_x", "flow_conductance_y"):
-        assert (np.diff(getattr(flowing, name), axis=1) <= 0.0).all()
+        assert (np.diff(flowing.probe_columns[name], axis=1) <= 0.0).all()
 
 
 def test_one_direction_and_the_arithmetic_rule(solved):
@@ -142,17 +142,21 @@ def test_one_direction_and_the_arithmetic_rule(solved):
     assert probe.names == ("flow_conductance_y", "flow_factor_y", "pressure_flow_factor_y",
                            "flow_connected_y")
     again = sweep(operator, gaps[:1], mean_pressures=np.geomspace(2e5, 2e7, 5), method="pcg",
-                  interface=InterfaceGrid((SIZE / N, SIZE / N), True, flow=probe),
+                  interface=InterfaceGrid((SIZE / N, SIZE / N), True, probes=(probe,)),
                   stiffness=False)
-    assert again.flow_conductance_x is None and again.flow_conductance_y is not None
+    assert "flow_conductance_x" not in again.probe_columns
+    assert list(again.probe_columns) == list(probe.names)
     # the arithmetic mean of two conductances is at least their harmonic mean: the
     # arithmetic rule passes at least as much, and the connectivity is the rule's own
     harmonic = sweep(operator, gaps[:1], mean_pressures=np.geomspace(2e5, 2e7, 5),
-                     method="pcg", interface=InterfaceGrid((SIZE / N, SIZE / N), True,
-                                                           flow=FlowProbe(directions=("y",))),
+                     method="pcg",
+                     interface=InterfaceGrid((SIZE / N, SIZE / N), True,
+                                             probes=(FlowProbe(directions=("y",)),)),
                      stiffness=False)
-    assert (again.flow_conductance_y >= harmonic.flow_conductance_y * (1 - 1e-12)).all()
-    np.testing.assert_array_equal(again.flow_connected_y, harmonic.flow_connected_y)
+    arithmetic, harmonic = again.probe_columns, harmonic.probe_columns
+    assert (arithmetic["flow_conductance_y"]
+            >= harmonic["flow_conductance_y"] * (1 - 1e-12)).all()
+    np.testing.assert_array_equal(arithmetic["flow_connected_y"], harmonic["flow_connected_y"])
 
 
 def test_gaps_of_rounding_size_are_closed():
@@ -165,11 +169,10 @@ def test_gaps_of_rounding_size_are_closed():
     pressure[0, :, :2] = pressure[0, :, -2:] = 0.0
     gap[0, 3, 2:-2] = 1e-18  # the chain
     pressure[0, 3, 2:-2] = 0.0
-    columns = FlowProbe(directions=("x",)).columns(pressure, gap, [1e-6], (1e-5, 1e-5),
-                                                   False)
+    fields = SolvedFields(pressure, gap, np.array([1e-6]), (1e-5, 1e-5), False)
+    columns = FlowProbe(directions=("x",)).measure(fields)
     assert not columns["flow_connected_x"][0] and columns["flow_conductance_x"][0] == 0.0
-    opened = FlowProbe(directions=("x",), closed_below=0.0).columns(
-        pressure, gap, [1e-6], (1e-5, 1e-5), False)
+    opened = FlowProbe(directions=("x",), closed_below=0.0).measure(fields)
     # connected, through a chain that passes nothing but rounding: the inlet flow is read
     # off a pressure drop of 1 - p ~ 1e-16 at the pools (K ~ 1e-15 of the pools' 1e-18)
     assert opened["flow_connected_x"][0] and opened["flow_conductance_x"][0] < 1e-30
@@ -184,15 +187,26 @@ def test_the_default_band_solver_gives_superlus_conductance(solved):
         lu = FlowProbe(sides=sides, solver=DIRECT)
         g = np.maximum(gaps - 0.8 * gaps.mean(), 0.0)
         p = np.where(g == 0.0, 1.0, 0.0)
-        a = banded.columns(p, g, g.mean(axis=(1, 2)), (1e-5, 1e-5), False)
-        b = lu.columns(p, g, g.mean(axis=(1, 2)), (1e-5, 1e-5), False)
+        fields = SolvedFields(p, g, g.mean(axis=(1, 2)), (1e-5, 1e-5), False)
+        a, b = banded.measure(fields), lu.measure(fields)
         for name in a:
             np.testing.assert_allclose(a[name], b[name], rtol=1e-10)
 
 
-def test_flow_columns_names_agree_everywhere():
-    assert FLOW == FLOW_COLUMNS == storage.FLOW_ARRAYS
-    assert NO_FLOW.names == () and NO_FLOW.columns(None, None, None, None, False) == {}
+def test_the_flow_probe_is_a_probe_and_names_its_columns():
+    probe = FlowProbe()
+    assert isinstance(probe, Probe) and probe.kind == "flow"
+    assert [column.name for column in probe.columns] == list(FLOW_COLUMNS) == [
+        f"{quantity}_{d}" for d in "xy" for quantity in
+        ("flow_conductance", "flow_factor", "pressure_flow_factor", "flow_connected")]
+    # the conductance is a gap cubed: m^3, sigma^3 in the dimensionless form
+    assert {column.name: (column.unit, column.length_power, column.dtype)
+            for column in probe.columns if column.name.endswith("_x")} == {
+        "flow_conductance_x": ("m^3", 3, float), "flow_factor_x": ("1", 0, float),
+        "pressure_flow_factor_x": ("1", 0, float), "flow_connected_x": ("1", 0, bool)}
+    # x before y whatever order the directions are given in
+    assert FlowProbe(directions=("y", "x")).names == FLOW_COLUMNS
+    assert NO_FLOW.columns == () and NO_FLOW.measure(None) == {}
 
 
 @pytest.mark.parametrize("bad", [{"directions": ("z",)}, {"directions": ("x", "x")},
@@ -212,18 +226,24 @@ def test_the_dimensionless_form_scales_the_conductance_by_sigma_cubed(tmp_path):
     geometry = type("Block", (), {"thickness": 10e-3, "element_area": (1e-4) ** 2,
                                   "size": (1.6e-3, 1.6e-3), "grid": (16, 16)})()
     unit = halfspace_influence((16, 16), (1.6e-3, 1.6e-3), 1.0, 0.0)
-    grid = InterfaceGrid((1e-4, 1e-4), flow=FlowProbe())
+    grid = InterfaceGrid((1e-4, 1e-4), probes=(FlowProbe(),))
     options = CellOptions(method="pivot", interface=grid)
     nd = cell_module.sweep_cell(unit, heights, geometry, 0.05, 8, options=options)
     sigma = 2e-6
     physical = to_physical(nd, sigma, 1e8)
-    np.testing.assert_allclose(physical.flow_conductance_x, nd.flow_conductance_x * sigma**3,
+    si, scaled = physical.probe_columns, nd.probe_columns
+    np.testing.assert_allclose(si["flow_conductance_x"], scaled["flow_conductance_x"] * sigma**3,
                                rtol=1e-15)
-    np.testing.assert_array_equal(physical.flow_factor_x, nd.flow_factor_x)
-    np.testing.assert_array_equal(physical.flow_connected_y, nd.flow_connected_y)
-    # and through a contact file, bit for bit
+    np.testing.assert_array_equal(si["flow_factor_x"], scaled["flow_factor_x"])
+    np.testing.assert_array_equal(si["flow_connected_y"], scaled["flow_connected_y"])
+    assert si["flow_connected_y"].dtype == bool
+    # and through a contact file, bit for bit, the probe made again from its settings
     path = tmp_path / "contact.h5"
     storage.write_contact(path, nd, {"job": "{}"})
-    back, _ = storage.read_contact(path)
-    for name in FLOW:
-        np.testing.assert_array_equal(getattr(back, name), getattr(nd, name))
+    back, attrs = storage.read_contact(path)
+    assert attrs["flow"] == ('{"closed_below":1e-07,"directions":["x","y"],'
+                             '"face_rule":"harmonic","sides":"grid"}')
+    assert back.probe_columns.probes == (FlowProbe(),)
+    assert list(back.probe_columns) == list(FLOW_COLUMNS)
+    for name in FLOW_COLUMNS:
+        np.testing.assert_array_equal(back.probe_columns[name], scaled[name])

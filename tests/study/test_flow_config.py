@@ -10,12 +10,8 @@ import pytest
 from roughcontact.study.cells import study_plan
 from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ContactSettings, load_config, validated
-from roughcontact.study.flow_settings import (
-    FLOW_OFF,
-    check_flow,
-    flow_settings,
-    probe_from_attrs,
-)
+from roughcontact.study.flow_settings import FLOW_OFF, check_flow, flow_settings
+from roughcontact.study.probes import PROBE_KINDS, probes_from_attrs, study_probes
 from roughcontact.study.settings import Study
 from roughcontact.transport import ARITHMETIC, NO_FLOW, SEALED, FlowProbe
 from roughcontact.transport.probe import probe_from_params
@@ -41,7 +37,7 @@ def test_off_by_default_and_off_changes_no_job_parameter(path):
     assert shipped["flow"]["enabled"] is False
     assert flow_settings(shipped["flow"]) is FLOW_OFF and FLOW_OFF.params() == {}
     settings = Study.from_config(shipped).contact
-    assert settings.flow is NO_FLOW
+    assert settings.flow is NO_FLOW and settings.probes == () and study_probes(FLOW_OFF) == ()
     # the contact jobs' solver parameters as before the flow section existed
     assert set(settings.params()) == {"method", "tol", "precision", "steps", "pressure_levels"}
 
@@ -56,10 +52,13 @@ def test_on_every_contact_job_gets_the_probe_and_its_parameters_change():
     # the job reads its settings back from these parameters
     assert ContactSettings.from_section(params) == settings
     assert probe_from_params(params["flow"]) == settings.flow
-    assert probe_from_attrs({"flow": '{"directions": ["y"], "sides": "sealed", '
-                                     '"face_rule": "arithmetic", "closed_below": 1e-7}'}
-                            ) == settings.flow
-    assert probe_from_attrs({}) is NO_FLOW
+    # the jobs record exactly that probe; a contact file's attribute makes it again
+    assert settings.probes == (settings.flow,)
+    assert PROBE_KINDS["flow"] is probe_from_params
+    assert probes_from_attrs({"flow": '{"directions": ["y"], "sides": "sealed", '
+                                      '"face_rule": "arithmetic", "closed_below": 1e-7}'}
+                             ) == (settings.flow,)
+    assert probes_from_attrs({"job": "{}"}) == ()
     assert SEALED.name == "sealed"
 
 
@@ -70,12 +69,16 @@ def test_the_seal_in_si_units_and_its_leak_rate():
     rows = pd.DataFrame({f"flow_conductance_{d}_{part}": [1e-18, 2e-18]
                          for d in "xy" for part in ("mean", "half_width")}
                         | {f"flow_conductance_{d}_count": [3, 3] for d in "xy"})
-    columns = flow.leak_columns(rows)
+    columns, units = flow.table_columns(rows)
     # Q = K W dp / (12 eta L), by hand
     expected = np.array([1e-18, 2e-18]) * 80e-3 * 2.0e6 / (12 * 0.05 * 4e-3)
     np.testing.assert_allclose(columns["leak_rate_x_mean"], expected, rtol=1e-15)
     np.testing.assert_allclose(columns["leak_rate_y_half_width"], expected, rtol=1e-15)
     assert list(columns["leak_rate_x_count"]) == [3, 3]
+    assert list(columns) == [f"leak_rate_{d}_{part}" for d in "xy"
+                             for part in ("mean", "half_width", "count")]
+    assert units == {name: "1" if name.endswith("_count") else "m^3/s" for name in columns}
+    assert FLOW_OFF.table_columns(rows) == ({}, {})
 
 
 @pytest.mark.parametrize(("key", "value", "fixed"), [

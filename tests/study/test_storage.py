@@ -321,3 +321,74 @@ def test_contact_files_store_every_interface_quantity():
     from roughcontact.contact.result import INTERFACE
 
     assert storage.INTERFACE_ARRAYS == INTERFACE
+
+
+class _Touching:
+    """A probe of one yes/no column and one length cubed (the storage needs only its
+    kind, settings and columns)."""
+
+    kind = "touching"
+
+    def __init__(self, threshold=0.5):
+        self.threshold = threshold
+
+    def __eq__(self, other):
+        return isinstance(other, _Touching) and other.threshold == self.threshold
+
+    @property
+    def columns(self):
+        from roughcontact.contact.probes import Column
+
+        return (Column("touching", "1", "share touching", dtype=bool),
+                Column("gap_cubed", "m^3", "mean gap cubed", length_power=3))
+
+    def params(self):
+        return {"threshold": self.threshold}
+
+
+def probed_sweep():
+    from roughcontact.contact.probes import ProbeColumns
+
+    values = {"touching": np.array([[True, False, True, False]] * 2),
+              "gap_cubed": np.linspace(1.0, 2.0, 8).reshape(2, 4)}
+    return dataclasses.replace(sweep(), probe_columns=ProbeColumns((_Touching(0.25),), values))
+
+
+def test_a_probes_columns_and_settings_are_stored_and_its_kind_makes_it_again(
+        tmp_path, monkeypatch):
+    from roughcontact.study import probes
+
+    path = tmp_path / "job.h5"
+    stored = probed_sweep()
+    storage.write_contact(path, stored, {"job": "{}"})
+    with h5py.File(path, "r") as f:  # the datasets under the columns' names, the settings
+        assert f.attrs["touching"] == '{"threshold":0.25}'  # under the probe's kind
+        assert f["touching"].dtype == bool and np.array_equal(f["gap_cubed"][()],
+                                                              np.linspace(1.0, 2.0, 8)
+                                                              .reshape(2, 4))
+    # a probe kind the registry does not know: refused, naming its datasets
+    with pytest.raises(StoredFileError, match="datasets gap_cubed, touching of no probe"):
+        storage.read_contact(path)
+    monkeypatch.setattr(probes, "PROBE_KINDS", {**probes.PROBE_KINDS,
+                                                "touching": lambda p: _Touching(**p)})
+    back, _ = storage.read_contact(path)
+    assert back.probe_columns.probes == (_Touching(0.25),)
+    for name in ("touching", "gap_cubed"):
+        np.testing.assert_array_equal(back.probe_columns[name], stored.probe_columns[name])
+        assert back.probe_columns[name].dtype == stored.probe_columns[name].dtype
+    # a file that names the probe but lacks one of its columns (its hash made without
+    # it) is refused, naming it
+    with h5py.File(path, "r+") as f:
+        del f["gap_cubed"]
+        f.attrs["content_sha256"] = arrays_sha256({name: f[name][()] for name in f})
+    with pytest.raises(StoredFileError, match="no gap_cubed of the probes it names"):
+        storage.read_contact(path)
+
+
+def test_a_sweep_without_probes_stores_no_probe_dataset_or_attribute(tmp_path):
+    path = tmp_path / "job.h5"
+    storage.write_contact(path, sweep(), {"job": "{}"})
+    with h5py.File(path, "r") as f:
+        assert set(f) == set(CONTACT_ARRAYS) and "flow" not in f.attrs
+    back, _ = storage.read_contact(path)
+    assert len(back.probe_columns) == 0
