@@ -2,8 +2,9 @@
 
 The solver minimizes the complementary energy with p >= 0 (Eq 27 of Kumar
 et al. 2006) for one or many surfaces and through approach sweeps, one
-module per part: ``methods`` (the methods by name, ``solve``,
-``solve_many``), ``cg``, ``steepest``, ``pivot`` and ``pcg`` (one
+module per part: ``problem`` (what is solved, ``Problem``, and how,
+``SolverOptions``: the two records every solve takes), ``methods`` (the methods
+by name, ``solve``, ``solve_many``), ``cg``, ``steepest``, ``pivot`` and ``pcg`` (one
 algorithm each, ``iteration`` the projected iteration the first two share;
 ``pcg`` the preconditioned CG of the grid FFT operators, ``nested`` its
 coarse-grid starts), ``loads`` (load control by an outer solve on the
@@ -25,24 +26,38 @@ a probe is (what a sweep measures beyond pressure and load, e.g. the flow of
 17-18).
 
 The solver's public names are importable from here: ``from roughcontact
-import contact; contact.solve(...)``.
+import contact; contact.solve(...)``, with the options as one record:
+``contact.sweep(C, gaps, approaches, element_area=dA,
+options=contact.SolverOptions(method="pivot", tol=1e-10))``.
 """
 
 from roughcontact.contact.kkt import kkt_residual
-from roughcontact.contact.methods import METHODS, PRECISIONS, resolve_method, solve, solve_many
+from roughcontact.contact.methods import (
+    METHODS,
+    PRECISIONS,
+    resolve_method,
+    solve,
+    solve_many,
+    solve_problem,
+)
+from roughcontact.contact.problem import Problem, SolverOptions
 from roughcontact.contact.result import ContactResult, SweepResult
 from roughcontact.contact.stiffness import tangent_stiffness
-from roughcontact.contact.sweeps import sweep
+from roughcontact.contact.sweeps import sweep, sweep_problem
 
 __all__ = [
     "METHODS",
     "PRECISIONS",
     "ContactResult",
+    "Problem",
+    "SolverOptions",
     "SweepResult",
     "kkt_residual",
     "resolve_method",
     "solve",
     "solve_many",
+    "solve_problem",
     "sweep",
+    "sweep_problem",
     "tangent_stiffness",
 ]

@@ -103,13 +103,14 @@ def block_interface(geometry) -> InterfaceGrid:
 
 
 #: The study's sweep (:func:`sweep_cell`): mixed precision, the pressure profiles and the
-#: interface quantities on the block's grid recorded.
-SWEEP_OPTIONS = nondim.CellOptions(precision="mixed", profile=True, interface=True)
+#: interface quantities on the block's grid recorded; a job's variant is
+#: ``SWEEP_OPTIONS.with_(method=..., tol=...)``.
+SWEEP_OPTIONS = nondim.CellOptions().with_(precision="mixed", profile=True, interface=True)
 
 
 def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: float, steps: int,
                *, options: nondim.CellOptions = SWEEP_OPTIONS, rows: slice | None = None,
-               bulk_factor: float = BULK_FACTOR, **settings) -> NondimSweep:
+               bulk_factor: float = BULK_FACTOR) -> NondimSweep:
     """Sweep every surface of a cell to ``pressure_end`` on :func:`approach_grid`.
 
     Parameters
@@ -124,8 +125,8 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
     pressure_end, steps
         As in :func:`approach_grid`.
     options : roughcontact.contact.nondim.CellOptions
-        The sweep's settings (default :data:`SWEEP_OPTIONS`); ``settings`` (keywords
-        named as its fields) replace those of ``options``. Its ``interface`` may be
+        The sweep's settings (default :data:`SWEEP_OPTIONS`; a variant:
+        :meth:`~roughcontact.contact.nondim.CellOptions.with_`). Its ``interface`` may be
         True: the grid of ``geometry`` (:func:`block_interface`: it then needs
         ``size`` and ``grid``), or an ``InterfaceGrid`` (e.g. with a counter body's
         deflection weights, :mod:`roughcontact.contact.counterface`).
@@ -135,7 +136,6 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
     bulk_factor : float
         As in :func:`approach_grid` (larger for a pair of bodies).
     """
-    options = dataclasses.replace(options, **settings)
     approaches = approach_grid(heights, pressure_end, steps, bulk_factor)
     if rows is not None:
         heights = heights[rows]
@@ -218,18 +218,19 @@ VALIDITY_QUANTITIES = ("area_above", "load_above", "excess_load")
 
 
 def sweep_and_aggregate(unit_influence, heights: np.ndarray, geometry, *, sigma: float,
-                        pressures, steps: int, reach: float = 1.0, **options,
+                        pressures, steps: int, reach: float = 1.0,
+                        options: nondim.CellOptions = SWEEP_OPTIONS,
                         ) -> tuple[NondimSweep, PhysicalSweep, pd.DataFrame]:
     """Sweep a cell and average it at ``pressures`` [Pa]: :func:`sweep_cell` then
     :func:`aggregate_sweep`.
 
     ``geometry`` also gives Young's modulus ``E`` [Pa]; the sweep ends at
-    ``reach`` times the largest of ``pressures``. ``options`` go to
-    :func:`sweep_cell`.
+    ``reach`` times the largest of ``pressures``; ``sigma`` [m] is the height scale
+    of ``heights``. ``options`` as in :func:`sweep_cell`.
     """
     pressures = np.asarray(pressures, dtype=float)
     end = reach * nondim_pressure(pressures.max(), thickness=geometry.thickness, E=geometry.E,
                                   sigma=sigma)
-    sweep = sweep_cell(unit_influence, heights, geometry, end, steps, **options)
+    sweep = sweep_cell(unit_influence, heights, geometry, end, steps, options=options)
     physical, table = aggregate_sweep(sweep, sigma, geometry.E, pressures)
     return sweep, physical, table

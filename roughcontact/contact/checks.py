@@ -4,16 +4,17 @@ The public entry points (:func:`roughcontact.contact.solve`,
 :func:`~roughcontact.contact.solve_many`, :func:`~roughcontact.contact.sweep`,
 :func:`~roughcontact.contact.kkt_residual`,
 :func:`~roughcontact.contact.tangent_stiffness`) check their arguments here
-once, and view the influence operator they were given through
-:class:`roughcontact.elasticity.protocol.InfluenceOperator`
-(:func:`as_operator`): past this point no solver asks which operator it got.
+once (the solves through :meth:`roughcontact.contact.problem.Problem.of` and
+:class:`~roughcontact.contact.problem.SolverOptions`), and view the influence
+operator they were given through
+:class:`roughcontact.elasticity.protocol.InfluenceOperator` (:func:`as_operator`):
+past this point no solver asks which operator it got.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -29,7 +30,6 @@ from roughcontact.elasticity.protocol import (
 
 __all__ = [
     "SYMMETRY_RTOL",
-    "SweepOptions",
     "approach_steps",
     "as_operator",
     "check_approach",
@@ -48,23 +48,6 @@ __all__ = [
     "given_matrix",
     "preconditioned_operator",
 ]
-
-@dataclass(frozen=True)
-class SweepOptions:
-    """The checked options of a sweep, shared by every method's approach loop.
-
-    ``tol`` bounds the KKT residual of each solution, ``max_iter`` the
-    iterations (pivots) of each step; ``hardness`` is the cap ``H`` [Pa] or
-    None; ``stiffness``, ``stiffness_tol``, ``extrapolate`` as in
-    :func:`roughcontact.contact.sweep`.
-    """
-
-    tol: float
-    max_iter: int
-    hardness: float | None
-    stiffness: bool
-    stiffness_tol: float
-    extrapolate: bool
 
 
 # ---------------------------------------------------------------------------

@@ -83,7 +83,7 @@ def halfspace_errors(block_unit, grid, size, nu: float, thickness: float,
         approaches = np.geomspace(end / 1e3, end, int(cal["steps"]))
         sweep = nondim.solve_cell(model, heights, thickness=thickness,
                                   element_area=element_area, approaches=approaches,
-                                  method="cg", tol=1e-8)
+                                  options=nondim.CellOptions().with_(method="cg", tol=1e-8))
         curves.append(_mean_curves(sweep, pressures))
     block, hs = curves
     return {name: float(np.nanmax(np.abs(hs[name] / block[name] - 1.0)))

@@ -1,5 +1,10 @@
 """The contact methods by name, and the solves at one approach (:func:`solve`, :func:`solve_many`).
 
+A solve takes a :class:`~roughcontact.contact.problem.Problem` (the operator, the
+gaps, the cap) and a :class:`~roughcontact.contact.problem.SolverOptions` (the
+method by name, ``tol``, ``max_iter``, ``precision``, ``load_tol``, ``retries``);
+they meet in a :class:`Solver`, the method looked up once in :data:`REGISTRY`.
+
 Frictionless normal contact of a rigid flat with a rough elastic body
 (Section 3 of Kumar, Sadeghi & Krousgrill 2006): given the influence
 coefficients ``C`` (Eq 16), the initial separation ``f = z_max - z`` (Eq
@@ -18,7 +23,7 @@ Hardness cap: with ``hardness = H`` [Pa] every method minimizes the same
 ``V(p)`` over ``0 <= p <= H`` (elastic-perfectly-plastic elements); the
 elements at ``H`` are the plastic area (``plastic_area_fraction`` of the
 results, included in ``real_area_fraction``). ``hardness=None`` (the
-default) is the uncapped problem, computed exactly as without the keyword.
+default) is the uncapped problem, computed exactly as without a cap.
 A capped solution depends on ``H L / (E sigma)`` besides the surface shape
 and ``d / sigma``, so one dimensionless solve
 (:mod:`roughcontact.contact.nondim`) serves every (sigma, E, H) with the
@@ -55,7 +60,7 @@ Methods (:data:`REGISTRY`; :data:`METHODS` also holds ``"auto"``):
     without a hardness cap, ``"cg"`` for any other matrix-free operator or a
     capped problem on one (:func:`resolve_method`); the default.
 
-Iteration limits (``max_iter``, default ``Method.default_max_iter``):
+Iteration limits (the options' ``max_iter``, default ``Method.default_max_iter``):
 ``max(1000, 2n)`` for ``"cg"``, ``20 max(1000, 4 sqrt(n))`` for ``"pcg"``
 (which also stops a solve whose residual has not halved in
 ``max(1000, 4 sqrt(n))`` iterations), ``max(20000, 20n)`` for
@@ -66,8 +71,8 @@ residual met ``tol`` and, under load control, its load met ``load_tol``
 (:mod:`roughcontact.contact.loads`). A solve that stops short is solved
 again cold, then by block principal pivoting where the matrix is dense or
 can be formed, and only then returned flagged, the attempts logged
-(:mod:`roughcontact.contact.retries`; ``retries=False`` returns a method's
-own result).
+(:mod:`roughcontact.contact.retries`; options with ``retries=False`` return a
+method's own result).
 
 Operators: ``operator`` is a dense symmetric influence matrix (ndarray, n x
 n, m/Pa; then ``element_area`` [m^2] must be given), an
@@ -110,15 +115,13 @@ import numpy as np
 
 from roughcontact.contact import cg, checks, pcg, pivot, steepest
 from roughcontact.contact.controls import Approaches, Loads
-from roughcontact.contact.loads import LOAD_TOL
+from roughcontact.contact.problem import DEFAULT_OPTIONS, Problem, SolverOptions
 from roughcontact.contact.products import PRECISIONS, Products
 from roughcontact.contact.result import Batch, ContactResult
 from roughcontact.contact.retries import settle
-from roughcontact.elasticity.protocol import InfluenceOperator
 
-__all__ = ["LOAD_TOL", "METHODS", "PRECISIONS", "REGISTRY", "Method", "Problem",
-           "check_method", "check_problem", "fallbacks", "method_for", "resolve_method", "solve",
-           "solve_many", "solve_rows"]
+__all__ = ["METHODS", "PRECISIONS", "REGISTRY", "Method", "Solver", "check_method",
+           "fallbacks", "method_for", "resolve_method", "solve", "solve_many", "solve_problem"]
 
 @dataclass(frozen=True)
 class Method:
@@ -135,7 +138,7 @@ class Method:
     single_precision : bool
         Takes single-precision search products (``precision="mixed"``).
     sweep : callable or None
-        ``sweep(method, products, gaps, steps, options, table)``, its own
+        ``sweep(solver, steps, table)`` (a :class:`Solver`), its own
         approach loop; None: the shared loop of :mod:`roughcontact.contact.sweeps`.
     load : callable or None
         ``load(products, gaps, P, pressure, tol, max_iter, hardness) -> (Batch,
@@ -225,63 +228,64 @@ def fallbacks(method: Method, operator) -> tuple:
 
 
 @dataclass(frozen=True)
-class Problem:
-    """The checked arguments every entry point shares.
+class Solver:
+    """A :class:`~roughcontact.contact.problem.Problem` and its
+    :class:`~roughcontact.contact.problem.SolverOptions` bound to the method chosen
+    for them (:meth:`of`): what every solve and sweep of the problem runs.
 
-    ``operator`` and the :class:`Method` chosen for it, the initial
-    separations ``gaps`` (m, n) [m] and the ``shape`` of one surface as
-    given, ``tol``, ``max_iter`` (the method's default filled in), the
-    ``products`` of the solve, the cap ``hardness`` [Pa] or None, the tolerance
-    on the load ``load_tol`` (load control), and whether an unconverged solve is
-    ``retried``, then by the ``fallbacks`` (:func:`fallbacks`).
+    Attributes
+    ----------
+    problem : Problem
+        What is solved (checked).
+    options : SolverOptions
+        How (checked).
+    method : Method
+        The method ``options.method`` names for the problem (``"auto"`` resolved,
+        :func:`method_for`).
+    max_iter : int
+        Its iteration limit (``options.max_iter``, or the method's default for ``n``
+        unknowns).
+    products : Products
+        The products ``C p`` of its solves at ``options.precision``.
+    fallbacks : tuple
+        The methods tried in turn on an unconverged surface (:func:`fallbacks`);
+        empty without ``options.retries``.
     """
 
-    operator: InfluenceOperator
+    problem: Problem
+    options: SolverOptions
     method: Method
-    gaps: np.ndarray
-    shape: tuple
-    tol: float
     max_iter: int
     products: Products
-    hardness: float | None
-    load_tol: float
-    retried: bool
     fallbacks: tuple
 
-    def settle(self, control, start, gaps=None) -> tuple[Batch, np.ndarray]:
-        """The rows of ``gaps`` (default all) under ``control``
+    @classmethod
+    def of(cls, problem: Problem, options: SolverOptions) -> Solver:
+        """The solver of ``problem`` with ``options`` (the method's name checked)."""
+        check_method(options.method)
+        op = problem.operator
+        chosen = method_for(options.method, op, problem.hardness)
+        return cls(problem, options, chosen, chosen.max_iter(options.max_iter, op.shape[0]),
+                   chosen.products(op, options.precision),
+                   fallbacks(chosen, op) if options.retries else ())
+
+    def settle(self, control, start) -> tuple[Batch, np.ndarray]:
+        """Every surface of the problem under ``control``
         (:class:`~roughcontact.contact.controls.Approaches` or ``Loads``) from ``start``
         [Pa], retried where unconverged (:func:`roughcontact.contact.retries.settle`);
         the batch and the approaches [m]."""
-        return settle(self.method, self.products, self.gaps if gaps is None else gaps,
-                      control, start, self.tol, self.max_iter, self.hardness, self.fallbacks,
-                      retry=self.retried)
+        return settle(self.method, self.products, self.problem.gaps, control, start,
+                      self.options.tol, self.max_iter, self.problem.hardness, self.fallbacks,
+                      retry=self.options.retries)
 
 
-def check_problem(operator, gaps0, name: str, *, method, tol, max_iter, precision,
-                  element_area, hardness, batched: bool, load_tol=LOAD_TOL,
-                  retries=True) -> Problem:
-    """Check the arguments shared by the entry points, in the order of their messages;
-    the gaps are named ``name``."""
-    check_method(method)
-    tol = checks.check_positive(tol)
-    load_tol = checks.check_positive(load_tol, "load_tol")
-    checks.check_max_iter(max_iter)
-    checks.check_precision(precision)
-    hardness = checks.check_hardness(hardness)
-    op = checks.as_operator(operator, element_area)
-    chosen = method_for(method, op, hardness)
-    gaps, shape = checks.check_surfaces(gaps0, op, name, batched=batched)
-    checks.check_definite(op)
-    return Problem(op, chosen, gaps, shape, tol, chosen.max_iter(max_iter, gaps.shape[1]),
-                   chosen.products(op, precision), hardness, load_tol, bool(retries),
-                   fallbacks(chosen, op) if retries else ())
-
-
-def solve_rows(problem: Problem, approach, p0, mean_pressure=None) -> list[ContactResult]:
+def solve_problem(problem: Problem, approach=None, *, mean_pressure=None, p0=None,
+                  options: SolverOptions = DEFAULT_OPTIONS) -> tuple[ContactResult, ...]:
     """Solve every surface of ``problem`` at ``approach`` [m] or ``mean_pressure`` [Pa]
-    from ``p0`` [Pa] (None: zero), retried where unconverged
-    (:mod:`roughcontact.contact.retries`); one :class:`ContactResult` each."""
+    from ``p0`` [Pa] (None: zero) with ``options``, retried where unconverged
+    (:mod:`roughcontact.contact.retries`); one :class:`ContactResult` each, fields in
+    ``problem.shape``. The arguments as in :func:`solve_many`."""
+    solver = Solver.of(problem, options)
     gaps, hardness = problem.gaps, problem.hardness
     m, n = gaps.shape
     checks.check_control(approach, mean_pressure)
@@ -290,22 +294,24 @@ def solve_rows(problem: Problem, approach, p0, mean_pressure=None) -> list[Conta
         checks.check_bounded(problem.operator, gaps, d, "approach", hardness)
         control = Approaches(d)
     else:
-        control = Loads(checks.check_mean_pressure(mean_pressure, m), problem.load_tol)
+        control = Loads(checks.check_mean_pressure(mean_pressure, m), options.load_tol)
     pressure = checks.check_initial_pressure(p0, m, n, hardness=hardness)
-    batch, d = problem.settle(control, pressure)
-    return [batch.contact_result(j, gaps[j] - d[j], problem.operator.element_area,
-                                 problem.shape, problem.method.name, problem.tol, d[j], hardness)
-            for j in range(m)]
+    batch, d = solver.settle(control, pressure)
+    return tuple(batch.contact_result(j, gaps[j] - d[j], problem.operator.element_area,
+                                      problem.shape, solver.method.name, options.tol, d[j],
+                                      hardness)
+                 for j in range(m))
 
 
-def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", tol=1e-10,
-          max_iter=None, p0=None, element_area=None, precision="double",
-          hardness=None, load_tol=LOAD_TOL, retries=True) -> ContactResult:
+def solve(operator, gap0, approach=None, *, mean_pressure=None, p0=None, hardness=None,
+          element_area=None, options: SolverOptions = DEFAULT_OPTIONS) -> ContactResult:
     """Contact pressure under a rigid flat at prescribed approach or mean pressure (Eq 27).
 
     Minimizes ``V = 1/2 p.C p - p.(d - f)`` over ``p >= 0`` (Eq 17, 18, 27 of
     Kumar et al. 2006): at the solution the gap ``u + f - d`` vanishes where
     ``p > 0`` and is non-negative elsewhere (Eq 19-22), ``u = C p`` (Eq 16).
+    The short form of ``solve_problem(Problem.of(operator, gap0, ...), ...)[0]``
+    (:class:`~roughcontact.contact.problem.Problem`, :func:`solve_problem`).
 
     Parameters
     ----------
@@ -321,29 +327,19 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
     mean_pressure : float, optional
         Nominal pressure ``P = sum p / n >= 0`` [Pa] instead (load control,
         :mod:`roughcontact.contact.loads`); the approach is found with the solution.
-    method : {"auto", "cg", "pcg", "steepest", "exact", "pivot"}
-        See the module docstring (``"auto"``, the default: :func:`resolve_method`).
-    tol : float
-        Tolerance on the dimensionless KKT residual (:mod:`roughcontact.contact.kkt`).
-    max_iter : int, optional
-        Iteration limit; default the method's (``Method.default_max_iter``; pcg
-        also stops a stalled solve, :func:`roughcontact.contact.pcg.stall_window`).
     p0 : ndarray, optional
         Non-negative starting pressure [Pa] (warm start), shape of ``gap0``;
         default zero. Pivoting takes its support as the first contact set.
-    element_area : float, optional
-        Element area ``dA`` [m^2]; default ``operator.element_area``.
-    precision : {"double", "mixed"}
-        ``"mixed"``: single-precision search products (module docstring);
-        convergence is decided in double precision either way.
     hardness : float, optional
         Pressure cap ``H`` [Pa]: Eq 27 over ``0 <= p <= H`` (module docstring);
         default None (no cap; ``+inf`` is the same). ``p0`` is clipped to ``H``.
-    load_tol : float
-        Tolerance on the load, ``|P(d) - P| <= load_tol P`` (default 1e-8).
-    retries : bool
-        Solve again where a solve stops short (default; module docstring).
-        False returns the method's own result: for measuring a method.
+    element_area : float, optional
+        Element area ``dA`` [m^2]; default ``operator.element_area``.
+    options : SolverOptions
+        The method (module docstring; ``"auto"``, the default: :func:`resolve_method`),
+        the KKT tolerance ``tol`` (default 1e-10), ``max_iter``, ``precision``, the
+        load's ``load_tol`` and ``retries``
+        (:class:`~roughcontact.contact.problem.SolverOptions`).
 
     Returns
     -------
@@ -352,23 +348,22 @@ def solve(operator, gap0, approach=None, *, mean_pressure=None, method="auto", t
         attempts) only if every attempt failed. Invalid input raises ValueError
         naming the argument.
     """
-    problem = check_problem(operator, gap0, "gap0", method=method, tol=tol, max_iter=max_iter,
-                            precision=precision, element_area=element_area, hardness=hardness,
-                            batched=False, load_tol=load_tol, retries=retries)
-    return solve_rows(problem, approach, p0, mean_pressure)[0]
+    problem = Problem.of(operator, gap0, hardness=hardness, element_area=element_area,
+                         batched=False)
+    return solve_problem(problem, approach, mean_pressure=mean_pressure, p0=p0,
+                         options=options)[0]
 
 
-def solve_many(operator, gaps0, approach=None, *, mean_pressure=None, method="auto", tol=1e-10,
-               max_iter=None, p0=None, element_area=None, precision="double",
-               hardness=None, load_tol=LOAD_TOL,
-               retries=True) -> tuple[ContactResult, ...]:
+def solve_many(operator, gaps0, approach=None, *, mean_pressure=None, p0=None, hardness=None,
+               element_area=None,
+               options: SolverOptions = DEFAULT_OPTIONS) -> tuple[ContactResult, ...]:
     """Solve m contact problems with one operator in one batched call (Eq 27).
 
     Same problem as :func:`solve` for each surface; all unfinished surfaces
     are worked on at once with matrix-matrix products ``[p_1 ... p_m]^T C``
     (BLAS 3 for a dense matrix), each surface keeping its own contact set,
     search direction and convergence flag; finished surfaces drop out of the
-    products.
+    products. The short form of ``solve_problem(Problem.of(operator, gaps0, ...), ...)``.
 
     Parameters
     ----------
@@ -380,17 +375,16 @@ def solve_many(operator, gaps0, approach=None, *, mean_pressure=None, method="au
         Rigid-body approach ``d >= 0`` [m], shared or per surface.
     mean_pressure : float or ndarray (m,), optional
         Mean pressure ``P >= 0`` [Pa] instead (load control, see :func:`solve`).
-    method, tol, max_iter, element_area, precision, hardness, load_tol, retries
-        As in :func:`solve`.
     p0 : ndarray, optional
         Starting pressures [Pa], shape of ``gaps0``.
+    hardness, element_area, options
+        As in :func:`solve`.
 
     Returns
     -------
     tuple of ContactResult
         One result per surface, fields shaped like one surface of ``gaps0``.
     """
-    problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
-                            precision=precision, element_area=element_area, hardness=hardness,
-                            batched=True, load_tol=load_tol, retries=retries)
-    return tuple(solve_rows(problem, approach, p0, mean_pressure))
+    problem = Problem.of(operator, gaps0, hardness=hardness, element_area=element_area)
+    return solve_problem(problem, approach, mean_pressure=mean_pressure, p0=p0,
+                         options=options)

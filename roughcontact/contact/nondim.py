@@ -82,12 +82,14 @@ from roughcontact.contact.curves import (
 )
 from roughcontact.contact.methods import resolve_method
 from roughcontact.contact.probes import ProbeColumns
+from roughcontact.contact.problem import Problem, SolverOptions
 from roughcontact.contact.result import INTERFACE
-from roughcontact.contact.sweeps import sweep
+from roughcontact.contact.sweeps import sweep_problem
 from roughcontact.elasticity import definiteness
 from roughcontact.elasticity.protocol import DenseInfluence
 
 __all__ = [
+    "CELL_SOLVER",
     "INTERFACE_SCALES",
     "SI_SCALES",
     "CellOptions",
@@ -333,43 +335,60 @@ def _check_batch_size(batch_size, m: int) -> int:
 # Sweep
 
 
+#: The solver of a cell's sweep unless told otherwise (:class:`CellOptions`): CG to a
+#: dimensionless KKT residual of 1e-8, in double precision, with the tangent stiffness at
+#: every step.
+CELL_SOLVER = SolverOptions(method="cg", tol=1e-8)
+_SOLVER_FIELDS = frozenset(field.name for field in dataclasses.fields(SolverOptions))
+
+
 @dataclass(frozen=True)
 class CellOptions:
     """How the surfaces of a cell are swept (:func:`solve_cell`,
     :func:`roughcontact.contact.cell.sweep_cell`): one record for every setting.
 
-    ``method``, ``tol``, ``max_iter``, ``stiffness_tol``, ``precision``, ``profile``
-    and ``interface`` as in :func:`roughcontact.contact.sweep` (``tol`` bounds the
-    dimensionless KKT residual, the same in SI units; the interface's gaps are in units
-    of sigma, like the heights). ``batch_size``: surfaces per sweep (None: all in one,
-    the fastest; smaller batches bound memory). ``progress``: called with a
-    :class:`SweepProgress` for every step of every batch, in step order when the
-    batch is finished. ``nondim_hardness``: the dimensionless cap ``H L / (E sigma)``
-    (the result then holds only for the (sigma, E, H) with that value,
-    :func:`to_physical` checks it; None: elastic).
+    Attributes
+    ----------
+    solver : SolverOptions
+        The solver of every batch's sweep (:func:`roughcontact.contact.sweep`; default
+        :data:`CELL_SOLVER`): ``method``, ``tol`` (it bounds the dimensionless KKT
+        residual, the same as in SI units), ``max_iter``, ``precision``,
+        ``stiffness_tol``, ``profile``, ... Its ``stiffness`` (on by default) gives the
+        normalized stiffness ``dPhat/ddhat`` of every step.
+    batch_size : int or None
+        Surfaces per sweep (None: all in one, the fastest; smaller batches bound
+        memory).
+    progress : callable or None
+        Called with a :class:`SweepProgress` for every step of every batch, in step
+        order when the batch is finished.
+    nondim_hardness : float or None
+        The dimensionless cap ``H L / (E sigma)`` (the result then holds only for the
+        (sigma, E, H) with that value, :func:`to_physical` checks it; None: elastic).
+    interface : InterfaceGrid or None
+        As in :func:`roughcontact.contact.sweep` (its gaps in units of sigma, like the
+        heights); :func:`roughcontact.contact.cell.sweep_cell` also takes True, the
+        grid of its block.
+
+    Build a variant with :meth:`with_`, e.g. ``CellOptions().with_(method="pivot",
+    batch_size=2)``.
     """
 
-    method: str = "cg"
-    tol: float = 1e-8
-    max_iter: int | None = None
-    stiffness_tol: float = 1e-6
-    precision: str = "double"
+    solver: SolverOptions = CELL_SOLVER
     batch_size: int | None = None
     progress: Callable[[SweepProgress], None] | None = None
     nondim_hardness: float | None = None
-    profile: bool = False
     interface: object = None
 
-    def sweep_keys(self) -> dict:
-        """The keywords of :func:`roughcontact.contact.sweep` these options set."""
-        return {"method": self.method, "tol": self.tol, "max_iter": self.max_iter,
-                "stiffness_tol": self.stiffness_tol, "precision": self.precision,
-                "hardness": self.nondim_hardness, "profile": self.profile,
-                "interface": self.interface}
+    def with_(self, **changes) -> CellOptions:
+        """These options with the fields ``changes`` replaced: the names of
+        :class:`~roughcontact.contact.problem.SolverOptions` fields in :attr:`solver`
+        (checked again), the others here (an unknown name raises TypeError)."""
+        solver = {name: changes.pop(name) for name in list(changes) if name in _SOLVER_FIELDS}
+        return dataclasses.replace(self, solver=self.solver.with_(**solver), **changes)
 
 
 def solve_cell(unit_influence, heights, *, thickness: float, element_area: float, approaches,
-               options: CellOptions = CellOptions(), **settings) -> NondimSweep:
+               options: CellOptions = CellOptions()) -> NondimSweep:
     """Dimensionless force-deflection sweep of all surfaces of one cell (Eq 27, 33, 35).
 
     Solves Eq 27 in the variables of the module docstring for every surface at every
@@ -392,8 +411,8 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         Rigid approaches ``dhat = d / sigma`` [-], shared or per surface, non-negative
         and increasing (:func:`roughcontact.contact.cell.approach_grid`).
     options : CellOptions
-        The sweep's settings; ``settings`` (keywords named as its fields) replace
-        those of ``options``.
+        The sweep's settings (the solver's among them, :attr:`CellOptions.solver`); a
+        variant is built with :meth:`CellOptions.with_`.
 
     Returns
     -------
@@ -402,7 +421,6 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
         have ``converged=False``, must not be used as results, and are counted
         in a warning.
     """
-    options = dataclasses.replace(options, **settings)
     thickness = check_positive(thickness, "thickness")
     element_area = check_positive(element_area, "element_area")
     gaps = initial_separation(heights)
@@ -412,22 +430,23 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
                                                   thickness), 1.0 / n)
     hardness = (None if options.nondim_hardness is None else
                 check_positive(options.nondim_hardness, "nondim_hardness (H L / (E sigma))"))
+    solver = options.solver.with_(method=resolve_method(options.solver.method, operator,
+                                                        hardness))
     options = dataclasses.replace(options, batch_size=_check_batch_size(options.batch_size, m),
-                                  nondim_hardness=hardness,
-                                  method=resolve_method(options.method, operator, hardness))
+                                  nondim_hardness=hardness, solver=solver)
     if options.interface is not None:  # the interface quantities need the fields' (ny, nx)
         if np.ndim(heights) != 3:
             raise ValueError(f"interface quantities need heights of shape (m, ny, nx), got "
                              f"{np.shape(heights)}")
         gaps = gaps.reshape(np.shape(heights))
     arrays = _sweep_batches(operator, gaps, steps, options)
-    _warn_unconverged(arrays, options.tol, options.stiffness_tol)
+    _warn_unconverged(arrays, solver.tol, solver.stiffness_tol)
     return NondimSweep(**arrays, thickness=thickness, element_area=element_area, n_elements=n,
-                       method=options.method, tol=float(options.tol),
-                       stiffness_tol=float(options.stiffness_tol), precision=options.precision,
-                       max_iter=None if options.max_iter is None else int(options.max_iter),
+                       method=solver.method, tol=float(solver.tol),
+                       stiffness_tol=float(solver.stiffness_tol), precision=solver.precision,
+                       max_iter=None if solver.max_iter is None else int(solver.max_iter),
                        nondim_hardness=hardness,
-                       profile_ranks=validity.rank_grid(n) if options.profile else None)
+                       profile_ranks=validity.rank_grid(n) if solver.profile else None)
 
 
 def _sweep_batches(operator, gaps, steps, options: CellOptions) -> dict:
@@ -439,10 +458,11 @@ def _sweep_batches(operator, gaps, steps, options: CellOptions) -> dict:
     start = time.perf_counter()
     for first in range(0, m, options.batch_size):
         rows = slice(first, min(m, first + options.batch_size))
-        result = sweep(operator, gaps[rows], steps[rows], element_area=1.0 / n, stiffness=True,
-                       **options.sweep_keys())
+        problem = Problem.of(operator, gaps[rows], hardness=options.nondim_hardness,
+                             interface=options.interface, element_area=1.0 / n)
+        result = sweep_problem(problem, steps[rows], options=options.solver)
         batch = solver_arrays(result, FROM_SOLVER, stiffness="normalized_stiffness")
-        if options.profile:
+        if options.solver.profile:
             batch.update({name: getattr(result, name) for name in PROFILES})
         batch.update(interface_arrays(result))
         _report_batch(batch, rows, m, time.perf_counter() - start, options.progress)

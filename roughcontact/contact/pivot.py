@@ -46,7 +46,6 @@ import logging
 import numpy as np
 import scipy.linalg
 
-from roughcontact.contact.checks import SweepOptions
 from roughcontact.contact.kkt import free_set, gap_scale, kkt_residuals
 from roughcontact.contact.products import Products, rows_product
 from roughcontact.contact.result import Batch, SweepTable
@@ -390,15 +389,18 @@ def _next_sets(p, rate, delta: float, rigid_next, hardness):
     return start, upper, predicted
 
 
-def _step_solved(state: PivotState, j: int, x, gap, gaps, steps, operator, diagonal,
-                 options: SweepOptions, table: SweepTable, method: str) -> None:
+def _step_solved(state: PivotState, j: int, x, gap, steps, operator, diagonal, solver,
+                 table: SweepTable) -> None:
     """Record surface ``j``'s solved step (pressure ``x``, ``gap``), its tangent from
     the factor, and restart it at its next step from the predicted sets.
 
-    A step that did not settle within ``max_iter`` pivots is pivoted again from the
-    cold guess if it started from a prediction; if it started cold it is recorded
-    unconverged, logged, and the next step starts cold, not from it."""
-    step, hardness = state.step, options.hardness
+    ``solver`` is the sweep's :class:`roughcontact.contact.methods.Solver` (its
+    problem's gaps ``f`` and cap, its options' ``tol`` and ``stiffness``). A step that
+    did not settle within ``max_iter`` pivots is pivoted again from the cold guess if
+    it started from a prediction; if it started cold it is recorded unconverged,
+    logged, and the next step starts cold, not from it."""
+    step, hardness = state.step, solver.problem.hardness
+    gaps, options = solver.problem.gaps, solver.options
     d = steps[j, step]
     k = steps.shape[1]
     scale = gap_scale((gaps[j] - d)[None])[0]
@@ -422,7 +424,8 @@ def _step_solved(state: PivotState, j: int, x, gap, gaps, steps, operator, diago
         logger.warning("contact sweep (%s): surface %d, step %d (approach %.6g m) did not "
                        "settle in %d pivots, from the predicted sets and from the cold "
                        "guess (KKT residual %.3g > tol %.3g); flagged, its next step "
-                       "starts cold", method, j, step, d, rounds, residual, options.tol)
+                       "starts cold", solver.method.name, j, step, d, rounds, residual,
+                       options.tol)
     state.step += 1
     state.spent = 0
     if state.step < k:
@@ -434,12 +437,13 @@ def _step_solved(state: PivotState, j: int, x, gap, gaps, steps, operator, diago
         state.cold = not converged
 
 
-def sweep(problem, steps, options: SweepOptions, table: SweepTable) -> None:
+def sweep(solver, steps, table: SweepTable) -> None:
     """Every surface's sweep by block principal pivoting, all in flight at once.
 
-    ``problem`` is the checked :class:`roughcontact.contact.methods.Problem`
-    (its method names the sweep in the log, its products give ``C``, its gaps
-    ``f`` (m, n) [m]). Each surface advances through its own approaches
+    ``solver`` is the checked :class:`roughcontact.contact.methods.Solver` (its
+    method names the sweep in the log, its products give ``C``, its problem's gaps
+    ``f`` (m, n) [m] and cap ``H`` [Pa], its options ``tol`` and ``stiffness``, its
+    ``max_iter`` the pivots of a step). Each surface advances through its own approaches
     ``steps`` (m, k) [m]; every round factors each in-flight surface's ``C_FF``
     on its current guess, solves ``C_FF p_F = d - f_F`` (``- C_FU H`` with a
     cap), and computes the gaps of *all* in-flight surfaces, whatever step each
@@ -451,24 +455,22 @@ def sweep(problem, steps, options: SweepOptions, table: SweepTable) -> None:
     A step that does not settle is retried and flagged as in
     :func:`_step_solved`. Fills ``table`` in place.
     """
-    products, gaps = problem.products, problem.gaps
+    products, gaps, hardness = solver.products, solver.problem.gaps, solver.problem.hardness
     dense = dense_influence(products.operator)
     diagonal = products.operator.diagonal()
     m = gaps.shape[0]
     k = steps.shape[1]
-    states = [PivotState(*_cold_sets(gaps[j] - steps[j, 0], options.hardness))
-              for j in range(m)]
+    states = [PivotState(*_cold_sets(gaps[j] - steps[j, 0], hardness)) for j in range(m)]
     while True:
         flight = [j for j in range(m) if states[j].step < k]
         if not flight:
             break
         rhs = np.array([steps[j, states[j].step] - gaps[j] for j in flight])
-        x, gap = _round(dense, [states[j] for j in flight], rhs, options.hardness)
+        x, gap = _round(dense, [states[j] for j in flight], rhs, hardness)
         for r, j in enumerate(flight):
             state = states[j]
             gap[r] += gaps[j] - steps[j, state.step]
             scale = gap_scale((gaps[j] - steps[j, state.step])[None])[0]
-            if state.settled(x[r], gap[r], diagonal, 1e-3 * options.tol * scale,
-                             options.hardness, options.max_iter):
-                _step_solved(state, j, x[r], gap[r], gaps, steps, dense, diagonal, options,
-                             table, problem.method.name)
+            if state.settled(x[r], gap[r], diagonal, 1e-3 * solver.options.tol * scale,
+                             hardness, solver.max_iter):
+                _step_solved(state, j, x[r], gap[r], steps, dense, diagonal, solver, table)

@@ -324,10 +324,7 @@ class SweepTable:
         #: step -> {surface: (pressure, gap)} of the surfaces recorded one at a time
         #: (block principal pivoting), described together once the step is complete
         self._pending: dict[int, dict[int, tuple]] = {}
-        if interface_grid is not None:
-            if len(self.shape) != 2:
-                raise ValueError(f"interface quantities need surfaces of shape (m, ny, nx) "
-                                 f"or an operator that knows its grid, got {self.shape}")
+        if interface_grid is not None:  # fields of (ny, nx): checked by Problem.of
             columns = {name: np.zeros((m, k)) for name in INTERFACE_SCALARS}
             columns["spot_count"] = np.zeros((m, k), dtype=int)
             columns["spot_area_quantiles"] = np.zeros((m, k, len(interface.SPOT_PROBABILITIES)))

@@ -23,16 +23,14 @@ import logging
 import numpy as np
 
 from roughcontact.contact import cg, checks
-from roughcontact.contact.checks import SweepOptions
 from roughcontact.contact.controls import Approaches, Loads
 from roughcontact.contact.kkt import free_set
-from roughcontact.contact.loads import LOAD_TOL
-from roughcontact.contact.methods import Problem, check_problem
-from roughcontact.contact.products import Products
+from roughcontact.contact.methods import Solver
+from roughcontact.contact.problem import DEFAULT_OPTIONS, Problem, SolverOptions
 from roughcontact.contact.result import SweepResult, SweepTable
 from roughcontact.contact.stiffness import free_set_cg
 
-__all__ = ["approach_loop", "load_loop", "predict", "sweep"]
+__all__ = ["approach_loop", "load_loop", "predict", "sweep", "sweep_problem"]
 
 logger = logging.getLogger("roughcontact.contact")
 
@@ -53,13 +51,13 @@ def predict(pressure, approach, last_approach, rate, hardness=None) -> np.ndarra
     return np.maximum(predicted, 0.0, out=predicted)
 
 
-def _tangent(products: Products, pressure, options: SweepOptions, step: int,
-             table: SweepTable):
+def _tangent(solver: Solver, pressure, step: int, table: SweepTable):
     """The tangent ``(C_FF)^-1 1`` [Pa/m] of every surface at ``step``, recorded as
     ``dF/dd``. Solved from zero: a warm start from the last step's tangent costs its
     residual's product and loses the CG's Galerkin property, and took more products."""
-    solution = free_set_cg(products, free_set(pressure, options.hardness),
-                           np.zeros_like(pressure), options.stiffness_tol,
+    products, stiffness_tol = solver.products, solver.options.stiffness_tol
+    solution = free_set_cg(products, free_set(pressure, solver.problem.hardness),
+                           np.zeros_like(pressure), stiffness_tol,
                            cg.default_max_iter(products.operator.shape[0]))
     ok = solution.converged
     table.record_stiffness(slice(None), step, products.operator.element_area * solution.total,
@@ -67,12 +65,12 @@ def _tangent(products: Products, pressure, options: SweepOptions, step: int,
     if not ok.all():
         logger.warning(
             "tangent stiffness: free-set CG did not reach tol %.3g for %d surfaces "
-            "at step %d", options.stiffness_tol, int((~ok).sum()), step,
+            "at step %d", stiffness_tol, int((~ok).sum()), step,
         )
     return solution.x
 
 
-def approach_loop(problem: Problem, steps, options: SweepOptions, table: SweepTable) -> None:
+def approach_loop(solver: Solver, steps, table: SweepTable) -> None:
     """The shared approach loop: all surfaces through step 1, 2, ... k together.
 
     Each step starts from the previous solution or, with ``extrapolate``,
@@ -82,22 +80,23 @@ def approach_loop(problem: Problem, steps, options: SweepOptions, table: SweepTa
     :mod:`roughcontact.contact.retries`) starts its next step from zero
     pressure instead. Fills ``table``.
     """
-    gaps = problem.gaps
+    gaps, options = solver.problem.gaps, solver.options
     m, n = gaps.shape
     pressure = np.zeros((m, n))
     rate = np.full((m, n), np.nan)
     for step in range(steps.shape[1]):
         start = pressure
         if options.extrapolate and step > 0:
-            start = predict(pressure, steps[:, step], steps[:, step - 1], rate, options.hardness)
-        batch, _ = problem.settle(Approaches(steps[:, step].copy()), start)
+            start = predict(pressure, steps[:, step], steps[:, step - 1], rate,
+                            solver.problem.hardness)
+        batch, _ = solver.settle(Approaches(steps[:, step].copy()), start)
         if options.extrapolate and not options.stiffness:
             # Secant dp/dd of this step, for the next prediction.
             delta = steps[:, step] - (steps[:, step - 1] if step > 0 else np.nan)
             with np.errstate(invalid="ignore", divide="ignore"):
                 rate = (batch.pressure - pressure) / delta[:, None]
         pressure = batch.pressure
-        tangent = _record(problem.products, batch, options, step, table, gaps, steps[:, step])
+        tangent = _record(solver, batch, step, table, steps[:, step])
         if options.stiffness:
             rate = tangent
         pressure, rate = _restart_failed(batch.converged, pressure, rate)
@@ -114,34 +113,33 @@ def _restart_failed(converged, pressure, rate):
     return pressure, rate
 
 
-def _record(products: Products, batch, options: SweepOptions, step: int, table: SweepTable,
-            gaps, approach):
+def _record(solver: Solver, batch, step: int, table: SweepTable, approach):
     """A step's solutions, work and (with ``stiffness``) tangent in ``table``; the tangent
-    (None without ``stiffness``). ``gaps`` (m, n) [m] and ``approach`` (m,) [m] give the
-    gap ``u + f - d`` of the interface quantities."""
-    gap = (batch.displacement + gaps - approach[:, None]) if table.interface else None
+    (None without ``stiffness``). The gaps ``f`` (m, n) [m] and ``approach`` (m,) [m]
+    give the gap ``u + f - d`` of the interface quantities."""
+    problem = solver.problem
+    gap = (batch.displacement + problem.gaps - approach[:, None]) if table.interface else None
     table.record(slice(None), step, batch.pressure, batch.displacement, batch.residual,
-                 products.operator.element_area, options.hardness, gap)
+                 problem.operator.element_area, problem.hardness, gap)
     table.record_work(slice(None), step, batch.iterations, batch.matvecs, batch.converged)
-    if options.stiffness:
-        return _tangent(products, batch.pressure, options, step, table)
+    if solver.options.stiffness:
+        return _tangent(solver, batch.pressure, step, table)
     return None
 
 
-def load_loop(problem: Problem, loads, options: SweepOptions, table: SweepTable) -> np.ndarray:
+def load_loop(solver: Solver, loads, table: SweepTable) -> np.ndarray:
     """The loop of a load-controlled sweep: all surfaces through the mean pressures
     ``loads`` (m, k) [Pa], each step started from the previous step's pressure (from
     zero after a step that did not converge; :mod:`roughcontact.contact.retries`) and
-    met to ``problem.load_tol`` (:func:`roughcontact.contact.loads.solve_at_loads`).
+    met to ``options.load_tol`` (:func:`roughcontact.contact.loads.solve_at_loads`).
     Fills ``table``; returns the approaches found (m, k) [m]."""
-    gaps = problem.gaps
-    m, n = gaps.shape
+    m, n = solver.problem.gaps.shape
     pressure = np.zeros((m, n))
     approaches = np.zeros(loads.shape)
     for step in range(loads.shape[1]):
-        batch, approaches[:, step] = problem.settle(
-            Loads(loads[:, step].copy(), problem.load_tol), pressure)
-        _record(problem.products, batch, options, step, table, gaps, approaches[:, step])
+        batch, approaches[:, step] = solver.settle(
+            Loads(loads[:, step].copy(), solver.options.load_tol), pressure)
+        _record(solver, batch, step, table, approaches[:, step])
         pressure, _ = _restart_failed(batch.converged, batch.pressure, None)
     return approaches
 
@@ -158,15 +156,35 @@ def _steps(problem, approaches, mean_pressures) -> np.ndarray:
     return steps
 
 
-def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto", tol=1e-10,
-          max_iter=None, element_area=None, return_fields=False, stiffness=True,
-          stiffness_tol=1e-6, precision="double", extrapolate=True, hardness=None,
-          profile=False, interface=None, load_tol=LOAD_TOL, retries=True) -> SweepResult:
+def sweep_problem(problem: Problem, approaches=None, *, mean_pressures=None,
+                  options: SolverOptions = DEFAULT_OPTIONS) -> SweepResult:
+    """Force-deflection curves of the surfaces of ``problem`` over k approaches or loads.
+
+    :func:`sweep` on a problem made beforehand
+    (:meth:`~roughcontact.contact.problem.Problem.of`); the arguments as there.
+    """
+    solver = Solver.of(problem, options)
+    steps = _steps(problem, approaches, mean_pressures)
+    table = SweepTable(problem.gaps.shape[0], steps.shape[1], problem.shape,
+                       options.return_fields, options.profile, problem.interface)
+    if mean_pressures is not None:  # load control
+        steps = load_loop(solver, steps, table)
+    else:
+        loop = solver.method.sweep or approach_loop
+        loop(solver, steps, table)
+    return table.result(steps, solver.method.name, options.tol, problem.hardness)
+
+
+def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, hardness=None,
+          interface=None, element_area=None,
+          options: SolverOptions = DEFAULT_OPTIONS) -> SweepResult:
     """Force-deflection curves of m surfaces over k approaches or loads (Eq 27, 33, 35).
 
     Every surface at every step, all at once (:func:`roughcontact.contact.solve_many`;
     the loops and warm starts: module docstring), with the tangent ``dF/dd =
-    dA 1^T (C_AA)^-1 1`` (:func:`roughcontact.contact.tangent_stiffness`).
+    dA 1^T (C_AA)^-1 1`` (:func:`roughcontact.contact.tangent_stiffness`). The short
+    form of ``sweep_problem(Problem.of(operator, gaps0, ...), ...)``
+    (:class:`~roughcontact.contact.problem.Problem`, :func:`sweep_problem`).
 
     Parameters
     ----------
@@ -178,43 +196,27 @@ def sweep(operator, gaps0, approaches=None, *, mean_pressures=None, method="auto
         Rigid-body approaches ``d >= 0`` [m] at each step, shared or per surface.
     mean_pressures : ndarray, (k,) or (m, k), optional
         Mean pressures ``P >= 0`` [Pa] instead (:func:`load_loop`).
-    method, tol, max_iter, element_area, precision, hardness, load_tol, retries
-        As in :func:`roughcontact.contact.solve` (``precision`` also for the
-        stiffness CG). A step unconverged after its retries is flagged, logged,
-        and the surface's next step starts from zero pressure, not from it.
-    return_fields : bool
-        Keep the pressure fields ``(m, k, *surface shape)`` [Pa].
-    stiffness : bool
-        Compute ``contact_stiffness`` (otherwise NaN).
-    stiffness_tol : float
-        Estimated relative error of ``dF/dd`` at which the free-set CG of the
-        stiffness stops (:mod:`roughcontact.contact.stiffness`).
-    extrapolate : bool
-        Start each step from the extrapolated pressure (only the start changes).
-    profile : bool
-        Keep every solution's pressure and load profiles
-        (:mod:`roughcontact.contact.validity`).
+    hardness, element_area
+        As in :func:`roughcontact.contact.solve`.
     interface : InterfaceGrid, optional
         The surfaces' grid (:class:`~roughcontact.contact.interface.InterfaceGrid`):
-        record every solution's spots, perimeter, corrected area and gaps.
+        record every solution's spots, perimeter, corrected area and gaps, and the
+        columns of the grid's probes (:mod:`roughcontact.contact.probes`).
+    options : SolverOptions
+        As in :func:`roughcontact.contact.solve` (``precision`` also for the
+        stiffness CG), and the sweep's own: ``stiffness`` (compute
+        ``contact_stiffness``, else NaN) and ``stiffness_tol``, ``extrapolate`` (start
+        each step from the extrapolated pressure), ``profile`` (keep every solution's
+        pressure and load profiles, :mod:`roughcontact.contact.validity`),
+        ``return_fields`` (keep the pressure fields ``(m, k, *surface shape)`` [Pa])
+        (:class:`~roughcontact.contact.problem.SolverOptions`). A step unconverged
+        after its retries is flagged, logged, and the surface's next step starts from
+        zero pressure, not from it.
 
     Returns
     -------
     SweepResult
     """
-    problem = check_problem(operator, gaps0, "gaps0", method=method, tol=tol, max_iter=max_iter,
-                            precision=precision, element_area=element_area, hardness=hardness,
-                            batched=True, load_tol=load_tol, retries=retries)
-    stiffness_tol = checks.check_positive(stiffness_tol, "stiffness_tol")
-    gaps = problem.gaps
-    steps = _steps(problem, approaches, mean_pressures)
-    options = SweepOptions(problem.tol, problem.max_iter, problem.hardness, bool(stiffness),
-                           stiffness_tol, bool(extrapolate))
-    table = SweepTable(gaps.shape[0], steps.shape[1], problem.shape, return_fields, profile,
-                       interface)
-    if mean_pressures is not None:  # load control
-        steps = load_loop(problem, steps, options, table)
-    else:
-        loop = problem.method.sweep or approach_loop
-        loop(problem, steps, options, table)
-    return table.result(steps, problem.method.name, problem.tol, problem.hardness)
+    problem = Problem.of(operator, gaps0, hardness=hardness, interface=interface,
+                         element_area=element_area)
+    return sweep_problem(problem, approaches, mean_pressures=mean_pressures, options=options)

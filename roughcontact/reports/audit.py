@@ -13,7 +13,6 @@ with what is stored: bit-identical for the same library versions.
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import logging
 import time
@@ -463,7 +462,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
         problem = contact_problem(record, surfaces["heights"], unit, counter,
                                   stored.probe_columns.probes)
         start = time.perf_counter()
-        options = dataclasses.replace(SWEEP_OPTIONS, method=stored.method, tol=stored.tol,
+        options = SWEEP_OPTIONS.with_(method=stored.method, tol=stored.tol,
                                       precision=stored.precision, max_iter=stored.max_iter)
         again = sweep_problem(record, problem, stored.approach.shape[1], options,
                               rows=slice(first, last))

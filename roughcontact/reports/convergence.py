@@ -65,7 +65,7 @@ import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from roughcontact.contact.cell import sweep_and_aggregate
+from roughcontact.contact.cell import SWEEP_OPTIONS, sweep_and_aggregate
 from roughcontact.elasticity.influence import GB, BlockGeometry, MeshSpec
 from roughcontact.reports.build_worker import HALFSPACE, build, centre_entries, run_isolated
 from roughcontact.reports.execution import dead_writers
@@ -228,7 +228,7 @@ def _contact_response(ec: np.ndarray, geom: BlockGeometry, task: dict) -> dict:
     pressures = np.asarray(task["pressures"], dtype=float)
     sweep, physical, frame = sweep_and_aggregate(
         ec, heights, geom, sigma=sigma, pressures=pressures, steps=_SWEEP_STEPS, reach=1.1,
-        method="auto", tol=task["tol"], precision="double")
+        options=SWEEP_OPTIONS.with_(method="auto", tol=task["tol"], precision="double"))
     if not sweep.converged.all():
         log.warning("contact sweep: %d of %d solves did not converge",
                     int((~sweep.converged).sum()), sweep.converged.size)

@@ -209,9 +209,10 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
              f"{hardness:.6g}")
     for probe in settings.probes:
         log.info("probe %s recorded at every step: %s", probe.kind, probe.params())
-    options = dataclasses.replace(cell_module.SWEEP_OPTIONS, method=settings.method,
-                                  tol=settings.tol, precision=settings.precision,
-                                  batch_size=min(m, BATCH_SIZE), progress=_progress_log())
+    options = cell_module.SWEEP_OPTIONS.with_(method=settings.method, tol=settings.tol,
+                                              precision=settings.precision,
+                                              batch_size=min(m, BATCH_SIZE),
+                                              progress=_progress_log())
     result = sweep_problem(job, problem, settings.steps, options)
     log.info("approach d/sigma %.3g .. %.3g", result.approach[0, 0], result.approach[0, -1])
     reached = result.nominal_pressure[:, -1].min()

@@ -216,7 +216,8 @@ def aimed_approaches(settings: GridConvergenceSettings, seeds) -> np.ndarray:
     pilot = np.outer(gaps.mean(axis=(1, 2)), PILOT_FRACTIONS)
     operator = PeriodicHalfSpace(pilot_grid, (settings.size, settings.size), settings.E,
                                  settings.nu)
-    result = contact.sweep(operator, gaps, pilot, tol=settings.tol, stiffness=False)
+    result = contact.sweep(operator, gaps, pilot,
+                           options=contact.SolverOptions(tol=settings.tol, stiffness=False))
     targets = np.geomspace(min(settings.reduced_pressures) / MARGIN,
                            max(settings.reduced_pressures) * MARGIN, settings.steps)
     reduced = result.nominal_pressure / settings.pressure_scale
@@ -249,9 +250,10 @@ def solve_grid(params: dict, surfaces_path, grid: int, out_path, run: RunInfo = 
     operator = PeriodicHalfSpace((grid, grid), (settings.size, settings.size), settings.E,
                                  settings.nu)
     gaps = heights.max(axis=(1, 2), keepdims=True) - heights
-    result = contact.sweep(operator, gaps, approaches, method="auto", tol=settings.tol,
-                           stiffness=False,
-                           interface=InterfaceGrid.of(operator, (settings.size, settings.size)))
+    result = contact.sweep(operator, gaps, approaches,
+                           interface=InterfaceGrid.of(operator, (settings.size, settings.size)),
+                           options=contact.SolverOptions(method="auto", tol=settings.tol,
+                                                         stiffness=False))
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     if not result.converged.all():
         log.warning("grid %d: %d of %d solves did not converge (tol %.1e); they are left out "

@@ -47,6 +47,7 @@ import pandas as pd
 import scipy.stats
 
 from roughcontact.contact import aggregate, nondim
+from roughcontact.contact.cell import SWEEP_OPTIONS
 from roughcontact.contact.curves import NondimSweep, PhysicalSweep
 from roughcontact.elasticity.influence import BlockGeometry
 from roughcontact.reports.speed.machine import describe_machine
@@ -161,8 +162,10 @@ def _reference_run(sweep: Callable, name: str, cell: str, say: Callable[[str], N
 
     ``sweep`` is :func:`timed_sweep` bound to the cell's surfaces and approaches.
     """
-    result, seconds = sweep(method="exact", tol=REFERENCE_TOL, precision="double",
-                            stiffness_tol=REFERENCE_STIFFNESS_TOL, max_iter=None)
+    result, seconds = sweep(SWEEP_OPTIONS.with_(method="exact", tol=REFERENCE_TOL,
+                                                precision="double",
+                                                stiffness_tol=REFERENCE_STIFFNESS_TOL,
+                                                max_iter=None))
     if not result.converged.all():
         log.warning("exact reference did not converge on %d steps of cell %s",
                     int((~result.converged).sum()), cell)
@@ -221,8 +224,10 @@ def _compared_runs(sweep: Callable, name: str, say: Callable[[str], None],
     """One run per method and tolerance of ``comparison``, the iterative ones in ``precision``."""
     runs = []
     for method, tol, own_precision, limit in comparison.runs(precision):
-        result, seconds = sweep(method=method, tol=tol, precision=own_precision,
-                                stiffness_tol=comparison.stiffness_tol, max_iter=limit)
+        result, seconds = sweep(SWEEP_OPTIONS.with_(method=method, tol=tol,
+                                                    precision=own_precision,
+                                                    stiffness_tol=comparison.stiffness_tol,
+                                                    max_iter=limit))
         runs.append(_Run(method, tol, own_precision, False, result, seconds))
         say(f"{name}: {method} tol {tol:.0e} {seconds:.1f} s, "
             f"{result.iterations.mean():.0f} iterations per solve, "
@@ -521,8 +526,9 @@ def surfaces_per_cell(
     heights = generator.heights(geometry.grid, geometry.size, cell, surfaces, "surfaces_per_cell")
     nd, solve_s = timed_sweep(unit_influence, heights, geometry,
                               sweep.end(geometry, generator.sigma), sweep.steps,
-                              method=sweep.method, tol=sweep.tol, precision=sweep.precision,
-                              batch_size=batch_size)
+                              SWEEP_OPTIONS.with_(method=sweep.method, tol=sweep.tol,
+                                                  precision=sweep.precision,
+                                                  batch_size=batch_size))
     reporter(progress)(f"{cell_key(skew, kurt)}: {surfaces} surfaces swept in {solve_s:.1f} s")
     table = band_vs_count(nondim.to_physical(nd, generator.sigma, geometry.E), sweep.pressures,
                           counts, draws=draws, seed=generator.seed)

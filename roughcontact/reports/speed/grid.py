@@ -19,7 +19,7 @@ from types import MappingProxyType
 import numpy as np
 import pandas as pd
 
-from roughcontact.contact.cell import aggregate_sweep
+from roughcontact.contact.cell import SWEEP_OPTIONS, aggregate_sweep
 from roughcontact.elasticity import operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
@@ -233,9 +233,9 @@ def grid_study(
         build_s = time.perf_counter() - start
         for skew, kurt in cells:
             nd, solve_s = timed_sweep(unit, heights(g, skew, kurt), geometry, end, sweep.steps,
-                                      method=sweep.method, tol=sweep.tol,
-                                      precision=sweep.precision, stiffness_tol=1e-6,
-                                      max_iter=None)
+                                      SWEEP_OPTIONS.with_(method=sweep.method, tol=sweep.tol,
+                                                          precision=sweep.precision,
+                                                          stiffness_tol=1e-6, max_iter=None))
             _, frame = aggregate_sweep(nd, generator.sigma, block.E, levels)
             say(f"grid {g} x {g} {cell_key(skew, kurt)}: influence {build_s:.1f} s, "
                 f"sweep {solve_s:.1f} s")

@@ -16,8 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughcontact.contact.cell import nondim_pressure, sweep_cell
+from roughcontact.contact.cell import SWEEP_OPTIONS, nondim_pressure, sweep_cell
 from roughcontact.contact.curves import NondimSweep
+from roughcontact.contact.nondim import CellOptions
 from roughcontact.elasticity.influence import BlockGeometry
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.synthetic import derive_seeds, generate_many
@@ -128,12 +129,13 @@ DEFAULT_SWEEP = SweepSettings()
 
 
 def timed_sweep(unit_influence, heights, geometry: BlockGeometry, pressure_end: float,
-                steps: int, **options) -> tuple[NondimSweep, float]:
+                steps: int, options: CellOptions = SWEEP_OPTIONS) -> tuple[NondimSweep, float]:
     """One :func:`~roughcontact.contact.cell.sweep_cell` and its wall time [s].
 
-    ``options`` go to ``sweep_cell``; callers pass ``precision`` explicitly
-    (the sweep's default is "mixed", the exact reference needs "double").
+    ``options`` go to ``sweep_cell``; callers set ``precision`` explicitly
+    (``SWEEP_OPTIONS.with_(precision=...)``: the sweep's default is "mixed", the exact
+    reference needs "double").
     """
     start = time.perf_counter()
-    sweep = sweep_cell(unit_influence, heights, geometry, pressure_end, steps, **options)
+    sweep = sweep_cell(unit_influence, heights, geometry, pressure_end, steps, options=options)
     return sweep, time.perf_counter() - start
