@@ -54,7 +54,8 @@ from bench_operators import (  # noqa: E402
 )
 
 from roughcontact import contact  # noqa: E402
-from roughcontact.contact import cell, nondim  # noqa: E402
+from roughcontact.contact import SolverOptions, cell, nondim  # noqa: E402
+from roughcontact.contact.nondim import CellOptions  # noqa: E402
 from roughcontact.elasticity import definiteness, halfspace, influence, operators  # noqa: E402
 from roughcontact.elasticity.protocol import DenseInfluence  # noqa: E402
 from roughcontact.surfaces import spec, synthetic  # noqa: E402
@@ -83,8 +84,8 @@ def one_solve(unit, grid: int, method: str = "auto") -> tuple[float, int]:
     definiteness.certify(operator)  # kept on it: the solve below does not pay it
     gap = nondim.initial_separation(heights)[0]
     start = time.perf_counter()
-    result = contact.solve(operator, gap, approaches[STEPS // 2], method=method, tol=TOL,
-                           precision="mixed")
+    result = contact.solve(operator, gap, approaches[STEPS // 2],
+                           options=SolverOptions(method=method, tol=TOL, precision="mixed"))
     return time.perf_counter() - start, int(result.matvecs)
 
 
@@ -95,7 +96,8 @@ def one_sweep(unit, grid: int) -> float:
     definiteness.certify(unit)
     start = time.perf_counter()
     nondim.solve_cell(unit, heights, thickness=THICKNESS, element_area=SIZE[0] * SIZE[1] / grid**2,
-                      approaches=approaches, method="auto", tol=TOL, precision="mixed")
+                      approaches=approaches,
+                      options=CellOptions().with_(method="auto", tol=TOL, precision="mixed"))
     return time.perf_counter() - start
 
 

@@ -85,7 +85,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact.contact import kkt_residual, solve, solve_many, sweep  # noqa: E402
+from roughcontact.contact import SolverOptions, kkt_residual, solve, solve_many, sweep  # noqa: E402
 from roughcontact.elasticity.halfspace import (  # noqa: E402
     PeriodicHalfSpace,
     SpectralHalfSpace,
@@ -181,8 +181,9 @@ def case_paper_sweep(args, surfaces: int, steps: int, extrapolate: bool) -> dict
     matrix, area, gaps = paper_problem(surfaces)
     approaches = np.linspace(0.0, APPROACH_END * SIGMA, args.steps + 1)[1 : steps + 1]
     start = time.perf_counter()
-    result = sweep(matrix, gaps, approaches, method="cg", element_area=area, tol=args.tol,
-                   precision="mixed", stiffness=True, extrapolate=extrapolate)
+    result = sweep(matrix, gaps, approaches, element_area=area,
+                   options=SolverOptions(method="cg", tol=args.tol, precision="mixed",
+                                         stiffness=True, extrapolate=extrapolate))
     wall = time.perf_counter() - start
     return dict(
         wall_s=wall,
@@ -218,8 +219,8 @@ def case_baseline_dense(args, method: str) -> dict:
     batch = np.repeat(gaps, levels.size, axis=0)
     approach = np.tile(levels, count)
     start = time.perf_counter()
-    results = solve_many(influence, batch, approach, method=method, element_area=area,
-                         tol=args.tol)
+    results = solve_many(influence, batch, approach, element_area=area,
+                         options=SolverOptions(method=method, tol=args.tol))
     return summarize(results, time.perf_counter() - start)
 
 
@@ -228,8 +229,8 @@ def case_baseline_block(args, method: str) -> dict:
     matrix, area, gaps = paper_problem(1)
     limit = 20000 if method == "steepest" else None
     start = time.perf_counter()
-    result = solve(matrix, gaps[0], 4.0 * SIGMA, method=method, element_area=area,
-                   tol=args.tol, max_iter=limit)
+    result = solve(matrix, gaps[0], 4.0 * SIGMA, element_area=area,
+                   options=SolverOptions(method=method, tol=args.tol, max_iter=limit))
     return summarize([result], time.perf_counter() - start)
 
 
@@ -245,7 +246,8 @@ def periodic_problem(grid: int, spectral: bool):
     low, high = 0.0, float(gap0.mean())
     approach = 0.5 * (low + high)
     for _ in range(12):
-        fraction = solve(operator, gap0, approach, tol=1e-5, max_iter=300).real_area_fraction
+        fraction = solve(operator, gap0, approach,
+                         options=SolverOptions(tol=1e-5, max_iter=300)).real_area_fraction
         if abs(fraction - 0.2) < 0.01:
             break
         low, high = (approach, high) if fraction < 0.2 else (low, approach)
@@ -256,7 +258,7 @@ def periodic_problem(grid: int, spectral: bool):
 def case_periodic(args, method: str, grid: int, tol: float, spectral: bool) -> dict:
     operator, gap0, approach, _ = periodic_problem(grid, spectral)
     start = time.perf_counter()
-    result = solve(operator, gap0, approach, method=method, tol=tol)
+    result = solve(operator, gap0, approach, options=SolverOptions(method=method, tol=tol))
     record = summarize([result], time.perf_counter() - start)
     record.update(max_pressure_MPa=result.max_pressure / 1e6,
                   final_pressure_MPa=result.nominal_pressure / 1e6)
@@ -282,7 +284,7 @@ def case_external(args, library: str, tol: float) -> dict:
     """Tamaas or ContactMechanics at our solution's mean pressure, same heights."""
     grid = args.periodic_grid
     operator, gap0, approach, size = periodic_problem(grid, spectral=True)
-    ours = solve(operator, gap0, approach, tol=tol)
+    ours = solve(operator, gap0, approach, options=SolverOptions(tol=tol))
     mean_pressure = ours.nominal_pressure
     heights = -gap0  # rough surface against a flat; contact where heights are high
     modulus = E / (1 - NU**2)
@@ -385,9 +387,9 @@ def case_units(args) -> dict:
         units.append(best_time(lambda: unit_matrix @ block))
         for mesh, (matrix, geometry) in problems.items():
             begin = time.perf_counter()
-            results[mesh] = sweep(matrix, gaps, approaches, method=args.method,
-                                  element_area=geometry.element_area, tol=args.tol,
-                                  precision=args.precision, stiffness=True)
+            results[mesh] = sweep(matrix, gaps, approaches, element_area=geometry.element_area,
+                                  options=SolverOptions(method=args.method, tol=args.tol,
+                                                        precision=args.precision, stiffness=True))
             walls[mesh].append(time.perf_counter() - begin)
     unit = min(units)
     rows = []

@@ -58,7 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from roughcontact import contact
-from roughcontact.contact import counterface
+from roughcontact.contact import SolverOptions, counterface
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.elasticity.protocol import DenseInfluence, MatrixFreeInfluence
@@ -114,9 +114,9 @@ def measure(unit_matrix: np.ndarray, gaps: np.ndarray) -> dict:
     ``unit_matrix`` of the pair (in E1's unit). A surface that ``METHOD`` leaves
     unconverged is solved again by block principal pivoting (exact on its contact set)."""
     def swept(method, rows):
-        result = contact.sweep(unit_matrix / E1, gaps[rows],
-                               mean_pressures=np.array(PRESSURES),
-                               element_area=(SIZE / GRID) ** 2, tol=TOL, method=method)
+        result = contact.sweep(unit_matrix / E1, gaps[rows], mean_pressures=np.array(PRESSURES),
+                               element_area=(SIZE / GRID) ** 2,
+                               options=SolverOptions(tol=TOL, method=method))
         ok = result.converged.all(axis=1) & result.stiffness_converged.all(axis=1)
         return {"k_P": THICKNESS / SIZE**2 * result.contact_stiffness,
                 "area": result.real_area_fraction, "p_max": result.max_pressure}, ok
@@ -200,7 +200,7 @@ def matrix_free_timing(block: DenseInfluence, repeats: int) -> dict:
         for name, operator in runs.items():
             start = time.perf_counter()
             result = contact.sweep(operator, gaps, mean_pressures=np.array(PRESSURES),
-                                   tol=1e-8, method=METHOD)
+                                   options=SolverOptions(tol=1e-8, method=METHOD))
             best[name] = min(best[name], time.perf_counter() - start)
             matvecs[name] = float(result.matvecs.sum())
     return {"seconds": best, "matvecs": matvecs}

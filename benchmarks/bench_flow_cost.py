@@ -78,6 +78,8 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from roughcontact.contact import SolverOptions  # noqa: E402
+
 OUT = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 STEPS, PRESSURE_END, BATCH = 30, 4.0, 20
 
@@ -98,8 +100,8 @@ def study_job():
     spec = SurfaceSpec(grid=60, size=geometry.size[0], corr_length=1e-3)
     heights = synthetic.generate_many(spec, range(60))
     heights = heights / heights.std(axis=(1, 2), keepdims=True)  # units of sigma
-    options = dataclasses.replace(cell.SWEEP_OPTIONS, method="auto", tol=1e-8,
-                                  precision="mixed", batch_size=BATCH)
+    options = cell.SWEEP_OPTIONS.with_(method="auto", tol=1e-8, precision="mixed",
+                                       batch_size=BATCH)
 
     def run(flow=None):
         grid = True if flow is None else dataclasses.replace(
@@ -269,8 +271,8 @@ def on_1024(repeats: int) -> tuple[dict, object]:
     def run(flow):
         grid = dataclasses.replace(interface.InterfaceGrid.of(op, (PERIOD, PERIOD)),
                                    probes=(flow,) if flow.columns else ())
-        return contact.sweep(op, gaps, mean_pressures=pressures, method="pcg", tol=1e-8,
-                             stiffness=False, interface=grid)
+        return contact.sweep(op, gaps, mean_pressures=pressures, interface=grid,
+                             options=SolverOptions(method="pcg", tol=1e-8, stiffness=False))
 
     kept = []
     times = alternated({"off": lambda: run(NO_FLOW), "on": lambda: run(FlowProbe())},

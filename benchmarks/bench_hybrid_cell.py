@@ -99,7 +99,8 @@ def worker(spec: dict) -> None:
     end = cell.nondim_pressure(END_PRESSURE, thickness=THICKNESS, E=E, sigma=SIGMA)
     cpu, wall = time.process_time(), time.perf_counter()
     result = cell.sweep_cell(operator, heights, geometry(grid), end, spec["steps"],
-                             method=spec["method"], tol=1e-8, precision="mixed", profile=False)
+                             options=cell.SWEEP_OPTIONS.with_(method=spec["method"], tol=1e-8,
+                                                             precision="mixed", profile=False))
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
     np.savez(spec["arrays"], **{name: getattr(result, name) for name in
                                 (*COMPARED, "iterations", "matvecs", "converged")})

@@ -268,7 +268,7 @@ def run_hybrid(which: str) -> dict:
     """Build "converged" or "hybrid:<coarse mesh>" at 60 x 60; entries and contact response."""
     import dataclasses
 
-    from roughcontact.contact.cell import sweep_and_aggregate
+    from roughcontact.contact.cell import SWEEP_OPTIONS, sweep_and_aggregate
     from roughcontact.elasticity.hybrid import hybrid_unit_modulus_influence
     from roughcontact.reports.convergence import CONTACT_COLUMNS
     from roughcontact.surfaces.spec import SurfaceSpec
@@ -289,9 +289,10 @@ def run_hybrid(which: str) -> dict:
     spec = SurfaceSpec(grid=geom.grid, size=geom.size, corr_length=(1e-3, 1e-3), sigma=sigma)
     heights = generate_many(spec, derive_seeds(2006, "influence_convergence", 3)) / sigma
     # swept and read as the convergence report does (40 steps to 1.1 P_max, exact-ish CG)
-    _, _, frame = sweep_and_aggregate(ec, heights, geom, sigma=sigma,
-                                      pressures=(0.3e6, 1e6, 2e6), steps=40, reach=1.1,
-                                      method="cg", tol=1e-10, precision="double")
+    _, _, frame = sweep_and_aggregate(ec, heights, geom, sigma=sigma, pressures=(0.3e6, 1e6, 2e6),
+                                      steps=40, reach=1.1,
+                                      options=SWEEP_OPTIONS.with_(method="cg", tol=1e-10,
+                                                                  precision="double"))
     return {"seconds": seconds, "peak_gb": peak,
             **{k: frame[f"{c}_mean"].tolist() for k, c in CONTACT_COLUMNS.items()}}
 

@@ -46,7 +46,8 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from roughcontact import contact  # noqa: E402
-from roughcontact.contact import cell, interface, nondim  # noqa: E402
+from roughcontact.contact import SolverOptions, cell, interface, nondim  # noqa: E402
+from roughcontact.contact.nondim import CellOptions  # noqa: E402
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence  # noqa: E402
 from roughcontact.surfaces import synthetic  # noqa: E402
 from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402
@@ -104,8 +105,9 @@ def cell_60(repeats: int) -> dict:
     def run(grid_or_none):
         return lambda: nondim.solve_cell(unit, heights, thickness=THICKNESS,
                                          element_area=element_area, approaches=approaches,
-                                         method="auto", tol=1e-8, precision="mixed",
-                                         interface=grid_or_none)
+                                         options=CellOptions().with_(method="auto", tol=1e-8,
+                                                                     precision="mixed",
+                                                                     interface=grid_or_none))
 
     times = alternated({"without": run(None), "with": run(spacing)}, repeats)
     swept = run(spacing)()
@@ -125,8 +127,9 @@ def sweep_1024(repeats: int) -> dict:
     spacing = interface.InterfaceGrid.of(op, (period, period))
 
     def run(grid_or_none):
-        return lambda: contact.sweep(op, gaps, approaches, method="auto", tol=1e-8,
-                                     stiffness=False, interface=grid_or_none)
+        return lambda: contact.sweep(op, gaps, approaches, interface=grid_or_none,
+                                     options=SolverOptions(method="auto", tol=1e-8,
+                                                           stiffness=False))
 
     times = alternated({"without": run(None), "with": run(spacing)}, repeats)
     swept = run(spacing)()

@@ -79,6 +79,7 @@ sys.path.insert(0, str(ROOT))
 
 from roughcontact.contact import nondim  # noqa: E402
 from roughcontact.contact.cell import approach_grid  # noqa: E402
+from roughcontact.contact.nondim import CellOptions  # noqa: E402
 from roughcontact.elasticity import assembly, sparse_solve  # noqa: E402
 from roughcontact.elasticity.influence import (  # noqa: E402
     BlockGeometry,
@@ -266,7 +267,8 @@ def case_solve(model: str, grid: int, coarse: int | None) -> dict:
     hx, hy = geom.spacing
     start = time.perf_counter()
     result = nondim.solve_cell(unit, heights, thickness=geom.thickness, element_area=hx * hy,
-                               approaches=approaches, method="cg", tol=TOL, precision="mixed")
+                               approaches=approaches,
+                               options=CellOptions().with_(method="cg", tol=TOL, precision="mixed"))
     wall = time.perf_counter() - start
     solves = result.converged.size
     return {

@@ -52,6 +52,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from roughcontact import contact  # noqa: E402
+from roughcontact.contact import SolverOptions  # noqa: E402
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace  # noqa: E402
 from roughcontact.surfaces import synthetic  # noqa: E402
 from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402
@@ -75,7 +76,7 @@ def threshold(operator, gap0: np.ndarray, steps: int) -> dict:
     solves = 0
     for _ in range(steps):
         middle = 0.5 * (low + high)
-        result = contact.solve(operator, gap0, middle, tol=1e-8, p0=warm)
+        result = contact.solve(operator, gap0, middle, p0=warm, options=SolverOptions(tol=1e-8))
         solves += 1
         if bool(solve_flow(flow_gap(result), setup).connected):
             low, low_area, warm = middle, result.real_area_fraction, result.pressure

@@ -81,6 +81,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from roughcontact import contact  # noqa: E402
+from roughcontact.contact import SolverOptions  # noqa: E402
 from roughcontact.elasticity import operators  # noqa: E402
 from roughcontact.reports.speed.grid import GridOptions, grid_study  # noqa: E402
 from roughcontact.reports.speed.sweeps import CellSurfaces, SweepSettings  # noqa: E402
@@ -131,7 +132,8 @@ def interior_peaks(spectrum: dict | None, label: str, args) -> pd.DataFrame:
                 f_fine = z_fine.max() - z_fine
                 approach = float(np.quantile(f_fine, level))
                 z = z_fine[:: finest // g, :: finest // g]
-                result = contact.solve(op, z_fine.max() - z, approach, tol=1e-8)
+                result = contact.solve(op, z_fine.max() - z, approach,
+                                       options=SolverOptions(tol=1e-8))
                 p = result.pressure
                 area.append(result.real_area_fraction)
                 peak.append(p.max())

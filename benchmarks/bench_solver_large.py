@@ -59,6 +59,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from bench_contact import gaussian_surfaces  # noqa: E402
 
 from roughcontact import contact  # noqa: E402
+from roughcontact.contact import SolverOptions  # noqa: E402
 from roughcontact.elasticity.halfspace import SpectralHalfSpace, _element_kernel  # noqa: E402
 from roughcontact.elasticity.operators import halfspace_operator  # noqa: E402
 
@@ -146,8 +147,8 @@ def case_large(grid: int, repeats: int) -> list[dict]:
         # the free-space library operator is E C: pressures in units of E
         unit = 1.0 / E if kind == "free" else 1.0
         for load in LOADS:
-            reference = contact.solve(new, gap, mean_pressure=load * unit, tol=1e-8,
-                                      precision="mixed")
+            reference = contact.solve(new, gap, mean_pressure=load * unit,
+                                      options=SolverOptions(tol=1e-8, precision="mixed"))
             d = reference.approach
             times = {"old": [], "new": []}
             results = {}

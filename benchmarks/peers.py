@@ -118,7 +118,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_contact import NU, E, periodic_problem, score  # noqa: E402
 
-from roughcontact.contact import kkt_residual, solve  # noqa: E402
+from roughcontact.contact import SolverOptions, kkt_residual, solve  # noqa: E402
 
 # ----------------------------------------------------------------- part 1
 
@@ -179,14 +179,15 @@ def periodic_runners(grid: int, tol: float, peers) -> tuple[dict, dict]:
     which every pressure is compared.
     """
     operator, gap0, approach, size = periodic_problem(grid, spectral=True)
-    reference = solve(operator, gap0, approach, tol=tol)  # untimed: the target load
+    # untimed: the target load
+    reference = solve(operator, gap0, approach, options=SolverOptions(tol=tol))
     mean_pressure = reference.nominal_pressure
     heights = np.ascontiguousarray(-gap0)
     modulus = E / (1 - NU**2)
 
     def ours():
         start = time.perf_counter()
-        result = solve(operator, gap0, approach, tol=tol)
+        result = solve(operator, gap0, approach, options=SolverOptions(tol=tol))
         wall = time.perf_counter() - start
         return wall, np.asarray(result.pressure).reshape(grid, grid), result.iterations, ""
 
@@ -211,7 +212,7 @@ def periodic_runners(grid: int, tol: float, peers) -> tuple[dict, dict]:
 
     def ours_love():
         start = time.perf_counter()
-        result = solve(operator_love, gap_love, approach_love, tol=tol)
+        result = solve(operator_love, gap_love, approach_love, options=SolverOptions(tol=tol))
         wall = time.perf_counter() - start
         return (wall, np.asarray(result.pressure).reshape(grid, grid), result.iterations,
                 "own discretisation and approach: not comparable")
@@ -333,16 +334,18 @@ def capped_runners(grid: int, tol: float, peers) -> tuple[dict, dict]:
     ``context`` holds the problem, ``H`` and our untimed reference.
     """
     operator, gap0, approach, size = periodic_problem(grid, spectral=True)
-    elastic = np.asarray(solve(operator, gap0, approach, tol=tol).pressure).ravel()
+    elastic = np.asarray(solve(operator, gap0, approach,
+                               options=SolverOptions(tol=tol)).pressure).ravel()
     hardness = float(np.quantile(elastic[elastic > 0], HARDNESS_QUANTILE))
-    reference = solve(operator, gap0, approach, tol=tol, hardness=hardness)  # untimed
+    reference = solve(operator, gap0, approach, hardness=hardness,  # untimed
+                      options=SolverOptions(tol=tol))
     mean_pressure = reference.nominal_pressure
     heights = np.ascontiguousarray(-gap0)
     modulus = E / (1 - NU**2)
 
     def ours():
         start = time.perf_counter()
-        result = solve(operator, gap0, approach, tol=tol, hardness=hardness)
+        result = solve(operator, gap0, approach, hardness=hardness, options=SolverOptions(tol=tol))
         wall = time.perf_counter() - start
         return (wall, np.asarray(result.pressure).reshape(grid, grid), result.iterations,
                 "" if result.converged else "not converged")

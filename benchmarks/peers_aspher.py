@@ -83,7 +83,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from bench_contact import NU, SIZE, E, gaussian_surfaces, initial_gaps, score  # noqa: E402
 from peers import alternate  # noqa: E402
 
-from roughcontact.contact import solve  # noqa: E402
+from roughcontact.contact import SolverOptions, solve  # noqa: E402
 from roughcontact.elasticity.halfspace import SpectralHalfSpace  # noqa: E402
 from roughcontact.elasticity.operators import halfspace_operator  # noqa: E402
 
@@ -134,9 +134,8 @@ def run_ours(kind, grid, gap0, size, threads, load=None, approach=None) -> dict:
     """One cold solve of ours (operator built inside the timer)."""
     cpu, wall = time.process_time(), time.perf_counter()
     operator, unit = make_operator(kind, grid, size, threads)
-    result = solve(operator, gap0, approach,
-                   mean_pressure=None if load is None else load / unit,
-                   method="auto", tol=TOL, precision="mixed")
+    result = solve(operator, gap0, approach, mean_pressure=None if load is None else load / unit,
+                   options=SolverOptions(method="auto", tol=TOL, precision="mixed"))
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
     return dict(cpu=cpu, wall=wall, pressure=result.pressure * unit,
                 converged=bool(result.converged), iterations=int(result.iterations),
@@ -189,7 +188,8 @@ def bench_case(kind, grid, load, args, python, scratch) -> list[dict]:
     """Alternated rounds of the runners on one case; rows of minima and ratios."""
     gap0, size = problem(grid)
     operator, unit = make_operator(kind, grid, size, 1)
-    referee = solve(operator, gap0, mean_pressure=load / unit, method="auto", tol=REFEREE_TOL)
+    referee = solve(operator, gap0, mean_pressure=load / unit,
+                    options=SolverOptions(method="auto", tol=REFEREE_TOL))
     if not referee.converged:
         raise RuntimeError(f"referee did not converge: {kind} {grid} P={load}")
     reference, approach = referee.pressure * unit, float(referee.approach)

@@ -102,11 +102,6 @@ class Problem:
         checks.check_definite(op)
         return cls(op, gaps, shape, hardness, interface)
 
-    @property
-    def surfaces(self) -> int:
-        """The number of surfaces ``m``."""
-        return self.gaps.shape[0]
-
 
 @dataclass(frozen=True)
 class SolverOptions:

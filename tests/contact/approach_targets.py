@@ -11,6 +11,7 @@ import logging
 import numpy as np
 
 from roughcontact import contact
+from roughcontact.contact import SolverOptions
 from roughcontact.contact.nondim import dimensionless_operator, initial_separation
 
 logger = logging.getLogger(__name__)
@@ -40,8 +41,8 @@ def target_grid(heights, unit_influence, *, thickness: float, steps: int,
     last = {"pressure": None}
 
     def reached(d):
-        results = contact.solve_many(operator, gaps, d, method=method, tol=tol,
-                                     element_area=1.0 / n, p0=last["pressure"])
+        results = contact.solve_many(operator, gaps, d, element_area=1.0 / n, p0=last["pressure"],
+                                     options=SolverOptions(method=method, tol=tol))
         last["pressure"] = np.stack([r.pressure for r in results])
         if any(not r.converged for r in results):
             logger.warning("target_grid: a solve did not reach tol %.3g", tol)

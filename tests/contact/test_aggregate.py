@@ -13,6 +13,7 @@ import scipy.stats
 from approach_targets import target_grid
 
 from roughcontact.contact import aggregate, nondim
+from roughcontact.contact.nondim import CellOptions
 from roughcontact.contact.probes import Column, ProbeColumns
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.surfaces.spec import SurfaceSpec
@@ -61,7 +62,7 @@ def approaches(heights, block_nu0):
 def nd_cell(heights, block_nu0, approaches):
     # block pivoting: on this block CG needs > 1000 iterations near full contact
     return nondim.solve_cell(block_nu0, heights, thickness=LENGTH, element_area=AREA,
-                             approaches=approaches, method="exact")
+                             approaches=approaches, options=CellOptions().with_(method="exact"))
 
 
 @pytest.fixture(scope="module")
@@ -204,7 +205,8 @@ def test_levels_beyond_a_surface_are_not_extrapolated(cell):
 
 def test_unconverged_steps_are_excluded_and_counted(heights, block_nu0, approaches):
     nd = nondim.solve_cell(block_nu0, heights[:6], thickness=LENGTH, element_area=AREA,
-                           approaches=approaches, method="exact", max_iter=3)
+                           approaches=approaches,
+                           options=CellOptions().with_(method="exact", max_iter=3))
     bad = ~nd.converged
     assert bad.any() and (~bad).sum(axis=1).min() >= 2
     physical = nondim.to_physical(nd, SIGMA, E)

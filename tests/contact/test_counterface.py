@@ -12,8 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from roughcontact.contact import counterface, solve
+from roughcontact.contact import SolverOptions, counterface, solve
 from roughcontact.contact.interface import InterfaceGrid, describe
+from roughcontact.contact.nondim import CellOptions
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence, MatrixFreeInfluence
 
@@ -58,7 +59,8 @@ def test_two_spheres_on_two_half_spaces_give_hertz():
     load = 4 * e_star * a**3 / (3 * radius)
     operator = counterface.equivalent_operator(love(n, E1, nu1), love(n, E2, nu2))
     heights = counterface.equivalent_heights(sphere(n, R1), sphere(n, R2))
-    result = solve(operator, heights.max() - heights, mean_pressure=load / SIZE**2, tol=1e-10)
+    result = solve(operator, heights.max() - heights, mean_pressure=load / SIZE**2,
+                   options=SolverOptions(tol=1e-10))
     assert result.converged
     summary = describe(result.pressure, result.gap, InterfaceGrid((SIZE / n, SIZE / n)))
     assert summary.spot_count == 1
@@ -103,8 +105,8 @@ def test_a_matrix_free_body_sums_without_a_dense_matrix():
     gap0 = -sphere(n, 5e-3)
     gap0 -= gap0.min()
     reference = solve(counterface.equivalent_operator(dense1, dense2), gap0, approach=2e-6,
-                      tol=1e-10)
-    result = solve(pair, gap0, approach=2e-6, method="cg", tol=1e-10)
+                      options=SolverOptions(tol=1e-10))
+    result = solve(pair, gap0, approach=2e-6, options=SolverOptions(method="cg", tol=1e-10))
     np.testing.assert_allclose(result.pressure, reference.pressure,
                                atol=1e-6 * reference.pressure.max())
 
@@ -137,7 +139,8 @@ def test_two_finite_blocks_with_nu0_give_eq44_with_the_combined_modulus():
     np.testing.assert_allclose(pair.matrix.sum(axis=1), combined, rtol=5e-3)
     rng = np.random.default_rng(8)
     heights = 2e-6 * rng.standard_normal((n, n))
-    result = solve(pair, heights.max() - heights, mean_pressure=1e6, tol=1e-10)
+    result = solve(pair, heights.max() - heights, mean_pressure=1e6,
+                   options=SolverOptions(tol=1e-10))
     u1, u2 = counterface.body_displacements(*blocks, result.pressure)
     assert u1.mean() + u2.mean() == pytest.approx(1e6 * combined, rel=5e-3)  # Eq 44
     assert u1.mean() / u2.mean() == pytest.approx((L1 / E1) / (L2 / E2), rel=1e-2)
@@ -192,8 +195,8 @@ def test_a_sweep_records_the_counter_body_deflection():
     gaps -= gaps.min(axis=(1, 2), keepdims=True)
     grid = InterfaceGrid((SIZE / n, SIZE / n),
                          counter_weights=counterface.deflection_weights(second))
-    result = sweep(pair, gaps, np.linspace(0.3e-6, 2e-6, 4), method="cg", tol=1e-10,
-                   return_fields=True, interface=grid)
+    result = sweep(pair, gaps, np.linspace(0.3e-6, 2e-6, 4), interface=grid,
+                   options=SolverOptions(method="cg", tol=1e-10, return_fields=True))
     fields = result.pressure.reshape(3, 4, n * n)
     u2 = (fields @ second.matrix.T).mean(axis=-1)
     u1 = (fields @ first.matrix.T).mean(axis=-1)
@@ -227,10 +230,9 @@ def test_a_matrix_free_pair_sweeps_by_cg_with_each_bodys_share():
     grid = InterfaceGrid((size[0] / n, size[1] / n),
                          counter_weights=counterface.deflection_weights(second) / thickness)
     heights = np.random.default_rng(1).standard_normal((2, n, n))
-    result = nondim.solve_cell(pair, heights, thickness=thickness,
-                               element_area=(size[0] / n) ** 2,
-                               approaches=np.geomspace(0.05, 3.0, 6), method="auto",
-                               interface=grid)
+    result = nondim.solve_cell(pair, heights, thickness=thickness, element_area=(size[0] / n) ** 2,
+                               approaches=np.geomspace(0.05, 3.0, 6),
+                               options=CellOptions().with_(method="auto", interface=grid))
     assert result.method == "cg" and result.converged.all()
     np.testing.assert_allclose(result.counter_deflection / result.mean_plane_deflection,
                                1 / 3, rtol=1e-6)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from roughcontact import contact
-from roughcontact.contact import nondim
+from roughcontact.contact import SolverOptions, nondim
 from roughcontact.contact.methods import METHODS, REGISTRY
 from roughcontact.contact.nondim import dimensionless_operator
 from roughcontact.contact.products import Products
@@ -70,11 +70,12 @@ def test_every_method_refuses_an_indefinite_symmetric_matrix_with_its_eigenvalue
     matrix, gap = indefinite_problem()
     eigenvalues = np.linalg.eigvalsh(matrix)
     calls = {
-        "solve": lambda: contact.solve(matrix, gap, APPROACH, method=method, element_area=AREA),
-        "solve_many": lambda: contact.solve_many(matrix, gap[None], APPROACH, method=method,
-                                                 element_area=AREA),
+        "solve": lambda: contact.solve(matrix, gap, APPROACH, element_area=AREA,
+                                       options=SolverOptions(method=method)),
+        "solve_many": lambda: contact.solve_many(matrix, gap[None], APPROACH, element_area=AREA,
+                                                 options=SolverOptions(method=method)),
         "sweep": lambda: contact.sweep(matrix, gap[None], [APPROACH, 2 * APPROACH],
-                                       method=method, element_area=AREA),
+                                       element_area=AREA, options=SolverOptions(method=method)),
     }
     for call in calls.values():
         with pytest.raises(IndefiniteOperator, match="operator must be positive definite") as info:
@@ -92,12 +93,14 @@ def test_every_method_refuses_a_non_symmetric_matrix_and_its_advice_works(method
     lopsided = matrix.copy()
     lopsided[3, 40] *= 1.01
     with pytest.raises(ValueError, match=r"operator must be symmetric.*\(C \+ C\.T\) / 2"):
-        contact.solve(lopsided, gap, APPROACH, method=method, element_area=AREA)
+        contact.solve(lopsided, gap, APPROACH, element_area=AREA,
+                      options=SolverOptions(method=method))
     with pytest.raises(ValueError, match="operator must be symmetric"):
-        contact.sweep(lopsided, gap[None], [APPROACH], method=method, element_area=AREA)
+        contact.sweep(lopsided, gap[None], [APPROACH], element_area=AREA,
+                      options=SolverOptions(method=method))
     # the advice, followed literally
-    result = contact.solve((lopsided + lopsided.T) / 2, gap, APPROACH, method=method,
-                           element_area=AREA)
+    result = contact.solve((lopsided + lopsided.T) / 2, gap, APPROACH, element_area=AREA,
+                           options=SolverOptions(method=method))
     assert result.converged
 
 
@@ -127,7 +130,7 @@ def test_a_matrix_free_indefinite_operator_is_refused_with_an_estimate(grid, met
     matrix, gap = indefinite_problem()
     smallest = np.linalg.eigvalsh(matrix)[0]
     with pytest.raises(IndefiniteOperator, match="lanczos estimate") as info:
-        contact.solve(Wrapped(matrix, grid), gap, APPROACH, method=method)
+        contact.solve(Wrapped(matrix, grid), gap, APPROACH, options=SolverOptions(method=method))
     # a Rayleigh quotient: at least the smallest eigenvalue (to rounding), here within
     # 1e-6 of it
     assert smallest * (1 + 1e-12) <= info.value.smallest < 0
@@ -142,7 +145,8 @@ def test_a_matrix_free_non_symmetric_operator_is_refused(grid):
     lopsided[:50, 50:] *= 1.01
     for method in ("cg", "pcg", "auto"):
         with pytest.raises(ValueError, match=r"operator must be symmetric.*x\.Cy - y\.Cx"):
-            contact.solve(Wrapped(lopsided, grid), gap, APPROACH, method=method)
+            contact.solve(Wrapped(lopsided, grid), gap, APPROACH,
+                          options=SolverOptions(method=method))
     assert contact.solve(Wrapped(matrix, grid), gap, APPROACH).converged
 
 
@@ -174,11 +178,11 @@ def test_the_certificate_is_taken_once_and_kept_on_the_operator():
     matrix = halfspace_influence((10, 10), SIZE, 1.0, 0.0)
     gap = np.random.default_rng(2).random(100) * 1e-6
     operator = Wrapped(matrix, (10, 10))
-    contact.solve(operator, gap, APPROACH, method="cg")
+    contact.solve(operator, gap, APPROACH, options=SolverOptions(method="cg"))
     certificate = operator.spd_certificate
     assert certificate.method == "preconditioned lanczos" and certificate.smallest > 0
     operator.products = 0
-    result = contact.solve(operator, gap, APPROACH, method="cg")
+    result = contact.solve(operator, gap, APPROACH, options=SolverOptions(method="cg"))
     assert operator.products <= result.matvecs  # nothing spent on the certificate again
     dense = DenseInfluence(matrix, AREA)
     contact.solve(dense, gap, APPROACH)

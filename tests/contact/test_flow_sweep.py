@@ -13,7 +13,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from roughcontact.contact import sweep
+from roughcontact.contact import SolverOptions, sweep
 from roughcontact.contact.interface import InterfaceGrid
 from roughcontact.contact.probes import Probe, SolvedFields
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
@@ -77,11 +77,11 @@ def solved():
     gaps = _surfaces()
     loads = np.geomspace(2e5, 2e7, 5)
     grid = InterfaceGrid((SIZE / N, SIZE / N), periodic=True)
-    plain = sweep(operator, gaps, mean_pressures=loads, method="pcg", interface=grid,
-                  return_fields=True, stiffness=False)
-    flowing = sweep(operator, gaps, mean_pressures=loads, method="pcg",
+    plain = sweep(operator, gaps, mean_pressures=loads, interface=grid,
+                  options=SolverOptions(method="pcg", return_fields=True, stiffness=False))
+    flowing = sweep(operator, gaps, mean_pressures=loads,
                     interface=InterfaceGrid(grid.spacing, True, probes=(FlowProbe(),)),
-                    return_fields=True, stiffness=False)
+                    options=SolverOptions(method="pcg", return_fields=True, stiffness=False))
     return operator, gaps, plain, flowing
 
 
@@ -141,18 +141,17 @@ def test_one_direction_and_the_arithmetic_rule(solved):
     probe = FlowProbe(directions=("y",), face_rule=ARITHMETIC)
     assert probe.names == ("flow_conductance_y", "flow_factor_y", "pressure_flow_factor_y",
                            "flow_connected_y")
-    again = sweep(operator, gaps[:1], mean_pressures=np.geomspace(2e5, 2e7, 5), method="pcg",
+    again = sweep(operator, gaps[:1], mean_pressures=np.geomspace(2e5, 2e7, 5),
                   interface=InterfaceGrid((SIZE / N, SIZE / N), True, probes=(probe,)),
-                  stiffness=False)
+                  options=SolverOptions(method="pcg", stiffness=False))
     assert "flow_conductance_x" not in again.probe_columns
     assert list(again.probe_columns) == list(probe.names)
     # the arithmetic mean of two conductances is at least their harmonic mean: the
     # arithmetic rule passes at least as much, and the connectivity is the rule's own
     harmonic = sweep(operator, gaps[:1], mean_pressures=np.geomspace(2e5, 2e7, 5),
-                     method="pcg",
                      interface=InterfaceGrid((SIZE / N, SIZE / N), True,
                                              probes=(FlowProbe(directions=("y",)),)),
-                     stiffness=False)
+                     options=SolverOptions(method="pcg", stiffness=False))
     arithmetic, harmonic = again.probe_columns, harmonic.probe_columns
     assert (arithmetic["flow_conductance_y"]
             >= harmonic["flow_conductance_y"] * (1 - 1e-12)).all()
@@ -227,7 +226,7 @@ def test_the_dimensionless_form_scales_the_conductance_by_sigma_cubed(tmp_path):
                                   "size": (1.6e-3, 1.6e-3), "grid": (16, 16)})()
     unit = halfspace_influence((16, 16), (1.6e-3, 1.6e-3), 1.0, 0.0)
     grid = InterfaceGrid((1e-4, 1e-4), probes=(FlowProbe(),))
-    options = CellOptions(method="pivot", interface=grid)
+    options = CellOptions().with_(method="pivot", interface=grid)
     nd = cell_module.sweep_cell(unit, heights, geometry, 0.05, 8, options=options)
     sigma = 2e-6
     physical = to_physical(nd, sigma, 1e8)

@@ -14,7 +14,8 @@ import pytest
 from approach_targets import target_grid
 
 from roughcontact import contact
-from roughcontact.contact import cell, nondim
+from roughcontact.contact import SolverOptions, cell, nondim
+from roughcontact.contact.nondim import CellOptions
 from roughcontact.elasticity.influence import BlockGeometry, influence_matrix
 
 GRID = 12
@@ -54,7 +55,7 @@ def test_first_touch_only_the_highest_elements(block, method, d):
     _, C, area = block
     gap = rough_gap(1, 1e-6)
     top = int(np.argmin(gap))
-    result = contact.solve(C, gap, d, method=method, element_area=area)
+    result = contact.solve(C, gap, d, element_area=area, options=SolverOptions(method=method))
     assert result.converged
     assert list(np.flatnonzero(result.pressure)) == [top]
     assert 0.0 < result.load == pytest.approx(area * d / C[top, top], rel=1e-12)
@@ -65,7 +66,7 @@ def test_first_touch_only_the_highest_elements(block, method, d):
     tied = gap.copy()
     second = int(np.argsort(gap, axis=None)[1])
     tied.flat[second] = 0.0
-    result = contact.solve(C, tied, d, method=method, element_area=area)
+    result = contact.solve(C, tied, d, element_area=area, options=SolverOptions(method=method))
     pair = [min(top, second), max(top, second)]
     assert result.converged
     assert list(np.flatnonzero(result.pressure)) == pair
@@ -86,7 +87,7 @@ def test_full_contact_is_the_linear_solve(block, method):
         pytest.skip("steepest descent needs > 20000 iterations at condition number 5e4")
     gap = rough_gap(1, 1e-6)
     d = 2.0 * full_contact_approach(C, gap)
-    result = contact.solve(C, gap, d, method=method, element_area=area)
+    result = contact.solve(C, gap, d, element_area=area, options=SolverOptions(method=method))
     expected = np.linalg.solve(C, d - gap.ravel())
     assert result.converged and result.real_area_fraction == 1.0
     # measured: exact 1e-12, cg 2e-8 (paper) / 3e-10 (refined), steepest 9e-10
@@ -99,8 +100,8 @@ def test_beyond_full_contact_load_is_linear_in_approach(block):
     geom, C, area = block
     gap = rough_gap(2, 1e-6)
     approaches = full_contact_approach(C, gap) * np.array([1.5, 2.0, 3.0, 4.0])
-    result = contact.sweep(C, gap[None], approaches, element_area=area, return_fields=True,
-                           stiffness_tol=1e-12)
+    result = contact.sweep(C, gap[None], approaches, element_area=area,
+                           options=SolverOptions(return_fields=True, stiffness_tol=1e-12))
     assert result.converged.all() and (result.real_area_fraction == 1.0).all()
     stiffness = area * np.linalg.solve(C, np.ones(N)).sum()  # dA 1^T C^-1 1 [N/m]
     slopes = np.diff(result.load[0]) / np.diff(approaches)
@@ -131,14 +132,16 @@ def test_single_spike_carries_the_load_until_the_flat_joins(block, method):
     d_star = height / (1.0 - ratio[first])
     assert first == 11 * GRID and d_star > 1.01 * height  # measured 1.035 H / 1.015 H
 
-    before = contact.solve(C, gap, 0.999 * d_star, method=method, element_area=area)
+    before = contact.solve(C, gap, 0.999 * d_star, element_area=area,
+                           options=SolverOptions(method=method))
     assert before.converged
     assert list(np.flatnonzero(before.pressure)) == [k]  # although d > H: flat held off
     assert before.load == pytest.approx(area * 0.999 * d_star / C[k, k], rel=1e-10)
     flat_gap = np.delete(before.gap.ravel(), k)
     assert flat_gap.min() > 0.0
 
-    after = contact.solve(C, gap, 1.001 * d_star, method=method, element_area=area)
+    after = contact.solve(C, gap, 1.001 * d_star, element_area=area,
+                          options=SolverOptions(method=method))
     assert after.converged
     assert list(np.flatnonzero(after.pressure)) == [k, first]
     assert after.load > area * 1.001 * d_star / C[k, k]  # the flat now carries load too
@@ -157,8 +160,8 @@ def test_nominal_pressure_a_tenth_of_E(block, sigma_over_length):
     sigma = sigma_over_length * LENGTH
     target = 0.1 * LENGTH / sigma  # Phat = P L / (E sigma)
     grid = target_grid(heights, unit, thickness=LENGTH, target_pressure=target, steps=6)
-    nd = nondim.solve_cell(unit, heights, thickness=LENGTH, element_area=area,
-                           approaches=grid, tol=1e-10)
+    nd = nondim.solve_cell(unit, heights, thickness=LENGTH, element_area=area, approaches=grid,
+                           options=CellOptions().with_(tol=1e-10))
     assert nd.converged.all() and nd.stiffness_converged.all()
     physical = nondim.to_physical(nd, sigma, 1e9)
     fields = [physical.nominal_pressure, physical.max_pressure, physical.normalized_stiffness,
@@ -193,12 +196,13 @@ def test_sigma_and_E_over_twelve_decades_give_identical_nondimensional_results(m
     area = geom.spacing[0] * geom.spacing[1]
     heights = np.random.default_rng(5).standard_normal((2, GRID, GRID))
     grid = target_grid(heights, unit, thickness=LENGTH, target_area=0.5, steps=8)
-    options = {"method": method, "tol": 1e-12, "stiffness_tol": 1e-12}
+    options = SolverOptions(method=method, tol=1e-12, stiffness_tol=1e-12)
     nd = nondim.solve_cell(unit, heights, thickness=LENGTH, element_area=area,
-                           approaches=grid, **options)
+                           approaches=grid, options=CellOptions(options))
     fhat = nondim.initial_separation(heights)
     for sigma, E in [(1e-9, 1e3), (1e-9, 1e12), (1e-3, 1e3), (1e-3, 1e12), (1e-6, 5e8)]:
-        si = contact.sweep(unit / E, sigma * fhat, sigma * grid, element_area=area, **options)
+        si = contact.sweep(unit / E, sigma * fhat, sigma * grid, element_area=area,
+                           options=options)
         assert si.converged.all() and si.stiffness_converged.all()
         physical = nondim.to_physical(nd, sigma, E)
         pairs = [
@@ -241,13 +245,13 @@ def test_flat_punch_in_si_units_is_full_contact(block, method):
     geom, C, area = block
     flat = np.zeros((GRID, GRID))
     d = 1e-6
-    result = contact.solve(C, flat, d, method=method, element_area=area)
+    result = contact.solve(C, flat, d, element_area=area, options=SolverOptions(method=method))
     expected = np.linalg.solve(C, np.full(N, d))
     assert result.converged and result.real_area_fraction == 1.0
     np.testing.assert_allclose(result.pressure.ravel(), expected, rtol=1e-7)  # measured 1e-9
     if geom.mesh == "paper":
         np.testing.assert_allclose(result.pressure, geom.E * d / LENGTH, rtol=1e-7)
-    idle = contact.solve(C, flat, 0.0, method=method, element_area=area)
+    idle = contact.solve(C, flat, 0.0, element_area=area, options=SolverOptions(method=method))
     assert idle.converged and idle.load == 0.0 and idle.residual == 0.0
     assert np.isfinite(idle.gap).all() and not idle.pressure.any()
 
@@ -264,8 +268,9 @@ def test_tiny_iteration_limit_is_reported_not_hidden(block, method, max_iter, ca
     gap = rough_gap(1, 1e-6)
     d = float(np.quantile(gap, 0.3))  # about 6-10 % contact at the solution
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = contact.solve(C, gap, d, method=method, max_iter=max_iter, element_area=area,
-                               retries=False)
+        result = contact.solve(C, gap, d, element_area=area,
+                               options=SolverOptions(method=method, max_iter=max_iter,
+                                                     retries=False))
     assert not result.converged
     assert result.iterations <= max_iter
     for name in ("pressure", "displacement", "gap"):
@@ -286,8 +291,9 @@ def test_tiny_iteration_limit_is_retried_by_pivoting(block, method, caplog):
     gap = rough_gap(1, 1e-6)
     d = float(np.quantile(gap, 0.3))
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = contact.solve(C, gap, d, method=method, max_iter=1, element_area=area)
-    reference = contact.solve(C, gap, d, method="exact", element_area=area)
+        result = contact.solve(C, gap, d, element_area=area,
+                               options=SolverOptions(method=method, max_iter=1))
+    reference = contact.solve(C, gap, d, element_area=area, options=SolverOptions(method="exact"))
     assert result.converged and result.residual <= result.tol
     np.testing.assert_array_equal(result.pressure, reference.pressure)
     assert result.residual == pytest.approx(
@@ -302,8 +308,8 @@ def test_pivoting_that_cannot_settle_is_flagged_with_its_attempts(block, caplog)
     gap = rough_gap(1, 1e-6)
     d = float(np.quantile(gap, 0.3))
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = contact.sweep(C, gap[None], [0.5 * d, d], method="exact", max_iter=1,
-                               element_area=area)
+        result = contact.sweep(C, gap[None], [0.5 * d, d], element_area=area,
+                               options=SolverOptions(method="exact", max_iter=1))
     assert not result.converged[0, 1]
     messages = [r.getMessage() for r in caplog.records if "did not converge" in r.getMessage()]
     assert len(messages) == (~result.converged).sum()
@@ -315,8 +321,8 @@ def test_tiny_iteration_limit_in_a_sweep_is_flagged(block, caplog):
     gap = rough_gap(1, 1e-6)
     d = float(np.quantile(gap, 0.3))
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = contact.sweep(C, np.stack([gap, gap]), [0.5 * d, d, 2 * d], method="cg",
-                               max_iter=1, element_area=area, retries=False)
+        result = contact.sweep(C, np.stack([gap, gap]), [0.5 * d, d, 2 * d], element_area=area,
+                               options=SolverOptions(method="cg", max_iter=1, retries=False))
     assert not result.converged.any()
     for name in ("load", "mean_plane_deflection", "max_pressure", "residual",
                  "contact_stiffness"):

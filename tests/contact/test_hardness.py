@@ -14,6 +14,7 @@ import scipy.linalg
 import scipy.optimize
 
 from roughcontact.contact import (
+    SolverOptions,
     kkt_residual,
     solve,
     solve_many,
@@ -44,7 +45,8 @@ def problem():
     z = rng.standard_normal((3, N * N)) * 1e-6
     gaps = z.max(axis=1, keepdims=True) - z
     approaches = np.linspace(0.4e-6, 3.0e-6, 5)
-    elastic = solve(C, gaps[0], approaches[-1], method="exact", element_area=AREA)
+    elastic = solve(C, gaps[0], approaches[-1], element_area=AREA,
+                    options=SolverOptions(method="exact"))
     # a third of the largest elastic pressure: a good share of the contact saturates
     return C, gaps, approaches, elastic.max_pressure / 3.0
 
@@ -61,8 +63,8 @@ def test_reference_is_a_kkt_point(problem):
 @pytest.mark.parametrize("method", ["cg", "exact", "steepest"])
 def test_bounded_solve_matches_bvls(method, problem):
     C, gaps, approaches, hardness = problem
-    results = solve_many(C, gaps, approaches[-1], method=method, tol=1e-11, element_area=AREA,
-                         hardness=hardness)
+    results = solve_many(C, gaps, approaches[-1], element_area=AREA, hardness=hardness,
+                         options=SolverOptions(method=method, tol=1e-11))
     for gap0, result in zip(gaps, results, strict=True):
         reference = bounded_reference(C, gap0, approaches[-1], hardness)
         assert result.converged and result.residual <= 1e-11
@@ -79,8 +81,8 @@ def test_bounded_solve_matches_bvls(method, problem):
 @pytest.mark.parametrize("method", ["cg", "pivot"])
 def test_bounded_sweep_matches_bvls(method, problem):
     C, gaps, approaches, hardness = problem
-    result = sweep(C, gaps, approaches, method=method, tol=1e-11, element_area=AREA,
-                   return_fields=True, hardness=hardness)
+    result = sweep(C, gaps, approaches, element_area=AREA, hardness=hardness,
+                   options=SolverOptions(method=method, tol=1e-11, return_fields=True))
     assert result.converged.all() and result.stiffness_converged.all()
     assert result.hardness == hardness
     for j in range(gaps.shape[0]):
@@ -97,14 +99,14 @@ def test_bounded_sweep_matches_bvls(method, problem):
 
 def test_mixed_precision_and_a_start_above_the_cap(problem):
     C, gaps, approaches, hardness = problem
-    result = sweep(C, gaps, approaches, method="cg", precision="mixed", tol=1e-10,
-                   element_area=AREA, hardness=hardness)
+    result = sweep(C, gaps, approaches, element_area=AREA, hardness=hardness,
+                   options=SolverOptions(method="cg", precision="mixed", tol=1e-10))
     assert result.converged.all() and result.residual.max() <= 1e-10
     reference = bounded_reference(C, gaps[1], approaches[2], hardness)
     start = np.full(N * N, 10.0 * hardness)  # clipped to H before the solve
     for method in ("cg", "exact"):
-        warm = solve(C, gaps[1], approaches[2], method=method, tol=1e-11, element_area=AREA,
-                     hardness=hardness, p0=start)
+        warm = solve(C, gaps[1], approaches[2], element_area=AREA, hardness=hardness, p0=start,
+                     options=SolverOptions(method=method, tol=1e-11))
         assert warm.converged
         assert np.abs(warm.pressure - reference).max() <= 1e-7 * hardness
 
@@ -113,12 +115,13 @@ def test_tangent_with_saturation_is_the_load_derivative(problem):
     # dF/dd at fixed free and saturated sets, against a central difference of
     # exact capped solves (small enough a step that no element changes set)
     C, gaps, approaches, hardness = problem
-    result = sweep(C, gaps[:1], approaches, method="pivot", element_area=AREA,
-                   return_fields=True, hardness=hardness)
+    result = sweep(C, gaps[:1], approaches, element_area=AREA, hardness=hardness,
+                   options=SolverOptions(method="pivot", return_fields=True))
     step = 1e-6 * approaches[-1]
     for k, approach in enumerate(approaches):
-        loads = [solve(C, gaps[0], approach + s, method="exact", element_area=AREA,
-                       hardness=hardness, tol=1e-14).load for s in (-step, step)]
+        loads = [solve(C, gaps[0], approach + s, element_area=AREA, hardness=hardness,
+                       options=SolverOptions(method="exact", tol=1e-14)).load
+                 for s in (-step, step)]
         difference = (loads[1] - loads[0]) / (2 * step)
         assert result.contact_stiffness[0, k] == pytest.approx(difference, rel=1e-6)
         from_cg = tangent_stiffness(C, result.pressure[0, k], element_area=AREA,
@@ -132,11 +135,11 @@ def test_tangent_with_saturation_is_the_load_derivative(problem):
 @pytest.mark.parametrize("method", ["cg", "pivot"])
 def test_infinite_hardness_limit_is_the_elastic_solve(method, problem):
     C, gaps, approaches, _ = problem
-    elastic = sweep(C, gaps, approaches, method=method, tol=1e-12, element_area=AREA,
-                    return_fields=True)
+    elastic = sweep(C, gaps, approaches, element_area=AREA,
+                    options=SolverOptions(method=method, tol=1e-12, return_fields=True))
     hardness = 1e6 * elastic.max_pressure.max()
-    capped = sweep(C, gaps, approaches, method=method, tol=1e-12, element_area=AREA,
-                   return_fields=True, hardness=hardness)
+    capped = sweep(C, gaps, approaches, element_area=AREA, hardness=hardness,
+                   options=SolverOptions(method=method, tol=1e-12, return_fields=True))
     np.testing.assert_array_equal(capped.pressure > 0, elastic.pressure > 0)
     np.testing.assert_allclose(capped.pressure, elastic.pressure, rtol=1e-9,
                                atol=1e-9 * elastic.max_pressure.max())
@@ -154,17 +157,18 @@ def test_flat_punch_saturates_everywhere(method):
     punch[5:11, 5:11] = True
     gap0 = np.where(punch, 0.0, 1e-3)
     approach = 1e-6
-    elastic = solve(C, gap0, approach, method="exact", element_area=AREA)
+    elastic = solve(C, gap0, approach, element_area=AREA, options=SolverOptions(method="exact"))
     assert (elastic.pressure[punch] > 0).all()
     hardness = 0.5 * elastic.pressure[punch].min()
     if method == "pivot":
-        result = sweep(C, gap0[None], [approach], method=method, element_area=AREA,
-                       return_fields=True, hardness=hardness)
+        result = sweep(C, gap0[None], [approach], element_area=AREA, hardness=hardness,
+                       options=SolverOptions(method=method, return_fields=True))
         pressure, load = result.pressure[0, 0], result.load[0, 0]
         plastic, real = result.plastic_area_fraction[0, 0], result.real_area_fraction[0, 0]
         assert result.contact_stiffness[0, 0] == 0.0
     else:
-        result = solve(C, gap0, approach, method=method, element_area=AREA, hardness=hardness)
+        result = solve(C, gap0, approach, element_area=AREA, hardness=hardness,
+                       options=SolverOptions(method=method))
         pressure, load = result.pressure, result.load
         plastic, real = result.plastic_area_fraction, result.real_area_fraction
     assert result.converged if method != "pivot" else result.converged.all()
@@ -176,17 +180,20 @@ def test_flat_punch_saturates_everywhere(method):
 @pytest.mark.parametrize("method", ["cg", "pivot"])
 def test_no_hardness_is_the_uncapped_solve(method, problem):
     C, gaps, approaches, _ = problem
-    base = sweep(C, gaps, approaches, method=method, element_area=AREA, return_fields=True)
+    base = sweep(C, gaps, approaches, element_area=AREA,
+                 options=SolverOptions(method=method, return_fields=True))
     for hardness in (None, np.inf):
-        other = sweep(C, gaps, approaches, method=method, element_area=AREA,
-                      return_fields=True, hardness=hardness)
+        other = sweep(C, gaps, approaches, element_area=AREA, hardness=hardness,
+                      options=SolverOptions(method=method, return_fields=True))
         for name in ("pressure", "load", "residual", "iterations", "matvecs",
                      "contact_stiffness", "real_area_fraction"):
             np.testing.assert_array_equal(getattr(other, name), getattr(base, name))
         assert other.hardness is None and (other.plastic_area_fraction == 0).all()
     single = "cg" if method == "cg" else "exact"
-    plain = solve(C, gaps[0], approaches[-1], method=single, element_area=AREA)
-    none = solve(C, gaps[0], approaches[-1], method=single, element_area=AREA, hardness=None)
+    plain = solve(C, gaps[0], approaches[-1], element_area=AREA,
+                  options=SolverOptions(method=single))
+    none = solve(C, gaps[0], approaches[-1], element_area=AREA, hardness=None,
+                 options=SolverOptions(method=single))
     np.testing.assert_array_equal(none.pressure, plain.pressure)
     assert none.iterations == plain.iterations and none.residual == plain.residual
     assert none.plastic_area_fraction == 0.0 and none.hardness is None
@@ -201,7 +208,8 @@ def test_periodic_operator_with_cap_matches_bvls():
     gap0 = z.max() - z
     approach = 1.5e-6
     hardness = solve(op, gap0, approach).max_pressure / 3.0
-    result = solve(op, gap0, approach, method="cg", tol=1e-12, hardness=hardness)
+    result = solve(op, gap0, approach, hardness=hardness,
+                   options=SolverOptions(method="cg", tol=1e-12))
     assert result.converged and result.plastic_area_fraction > 0
     assert kkt_residual(op, gap0, approach, result.pressure, hardness=hardness) <= 1e-12
     reference = bounded_reference(dense, gap0, approach, hardness)
@@ -210,8 +218,8 @@ def test_periodic_operator_with_cap_matches_bvls():
 
 def test_capped_residual_sees_each_violation(problem):
     C, gaps, approaches, hardness = problem
-    good = solve(C, gaps[0], approaches[-1], method="exact", element_area=AREA,
-                 hardness=hardness).pressure.ravel()
+    good = solve(C, gaps[0], approaches[-1], element_area=AREA, hardness=hardness,
+                 options=SolverOptions(method="exact")).pressure.ravel()
 
     def score(pressure):
         return kkt_residual(C, gaps[0], approaches[-1], pressure, element_area=AREA,

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 import scipy.ndimage
 
-from roughcontact.contact import interface, solve
+from roughcontact.contact import SolverOptions, interface, solve
+from roughcontact.contact.nondim import CellOptions
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 
 E, NU, SIZE = 210e9, 0.3, 1.0e-3
@@ -107,7 +108,7 @@ def hertz_errors(n, offsets, radius=5.0e-3, a=0.1e-3):
     for ox, oy in offsets:
         X, Y = np.meshgrid(x - ox * dx, x - oy * dx)
         result = solve(op, (X**2 + Y**2) / (2 * radius), mean_pressure=load / SIZE**2,
-                       tol=1e-10)
+                       options=SolverOptions(tol=1e-10))
         assert result.converged
         summary = interface.describe(result.pressure, result.gap, grid)
         assert summary.spot_count == 1
@@ -138,7 +139,7 @@ def test_doubly_sinusoidal_surface_has_one_spot_per_peak_across_periodic_edges()
     k = 2 * math.pi * periods / SIZE
     heights = 1e-6 * np.cos(k * X) * np.cos(k * Y)
     op = PeriodicHalfSpace((n, n), (SIZE, SIZE), E, NU)
-    result = solve(op, heights.max() - heights, mean_pressure=1e8, tol=1e-10)
+    result = solve(op, heights.max() - heights, mean_pressure=1e8, options=SolverOptions(tol=1e-10))
     assert result.converged
     grid = interface.InterfaceGrid.of(op, (SIZE, SIZE))
     summary = interface.describe(result.pressure, result.gap, grid)
@@ -162,7 +163,7 @@ def test_mean_gap_and_gap_quantiles_of_a_solution():
     op = PeriodicHalfSpace((n, n), (SIZE, SIZE), E, NU, mean_compliance=1e-12)
     f = heights.max() - heights
     d = 1.5e-6
-    result = solve(op, f, approach=d, tol=1e-12)
+    result = solve(op, f, approach=d, options=SolverOptions(tol=1e-12))
     grid = interface.InterfaceGrid.of(op, (SIZE, SIZE))
     assert not grid.periodic  # a positive mean compliance: not taken as a periodic cell
     # the gap recomputed from the pressure, independently of the result's gap field
@@ -211,8 +212,8 @@ def test_a_sweep_records_the_interface_of_every_step(method):
     C = halfspace_influence((n, n), (size, size), E, NU)
     d = np.linspace(0.5e-6, 2.5e-6, 5)
     grid = interface.InterfaceGrid((size / n, size / n))
-    result = sweep(C, f, d, method=method, element_area=(size / n) ** 2, interface=grid,
-                   return_fields=True, tol=1e-12)
+    result = sweep(C, f, d, element_area=(size / n) ** 2, interface=grid,
+                   options=SolverOptions(method=method, return_fields=True, tol=1e-12))
     p = result.pressure.reshape(3, 5, n * n)
     gap = (np.einsum("ij,mkj->mki", C, p) + f.reshape(3, 1, -1)
            - d[None, :, None]).reshape(3, 5, n, n)
@@ -242,8 +243,8 @@ def test_aggregates_read_the_distributions_at_the_solved_steps():
     unit = halfspace_influence((n, n), (size, size), 1.0, 0.0)
     grid = interface.InterfaceGrid((size / n, size / n))
     nd = nondim.solve_cell(unit, heights, thickness=size, element_area=(size / n) ** 2,
-                           approaches=np.linspace(0.5, 2.5, 6), method="pivot", tol=1e-12,
-                           interface=grid)
+                           approaches=np.linspace(0.5, 2.5, 6),
+                           options=CellOptions().with_(method="pivot", tol=1e-12, interface=grid))
     sigma = 2e-6
     physical = nondim.to_physical(nd, sigma=sigma, E=1e9)
     steps = physical.nominal_pressure[0, 1:5]

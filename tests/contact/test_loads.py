@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from roughcontact import contact
+from roughcontact.contact import SolverOptions
 from roughcontact.elasticity import operators
 from roughcontact.elasticity.halfspace import SpectralHalfSpace
 
@@ -46,9 +47,10 @@ def test_load_controlled_solve_equals_displacement_controlled(case):
     gap = rough_gaps(1, (20, 24), seed=11)[0]
     for fraction in (0.2, 0.6):
         d = fraction * gap.mean()
-        displaced = contact.solve(op, gap, d, method=method, tol=1e-11, element_area=area)
-        loaded = contact.solve(op, gap, mean_pressure=displaced.nominal_pressure, method=method,
-                               tol=1e-11, element_area=area)
+        displaced = contact.solve(op, gap, d, element_area=area,
+                                  options=SolverOptions(method=method, tol=1e-11))
+        loaded = contact.solve(op, gap, mean_pressure=displaced.nominal_pressure, element_area=area,
+                               options=SolverOptions(method=method, tol=1e-11))
         assert loaded.converged and loaded.method == method
         assert 0.005 < displaced.real_area_fraction < 0.9
         assert loaded.nominal_pressure == pytest.approx(displaced.nominal_pressure, rel=1e-9)
@@ -62,10 +64,10 @@ def test_load_controlled_sweep_equals_displacement_controlled(case):
     area = (SIZE[0] / 24) * (SIZE[1] / 20)
     gaps = rough_gaps(2, (20, 24), seed=12)
     approaches = np.array([0.1, 0.3, 0.5]) * gaps.mean()
-    displaced = contact.sweep(op, gaps, approaches, method=method, tol=1e-11, element_area=area,
-                              return_fields=True)
-    loaded = contact.sweep(op, gaps, mean_pressures=displaced.nominal_pressure, method=method,
-                           tol=1e-11, element_area=area, return_fields=True)
+    displaced = contact.sweep(op, gaps, approaches, element_area=area,
+                              options=SolverOptions(method=method, tol=1e-11, return_fields=True))
+    loaded = contact.sweep(op, gaps, mean_pressures=displaced.nominal_pressure, element_area=area,
+                           options=SolverOptions(method=method, tol=1e-11, return_fields=True))
     assert loaded.converged.all() and loaded.method == method
     np.testing.assert_array_equal(loaded.pressure > 0, displaced.pressure > 0)
     assert np.abs(loaded.pressure - displaced.pressure).max() <= 1e-6 * displaced.pressure.max()
@@ -77,7 +79,7 @@ def test_zero_load_touches_and_exactly_one_control_is_required():
     op = operators.halfspace_operator((8, 8), SIZE, NU)
     gap = rough_gaps(1, (8, 8), seed=13)[0]
     for method in ("pcg", "cg"):
-        idle = contact.solve(op, gap, mean_pressure=0.0, method=method)
+        idle = contact.solve(op, gap, mean_pressure=0.0, options=SolverOptions(method=method))
         assert idle.converged and idle.load == 0.0 and idle.approach == gap.min()
     with pytest.raises(ValueError, match="exactly one of approach"):
         contact.solve(op, gap)
@@ -122,13 +124,14 @@ def test_pcg_load_control_on_an_ill_conditioned_block_is_right_or_flagged(paper_
     op, gap = paper_block
     loads = np.geomspace(0.1e6, 10e6, 12)
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = contact.sweep(op, gap[None], mean_pressures=loads, method="pcg",
-                               precision=precision, tol=1e-10, stiffness=False)
+        result = contact.sweep(op, gap[None], mean_pressures=loads,
+                               options=SolverOptions(method="pcg", precision=precision, tol=1e-10,
+                                                     stiffness=False))
     assert result.converged.all()
     np.testing.assert_allclose(result.nominal_pressure[0], loads, rtol=1e-8)
     # the referee: pivoting at the approaches found gives the same contact and loads
-    exact = contact.sweep(op, gap[None], result.approach[0], method="pivot", tol=1e-12,
-                          stiffness=False)
+    exact = contact.sweep(op, gap[None], result.approach[0],
+                          options=SolverOptions(method="pivot", tol=1e-12, stiffness=False))
     np.testing.assert_array_equal(result.real_area_fraction, exact.real_area_fraction)
     np.testing.assert_allclose(exact.nominal_pressure[0], loads, rtol=1e-6)
     assert not any("did not converge" in r.getMessage() for r in caplog.records)
@@ -140,12 +143,14 @@ def test_pcg_load_control_stall_is_cut_short(paper_block):
     from roughcontact.contact import pcg
 
     op, gap = paper_block
-    stalled = contact.solve(op, gap, mean_pressure=0.1e6, method="pcg", tol=1e-10,
-                            retries=False)
+    stalled = contact.solve(op, gap, mean_pressure=0.1e6,
+                            options=SolverOptions(method="pcg", tol=1e-10, retries=False))
     assert not stalled.converged and stalled.residual > 0.1
     assert stalled.iterations == pcg.stall_window(gap.size)
-    retried = contact.solve(op, gap, mean_pressure=0.1e6, method="pcg", tol=1e-10)
-    exact = contact.solve(op, gap, mean_pressure=0.1e6, method="exact", tol=1e-12)
+    retried = contact.solve(op, gap, mean_pressure=0.1e6,
+                            options=SolverOptions(method="pcg", tol=1e-10))
+    exact = contact.solve(op, gap, mean_pressure=0.1e6,
+                          options=SolverOptions(method="exact", tol=1e-12))
     assert retried.converged
     np.testing.assert_array_equal(retried.contact_set, exact.contact_set)
     assert retried.approach == pytest.approx(exact.approach, rel=1e-8)
@@ -170,8 +175,9 @@ def test_cg_load_control_flags_mean_what_they_say(seed):
     op = SpectralHalfSpace((32, 32), (1e-3, 1e-3), E, NU)
     gaps = rough_gaps(4, (32, 32), seed)
     loads = np.geomspace(1e5, 3e7, 8)
-    result = contact.sweep(op, gaps, mean_pressures=loads, method="cg", tol=1e-10,
-                           return_fields=True, stiffness=False)
+    result = contact.sweep(op, gaps, mean_pressures=loads,
+                           options=SolverOptions(method="cg", tol=1e-10, return_fields=True,
+                                                 stiffness=False))
     assert result.converged.all()
     for j, k in np.ndindex(result.approach.shape):
         pressure = result.pressure[j, k]

@@ -3,6 +3,7 @@
 import numpy as np
 
 from roughcontact import contact
+from roughcontact.contact import SolverOptions
 from roughcontact.contact.checks import as_operator
 from roughcontact.contact.products import Products
 from roughcontact.elasticity.halfspace import SpectralHalfSpace
@@ -20,8 +21,10 @@ def test_cg_takes_float32_fft_products_and_still_meets_tol():
     z = rng.standard_normal((24, 32)) * 1e-6
     gap = z.max() - z
     d = 0.4 * gap.mean()
-    mixed = contact.solve(op, gap, d, method="cg", tol=1e-11, precision="mixed")
-    double = contact.solve(op, gap, d, method="cg", tol=1e-11, precision="double")
+    mixed = contact.solve(op, gap, d,
+                          options=SolverOptions(method="cg", tol=1e-11, precision="mixed"))
+    double = contact.solve(op, gap, d,
+                           options=SolverOptions(method="cg", tol=1e-11, precision="double"))
     assert mixed.converged and contact.kkt_residual(op, gap, d, mixed.pressure) <= 1e-11
     np.testing.assert_array_equal(mixed.contact_set, double.contact_set)
     assert np.abs(mixed.pressure - double.pressure).max() <= 1e-8 * double.max_pressure

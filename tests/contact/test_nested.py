@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from roughcontact import contact
-from roughcontact.contact import nested, pcg
+from roughcontact.contact import SolverOptions, nested, pcg
 from roughcontact.elasticity import operators
 from roughcontact.elasticity.halfspace import SpectralHalfSpace
 
@@ -71,7 +71,8 @@ def test_solve_starts_large_cold_grids_from_coarse_levels():
     assert grid[0] * grid[1] > pcg.NESTED_MIN_ELEMENTS
     op = operators.halfspace_operator(grid, size, NU)
     gap = rough_gap((128, 192), seed=3)
-    result = contact.solve(op, gap, 0.4 * gap.mean(), tol=1e-10, precision="mixed")
+    result = contact.solve(op, gap, 0.4 * gap.mean(),
+                           options=SolverOptions(tol=1e-10, precision="mixed"))
     cold = pcg.constrained_pcg(op, gap, approach=0.4 * gap.mean(), tol=1e-10)
     assert result.method == "pcg" and result.converged
     np.testing.assert_array_equal(result.contact_set, cold.pressure > 0)

@@ -13,9 +13,10 @@ import pytest
 from approach_targets import target_grid
 
 from roughcontact import contact
+from roughcontact.contact import SolverOptions, nondim
 from roughcontact.contact import cell as cell_module
-from roughcontact.contact import nondim
 from roughcontact.contact.curves import PhysicalSweep
+from roughcontact.contact.nondim import CellOptions
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
 from roughcontact.surfaces.spec import SurfaceSpec
@@ -50,7 +51,8 @@ def cell(heights, unit_influence):
     approaches = target_grid(heights, unit_influence, thickness=LENGTH, target_area=0.6,
                              steps=10)
     nd = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                           approaches=approaches, tol=1e-12, stiffness_tol=1e-12)
+                           approaches=approaches,
+                           options=CellOptions().with_(tol=1e-12, stiffness_tol=1e-12))
     return approaches, nd
 
 
@@ -64,8 +66,8 @@ def test_rescaled_sweep_equals_direct_si_sweep(cell, heights, sigma, E):
     assert nd.converged.all() and nd.stiffness_converged.all()
     C = halfspace_influence((GRID, GRID), (SIZE, SIZE), E, NU)  # [m/Pa], built at E
     gaps = sigma * (heights.max(axis=(1, 2), keepdims=True) - heights)  # [m]
-    direct = contact.sweep(C, gaps, sigma * approaches, element_area=AREA, tol=1e-12,
-                           stiffness_tol=1e-12)
+    direct = contact.sweep(C, gaps, sigma * approaches, element_area=AREA,
+                           options=SolverOptions(tol=1e-12, stiffness_tol=1e-12))
     assert direct.converged.all()
     reference = PhysicalSweep.from_contact_sweep(
         direct, thickness=LENGTH, nominal_area=GRID**2 * AREA, sigma=sigma, E=E)
@@ -82,9 +84,9 @@ def test_paper_form_is_equivalent(cell, heights, unit_influence):
     """Eq 23-26 (p~ = p/E, C~ = C E / sigma) gives P/E = (sigma / L) Phat."""
     approaches, nd = cell
     sigma = 25e-6
-    paper = contact.sweep(unit_influence / sigma, nondim.initial_separation(heights),
-                          approaches, element_area=1.0 / GRID**2, tol=1e-12,
-                          stiffness_tol=1e-12)
+    paper = contact.sweep(unit_influence / sigma, nondim.initial_separation(heights), approaches,
+                          element_area=1.0 / GRID**2,
+                          options=SolverOptions(tol=1e-12, stiffness_tol=1e-12))
     assert relative_error(paper.nominal_pressure, sigma / LENGTH * nd.nominal_pressure) < 1e-8
     assert relative_error(paper.real_area_fraction, nd.real_area_fraction) == 0.0
 
@@ -134,7 +136,8 @@ def test_unconverged_steps_are_flagged_not_hidden(heights, unit_influence, caplo
         # pivoting, the solver of last resort, limited to one pivot: the sweep's
         # retries (cold) cannot settle every step either
         nd = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                               approaches=approaches, method="exact", max_iter=1)
+                               approaches=approaches,
+                               options=CellOptions().with_(method="exact", max_iter=1))
     assert (~nd.converged).any()
     assert (nd.residual[~nd.converged] > nd.tol).all()
     assert np.isfinite(nd.nominal_pressure).all()
@@ -146,7 +149,8 @@ def test_unconverged_steps_are_flagged_not_hidden(heights, unit_influence, caplo
 def test_progress_reports_every_step_of_every_batch(heights, unit_influence):
     reports = []
     nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                      approaches=[0.5, 1.0, 1.5], batch_size=3, progress=reports.append)
+                      approaches=[0.5, 1.0, 1.5],
+                      options=CellOptions().with_(batch_size=3, progress=reports.append))
     assert [(r.surfaces_done, r.step) for r in reports] == [
         (3, 1), (3, 2), (3, 3), (4, 1), (4, 2), (4, 3)]
     assert all(r.surfaces_total == 4 and r.steps_total == 3 for r in reports)
@@ -166,8 +170,9 @@ def test_batches_and_matrix_free_operator_agree(cell, heights, unit_influence):
             return unit_influence @ p
 
     other = nondim.solve_cell(MatrixFree(), heights, thickness=LENGTH, element_area=AREA,
-                              approaches=approaches, tol=1e-12, stiffness_tol=1e-12,
-                              batch_size=3)
+                              approaches=approaches,
+                              options=CellOptions().with_(tol=1e-12, stiffness_tol=1e-12,
+                                                          batch_size=3))
     for name in ("nominal_pressure", "real_area_fraction", "normalized_stiffness",
                  "mean_plane_deflection", "max_pressure"):
         assert relative_error(getattr(other, name), getattr(nd, name)) < 1e-9, name
@@ -197,9 +202,11 @@ def test_bad_input_is_rejected(heights, unit_influence, change, message):
     kwargs = dict(heights=heights, approaches=[0.5, 1.0], thickness=LENGTH)
     if "heights" in change:
         change = dict(heights=heights * change["heights"])
+    options = {"batch_size": change.pop("batch_size")} if "batch_size" in change else {}
     kwargs.update(change)
     with pytest.raises(ValueError, match=message):
-        nondim.solve_cell(unit_influence, element_area=AREA, **kwargs)
+        nondim.solve_cell(unit_influence, element_area=AREA, **kwargs,
+                          options=CellOptions().with_(**options))
 
 
 def test_to_physical_rejects_other_geometry(cell):

@@ -14,7 +14,7 @@ import scipy.linalg
 import scipy.optimize
 
 from roughcontact import contact
-from roughcontact.contact import pcg, stiffness
+from roughcontact.contact import SolverOptions, pcg, stiffness
 from roughcontact.contact.nondim import dimensionless_operator
 from roughcontact.contact.products import Products
 from roughcontact.elasticity import operators
@@ -76,9 +76,10 @@ def test_pcg_equals_pivoting_on_the_dense_matrix(name, precision):
     gap = rough_gap((20, 24), seed=3)
     for fraction in (0.1, 0.3, 0.45):  # approaches below the mean gap (periodic operators)
         d = fraction * gap.mean() * 2.0
-        ours = contact.solve(op, gap, d, method="pcg", tol=1e-10, precision=precision)
-        reference = contact.solve(dense, gap, d, method="pivot", tol=1e-13,
-                                  element_area=op.element_area)
+        ours = contact.solve(op, gap, d,
+                             options=SolverOptions(method="pcg", tol=1e-10, precision=precision))
+        reference = contact.solve(dense, gap, d, element_area=op.element_area,
+                                  options=SolverOptions(method="pivot", tol=1e-13))
         assert ours.converged and ours.method == "pcg" and ours.residual <= 1e-10
         assert 0.01 < reference.real_area_fraction < 0.9
         np.testing.assert_array_equal(ours.contact_set, reference.contact_set)
@@ -91,7 +92,8 @@ def test_pcg_equals_scipy_nnls():
     dense = op.matvec(np.eye(op.shape[0]))
     gap = rough_gap((14, 16), seed=5)
     d = 0.8 * gap.mean()
-    ours = contact.solve(op, gap, d, method="pcg", tol=1e-11, precision="mixed")
+    ours = contact.solve(op, gap, d,
+                         options=SolverOptions(method="pcg", tol=1e-11, precision="mixed"))
     reference = nnls_reference(dense, gap, d).reshape(gap.shape)
     np.testing.assert_array_equal(ours.pressure > 0, reference > 0)
     assert np.abs(ours.pressure - reference).max() <= 1e-7 * reference.max()
@@ -105,7 +107,8 @@ def test_pcg_hertz_on_a_fine_halfspace_grid():
     op = operators.halfspace_operator((n, n), (n * dx, n * dx), NU)  # E = 1 Pa
     x = (np.arange(n) - n // 2 + 0.5) * dx
     gap = (x[None, :] ** 2 + x[:, None] ** 2) / (2.0 * radius)
-    result = contact.solve(op, gap, a**2 / radius, tol=1e-9, precision="mixed")
+    result = contact.solve(op, gap, a**2 / radius,
+                           options=SolverOptions(tol=1e-9, precision="mixed"))
     assert result.method == "pcg" and result.converged
     e_star = 1.0 / (1.0 - NU**2)
     load = 4.0 / 3.0 * e_star * np.sqrt(radius) * (a**2 / radius) ** 1.5
@@ -119,8 +122,9 @@ def test_pcg_reports_non_convergence(caplog):
     op = operators.halfspace_operator((24, 20), SIZE, NU)
     gap = rough_gap((20, 24), seed=4)
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = contact.solve(op, gap, gap.mean(), method="pcg", tol=1e-12, max_iter=2,
-                               retries=False)
+        result = contact.solve(op, gap, gap.mean(),
+                               options=SolverOptions(method="pcg", tol=1e-12, max_iter=2,
+                                                     retries=False))
     assert not result.converged and result.iterations == 2
     assert result.residual > 1e-12
     assert result.residual == pytest.approx(
@@ -144,15 +148,15 @@ def test_pcg_refuses_a_cap_and_solves_a_dense_matrix_unpreconditioned():
     half = operators.halfspace_operator((8, 8), SIZE, NU)
     gap = rough_gap((8, 8), seed=1)
     with pytest.raises(ValueError, match="method='cg'"):
-        contact.solve(half, gap, gap.mean(), method="pcg", hardness=1e-6)
-    dense = contact.solve(half.to_dense(), gap.ravel(), gap.mean(), method="pcg", tol=1e-11,
-                          element_area=half.element_area, precision="mixed")
+        contact.solve(half, gap, gap.mean(), hardness=1e-6, options=SolverOptions(method="pcg"))
+    dense = contact.solve(half.to_dense(), gap.ravel(), gap.mean(), element_area=half.element_area,
+                          options=SolverOptions(method="pcg", tol=1e-11, precision="mixed"))
     reference = nnls_reference(half.to_dense(), gap, gap.mean())
     assert dense.converged
     np.testing.assert_array_equal(dense.pressure > 0, reference > 0)
     assert np.abs(dense.pressure - reference).max() <= 1e-7 * reference.max()
     # auto on a capped problem is CG, which honours the cap
-    capped = contact.solve(half, gap, gap.mean(), hardness=1e-6, tol=1e-9)
+    capped = contact.solve(half, gap, gap.mean(), hardness=1e-6, options=SolverOptions(tol=1e-9))
     assert capped.method == "cg" and capped.converged and capped.max_pressure <= 1e-6
 
 
@@ -169,7 +173,7 @@ def test_preconditioned_tangent_stiffness_equals_the_dense_solve(name):
     against a dense linear solve on the contact set."""
     op = OPERATORS[name]()
     gap = rough_gap((20, 24), seed=8)
-    result = contact.solve(op, gap, 0.6 * gap.mean(), tol=1e-10)
+    result = contact.solve(op, gap, 0.6 * gap.mean(), options=SolverOptions(tol=1e-10))
     stiffness = contact.tangent_stiffness(op, result.pressure, tol=1e-12)
     contact_set = np.flatnonzero(result.pressure.ravel() > 0)
     dense = op.matvec(np.eye(op.shape[0]))[np.ix_(contact_set, contact_set)]
@@ -186,7 +190,7 @@ def test_stiffness_tol_bounds_the_stiffness_error(name, tol):
     contact set of a rough contact at 7 % contact."""
     op = OPERATORS["hybrid" if name == "dense" else name]()
     gap = rough_gap((20, 24), seed=8)
-    result = contact.solve(op, gap, 0.6 * gap.mean(), tol=1e-10)
+    result = contact.solve(op, gap, 0.6 * gap.mean(), options=SolverOptions(tol=1e-10))
     contact_set = np.flatnonzero(result.pressure.ravel() > 0)
     matrix = op.matvec(np.eye(op.shape[0]))
     expected = op.element_area * np.linalg.solve(matrix[np.ix_(contact_set, contact_set)],
@@ -210,7 +214,7 @@ def paper_mesh_contact():
     unit = 0.5 * (unit + unit.T)
     body = DenseInfluence(unit, geometry.element_area)
     gap = rough_gap((24, 24), seed=0)
-    result = contact.solve(body, gap.ravel(), gap.mean(), tol=1e-12)
+    result = contact.solve(body, gap.ravel(), gap.mean(), options=SolverOptions(tol=1e-12))
     return body, unit, result.pressure
 
 

@@ -9,7 +9,14 @@ import numpy as np
 import pytest
 from test_solver import nnls_reference  # scipy NNLS on the Cholesky factor of C
 
-from roughcontact.contact import resolve_method, solve, solve_many, sweep, tangent_stiffness
+from roughcontact.contact import (
+    SolverOptions,
+    resolve_method,
+    solve,
+    solve_many,
+    sweep,
+    tangent_stiffness,
+)
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence, MatrixFreeInfluence
 
@@ -32,8 +39,8 @@ def problem():
 
 def test_every_step_matches_nnls(problem):
     C, gaps, approaches, area = problem
-    result = sweep(C, gaps, approaches, method="pivot", tol=1e-10, element_area=area,
-                   return_fields=True)
+    result = sweep(C, gaps, approaches, element_area=area,
+                   options=SolverOptions(method="pivot", tol=1e-10, return_fields=True))
     assert result.method == "pivot"
     assert result.converged.all() and result.residual.max() < 1e-12
     for j in range(gaps.shape[0]):
@@ -46,8 +53,10 @@ def test_every_step_matches_nnls(problem):
 
 def test_agrees_with_the_cg_sweep_and_costs_fewer_products(problem):
     C, gaps, approaches, area = problem
-    pivot = sweep(C, gaps, approaches, method="pivot", tol=1e-10, element_area=area)
-    cg = sweep(C, gaps, approaches, method="cg", tol=1e-10, element_area=area)
+    pivot = sweep(C, gaps, approaches, element_area=area,
+                  options=SolverOptions(method="pivot", tol=1e-10))
+    cg = sweep(C, gaps, approaches, element_area=area,
+               options=SolverOptions(method="cg", tol=1e-10))
     assert np.array_equal(pivot.real_area_fraction, cg.real_area_fraction)
     assert pivot.load == pytest.approx(cg.load, rel=1e-7)
     assert pivot.contact_stiffness == pytest.approx(cg.contact_stiffness, rel=1e-5)
@@ -56,8 +65,8 @@ def test_agrees_with_the_cg_sweep_and_costs_fewer_products(problem):
 
 def test_tangent_from_the_factor_equals_the_free_set_cg(problem):
     C, gaps, approaches, area = problem
-    result = sweep(C, gaps[:1], approaches[:1], method="pivot", tol=1e-10, element_area=area,
-                   return_fields=True)
+    result = sweep(C, gaps[:1], approaches[:1], element_area=area,
+                   options=SolverOptions(method="pivot", tol=1e-10, return_fields=True))
     for k in (1, 3, 5):
         expected = tangent_stiffness(C, result.pressure[0, k], element_area=area, tol=1e-13)
         assert result.contact_stiffness[0, k] == pytest.approx(expected, rel=1e-9)
@@ -80,8 +89,8 @@ def test_ill_conditioned_matrix_is_solved_to_rounding():
     rng = np.random.default_rng(3)
     z = rng.standard_normal((2, n * n)) * 1e-6
     gaps = z.max(axis=1, keepdims=True) - z
-    result = sweep(C, gaps, np.geomspace(0.1, 2.0, 5) * 1e-6, method="pivot", tol=1e-8,
-                   element_area=(1e-3 / n) ** 2)
+    result = sweep(C, gaps, np.geomspace(0.1, 2.0, 5) * 1e-6, element_area=(1e-3 / n) ** 2,
+                   options=SolverOptions(method="pivot", tol=1e-8))
     assert result.converged.all() and result.residual.max() < 1e-10
 
 
@@ -106,13 +115,13 @@ def test_single_solves_and_the_sweep_share_the_pivoting(problem):
     """solve_many("pivot"/"exact") runs the rounds of the sweep for one step: the same
     solutions to rounding, a dense matrix passed plain or wrapped alike."""
     C, gaps, approaches, area = problem
-    swept = sweep(C, gaps, approaches, method="pivot", tol=1e-10, element_area=area,
-                  return_fields=True)
+    swept = sweep(C, gaps, approaches, element_area=area,
+                  options=SolverOptions(method="pivot", tol=1e-10, return_fields=True))
     for k in (0, 3, 5):
         for method, operator, given in (("pivot", C, area), ("exact", DenseInfluence(C, area),
                                                             None)):
-            results = solve_many(operator, gaps, approaches[:, k], method=method, tol=1e-10,
-                                 element_area=given)
+            results = solve_many(operator, gaps, approaches[:, k], element_area=given,
+                                 options=SolverOptions(method=method, tol=1e-10))
             for j, result in enumerate(results):
                 assert result.method == method and result.converged
                 assert result.matvecs == result.iterations + 2  # rounds, then C p
@@ -127,7 +136,8 @@ def test_not_positive_definite_is_refused(problem):
     bad = C.copy()
     bad[0, 0] = -bad[0, 0]
     with pytest.raises(ValueError, match="positive"):
-        sweep(bad, gaps[:1], approaches[:1], method="pivot", element_area=area)
+        sweep(bad, gaps[:1], approaches[:1], element_area=area,
+              options=SolverOptions(method="pivot"))
 
 
 def test_a_factor_kept_in_part_and_extended_is_the_cholesky_factor_of_the_new_set():

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from roughcontact.contact import aggregate, sweep
+from roughcontact.contact import SolverOptions, aggregate, sweep
 from roughcontact.contact import cell as cell_module
 from roughcontact.contact.interface import InterfaceGrid
 from roughcontact.contact.nondim import CellOptions, to_physical
@@ -64,11 +64,12 @@ def matrix():
 def test_a_sweep_records_the_probe_at_every_step(matrix, method):
     gaps = _separations()
     approaches = np.linspace(0.3e-6, 2.0e-6, 5)
-    plain = sweep(matrix, gaps, approaches, method=method, element_area=SPACING[0] ** 2,
-                  interface=InterfaceGrid(SPACING), return_fields=True, stiffness=False)
-    probed = sweep(matrix, gaps, approaches, method=method, element_area=SPACING[0] ** 2,
-                   interface=InterfaceGrid(SPACING, probes=(GapCubed(),)), return_fields=True,
-                   stiffness=False)
+    plain = sweep(matrix, gaps, approaches, element_area=SPACING[0] ** 2,
+                  interface=InterfaceGrid(SPACING),
+                  options=SolverOptions(method=method, return_fields=True, stiffness=False))
+    probed = sweep(matrix, gaps, approaches, element_area=SPACING[0] ** 2,
+                   interface=InterfaceGrid(SPACING, probes=(GapCubed(),)),
+                   options=SolverOptions(method=method, return_fields=True, stiffness=False))
     columns = probed.probe_columns
     assert list(columns) == ["mean_gap_cubed", "separation", "touching"]
     assert columns["touching"].dtype == bool and columns["separation"].shape == (3, 5)
@@ -97,8 +98,8 @@ def cell_sweep():
     geometry = type("Block", (), {"thickness": 5e-3, "element_area": SPACING[0] ** 2,
                                   "size": (SIZE, SIZE), "grid": (N, N)})()
     unit = halfspace_influence((N, N), (SIZE, SIZE), 1.0, 0.3)
-    options = CellOptions(method="pivot", batch_size=2,
-                          interface=InterfaceGrid(SPACING, probes=(GapCubed(),)))
+    options = CellOptions().with_(method="pivot", batch_size=2,
+                                  interface=InterfaceGrid(SPACING, probes=(GapCubed(),)))
     return cell_module.sweep_cell(unit, heights, geometry, 0.5, 12, options=options)
 
 

@@ -6,6 +6,7 @@ Cholesky-transformed problem, min 1/2 |L^T p - L^-1 b|^2 over p >= 0 with
 C = L L^T, b = d - f, which has the same minimizer as Eq 27.
 """
 
+import dataclasses
 import logging
 
 import numpy as np
@@ -13,7 +14,14 @@ import pytest
 import scipy.linalg
 import scipy.optimize
 
-from roughcontact.contact import kkt_residual, solve, solve_many, sweep, tangent_stiffness
+from roughcontact.contact import (
+    SolverOptions,
+    kkt_residual,
+    solve,
+    solve_many,
+    sweep,
+    tangent_stiffness,
+)
 from roughcontact.contact.references import hertz
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
 
@@ -57,7 +65,7 @@ def test_hertz_periodic_half_space():
     # convention of the periodic operator (which shifts d) does not enter.
     n, dx, radius = 128, 1e-6, 1e-2
     op = PeriodicHalfSpace((n, n), (n * dx, n * dx), E, NU)
-    result = solve(op, paraboloid(n, dx, radius), 3e-8, tol=1e-10)
+    result = solve(op, paraboloid(n, dx, radius), 3e-8, options=SolverOptions(tol=1e-10))
     assert result.converged
     expected = hertz(result.load, radius, E_STAR)
     a_hertz, p0_hertz = expected.a, expected.p0
@@ -75,8 +83,8 @@ def test_hertz_dense_half_space(method):
     n, dx, radius = 40, 1e-6, 1e-2
     C = halfspace_influence((n, n), (n * dx, n * dx), E, NU)
     approach = (16 * dx) ** 2 / radius
-    result = solve(C, paraboloid(n, dx, radius), approach, method=method,
-                   element_area=dx * dx)
+    result = solve(C, paraboloid(n, dx, radius), approach, element_area=dx * dx,
+                   options=SolverOptions(method=method))
     assert result.converged
     expected = hertz(result.load, radius, E_STAR)
     a_hertz, p0_hertz = expected.a, expected.p0
@@ -96,8 +104,8 @@ def test_diagonal_operator(method):
     compliance = rng.uniform(1e-12, 5e-12, 50)
     gap0 = rng.uniform(0.0, 2e-6, 50)
     approach = 1e-6
-    result = solve(np.diag(compliance), gap0, approach, method=method, element_area=1e-8,
-                   tol=1e-14)
+    result = solve(np.diag(compliance), gap0, approach, element_area=1e-8,
+                   options=SolverOptions(method=method, tol=1e-14))
     expected = np.maximum(approach - gap0, 0.0) / compliance
     np.testing.assert_allclose(result.pressure, expected, rtol=1e-12, atol=0.0)
     assert result.converged
@@ -109,7 +117,7 @@ def test_first_touch_single_element(method, small_problem):
     gap0 = gaps[0].ravel()
     second = np.sort(gap0)[1]  # gap of the next-highest element
     approach = 0.5 * second
-    result = solve(C, gap0, approach, method=method, element_area=area)
+    result = solve(C, gap0, approach, element_area=area, options=SolverOptions(method=method))
     k = int(np.argmin(gap0))
     assert result.converged
     assert np.count_nonzero(result.pressure) == 1
@@ -131,7 +139,8 @@ def test_full_contact(method, small_problem):
     approach = 30 * gap0.max()
     expected = np.linalg.solve(C, approach - gap0)
     assert (expected > 0).all()
-    result = solve(C, gap0, approach, method=method, element_area=area, tol=1e-10)
+    result = solve(C, gap0, approach, element_area=area,
+                   options=SolverOptions(method=method, tol=1e-10))
     assert result.converged
     assert result.real_area_fraction == 1.0
     np.testing.assert_allclose(result.pressure, expected, rtol=1e-7)
@@ -147,7 +156,8 @@ def test_random_problems_match_nnls(method, approach, small_problem):
     C, gaps, area = small_problem
     for gap0 in gaps:
         reference = nnls_reference(C, gap0, approach)
-        result = solve(C, gap0, approach, method=method, element_area=area, tol=1e-12)
+        result = solve(C, gap0, approach, element_area=area,
+                       options=SolverOptions(method=method, tol=1e-12))
         assert result.converged
         error = np.abs(result.pressure.ravel() - reference).max() / reference.max()
         assert error < 1e-8
@@ -163,16 +173,17 @@ def test_periodic_operator_matches_nnls():
     z = rng.standard_normal((n, n)) * 1e-6
     gap0 = z.max() - z
     reference = nnls_reference(dense, gap0, 1.5e-6)
-    result = solve(op, gap0, 1.5e-6, tol=1e-12)
+    result = solve(op, gap0, 1.5e-6, options=SolverOptions(tol=1e-12))
     error = np.abs(result.pressure.ravel() - reference).max() / reference.max()
     assert result.converged and error < 1e-8
 
 
 def test_mixed_precision_meets_tolerance(small_problem):
     C, gaps, area = small_problem
-    double = solve(C, gaps[2], 3e-6, method="cg", element_area=area, tol=1e-11)
-    mixed = solve(C, gaps[2], 3e-6, method="cg", element_area=area, tol=1e-11,
-                  precision="mixed")
+    double = solve(C, gaps[2], 3e-6, element_area=area,
+                   options=SolverOptions(method="cg", tol=1e-11))
+    mixed = solve(C, gaps[2], 3e-6, element_area=area,
+                  options=SolverOptions(method="cg", tol=1e-11, precision="mixed"))
     assert mixed.converged and mixed.residual <= 1e-11
     assert kkt_residual(C, gaps[2], 3e-6, mixed.pressure) <= 1e-11
     np.testing.assert_allclose(mixed.pressure, double.pressure, rtol=0,
@@ -213,9 +224,10 @@ def test_warm_start_agrees_with_cold(small_problem):
     C, gaps, area = small_problem
     first = solve(C, gaps[0], 2e-6, element_area=area)
     for method in ("cg", "steepest", "exact"):
-        cold = solve(C, gaps[0], 2.5e-6, element_area=area, method=method, tol=1e-10)
-        warm = solve(C, gaps[0], 2.5e-6, element_area=area, method=method, tol=1e-10,
-                     p0=first.pressure)
+        cold = solve(C, gaps[0], 2.5e-6, element_area=area,
+                     options=SolverOptions(method=method, tol=1e-10))
+        warm = solve(C, gaps[0], 2.5e-6, element_area=area, p0=first.pressure,
+                     options=SolverOptions(method=method, tol=1e-10))
         assert cold.converged and warm.converged
         np.testing.assert_allclose(warm.pressure, cold.pressure, rtol=0,
                                    atol=1e-7 * cold.max_pressure)
@@ -225,10 +237,11 @@ def test_warm_start_agrees_with_cold(small_problem):
 def test_solve_many_equals_loop(method, small_problem):
     C, gaps, area = small_problem
     approaches = np.array([1e-6, 3e-6, 0.0])
-    batch = solve_many(C, gaps, approaches, method=method, element_area=area)
+    batch = solve_many(C, gaps, approaches, element_area=area, options=SolverOptions(method=method))
     assert len(batch) == 3
     for j, result in enumerate(batch):
-        single = solve(C, gaps[j], approaches[j], method=method, element_area=area)
+        single = solve(C, gaps[j], approaches[j], element_area=area,
+                       options=SolverOptions(method=method))
         assert result.converged == single.converged
         assert result.approach == approaches[j]
         np.testing.assert_allclose(result.pressure, single.pressure, rtol=0,
@@ -246,7 +259,8 @@ def test_solve_many_flat_and_scalar_approach(small_problem):
 def test_sweep_matches_solve_and_is_monotone(small_problem):
     C, gaps, area = small_problem
     approaches = np.linspace(0.5e-6, 5e-6, 6)
-    result = sweep(C, gaps, approaches, element_area=area, return_fields=True)
+    result = sweep(C, gaps, approaches, element_area=area,
+                   options=SolverOptions(return_fields=True))
     assert result.load.shape == (3, 6)
     assert result.pressure.shape == (3, 6, 20, 20)
     assert result.converged.all() and result.stiffness_converged.all()
@@ -272,15 +286,18 @@ def test_sweep_matches_solve_and_is_monotone(small_problem):
 def test_tangent_stiffness_matches_finite_difference(small_problem):
     C, gaps, area = small_problem
     approach, h = 3e-6, 1e-12
-    below = solve(C, gaps[0], approach - h, element_area=area, method="exact")
-    above = solve(C, gaps[0], approach + h, element_area=area, method="exact")
-    centre = solve(C, gaps[0], approach, element_area=area, method="exact")
+    below = solve(C, gaps[0], approach - h, element_area=area,
+                  options=SolverOptions(method="exact"))
+    above = solve(C, gaps[0], approach + h, element_area=area,
+                  options=SolverOptions(method="exact"))
+    centre = solve(C, gaps[0], approach, element_area=area, options=SolverOptions(method="exact"))
     # Same contact set at both ends, so the load is linear in d in between.
     assert np.array_equal(below.pressure > 0, above.pressure > 0)
     finite_difference = (above.load - below.load) / (2 * h)
     stiffness = tangent_stiffness(C, centre.pressure, element_area=area, tol=1e-12)
     assert stiffness == pytest.approx(finite_difference, rel=1e-5)
-    swept = sweep(C, gaps[:1], [approach], element_area=area, stiffness_tol=1e-10)
+    swept = sweep(C, gaps[:1], [approach], element_area=area,
+                  options=SolverOptions(stiffness_tol=1e-10))
     assert swept.contact_stiffness[0, 0] == pytest.approx(finite_difference, rel=1e-5)
 
 
@@ -298,7 +315,7 @@ def test_tangent_stiffness_full_contact_is_closed_form(small_problem):
 def test_non_convergence_warns_and_returns(small_problem, caplog):
     C, gaps, area = small_problem
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = solve(C, gaps[0], 4e-6, element_area=area, max_iter=2)
+        result = solve(C, gaps[0], 4e-6, element_area=area, options=SolverOptions(max_iter=2))
     assert not result.converged
     assert np.isfinite(result.residual) and result.residual > result.tol
     assert np.isfinite(result.pressure).all() and (result.pressure >= 0).all()
@@ -326,10 +343,12 @@ def test_non_convergence_warns_and_returns(small_problem, caplog):
 )
 def test_bad_input_names_argument(change, name, small_problem):
     C, gaps, area = small_problem
+    fields = {field.name for field in dataclasses.fields(SolverOptions)}
     arguments = dict(gap0=gaps[0], approach=1e-6, element_area=area)
-    arguments.update(change)
+    arguments.update({key: value for key, value in change.items() if key not in fields})
+    options = {key: value for key, value in change.items() if key in fields}
     with pytest.raises(ValueError, match=name):
-        solve(C, **arguments)
+        solve(C, **arguments, options=SolverOptions(**options))
 
 
 def test_bad_operator_rejected(small_problem):
@@ -346,7 +365,7 @@ def test_bad_operator_rejected(small_problem):
     indefinite[0, 1] = indefinite[1, 0] = 2 * C[0, 0]
     gap0 = np.zeros(400)
     with pytest.raises(ValueError, match="operator must be positive definite"):
-        solve(indefinite, gap0, 1e-6, element_area=area, method="exact")
+        solve(indefinite, gap0, 1e-6, element_area=area, options=SolverOptions(method="exact"))
     with pytest.raises(ValueError, match="operator must be a square"):
         solve(C[:, :399], gaps[0], 1e-6, element_area=area)
     bad = C.copy()
@@ -388,9 +407,9 @@ def test_sweep_extrapolation_same_solution_fewer_iterations(small_problem, stiff
     """The predictor (tangent or secant dp/dd) changes the start, not the solution."""
     C, gaps, area = small_problem
     approaches = np.linspace(0.5e-6, 5e-6, 10)
-    runs = [sweep(C, gaps, approaches, method="cg", element_area=area, tol=1e-10,
-                  stiffness=stiffness, stiffness_tol=1e-10, extrapolate=flag,
-                  return_fields=True)
+    runs = [sweep(C, gaps, approaches, element_area=area,
+                  options=SolverOptions(method="cg", tol=1e-10, stiffness=stiffness,
+                                        stiffness_tol=1e-10, extrapolate=flag, return_fields=True))
             for flag in (True, False)]
     predicted, plain = runs
     assert predicted.converged.all() and plain.converged.all()
@@ -429,8 +448,9 @@ def test_sweep_extrapolation_nonconvergence_is_flagged_not_nan(small_problem, ca
     C, gaps, area = small_problem
     approaches = np.linspace(0.5e-6, 5e-6, 4)
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = sweep(C, gaps, approaches, method="cg", element_area=area, max_iter=2,
-                       stiffness=False, retries=False)
+        result = sweep(C, gaps, approaches, element_area=area,
+                       options=SolverOptions(method="cg", max_iter=2, stiffness=False,
+                                             retries=False))
     assert not result.converged[:, 1:].all()
     assert np.isfinite(result.load).all() and np.isfinite(result.residual).all()
     assert "did not converge" in caplog.text

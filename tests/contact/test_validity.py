@@ -10,8 +10,9 @@ for the (sigma, E, H) of its H L / (E sigma).
 import numpy as np
 import pytest
 
+from roughcontact.contact import SolverOptions, nondim, sweep, validity
 from roughcontact.contact import cell as cell_module
-from roughcontact.contact import nondim, sweep, validity
+from roughcontact.contact.nondim import CellOptions
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.synthetic import generate_many
@@ -51,8 +52,9 @@ def fields(heights, unit_influence):
     """A dimensionless sweep with its profiles and its full pressure fields."""
     gaps = nondim.initial_separation(heights)
     approaches = np.geomspace(0.05, 3.0, 8)
-    result = sweep(unit_influence / LENGTH, gaps, approaches, method="pivot", tol=1e-10,
-                   element_area=1.0 / gaps.shape[1], return_fields=True, profile=True)
+    result = sweep(unit_influence / LENGTH, gaps, approaches, element_area=1.0 / gaps.shape[1],
+                   options=SolverOptions(method="pivot", tol=1e-10, return_fields=True,
+                                         profile=True))
     return result, result.pressure.reshape(*result.pressure.shape[:2], -1)
 
 
@@ -116,16 +118,18 @@ def test_where_nothing_exceeds_H_the_capped_solve_is_the_elastic_one(heights, un
     """The check is free because it is enough: below H the cap changes nothing."""
     approaches = np.geomspace(0.05, 1.0, 5)
     elastic = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                                approaches=approaches, method="pivot", tol=1e-10,
-                                profile=True)
+                                approaches=approaches,
+                                options=CellOptions().with_(method="pivot", tol=1e-10,
+                                                            profile=True))
     H = 1.01 * elastic.max_pressure.max()
     shares = validity.fractions_above(elastic.profile_ranks, elastic.pressure_profile,
                                       elastic.load_profile, elastic.real_area_fraction,
                                       elastic.nominal_pressure, H)
     assert (shares["area_above"] == 0.0).all()
     capped = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                               approaches=approaches, method="pivot", tol=1e-10,
-                               nondim_hardness=H)
+                               approaches=approaches,
+                               options=CellOptions().with_(method="pivot", tol=1e-10,
+                                                           nondim_hardness=H))
     assert (capped.plastic_area_fraction == 0.0).all()
     np.testing.assert_allclose(capped.nominal_pressure, elastic.nominal_pressure, rtol=1e-9)
     np.testing.assert_allclose(capped.normalized_stiffness, elastic.normalized_stiffness,
@@ -136,12 +140,14 @@ def test_the_capped_plastic_area_follows_the_elastic_share_above_H(heights, unit
     """Above H, the elastic share is the first estimate of the saturated area."""
     approaches = np.geomspace(0.05, 1.0, 5)
     elastic = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                                approaches=approaches, method="pivot", tol=1e-10,
-                                profile=True)
+                                approaches=approaches,
+                                options=CellOptions().with_(method="pivot", tol=1e-10,
+                                                            profile=True))
     H = 0.5 * elastic.max_pressure[:, -1].min()
     capped = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                               approaches=approaches, method="pivot", tol=1e-10,
-                               nondim_hardness=H)
+                               approaches=approaches,
+                               options=CellOptions().with_(method="pivot", tol=1e-10,
+                                                           nondim_hardness=H))
     shares = validity.fractions_above(elastic.profile_ranks, elastic.pressure_profile,
                                       elastic.load_profile, elastic.real_area_fraction,
                                       elastic.nominal_pressure, H)
@@ -156,7 +162,8 @@ def test_the_capped_plastic_area_follows_the_elastic_share_above_H(heights, unit
 def test_validity_table_reads_physical_hardness(heights, unit_influence):
     geometry = type("Body", (), {"thickness": LENGTH, "element_area": AREA,
                                  "size": (SIZE, SIZE), "grid": (GRID, GRID)})()
-    nd = cell_module.sweep_cell(unit_influence, heights, geometry, 0.3, 8, method="pivot")
+    nd = cell_module.sweep_cell(unit_influence, heights, geometry, 0.3, 8,
+                                options=cell_module.SWEEP_OPTIONS.with_(method="pivot"))
     sigma, E = 20e-6, 200e6
     scale = E * sigma / LENGTH
     levels = np.array([nd.nominal_pressure[:, -1].min() * scale])
@@ -179,7 +186,8 @@ def test_a_capped_sweep_refuses_a_rescaling_that_changes_its_cap(heights, unit_i
     sigma, E, H = 20e-6, 200e6, 30e6
     cap = cell_module.nondim_pressure(H, thickness=LENGTH, E=E, sigma=sigma)
     nd = nondim.solve_cell(unit_influence, heights[:1], thickness=LENGTH, element_area=AREA,
-                           approaches=[0.2, 0.5], nondim_hardness=cap, method="pivot")
+                           approaches=[0.2, 0.5],
+                           options=CellOptions().with_(nondim_hardness=cap, method="pivot"))
     physical = nondim.to_physical(nd, sigma, E, hardness=H)
     assert physical.hardness == H and physical.max_pressure.max() <= H * (1 + 1e-9)
     # doubling sigma and E quadruples E sigma: the same H is a quarter of the cap, refused
@@ -200,11 +208,13 @@ def test_plastic_load_is_the_saturated_elements_times_H_over_the_load(heights, u
     cap = cell_module.nondim_pressure(H, thickness=LENGTH, E=E, sigma=sigma)
     gaps = nondim.initial_separation(heights)
     nd = nondim.solve_cell(unit_influence, heights, thickness=LENGTH, element_area=AREA,
-                           approaches=[0.3, 1.0], nondim_hardness=cap, method="pivot")
+                           approaches=[0.3, 1.0],
+                           options=CellOptions().with_(nondim_hardness=cap, method="pivot"))
     physical = nondim.to_physical(nd, sigma, E, hardness=H)
     # counted on the fields of the same capped problem, solved in SI units
     result = sweep(unit_influence / E, gaps * sigma, np.array([0.3, 1.0]) * sigma,
-                   method="pivot", element_area=AREA, hardness=H, return_fields=True, tol=1e-10)
+                   element_area=AREA, hardness=H,
+                   options=SolverOptions(method="pivot", return_fields=True, tol=1e-10))
     p = result.pressure.reshape(*result.pressure.shape[:2], -1)
     saturated = np.where(p >= H * (1 - 1e-12), p, 0.0).sum(axis=-1) / p.sum(axis=-1)
     np.testing.assert_allclose(physical.plastic_load_fraction, saturated, rtol=1e-9, atol=1e-12)

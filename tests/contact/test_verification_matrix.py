@@ -29,7 +29,7 @@ import pytest
 import verification as V
 
 from roughcontact import contact
-from roughcontact.contact import counterface
+from roughcontact.contact import SolverOptions, counterface
 from roughcontact.contact.references import hertz, sphere_gap, westergaard_pressure
 from roughcontact.elasticity.halfspace import (
     PeriodicHalfSpace,
@@ -113,19 +113,20 @@ def test_flat_punch_on_every_mesh(punch_blocks, method, control, capped):
     for mesh, op in punch_blocks.items():
         if method == "pcg" and capped:
             with pytest.raises(ValueError, match="does not solve the capped problem"):
-                contact.solve(op, flat, d, method=method, hardness=hardness)
+                contact.solve(op, flat, d, hardness=hardness, options=SolverOptions(method=method))
             continue
         unit = np.linalg.solve(op.matrix, np.ones(16))  # C^-1 1 [Pa/m], numpy
         exact_rows = mesh in ("paper", "graded")
         assert unit.mean() * PUNCH_L / PUNCH_E == pytest.approx(
             1.0, rel=1e-9 if exact_rows else 1e-2), mesh
         if control == "approach":
-            result = contact.solve(op, flat, d, method=method, hardness=hardness, tol=1e-12)
+            result = contact.solve(op, flat, d, hardness=hardness,
+                                   options=SolverOptions(method=method, tol=1e-12))
             expected_p, expected_d = (hardness if capped else d * unit), d
         else:
             load = 0.25 * full
-            result = contact.solve(op, flat, mean_pressure=load, method=method,
-                                   hardness=hardness, tol=1e-12)
+            result = contact.solve(op, flat, mean_pressure=load, hardness=hardness,
+                                   options=SolverOptions(method=method, tol=1e-12))
             expected_p, expected_d = load * unit / unit.mean(), load / unit.mean()
         assert result.converged, (mesh, result.residual)
         assert result.real_area_fraction == 1.0
@@ -161,10 +162,10 @@ def test_westergaard_on_elongated_cells(kind, method, control):
     half_width = 16.5 * dx
     load = np.pi * e_star * amplitude / wavelength * np.sin(np.pi * half_width / wavelength) ** 2
     if control == "load":
-        result = contact.solve(op, gap, mean_pressure=load, method=method)
+        result = contact.solve(op, gap, mean_pressure=load, options=SolverOptions(method=method))
     else:
-        at_load = contact.solve(op, gap, mean_pressure=load, method="exact")
-        result = contact.solve(op, gap, at_load.approach, method=method)
+        at_load = contact.solve(op, gap, mean_pressure=load, options=SolverOptions(method="exact"))
+        result = contact.solve(op, gap, at_load.approach, options=SolverOptions(method=method))
     assert result.converged
     profile = result.pressure[0] if kind.startswith("periodic") else result.pressure[:, 0]
     expected = westergaard_pressure(s, wavelength, half_width, load)
@@ -193,11 +194,12 @@ def test_hertz_on_the_half_space(kind, method, control):
     gap = sphere_gap(HERTZ_N, HERTZ_DX, HERTZ_RADIUS)
     approach = (8 * HERTZ_DX) ** 2 / HERTZ_RADIUS
     if control == "approach":
-        result = contact.solve(op, gap, approach, method=method, element_area=HERTZ_DX**2)
+        result = contact.solve(op, gap, approach, element_area=HERTZ_DX**2,
+                               options=SolverOptions(method=method))
     else:
         load = 4.0 / 3.0 * e_star * HERTZ_RADIUS**0.5 * approach**1.5 / size[0] / size[1]
-        result = contact.solve(op, gap, mean_pressure=load, method=method,
-                               element_area=HERTZ_DX**2)
+        result = contact.solve(op, gap, mean_pressure=load, element_area=HERTZ_DX**2,
+                               options=SolverOptions(method=method))
     assert result.converged
     expected = hertz(result.load, HERTZ_RADIUS, e_star)
     a = np.sqrt(np.count_nonzero(result.pressure) * HERTZ_DX**2 / np.pi)
@@ -224,8 +226,8 @@ def test_two_half_spaces_are_one_of_the_composite_modulus(method, control):
     case = V.cases(chosen, capped=False)[0]
     keys = ({"approach": case.approach} if control == "approach"
             else {"mean_pressure": case.mean_pressure})
-    both = contact.solve(pair, case.gap, method=method, **keys)
-    one = contact.solve(single, case.gap, method=method, **keys)
+    both = contact.solve(pair, case.gap, **keys, options=SolverOptions(method=method))
+    one = contact.solve(single, case.gap, **keys, options=SolverOptions(method=method))
     assert both.converged and one.converged
     np.testing.assert_array_equal(both.contact_set, one.contact_set)
     assert np.abs(both.pressure - one.pressure).max() <= 1e-6 * one.max_pressure

@@ -44,7 +44,7 @@ import scipy.linalg
 import scipy.optimize
 
 from roughcontact import contact
-from roughcontact.contact import counterface
+from roughcontact.contact import SolverOptions, counterface
 from roughcontact.elasticity.halfspace import (
     PeriodicHalfSpace,
     SpectralHalfSpace,
@@ -210,8 +210,8 @@ def rough_gap(body: Body, seed: int, slope: float) -> np.ndarray:
 def _exact(body: Body, gap, *, approach=None, mean_pressure=None, hardness=None):
     """Block principal pivoting's solution (a case's target, not a referee)."""
     result = contact.solve(body.operator, gap, approach, mean_pressure=mean_pressure,
-                           method="exact", tol=1e-12, hardness=hardness,
-                           element_area=body.size[0] * body.size[1] / body.n)
+                           hardness=hardness, element_area=body.size[0] * body.size[1] / body.n,
+                           options=SolverOptions(method="exact", tol=1e-12))
     if not result.converged:
         raise RuntimeError(f"{body.name}: the case's exact solution did not converge "
                            f"(KKT residual {result.residual:.3g})")
@@ -356,9 +356,10 @@ def verify(body: Body, method: str, control: str, case: Case, retries: bool = Tr
                     else {"mean_pressure": case.mean_pressure})
     start = time.perf_counter()
     try:
-        result = contact.solve(body.operator, case.gap, method=method, tol=TOL,
-                               load_tol=LOAD_TOL, hardness=case.hardness, element_area=area,
-                               retries=retries, **control_keys)
+        result = contact.solve(body.operator, case.gap, hardness=case.hardness,
+                               element_area=area, **control_keys,
+                               options=SolverOptions(method=method, tol=TOL, load_tol=LOAD_TOL,
+                                                     retries=retries))
     except ValueError as error:
         return Verdict(**keys, refused=str(error))
     seconds = time.perf_counter() - start

@@ -7,6 +7,7 @@ import pytest
 from scipy import integrate, special
 
 from roughcontact import contact
+from roughcontact.contact import SolverOptions
 from roughcontact.contact.references import westergaard_pressure
 from roughcontact.elasticity.halfspace import (
     PeriodicHalfSpace,
@@ -264,7 +265,8 @@ def test_periodic_wavy_contact_is_westergaard(n_long, n_short, long_axis):
     half_width = 64.5 * dx
     p_star = np.pi * E_STAR * amplitude / wavelength
     mean_pressure = p_star * np.sin(np.pi * half_width / wavelength) ** 2
-    result = contact.solve(op, gap, mean_pressure=mean_pressure, method="pcg")
+    result = contact.solve(op, gap, mean_pressure=mean_pressure,
+                           options=SolverOptions(method="pcg"))
     assert result.converged
     pressure = result.pressure.reshape(gap.shape)
     profile = pressure[0] if long_axis == 1 else pressure[:, 0]

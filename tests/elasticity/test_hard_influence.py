@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from roughcontact import contact
+from roughcontact.contact import SolverOptions
 from roughcontact.elasticity.influence import (
     MESH_PRESETS,
     BlockGeometry,
@@ -84,8 +85,8 @@ def test_one_and_two_element_grids(grid, mesh):
     np.testing.assert_allclose(C.sum(axis=1), geom.thickness / geom.E, rtol=1e-10)
     # and the contact solver takes it: a flat punch presses uniformly, p = E d / L
     d = 1e-6
-    result = contact.solve(C, np.zeros(n), d, method="exact",
-                           element_area=geom.spacing[0] * geom.spacing[1])
+    result = contact.solve(C, np.zeros(n), d, element_area=geom.spacing[0] * geom.spacing[1],
+                           options=SolverOptions(method="exact"))
     assert result.converged
     np.testing.assert_allclose(result.pressure, geom.E * d / geom.thickness, rtol=1e-9)
 

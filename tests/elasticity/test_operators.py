@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from roughcontact import contact
+from roughcontact.contact import SolverOptions
 from roughcontact.elasticity import operators
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace, halfspace_influence
 from roughcontact.elasticity.hybrid import hybrid_unit_modulus_influence
@@ -79,8 +80,9 @@ def test_contact_with_operator_equals_contact_with_its_matrix(small_hybrid):
     rng = np.random.default_rng(3)
     gaps = rng.random((3, op.shape[0])) * 1e-5
     approach = np.array([2e-6, 4e-6, 6e-6])
-    a = contact.solve_many(op, gaps, approach, tol=1e-10)
-    b = contact.solve_many(dense, gaps, approach, tol=1e-10, element_area=op.element_area)
+    a = contact.solve_many(op, gaps, approach, options=SolverOptions(tol=1e-10))
+    b = contact.solve_many(dense, gaps, approach, element_area=op.element_area,
+                           options=SolverOptions(tol=1e-10))
     for ra, rb in zip(a, b, strict=True):
         assert ra.converged and rb.converged
         np.testing.assert_allclose(ra.pressure, rb.pressure, rtol=1e-6,

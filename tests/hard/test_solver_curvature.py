@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 from roughcontact import contact
+from roughcontact.contact import SolverOptions
 from roughcontact.contact.methods import REGISTRY
 from roughcontact.contact.products import Products
 from roughcontact.elasticity.protocol import DenseInfluence
@@ -48,7 +49,8 @@ def test_the_matrices_are_symmetric_indefinite_with_a_positive_diagonal():
 @pytest.mark.parametrize(("method", "matrix", "gap"), CASES)
 def test_exact_refuses_these_matrices(method, matrix, gap):
     with pytest.raises(ValueError, match=REFUSAL):
-        contact.solve(matrix, gap, APPROACH, method="exact", element_area=1.0)
+        contact.solve(matrix, gap, APPROACH, element_area=1.0,
+                      options=SolverOptions(method="exact"))
 
 
 def _iterate(method, matrix, gaps, approach=APPROACH, precision="double", p0=None,
@@ -72,7 +74,7 @@ def test_iteration_refuses_negative_curvature(method, matrix, gap):
 @pytest.mark.parametrize(("method", "matrix", "gap"), CASES)
 def test_entry_points_refuse_these_matrices_before_iterating(method, matrix, gap):
     with pytest.raises(ValueError, match=REFUSAL + r".*smallest about -"):
-        contact.solve(matrix, gap, APPROACH, method=method, element_area=1.0)
+        contact.solve(matrix, gap, APPROACH, element_area=1.0, options=SolverOptions(method=method))
 
 
 def test_mixed_precision_refuses_negative_curvature():
@@ -98,8 +100,8 @@ def test_batched_iteration_names_the_surface_with_negative_curvature(method, mat
 @pytest.mark.parametrize(("method", "matrix", "gap"), CASES)
 def test_sweep_refuses_negative_curvature(method, matrix, gap):
     with pytest.raises(ValueError, match=REFUSAL):
-        contact.sweep(matrix, gap[None], [APPROACH, 1.5 * APPROACH], method=method,
-                     element_area=1.0)
+        contact.sweep(matrix, gap[None], [APPROACH, 1.5 * APPROACH], element_area=1.0,
+                      options=SolverOptions(method=method))
 
 
 class _CountingOperator:
@@ -130,14 +132,18 @@ def test_positive_definite_solves_are_unchanged(method, condition, caplog):
     matrix = (basis * np.logspace(0.0, -np.log10(condition), n)) @ basis.T
     matrix = 0.5 * (matrix + matrix.T)
     gaps = rng.uniform(0.0, 1.0, (3, n))
-    reference = contact.solve_many(matrix, gaps, 0.5, method="exact", element_area=1.0)
+    reference = contact.solve_many(matrix, gaps, 0.5, element_area=1.0,
+                                   options=SolverOptions(method="exact"))
     operator = _CountingOperator(matrix)
-    contact.solve_many(operator, gaps[:1], 0.5, method=method, tol=1e-9)  # certified once
+    # certified once
+    contact.solve_many(operator, gaps[:1], 0.5, options=SolverOptions(method=method, tol=1e-9))
     operator.products = 0
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        results = contact.solve_many(operator, gaps, 0.5, method=method, tol=1e-9)
-        mixed = contact.solve_many(matrix, gaps, 0.5, method=method, tol=1e-9,
-                                  element_area=1.0, precision="mixed")
+        results = contact.solve_many(operator, gaps, 0.5,
+                                     options=SolverOptions(method=method, tol=1e-9))
+        mixed = contact.solve_many(matrix, gaps, 0.5, element_area=1.0,
+                                   options=SolverOptions(method=method, tol=1e-9,
+                                                         precision="mixed"))
     assert not caplog.records
     for result, fast, exact in zip(results, mixed, reference, strict=True):
         assert result.converged and fast.converged

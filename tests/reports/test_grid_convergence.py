@@ -18,6 +18,7 @@ import pytest
 from matplotlib.image import imread
 
 from roughcontact import contact
+from roughcontact.contact import SolverOptions
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 from roughcontact.errors import StoredFileError
 from roughcontact.reports.grid_convergence import (
@@ -147,7 +148,7 @@ def test_tiny_study_area_matches_a_direct_solve(tiny):
     operator = PeriodicHalfSpace((128, 128), (settings.size, settings.size), settings.E,
                                  settings.nu)
     result = contact.solve(operator, heights.max() - heights, sweep.approach[0, 2],
-                           tol=1e-10)
+                           options=SolverOptions(tol=1e-10))
     assert result.real_area_fraction == pytest.approx(sweep.real_area_fraction[0, 2], abs=2e-4)
     assert result.nominal_pressure == pytest.approx(sweep.nominal_pressure[0, 2], rel=1e-5)
 
