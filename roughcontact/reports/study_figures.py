@@ -44,9 +44,9 @@ def _counter_modelled(cell) -> bool:
 
 def two_bodies_label(cell) -> str:
     """Legend text of a cell of a two-bodies study (its rows of an aggregate table): its
-    counter body (:func:`~roughcontact.study.captions.counter_label`), and whether the
+    counter body (:func:`~roughcontact.study.plan.captions.counter_label`), and whether the
     contact job treated it as rigid (below ``rigid_share``: no share reported)."""
-    from roughcontact.study.captions import counter_label
+    from roughcontact.study.plan.captions import counter_label
 
     label = counter_label(cell.iloc[0])
     if label != "rigid smooth flat" and not _counter_modelled(cell):

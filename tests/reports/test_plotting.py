@@ -31,7 +31,7 @@ from roughcontact.reports.study_figures import (  # noqa: E402
     plot_leakage,
     plot_two_bodies,
 )
-from roughcontact.study import storage  # noqa: E402
+from roughcontact.study.jobs import storage  # noqa: E402
 
 
 def test_save_table_writes_the_csv_and_clears_stale_temporaries(tmp_path):
