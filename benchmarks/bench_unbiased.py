@@ -45,8 +45,8 @@ from scipy import stats  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from roughcontact.study.cells import study_plan  # noqa: E402
 from roughcontact.study.config import apply_schema  # noqa: E402
+from roughcontact.study.plan.cells import study_plan  # noqa: E402
 from roughcontact.study.settings import Study  # noqa: E402
 from roughcontact.surfaces import calibration, synthetic  # noqa: E402
 from roughcontact.surfaces.spec import SurfaceSpec  # noqa: E402

@@ -9,19 +9,20 @@ import re
 
 from snakemake.exceptions import IncompleteCheckpointException, WorkflowError
 
-from roughcontact.study import layout, resources
-from roughcontact.study.cells import (
+from roughcontact.study import layout
+from roughcontact.study.plan import resources
+from roughcontact.study.plan.cells import (
     figure_aggregates,
     figure_caption,
     figure_parameters,
     study_plan,
 )
-from roughcontact.study.checks import ConfigProblems
+from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.provenance import canonical_json
 from roughcontact.study.records import InfluenceModel
 from roughcontact.study.settings import Study, thawed
 from roughcontact.study.sources import spectrum_from_entry
-from roughcontact.study.storage import read_choice
+from roughcontact.study.jobs.storage import read_choice
 
 STUDY = Study.from_config(config)  # the validated configuration, typed (Snakefile)
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -83,7 +84,7 @@ def get_final_outputs():
 
 # ---- The plan's record of each job: its params, and what it asks a scheduler for ----
 # Memory [MB] and wall time [min] of every job, for schedulers that enforce them
-# (profiles/slurm): roughcontact.study.resources.JOB_COSTS by the kind of job, from the
+# (profiles/slurm): roughcontact.study.plan.resources.JOB_COSTS by the kind of job, from the
 # plan's record its wildcards name; a retry (`attempt`) asks for more time.
 
 RECORDS = {

@@ -1,7 +1,7 @@
 # Last stage: the paper's figures from papermill-parameterised notebooks. Each figure's
 # caption in the report (report/figure.rst) is written from the study's own settings
-# (params.caption: roughcontact.study.captions, named by the figure registry
-# roughcontact.study.figures).
+# (params.caption: roughcontact.study.plan.captions, named by the figure registry
+# roughcontact.study.plan.figures).
 
 
 rule figure:

@@ -1,9 +1,9 @@
 """Snakemake entry point of rule `aggregate`: a figure's or sweep's tables."""
 
 from roughcontact.study import layout
-from roughcontact.study.aggregation import aggregate_study
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.flow_settings import FlowSettings
+from roughcontact.study.jobs.aggregation import aggregate_study
 from roughcontact.study.logs import route_logging
 from roughcontact.study.probes import study_probes
 from roughcontact.study.provenance import RunInfo

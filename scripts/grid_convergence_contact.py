@@ -1,6 +1,6 @@
 """Snakemake entry point of rule `grid_convergence_contact`: the sweeps on one grid."""
 
-from roughcontact.study.grid_convergence import solve_grid
+from roughcontact.study.jobs.grid_convergence import solve_grid
 from roughcontact.study.logs import route_logging
 from roughcontact.study.provenance import RunInfo
 

@@ -1,6 +1,6 @@
 """Snakemake entry point of rule `grid_convergence_surfaces`: the study's surfaces on one grid."""
 
-from roughcontact.study.grid_convergence import build_grid_surfaces
+from roughcontact.study.jobs.grid_convergence import build_grid_surfaces
 from roughcontact.study.logs import route_logging
 from roughcontact.study.provenance import RunInfo
 

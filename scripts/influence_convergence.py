@@ -5,10 +5,10 @@ import logging
 
 from roughcontact.reports.convergence import influence_convergence, plot_influence_convergence
 from roughcontact.study.config import ConvergenceSettings
+from roughcontact.study.jobs.storage import check_parameters
 from roughcontact.study.logs import route_logging
 from roughcontact.study.provenance import atomic_path
 from roughcontact.study.records import Geometry
-from roughcontact.study.storage import check_parameters
 from roughcontact.units import MPA
 
 route_logging(snakemake.log[0])

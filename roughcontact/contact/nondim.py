@@ -177,7 +177,7 @@ def initial_separation(heights) -> np.ndarray:
     ----------
     heights : array_like, (m, ny, nx) or (m, n)
         Heights in units of sigma (``z / sigma``), as stored in
-        ``results/surfaces/<cell>.h5`` (:func:`roughcontact.study.storage.read_surfaces`).
+        ``results/surfaces/<cell>.h5`` (:func:`roughcontact.study.jobs.storage.read_surfaces`).
 
     Returns
     -------

@@ -33,18 +33,18 @@ from roughcontact.contact.plausibility import (
 )
 from roughcontact.errors import StoredFileError
 from roughcontact.study import layout
-from roughcontact.study.aggregation import validity_rows, validity_summary
-from roughcontact.study.contact_jobs import contact_problem, read_counter, sweep_problem
 from roughcontact.study.contact_records import ContactJob, StudyCell
-from roughcontact.study.jobs import certified_influence
-from roughcontact.study.provenance import atomic_path, git_commit
-from roughcontact.study.storage import (
+from roughcontact.study.jobs.aggregation import validity_rows, validity_summary
+from roughcontact.study.jobs.contact import contact_problem, read_counter, sweep_problem
+from roughcontact.study.jobs.influence import certified_influence
+from roughcontact.study.jobs.storage import (
     check_parameters,
     contact_datasets,
     read_contact,
     read_influence,
     read_surfaces,
 )
+from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.units import MPA
 
 log = logging.getLogger(__name__)

@@ -71,7 +71,7 @@ from roughcontact.reports.build_worker import HALFSPACE, build, centre_entries, 
 from roughcontact.reports.execution import dead_writers
 from roughcontact.reports.plotting import save_figure
 from roughcontact.study.config import BuildSettings, ConvergenceSettings
-from roughcontact.study.storage import read_influence
+from roughcontact.study.jobs.storage import read_influence
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.synthetic import derive_seeds, generate_many
 

@@ -1,7 +1,7 @@
 """Grid convergence of real contact area, peak pressure and the area-load slope kappa.
 
 The same self-affine surfaces with a short-wavelength cut-off, resolved on
-grids of ``g`` x ``g`` elements (:mod:`roughcontact.study.grid_convergence`
+grids of ``g`` x ``g`` elements (:mod:`roughcontact.study.jobs.grid_convergence`
 makes and solves them, on the periodic elastic half-space), are compared at
 fixed reduced nominal pressures ``p* = p0 / (E* h'_rms)``:
 
@@ -51,7 +51,8 @@ from roughcontact.contact import aggregate
 from roughcontact.contact.curves import PhysicalSweep
 from roughcontact.reports.convergence import richardson
 from roughcontact.reports.plotting import BANDS, positive_band, save_figure
-from roughcontact.study.grid_convergence import GridConvergenceSettings, read_grid_contact
+from roughcontact.study.config import GridConvergenceSettings
+from roughcontact.study.jobs.grid_convergence import read_grid_contact
 from roughcontact.study.provenance import atomic_path
 
 __all__ = ["KAPPA_REFERENCES", "QUANTITIES", "converged_grid", "extrapolate", "fit_kappa",
@@ -282,7 +283,7 @@ def grid_convergence_report(contact_paths: Sequence, csv_path, png_path) -> pd.D
     """Read the study's contact files (one per grid), write the table (CSV) and figure (PNG).
 
     Every file must belong to the same study (equal ``params`` and seeds) and
-    match its content hash (:func:`~roughcontact.study.grid_convergence.read_grid_contact`);
+    match its content hash (:func:`~roughcontact.study.jobs.grid_convergence.read_grid_contact`);
     otherwise ValueError naming the file. Returns the table
     (:func:`grid_convergence_table`).
     """

@@ -170,7 +170,7 @@ def surface_moments(files, sigma_um: float, cells=None):
     """
     import pandas as pd
 
-    from roughcontact.study.storage import read_surfaces
+    from roughcontact.study.jobs.storage import read_surfaces
 
     rows = []
     files = list(files)
@@ -193,7 +193,7 @@ def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3, cells=Non
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from roughcontact.study.storage import read_surfaces
+    from roughcontact.study.jobs.storage import read_surfaces
 
     files = list(files)
     columns = max(1, min(columns, len(files)))

@@ -44,9 +44,9 @@ def _counter_modelled(cell) -> bool:
 
 def two_bodies_label(cell) -> str:
     """Legend text of a cell of a two-bodies study (its rows of an aggregate table): its
-    counter body (:func:`~roughcontact.study.captions.counter_label`), and whether the
+    counter body (:func:`~roughcontact.study.plan.captions.counter_label`), and whether the
     contact job treated it as rigid (below ``rigid_share``: no share reported)."""
-    from roughcontact.study.captions import counter_label
+    from roughcontact.study.plan.captions import counter_label
 
     label = counter_label(cell.iloc[0])
     if label != "rigid smooth flat" and not _counter_modelled(cell):
@@ -159,14 +159,20 @@ def load_percolation(paths, names) -> dict:
     """The percolation thresholds of several studies by name (the sidecar's
     ``flow.percolation`` of each :data:`AGGREGATE_FILES` paths of ``paths``, as a table
     per study: one row per cell and flow direction; the sidecar checked as by
-    :func:`load_aggregates`)."""
+    :func:`load_aggregates`). A study solved without the flow has none to draw: refused,
+    naming its sidecar (the workflow refuses such a figure when it is planned)."""
     import pandas as pd
 
     paths, names = list(paths), list(names)
     found = {}
     for k, name in enumerate(names):
-        meta = load_aggregates(paths[AGGREGATE_FILES * k:AGGREGATE_FILES * (k + 1)])[2]
-        rows = meta.get("flow", {}).get("percolation", [])
+        files = paths[AGGREGATE_FILES * k:AGGREGATE_FILES * (k + 1)]
+        meta = load_aggregates(files)[2]
+        if "flow" not in meta:
+            raise ValueError(f"{files[2]}: study {name!r} was solved without the flow "
+                             f"(flow.enabled: false), so it has no percolation thresholds "
+                             f"to draw; solve it with the flow on")
+        rows = meta["flow"]["percolation"]
         found[name] = pd.DataFrame(rows).astype({key: float for key in _THRESHOLD_KEYS
                                                  if rows})
     return found

@@ -22,6 +22,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
+from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.transport.probe import NO_FLOW, FlowProbe, probe_from_params
 from roughcontact.units import GB, MM, MPA, UM
 
@@ -404,3 +407,72 @@ class SpeedReportSettings:
                    counts=tuple(int(c) for c in section["counts"]),
                    tol_kP=float(section["tol_kP"]), tol_area=float(section["tol_area"]),
                    pressures=tuple(float(p) * MPA for p in section["pressures_MPa"]))
+
+
+#: Pilot sweep on the coarsest grid: approaches as fractions of the mean initial gap.
+PILOT_FRACTIONS = np.geomspace(0.1, 0.95, 24)
+
+
+@dataclass(frozen=True)
+class GridConvergenceSettings:
+    """The grid-convergence study (``reports.grid_convergence``), SI units.
+
+    ``grids`` (elements per side, ascending), ``surfaces`` seeds, square
+    ``size`` [m]; the self-affine spectrum (``hurst``, ``rolloff_wavelength``,
+    ``cutoff_wavelength`` [m]) and ``generator`` (``"paper"``: a Gaussian
+    process); each surface scaled to ``rms_gradient`` h'_rms [-]; the body's
+    ``E`` [Pa] and ``nu``; the ``reduced_pressures`` ``p0 / (E* h'_rms)`` [-]
+    read per grid; ``kappa_area`` the (lowest, highest) real area fraction of
+    the fit of kappa; ``steps`` approaches per sweep, contact ``tol``; and
+    ``converged_within``, the relative distance to the extrapolated value at
+    which an aggregate counts as converged.
+    """
+
+    grids: tuple[int, ...]
+    surfaces: int
+    size: float
+    hurst: float
+    rolloff_wavelength: float
+    cutoff_wavelength: float
+    generator: str
+    rms_gradient: float
+    E: float
+    nu: float
+    reduced_pressures: tuple[float, ...]
+    kappa_area: tuple[float, float]
+    steps: int
+    tol: float
+    converged_within: float
+
+    @classmethod
+    def from_section(cls, section: dict) -> GridConvergenceSettings:
+        return cls(grids=tuple(sorted(int(g) for g in section["grids"])),
+                   surfaces=int(section["surfaces"]), size=float(section["size_mm"]) * MM,
+                   hurst=float(section["hurst"]),
+                   rolloff_wavelength=float(section["rolloff_mm"]) * MM,
+                   cutoff_wavelength=float(section["cutoff_mm"]) * MM,
+                   generator=str(section["generator"]),
+                   rms_gradient=float(section["rms_gradient"]),
+                   E=float(section["E_MPa"]) * MPA, nu=float(section["nu"]),
+                   reduced_pressures=tuple(sorted(float(p)
+                                                  for p in section["reduced_pressures"])),
+                   kappa_area=(float(section["kappa_area"][0]),
+                               float(section["kappa_area"][1])),
+                   steps=int(section["steps"]), tol=float(section["tol"]),
+                   converged_within=float(section["converged_within"]))
+
+    @property
+    def contact_modulus(self) -> float:
+        """``E* = E / (1 - nu^2)`` [Pa] (rigid flat on an elastic body)."""
+        return self.E / (1.0 - self.nu**2)
+
+    @property
+    def pressure_scale(self) -> float:
+        """``E* h'_rms`` [Pa]: nominal pressure = reduced pressure x this."""
+        return self.contact_modulus * self.rms_gradient
+
+    def spec(self, grid: int | None = None) -> SurfaceSpec:
+        """The surfaces' :class:`SurfaceSpec` (``sigma`` 1: the scale is ``rms_gradient``)."""
+        return SurfaceSpec(grid=grid or self.grids[0], size=self.size, acf="self-affine",
+                           hurst=self.hurst, rolloff_wavelength=self.rolloff_wavelength,
+                           cutoff_wavelength=self.cutoff_wavelength)

@@ -133,7 +133,7 @@ class StudyCell:
     are checked against (the share of real area and load above each, no extra
     solve), flagged beyond ``hardness_threshold``. ``counter_entry``: the configured
     counter body the plan made ``counterface`` of
-    (:class:`~roughcontact.study.counter_entries.CounterfaceEntry`, with the keys the
+    (:class:`~roughcontact.study.plan.counter_entries.CounterfaceEntry`, with the keys the
     plan's messages name; not a parameter of the cell).
     """
 

@@ -28,7 +28,6 @@ from roughcontact.study.records import (
     SurfaceCell,
     surface_cell_from_params,
 )
-from roughcontact.study.storage import read_surfaces
 from roughcontact.units import MM, MPA, UM
 
 # ---------------------------------------------------------------------------
@@ -75,7 +74,7 @@ class _Smooth:
     def files(self, study_seed=None) -> dict:
         return {}
 
-    def read(self, paths: dict, study_seed=None):
+    def read(self, paths: dict, reader, study_seed=None):
         return counterface.SMOOTH
 
     def bytes(self, count: int, n: int) -> float:
@@ -127,11 +126,11 @@ class RoughCounter:
                                             {"cell": self.cell.params(),
                                              "study_seed": study_seed})}
 
-    def read(self, paths: dict, study_seed=None) -> counterface.RoughSurface:
+    def read(self, paths: dict, reader, study_seed=None) -> counterface.RoughSurface:
         """The counter surface facing the first (:meth:`SurfaceCell.facing`), read from
-        its file (checked to have been made for it)."""
-        stored = read_surfaces(paths["counter_surfaces"], cell=self.cell.params(),
-                               study_seed=study_seed)
+        its file by ``reader`` (``surfaces(path, cell, study_seed)``: the stored surfaces,
+        checked to have been made for the cell)."""
+        stored = reader.surfaces(paths["counter_surfaces"], self.cell, study_seed)
         return self.cell.facing(stored["heights"], self.sigma_ratio, stored["content_sha256"])
 
     def bytes(self, count: int, n: int) -> float:
@@ -265,7 +264,7 @@ class ElasticCounter:
 @dataclass(frozen=True)
 class JobFile:
     """A file a job reads: its ``path`` and the parameters it must have been made for
-    (:func:`roughcontact.study.storage.check_parameters`), and the pair it holds."""
+    (:func:`roughcontact.study.jobs.storage.check_parameters`), and the pair it holds."""
 
     path: str
     made_for: dict
@@ -398,7 +397,7 @@ class Counterface:
         the job's files ``paths`` (each checked; ``reader`` as
         :meth:`ElasticCounter.read`), and the content hashes to record."""
         compliance, hashes = self.body.read(paths, first, self.rigid_share, reader)
-        return counterface.Body(self.surface.read(paths, study_seed), compliance,
+        return counterface.Body(self.surface.read(paths, reader, study_seed), compliance,
                                 self.rigid_share), hashes
 
     def time_factor(self, model: dict) -> float:
@@ -487,7 +486,7 @@ class PairGeometry:
     ``second``'s scaled by ``modulus_ratio`` E1 / E2, with the ``rigid_share`` that
     decides whether the second is treated as rigid. Its file
     (:func:`roughcontact.study.layout.pair`) is shared by every contact job on the
-    same pair (:func:`roughcontact.study.jobs.build_pair`)."""
+    same pair (:func:`roughcontact.study.jobs.influence.build_pair`)."""
 
     first: Geometry
     second: Geometry

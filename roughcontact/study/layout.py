@@ -19,7 +19,8 @@ parameter is a new file. Under :data:`ROOT`:
 from __future__ import annotations
 
 __all__ = ["AGGREGATE_EXTENSIONS", "ROOT", "aggregate", "aggregates", "choice", "contact",
-           "figure", "grid_contact", "grid_surfaces", "influence", "pair", "surfaces"]
+           "figure", "grid_contact", "grid_surfaces", "influence", "pair", "report",
+           "surfaces"]
 
 #: The folder of every output, relative to the working directory.
 ROOT = "results"
@@ -66,6 +67,11 @@ def aggregates(study: str) -> list[str]:
 def figure(name: str, extension: str) -> str:
     """A figure's file (png, pdf, the executed notebook ipynb, or a table's csv)."""
     return f"{ROOT}/figures/{name}.{extension}"
+
+
+def report(name: str) -> str:
+    """A report's file (``speed_vs_error.md``, ``influence_convergence.csv``, ...)."""
+    return f"{ROOT}/reports/{name}"
 
 
 def grid_surfaces(grid: int) -> str:

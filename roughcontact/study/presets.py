@@ -26,6 +26,8 @@ from types import MappingProxyType
 
 import yaml
 
+from roughcontact.study import layout
+
 #: The stored presets file of the source tree.
 PRESETS_FILE = Path(__file__).resolve().parents[2] / "config" / "accuracy_presets.yaml"
 
@@ -45,7 +47,7 @@ def load_presets(path: str | os.PathLike = PRESETS_FILE) -> MappingProxyType:
         raise FileNotFoundError(
             f"{path}: the accuracy presets file is missing; restore it from the repository "
             f"(git checkout -- config/accuracy_presets.yaml) or regenerate it with "
-            f"`snakemake --cores 2 results/reports/speed_vs_error.md`") from None
+            f"`snakemake --cores 2 {layout.report('speed_vs_error.md')}`") from None
     missing = {"accuracy_presets", "fallback_mesh_errors"} - set(data or {})
     if missing:
         raise ValueError(f"{path}: expected the sections accuracy_presets and "

@@ -4,7 +4,7 @@ The study cells, contact jobs and counter bodies built from them are in
 :mod:`roughcontact.study.contact_records`.
 
 Frozen dataclasses in SI units, built once from the validated configuration
-(:mod:`roughcontact.study.studies`, :func:`roughcontact.study.cells.study_plan`).
+(:mod:`roughcontact.study.plan.studies`, :func:`roughcontact.study.plan.cells.study_plan`).
 Each has its file key and its ``params()``: the plain, JSON-able form the
 workflow passes to a job (Snakemake compares it to decide reruns) and stores
 with the result, with the configuration's units (lengths in mm, sigma in um,
@@ -74,7 +74,7 @@ class Generator(Enum):
 #: seed's white noise is translated and filtered alone, and each surface's mean is taken
 #: alone), and the exact generator (each seed's IAAFT alone). The first k surfaces of any
 #: such cell are those of a larger cell of the same statistics key, bit for bit, and the
-#: workflow takes them from its file (:func:`roughcontact.study.cells.surfaces_from`).
+#: workflow takes them from its file (:func:`roughcontact.study.plan.cells.surfaces_from`).
 SEEDED_PER_SURFACE = frozenset({Generator.FILTER, Generator.PAPER, Generator.EXACT})
 
 

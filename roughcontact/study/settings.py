@@ -11,12 +11,12 @@ sections applied). Everything after the edge takes the study, or the part of
 it it needs, never the configuration's dict::
 
     study = load_study("config/quick.yaml")
-    plan = study_plan(study)          # roughcontact.study.cells
+    plan = study_plan(study)          # roughcontact.study.plan.cells
     plan.jobs                         # every contact job, by file key
 
 The values a figure or sweep writes (``moments``, ``b_mm``, ``sigma_um``, ...)
 stay as written in its section: the checks name them in the configuration's
-units, and the cells convert them (:mod:`roughcontact.study.studies`).
+units, and the cells convert them (:mod:`roughcontact.study.plan.studies`).
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from roughcontact.study.config import (
     BuildSettings,
     ContactSettings,
     ConvergenceSettings,
+    GridConvergenceSettings,
     SpeedReportSettings,
     as_pair,
     from_unit,
@@ -41,7 +42,6 @@ from roughcontact.study.config import (
 )
 from roughcontact.study.contact_records import Accuracy
 from roughcontact.study.flow_settings import FlowSettings, flow_settings
-from roughcontact.study.grid_convergence import GridConvergenceSettings
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.provenance import config_hash
 from roughcontact.study.records import GeneratedCell, Generator, Geometry

@@ -17,7 +17,7 @@ from roughcontact.contact import SolverOptions, sweep
 from roughcontact.contact.interface import InterfaceGrid
 from roughcontact.contact.probes import Probe, SolvedFields
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
-from roughcontact.study import storage
+from roughcontact.study.jobs import storage
 from roughcontact.transport import ARITHMETIC, FLOW_COLUMNS, NO_FLOW, FlowProbe
 
 N, SIZE, E = 32, 1.0e-3, 1.0e9

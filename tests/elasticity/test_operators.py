@@ -16,8 +16,8 @@ from roughcontact.elasticity.influence import BlockGeometry
 from roughcontact.elasticity.protocol import DenseInfluence, InfluenceOperator
 from roughcontact.study import jobs as pipeline
 from roughcontact.study.config import BuildSettings, validated
+from roughcontact.study.jobs.storage import influence_sha256, read_influence
 from roughcontact.study.records import Geometry
-from roughcontact.study.storage import influence_sha256, read_influence
 
 SIZE = (9e-3, 7.5e-3)
 

@@ -30,14 +30,13 @@ from roughcontact.reports.grid_convergence import (
     kappa_levels,
     plot_grid_convergence,
 )
-from roughcontact.study.config import validated
-from roughcontact.study.grid_convergence import (
-    GridConvergenceSettings,
+from roughcontact.study.config import GridConvergenceSettings, validated
+from roughcontact.study.jobs.grid_convergence import (
     build_grid_surfaces,
     read_grid_contact,
     solve_grid,
 )
-from roughcontact.study.storage import read_surfaces
+from roughcontact.study.jobs.storage import read_surfaces
 
 GRIDS = [32, 64, 128, 256]
 

@@ -31,7 +31,7 @@ from roughcontact.reports.study_figures import (  # noqa: E402
     plot_leakage,
     plot_two_bodies,
 )
-from roughcontact.study import storage  # noqa: E402
+from roughcontact.study.jobs import storage  # noqa: E402
 
 
 def test_save_table_writes_the_csv_and_clears_stale_temporaries(tmp_path):
@@ -415,7 +415,7 @@ def test_leakage_pressures_span_the_levels_where_every_cell_is_solved_and_one_le
 
 def test_load_percolation_reads_the_sidecars_thresholds(tmp_path):
     """The thresholds of each study from its sidecar (checked as the tables are), the
-    sidecar's nulls as NaN; a study without flow has none."""
+    sidecar's nulls as NaN; a study solved without the flow is refused, naming it."""
     paths = []
     for name, flow in (("seal", {"percolation": [
             {"cell": 0, "direction": "x", "area": 0.42, "area_low": 0.4, "area_high": 0.44,
@@ -429,7 +429,8 @@ def test_load_percolation_reads_the_sidecars_thresholds(tmp_path):
             meta["flow"] = flow
         (tmp_path / f"{name}.json").write_text(json.dumps(meta))
         paths += [table, moduli, tmp_path / f"{name}.json", tmp_path / f"{name}.validity.csv"]
-    found = load_percolation(paths, ["seal", "dry"])
+    found = load_percolation(paths[:4], ["seal"])
     assert found["seal"]["area"].tolist() == [0.42]
     assert np.isnan(found["seal"]["pressure_low_MPa"].iloc[0])
-    assert found["dry"].empty
+    with pytest.raises(ValueError, match=r"dry.json: study 'dry' was solved without the flow"):
+        load_percolation(paths, ["seal", "dry"])

@@ -20,9 +20,9 @@ from roughcontact.elasticity.influence import (
     build_mesh,
     shape_problems,
 )
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import validated
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.settings import Study
 
 PATCH_MM = (0.126, 0.0944)

@@ -3,8 +3,8 @@
 report/figure.rst's captions were fixed text: "left the paper's mesh, right
 the converged mesh" for Fig 7 and the mean gap, while config/quick.yaml
 draws the refined mesh on the right. They now come from the cells each
-figure draws (roughcontact.study.captions, named by the figure registry
-roughcontact.study.figures; the figure rule's params.caption), so that each is
+figure draws (roughcontact.study.plan.captions, named by the figure registry
+roughcontact.study.plan.figures; the figure rule's params.caption), so that each is
 true for every shipped config.
 """
 
@@ -14,10 +14,10 @@ from types import SimpleNamespace
 import jinja2
 import pytest
 
-from roughcontact.study.captions import counter_label, panels
-from roughcontact.study.cells import figure_caption, study_plan
 from roughcontact.study.config import load_config
-from roughcontact.study.figures import FIGURES, Kind
+from roughcontact.study.plan.captions import counter_label, panels
+from roughcontact.study.plan.cells import figure_caption, study_plan
+from roughcontact.study.plan.figures import FIGURES, Kind
 from roughcontact.study.settings import Study
 
 REPO = Path(__file__).resolve().parents[2]

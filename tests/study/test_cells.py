@@ -8,16 +8,16 @@ import yaml
 from scipy import ndimage
 
 from roughcontact.elasticity.influence import ModelTooLarge
-from roughcontact.study.cells import drawn_with, figure_aggregates, study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import BuildSettings, in_unit, load_config, validated
 from roughcontact.study.contact_records import ContactJob, StudyCell
-from roughcontact.study.jobs import build_influence
+from roughcontact.study.jobs.influence import build_influence
+from roughcontact.study.jobs.storage import read_influence
+from roughcontact.study.plan.cells import drawn_with, figure_aggregates, study_plan
+from roughcontact.study.plan.checks import ConfigProblems
+from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.records import Geometry, InfluenceModel, surface_cell_from_params
 from roughcontact.study.settings import Study
-from roughcontact.study.storage import read_influence
-from roughcontact.study.studies import contact_cells
 from roughcontact.units import MM, MPA, UM
 
 REPO = Path(__file__).resolve().parents[2]

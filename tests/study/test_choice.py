@@ -8,10 +8,10 @@ import pytest
 
 from roughcontact.elasticity import influence, operators
 from roughcontact.errors import StoredFileError
-from roughcontact.study import jobs
 from roughcontact.study.config import BuildSettings
+from roughcontact.study.jobs import influence as jobs
+from roughcontact.study.jobs.storage import read_choice
 from roughcontact.study.records import Geometry, InfluenceModel, coarse_geometry
-from roughcontact.study.storage import read_choice
 
 TOLERANCE = (("k_P", 0.02), ("max_pressure", 0.05), ("real_area", 0.05))
 

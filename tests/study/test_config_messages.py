@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from roughcontact.study.cells import study_plan
 from roughcontact.study.config import ConfigError, schema_errors, validated
+from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.records import MeasuredCell
 from roughcontact.study.settings import Study
 from roughcontact.units import MM

@@ -1,6 +1,6 @@
 """A generated surface shorter than two correlation lengths is refused when the plan is made.
 
-b <= L / 2 along each axis (:data:`~roughcontact.study.checks.MAX_CORRELATION_FRACTION`):
+b <= L / 2 along each axis (:data:`~roughcontact.study.plan.checks.MAX_CORRELATION_FRACTION`):
 the message names the study's b_mm and the size key the surface takes its side from
 (surfaces.size_mm, or the study's own size_mm), and each fix it offers plans.
 """
@@ -11,9 +11,9 @@ import re
 import pytest
 import yaml
 
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import validated
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.settings import Study
 
 #: 12 x 12 elements over the paper's 9 mm (0.75 mm spacing) and the paper's generator (no

@@ -17,10 +17,10 @@ import pytest
 import yaml
 from scipy import ndimage
 
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
-from roughcontact.study.counter_entries import BlockEntry, GeneratedEntry, counterface_entries
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
+from roughcontact.study.plan.counter_entries import BlockEntry, GeneratedEntry, counterface_entries
 from roughcontact.study.records import InfluenceModel
 from roughcontact.study.settings import Study
 

@@ -18,12 +18,12 @@ from scipy import ndimage
 from roughcontact.contact import counterface
 from roughcontact.contact.cell import BULK_FACTOR
 from roughcontact.elasticity.protocol import DenseInfluence
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
-from roughcontact.study.contact_jobs import contact_problem
 from roughcontact.study.contact_records import ContactJob, StudyCell
 from roughcontact.study.counter_records import NO_COUNTERFACE, RIGID
+from roughcontact.study.jobs.contact import contact_problem
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.settings import Study
 from roughcontact.surfaces.synthetic import derive_seeds
 

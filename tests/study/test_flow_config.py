@@ -7,10 +7,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ContactSettings, load_config, validated
 from roughcontact.study.flow_settings import FLOW_OFF, check_flow, flow_settings
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.probes import PROBE_KINDS, probes_from_attrs, study_probes
 from roughcontact.study.settings import Study
 from roughcontact.transport import ARITHMETIC, NO_FLOW, SEALED, FlowProbe

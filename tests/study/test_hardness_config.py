@@ -4,11 +4,11 @@ import copy
 
 import pytest
 
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import load_config, validated
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
+from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.settings import Study
-from roughcontact.study.studies import contact_cells
 
 STUDY = {"sigma_um": [10.0, 20.0], "b_mm": 0.5, "pressure_MPa": [0.1, 2.0]}
 BASE = {"study_seed": 0,

@@ -15,14 +15,14 @@ import pytest
 
 from roughcontact.elasticity import influence
 from roughcontact.errors import IndefiniteOperator
-from roughcontact.study import jobs
-from roughcontact.study.cells import study_plan
 from roughcontact.study.config import load_config
-from roughcontact.study.contact_jobs import solve_contact_job
-from roughcontact.study.jobs import build_influence
+from roughcontact.study.jobs import influence as jobs
+from roughcontact.study.jobs.contact import solve_contact_job
+from roughcontact.study.jobs.influence import build_influence
+from roughcontact.study.jobs.storage import read_contact, read_influence, write_influence
+from roughcontact.study.jobs.surfaces import build_surface_cell
+from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.settings import Study
-from roughcontact.study.storage import read_contact, read_influence, write_influence
-from roughcontact.study.surface_jobs import build_surface_cell
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -23,8 +23,11 @@ def loaded_after(module: str) -> list[str]:
     return proc.stdout.split()
 
 
-@pytest.mark.parametrize("module", ["roughcontact.study.jobs", "roughcontact.study.surface_jobs",
+@pytest.mark.parametrize("module", ["roughcontact.study.jobs.influence",
+                                    "roughcontact.study.jobs.surfaces",
+                                    "roughcontact.study.jobs.contact",
                                     "roughcontact.study.contact_jobs",
+                                    "roughcontact.study.surface_jobs",
                                     "roughcontact.contact",
                                     "roughcontact.reports.plotting",
                                     "roughcontact.reports.study_figures",
@@ -35,7 +38,7 @@ def test_job_modules_import_no_heavy_library(module):
 
 def test_the_aggregation_job_loads_pandas_but_no_statistics_library():
     # the 95 % bands take the Student-t quantile from scipy.special (stdtrit)
-    assert loaded_after("roughcontact.study.aggregation") == ["pandas"]
+    assert loaded_after("roughcontact.study.jobs.aggregation") == ["pandas"]
 
 
 def test_the_lazy_imports_give_the_same_numbers():
@@ -67,7 +70,7 @@ def test_the_lazy_imports_give_the_same_numbers():
 def test_the_file_readers_load_neither_the_solvers_nor_the_finite_element_model():
     """A figure or job that reads stored files only (surfaces, tables) does not load the
     contact solvers or scikit-fem through the readers."""
-    code = ("import sys, roughcontact.study.storage\n"
+    code = ("import sys, roughcontact.study.jobs.storage\n"
             "print(' '.join(m for m in ('roughcontact.contact', 'roughcontact.elasticity',"
             " 'skfem', 'scipy.sparse', 'scipy.linalg') if m in sys.modules))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

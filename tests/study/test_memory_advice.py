@@ -6,9 +6,9 @@ import re
 
 import pytest
 
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import validated
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.settings import Study
 
 

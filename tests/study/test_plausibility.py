@@ -22,14 +22,14 @@ from roughcontact.contact.plausibility import (
     plausibility_flags,
 )
 from roughcontact.reports.audit import audit_cell
-from roughcontact.study.aggregation import aggregate_study
 from roughcontact.study.config import ContactSettings, validated
-from roughcontact.study.contact_jobs import solve_contact_job
 from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.jobs import build_influence
+from roughcontact.study.jobs.aggregation import aggregate_study
+from roughcontact.study.jobs.contact import solve_contact_job
+from roughcontact.study.jobs.influence import build_influence
+from roughcontact.study.jobs.surfaces import build_surface_cell
 from roughcontact.study.records import Geometry, MeasuredCell
 from roughcontact.study.sources import MeasurementImport
-from roughcontact.study.surface_jobs import build_surface_cell
 
 E = 511e6
 

@@ -1,4 +1,4 @@
-"""The cost model of the job resources (roughcontact.study.resources): values
+"""The cost model of the job resources (roughcontact.study.plan.resources): values
 worked by hand from the documented formulas and config/cost_model.yaml."""
 
 import dataclasses
@@ -8,9 +8,6 @@ import pytest
 import yaml
 from snakemake.utils import validate
 
-from roughcontact.study import resources
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import (
     BuildSettings,
     ContactSettings,
@@ -18,6 +15,9 @@ from roughcontact.study.config import (
     validated,
 )
 from roughcontact.study.contact_records import ContactJob
+from roughcontact.study.plan import resources
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
 from roughcontact.study.settings import Study
 

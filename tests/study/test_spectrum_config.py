@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 
 from roughcontact.errors import MeasurementError
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import ConfigError, validated
+from roughcontact.study.jobs.surfaces import build_surface_cell
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
+from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.settings import Study
 from roughcontact.study.sources import spectrum_from_entry
-from roughcontact.study.studies import contact_cells
-from roughcontact.study.surface_jobs import build_surface_cell
 from roughcontact.surfaces import spectra
 
 REPO = Path(__file__).resolve().parents[2]

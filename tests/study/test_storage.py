@@ -14,10 +14,10 @@ from roughcontact.contact.curves import NondimSweep
 from roughcontact.elasticity.operators import BlockOperator
 from roughcontact.errors import DiskFullError, StoredFileError
 from roughcontact.hashes import arrays_sha256
-from roughcontact.study import storage
+from roughcontact.study.jobs import storage
+from roughcontact.study.jobs.storage import CONTACT_ARRAYS, CONTACT_FIELDS
 from roughcontact.study.provenance import atomic_path, canonical_json
 from roughcontact.study.records import Geometry, InfluenceModel
-from roughcontact.study.storage import CONTACT_ARRAYS, CONTACT_FIELDS
 
 
 def surfaces_file(path):

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from roughcontact.errors import StoredFileError
-from roughcontact.study.cells import study_plan, surfaces_from
 from roughcontact.study.config import load_config
+from roughcontact.study.jobs.surfaces import build_surface_cell
+from roughcontact.study.plan.cells import study_plan, surfaces_from
 from roughcontact.study.provenance import provenance
 from roughcontact.study.records import GeneratedCell, Generator
 from roughcontact.study.settings import Study
-from roughcontact.study.surface_jobs import build_surface_cell
 
 REPO = Path(__file__).resolve().parents[2]
 #: Root attributes that differ between two builds of the same cell: provenance, the

@@ -19,9 +19,9 @@ from scipy import ndimage
 from topographies import DATA, needs_data
 
 from roughcontact.errors import MeasurementError
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import validated
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.settings import Study
 from roughcontact.surfaces.measured import ImportOptions, load_measurement
 

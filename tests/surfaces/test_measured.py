@@ -16,15 +16,15 @@ import yaml
 from scipy import stats as scipy_stats
 
 from roughcontact.errors import MeasurementError
-from roughcontact.study.cells import contact_jobs
-from roughcontact.study.checks import check_studies
 from roughcontact.study.config import validated
+from roughcontact.study.jobs.storage import read_surfaces
+from roughcontact.study.jobs.surfaces import build_surface_cell
+from roughcontact.study.plan.cells import contact_jobs
+from roughcontact.study.plan.checks import check_studies
+from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.records import MeasuredCell
 from roughcontact.study.settings import Study
 from roughcontact.study.sources import MeasurementImport
-from roughcontact.study.storage import read_surfaces
-from roughcontact.study.studies import contact_cells
-from roughcontact.study.surface_jobs import build_surface_cell
 from roughcontact.surfaces import johnson, measured, preparation, readers, statistics
 from roughcontact.surfaces.measured import ImportOptions
 

@@ -20,11 +20,11 @@ from scipy import ndimage
 from topographies import DATA, needs_data
 
 from roughcontact.errors import MeasurementError
-from roughcontact.study.checks import check_studies
 from roughcontact.study.config import validated
+from roughcontact.study.jobs.surfaces import build_surface_cell
+from roughcontact.study.plan.checks import check_studies
 from roughcontact.study.records import GeneratedCell, Generator
 from roughcontact.study.settings import Study
-from roughcontact.study.surface_jobs import build_surface_cell
 from roughcontact.surfaces.measured import ImportOptions, load_measurement, statistics
 from roughcontact.surfaces.statistics import height_stats
 

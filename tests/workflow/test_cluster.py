@@ -12,11 +12,11 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from roughcontact.study import resources
-from roughcontact.study.cells import study_plan
 from roughcontact.study.config import ConvergenceSettings, load_config, report_section
+from roughcontact.study.plan import resources
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.settings import Study
-from roughcontact.study.studies import contact_cells
 
 REPO = Path(__file__).resolve().parents[2]
 PROFILES = REPO / "profiles"
@@ -245,7 +245,7 @@ def _summary(plan, config, job):  # its memory is the rule's own number
 
 
 #: Rule -> (plan, config, dry-run job) -> (memory [MB], wall time [min]) of a first attempt
-#: from the cost model (roughcontact.study.resources on config/cost_model.yaml), from the
+#: from the cost model (roughcontact.study.plan.resources on config/cost_model.yaml), from the
 #: records rules/common.smk passes it; None where the model does not give the number.
 MODEL_REQUESTS = {
     "influence": _influence,

@@ -103,7 +103,7 @@ def test_the_audit_re_solves_pairs_bit_for_bit(run):
 
 def test_each_pair_of_bodies_is_summed_once_and_checked_on_read(run):
     from roughcontact.errors import StoredFileError
-    from roughcontact.study.storage import read_contact, read_pair
+    from roughcontact.study.jobs.storage import read_contact, read_pair
 
     _, _, _, results, _ = run
     pairs = sorted((results / "influence" / "pairs").glob("*.h5"))

@@ -5,10 +5,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-from roughcontact.study.cells import study_plan
 from roughcontact.study.config import validated
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.settings import Study
-from roughcontact.study.studies import contact_cells
 
 REPO = Path(__file__).resolve().parents[2]
 

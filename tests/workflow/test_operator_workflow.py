@@ -14,7 +14,7 @@ from test_workflow import run_snakemake
 
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.operators import BlockOperator
-from roughcontact.study.storage import read_influence
+from roughcontact.study.jobs.storage import read_influence
 
 pytestmark = pytest.mark.workflow
 

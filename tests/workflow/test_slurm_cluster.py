@@ -40,10 +40,10 @@ from test_cluster import (
     wildcard_values,
 )
 
-from roughcontact.study.cells import study_plan
 from roughcontact.study.config import load_config
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.settings import Study
-from roughcontact.study.studies import contact_cells
 
 pytestmark = pytest.mark.slurm
 

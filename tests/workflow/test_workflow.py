@@ -17,12 +17,12 @@ import pandas as pd
 import pytest
 import yaml
 
-from roughcontact.study.cells import study_plan
 from roughcontact.study.config import load_config
+from roughcontact.study.jobs.storage import read_contact, read_influence
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.records import surface_cell_from_params
 from roughcontact.study.settings import Study
-from roughcontact.study.storage import read_contact, read_influence
-from roughcontact.study.studies import contact_cells
 from roughcontact.surfaces import johnson
 from roughcontact.surfaces import synthetic as surface
 from roughcontact.surfaces.statistics import height_stats
@@ -345,7 +345,7 @@ class _Hold(logging.Handler):
                 time.sleep(0.05)
 
 
-logging.getLogger("roughcontact.study.contact_jobs").addHandler(_Hold())
+logging.getLogger("roughcontact.study.jobs.contact").addHandler(_Hold())
 """
 
 

@@ -60,7 +60,7 @@ from roughcontact.reports.speed.sweeps import (
     reporter,
     timed_sweep,
 )
-from roughcontact.study.contact_jobs import BATCH_SIZE
+from roughcontact.study.jobs.contact import BATCH_SIZE
 from roughcontact.study.presets import FALLBACK_MESH_ERRORS
 
 __all__ = [

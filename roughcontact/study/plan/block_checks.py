@@ -18,8 +18,8 @@ import math
 from roughcontact.elasticity.influence import MAX_SLENDERNESS, shape_problems
 from roughcontact.study.config import BuildSettings, in_unit
 from roughcontact.study.contact_records import StudyCell
+from roughcontact.study.plan.studies import PATCH_THICKNESS
 from roughcontact.study.records import Geometry, InfluenceModel, MeasuredCell
-from roughcontact.study.studies import PATCH_THICKNESS
 from roughcontact.units import MM
 
 #: Thickness candidates tried, as multiples of the patch's narrower side (from 1 %

@@ -13,7 +13,7 @@ body alike: one code, whichever body a value belongs to.
 thinner than one contact element (``thickness_mm: 0.01``, metres meant), each with
 the value in the unit it was likely typed in where that value passes; measured maps
 (first or counter) that are noise or whose measured sigma is out of range
-(:mod:`~roughcontact.study.measured_checks`).
+(:mod:`~roughcontact.study.plan.measured_checks`).
 """
 
 from __future__ import annotations
@@ -21,11 +21,11 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from roughcontact.study.block_checks import block_problems
 from roughcontact.study.config import BuildSettings, in_unit, unit_slips
 from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.counter_entries import CounterfaceEntry
-from roughcontact.study.measured_checks import measured_problems
+from roughcontact.study.plan.block_checks import block_problems
+from roughcontact.study.plan.counter_entries import CounterfaceEntry
+from roughcontact.study.plan.measured_checks import measured_problems
 from roughcontact.study.records import Geometry, InfluenceModel, MeasuredCell, SurfaceCell
 from roughcontact.study.settings import Study
 from roughcontact.units import MM, MPA, UM
@@ -138,7 +138,7 @@ def _modulus_problems(body: Body) -> list[str]:
 def _thickness_problems(body: Body, build: BuildSettings) -> list[str]:
     """Messages for a block thinner than one contact element (a thickness in metres
     typed in mm), with the thickness it was likely meant as where that block passes
-    :func:`~roughcontact.study.block_checks.block_problems`."""
+    :func:`~roughcontact.study.plan.block_checks.block_problems`."""
     geometry, key = body.geometry, body.keys["thickness_mm"]
     spacing = min(s / n for s, n in zip(geometry.size, geometry.grid, strict=True))
     if geometry.thickness >= spacing * (1 - 1e-9):

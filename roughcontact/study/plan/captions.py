@@ -5,9 +5,9 @@ meshes of its panels in their order, the surfaces per curve, the (Sk, Ku)
 pairs, sigma, b, the nominal areas, the counter bodies. Nothing in it is
 fixed text that one study makes true and another false (the quick study
 draws the refined mesh where the default one draws the converged mesh).
-Each writer takes the :class:`~roughcontact.study.cells.StudyPlan` (its study's
+Each writer takes the :class:`~roughcontact.study.plan.cells.StudyPlan` (its study's
 settings and the cells the figure draws) and the figure's name; the figure registry
-(:data:`roughcontact.study.figures.FIGURES`) names each figure's writer, and the
+(:data:`roughcontact.study.plan.figures.FIGURES`) names each figure's writer, and the
 workflow passes its text to the figure rule (``params.caption``, read by
 ``report/figure.rst``).
 """

@@ -3,7 +3,7 @@ configuration asks for, computed once.
 
 :func:`study_plan` turns a validated configuration into a :class:`StudyPlan`
 of typed records (:mod:`roughcontact.study.records`), after the checks the
-schema cannot make (:mod:`roughcontact.study.checks`). The workflow makes it
+schema cannot make (:mod:`roughcontact.study.plan.checks`). The workflow makes it
 once per run (``rules/common.smk``) and every rule reads its jobs, inputs,
 parameters and resources from it. The record keys name every parameter, so
 a changed parameter is a new file and the workflow reruns exactly what
@@ -16,9 +16,13 @@ import dataclasses
 from collections.abc import Mapping
 
 from roughcontact.study import layout
-from roughcontact.study.block_checks import check_blocks
-from roughcontact.study.body_checks import check_plausible
-from roughcontact.study.checks import (
+from roughcontact.study.config import BuildSettings, ContactSettings
+from roughcontact.study.contact_records import ContactJob, StudyCell
+from roughcontact.study.counter_records import PairGeometry
+from roughcontact.study.flow_settings import check_flow
+from roughcontact.study.plan.block_checks import check_blocks
+from roughcontact.study.plan.body_checks import check_plausible
+from roughcontact.study.plan.checks import (
     ConfigProblems,
     check_feasible,
     check_memory,
@@ -26,12 +30,9 @@ from roughcontact.study.checks import (
     check_studies,
     check_windows,
 )
-from roughcontact.study.config import BuildSettings, ContactSettings
-from roughcontact.study.contact_records import ContactJob, StudyCell
-from roughcontact.study.counter_checks import check_counterfaces
-from roughcontact.study.counter_records import PairGeometry
-from roughcontact.study.figures import FIGURES, Kind
-from roughcontact.study.flow_settings import check_flow
+from roughcontact.study.plan.counter_checks import check_counterfaces
+from roughcontact.study.plan.figures import FIGURES, Kind
+from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.records import (
     SEEDED_PER_SURFACE,
     Geometry,
@@ -39,7 +40,6 @@ from roughcontact.study.records import (
     SurfaceCell,
 )
 from roughcontact.study.settings import Study
-from roughcontact.study.studies import contact_cells
 
 
 @dataclasses.dataclass(frozen=True)
@@ -127,7 +127,7 @@ def _figures_and_studies(study: Study) -> tuple[tuple[str, ...], tuple[str, ...]
 def study_plan(study: Study) -> StudyPlan:
     """The :class:`StudyPlan` of a :class:`~roughcontact.study.settings.Study`.
 
-    Raises :class:`~roughcontact.study.checks.ConfigProblems` naming every
+    Raises :class:`~roughcontact.study.plan.checks.ConfigProblems` naming every
     invalid contact study or infeasible surface cell, before any job is
     planned to run.
     """
@@ -239,7 +239,7 @@ def influence_geometries(study: Study) -> dict[str, Geometry]:
 
 
 # ---------------------------------------------------------------------------
-# What each figure draws (the figure registry: roughcontact.study.figures)
+# What each figure draws (the figure registry: roughcontact.study.plan.figures)
 
 
 def figure_aggregates(plan: StudyPlan, name: str) -> tuple[str, ...]:

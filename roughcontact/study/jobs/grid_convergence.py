@@ -16,7 +16,8 @@ problem alone. Two jobs per grid:
   aimed, per surface, at the reduced pressures ``p0 / (E* h'_rms)`` of the
   study by a pilot sweep on the coarsest grid (:func:`aimed_approaches`).
 
-:class:`GridConvergenceSettings` is the validated section in SI units. The
+:class:`~roughcontact.study.config.GridConvergenceSettings` is the validated section in SI
+units. The
 report (:mod:`roughcontact.reports.grid_convergence`) reads the contact
 files (:func:`read_grid_contact`). File layouts::
 
@@ -42,7 +43,6 @@ import json
 import logging
 import math
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -53,8 +53,8 @@ from roughcontact.contact.result import INTERFACE_SCALARS, INTERFACE_UNITS
 from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import arrays_sha256
-from roughcontact.study.provenance import NO_RUN, RunInfo, canonical_json, provenance
-from roughcontact.study.storage import (
+from roughcontact.study.config import PILOT_FRACTIONS, GridConvergenceSettings
+from roughcontact.study.jobs.storage import (
     REBUILD,
     check_attributes,
     open_h5,
@@ -62,15 +62,13 @@ from roughcontact.study.storage import (
     verify,
     write_h5,
 )
+from roughcontact.study.provenance import NO_RUN, RunInfo, canonical_json, provenance
 from roughcontact.surfaces.multiresolution import band_grid, generate_resolved
-from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.statistics import height_stats, spectral_moments
 from roughcontact.surfaces.synthetic import derive_seeds
-from roughcontact.units import MM, MPA
 
-__all__ = ["CONTACT_FIELDS", "GridConvergenceSettings", "aimed_approaches",
-           "build_grid_surfaces", "grid_mem_mb", "read_grid_contact", "solve_grid",
-           "sweep_runtime"]
+__all__ = ["CONTACT_FIELDS", "aimed_approaches", "build_grid_surfaces", "read_grid_contact",
+           "solve_grid"]
 
 log = logging.getLogger("roughcontact.grid_convergence")
 
@@ -80,76 +78,9 @@ CONTACT_FIELDS = ("approach", "load", "nominal_pressure", "mean_plane_deflection
                   "converged")
 #: Seed key of the study's surfaces (:func:`~roughcontact.surfaces.synthetic.derive_seeds`).
 SEED_KEY = "grid_convergence"
-#: Pilot sweep on the coarsest grid: approaches as fractions of the mean initial gap.
-PILOT_FRACTIONS = np.geomspace(0.1, 0.95, 24)
 #: The approaches of a sweep reach this factor below the smallest and above the largest
 #: reduced pressure of the study, so that every level lies inside each surface's curve.
 MARGIN = 1.5
-
-
-@dataclass(frozen=True)
-class GridConvergenceSettings:
-    """The grid-convergence study (``reports.grid_convergence``), SI units.
-
-    ``grids`` (elements per side, ascending), ``surfaces`` seeds, square
-    ``size`` [m]; the self-affine spectrum (``hurst``, ``rolloff_wavelength``,
-    ``cutoff_wavelength`` [m]) and ``generator`` (``"paper"``: a Gaussian
-    process); each surface scaled to ``rms_gradient`` h'_rms [-]; the body's
-    ``E`` [Pa] and ``nu``; the ``reduced_pressures`` ``p0 / (E* h'_rms)`` [-]
-    read per grid; ``kappa_area`` the (lowest, highest) real area fraction of
-    the fit of kappa; ``steps`` approaches per sweep, contact ``tol``; and
-    ``converged_within``, the relative distance to the extrapolated value at
-    which an aggregate counts as converged.
-    """
-
-    grids: tuple[int, ...]
-    surfaces: int
-    size: float
-    hurst: float
-    rolloff_wavelength: float
-    cutoff_wavelength: float
-    generator: str
-    rms_gradient: float
-    E: float
-    nu: float
-    reduced_pressures: tuple[float, ...]
-    kappa_area: tuple[float, float]
-    steps: int
-    tol: float
-    converged_within: float
-
-    @classmethod
-    def from_section(cls, section: dict) -> GridConvergenceSettings:
-        return cls(grids=tuple(sorted(int(g) for g in section["grids"])),
-                   surfaces=int(section["surfaces"]), size=float(section["size_mm"]) * MM,
-                   hurst=float(section["hurst"]),
-                   rolloff_wavelength=float(section["rolloff_mm"]) * MM,
-                   cutoff_wavelength=float(section["cutoff_mm"]) * MM,
-                   generator=str(section["generator"]),
-                   rms_gradient=float(section["rms_gradient"]),
-                   E=float(section["E_MPa"]) * MPA, nu=float(section["nu"]),
-                   reduced_pressures=tuple(sorted(float(p)
-                                                  for p in section["reduced_pressures"])),
-                   kappa_area=(float(section["kappa_area"][0]),
-                               float(section["kappa_area"][1])),
-                   steps=int(section["steps"]), tol=float(section["tol"]),
-                   converged_within=float(section["converged_within"]))
-
-    @property
-    def contact_modulus(self) -> float:
-        """``E* = E / (1 - nu^2)`` [Pa] (rigid flat on an elastic body)."""
-        return self.E / (1.0 - self.nu**2)
-
-    @property
-    def pressure_scale(self) -> float:
-        """``E* h'_rms`` [Pa]: nominal pressure = reduced pressure x this."""
-        return self.contact_modulus * self.rms_gradient
-
-    def spec(self, grid: int | None = None) -> SurfaceSpec:
-        """The surfaces' :class:`SurfaceSpec` (``sigma`` 1: the scale is ``rms_gradient``)."""
-        return SurfaceSpec(grid=grid or self.grids[0], size=self.size, acf="self-affine",
-                           hurst=self.hurst, rolloff_wavelength=self.rolloff_wavelength,
-                           cutoff_wavelength=self.cutoff_wavelength)
 
 
 def _stats(heights: np.ndarray, size: float) -> dict:
@@ -297,24 +228,3 @@ def read_grid_contact(path) -> tuple[PhysicalSweep, dict]:
                           nominal_area=size * size)
     attrs["rms_gradient"] = arrays["rms_gradient"]
     return sweep, attrs
-
-
-
-#: CPU seconds of one contact solve on 1024^2 elements at tol 1e-8 and 3-15 % contact
-#: (measured 4-11 s on the shared 2-core machine, cold starts) and the growth with the
-#: element count n (n log n products, iterations growing with the grid).
-SOLVE_SECONDS_1024 = 12.0
-SOLVE_EXPONENT = 1.2
-
-
-def sweep_runtime(settings: GridConvergenceSettings, grid: int, attempt: int = 1) -> int:
-    """Requested wall time [min] of :func:`solve_grid` on ``grid`` (a retry asks for more)."""
-    solves = settings.surfaces * (settings.steps + len(PILOT_FRACTIONS) / 10.0)
-    seconds = solves * SOLVE_SECONDS_1024 * (grid * grid / 1024**2) ** SOLVE_EXPONENT
-    return int(math.ceil(attempt * (2.0 + 2.0 * seconds / 60.0)))
-
-
-def grid_mem_mb(settings: GridConvergenceSettings, grid: int) -> int:
-    """Peak memory [MB] of a job on ``grid``: 300 MB of interpreter and libraries and 20
-    work arrays of doubles per surface (the batched sweep's iterates and products)."""
-    return int(300 + 20 * 8 * settings.surfaces * grid * grid / 1e6)

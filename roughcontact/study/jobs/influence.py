@@ -1,16 +1,16 @@
 """Bodies of the workflow's influence jobs.
 
-The surface jobs are in :mod:`roughcontact.study.surface_jobs`, the contact jobs
-in :mod:`roughcontact.study.contact_jobs`. An *influence job* builds E * C of one
+The surface jobs are in :mod:`roughcontact.study.jobs.surfaces`, the contact jobs
+in :mod:`roughcontact.study.jobs.contact`. An *influence job* builds E * C of one
 block geometry (a dense finite-element matrix or a matrix-free operator); a
 *pair job* sums two bodies' models once, for the contact jobs with a compliant
 counter body on a dense first body (Eq 17-18). The aggregation of a study's
-cells is in :mod:`roughcontact.study.aggregation`.
+cells is in :mod:`roughcontact.study.jobs.aggregation`.
 
 A job takes its rule's params: the plain ``params()`` of the records of
 :mod:`roughcontact.study.records`, which its first lines turn into those
 records (the job's edge); everything after works on the records. The
-layouts of the files are described in :mod:`roughcontact.study.storage`.
+layouts of the files are described in :mod:`roughcontact.study.jobs.storage`.
 """
 
 from __future__ import annotations
@@ -26,9 +26,16 @@ from roughcontact.elasticity import definiteness, influence, operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence
 from roughcontact.errors import FactorizationError
-from roughcontact.study.checks import memory_message
 from roughcontact.study.config import BuildSettings, in_unit
 from roughcontact.study.counter_records import PairGeometry
+from roughcontact.study.jobs.storage import (
+    read_influence,
+    read_pair,
+    write_choice,
+    write_influence,
+    write_pair,
+)
+from roughcontact.study.memory_advice import memory_message
 from roughcontact.study.provenance import (
     RunInfo,
     canonical_json,
@@ -36,13 +43,6 @@ from roughcontact.study.provenance import (
     provenance,
 )
 from roughcontact.study.records import Geometry, InfluenceModel, coarse_geometry
-from roughcontact.study.storage import (
-    read_influence,
-    read_pair,
-    write_choice,
-    write_influence,
-    write_pair,
-)
 from roughcontact.units import GB
 
 log = logging.getLogger(__name__)
@@ -268,7 +268,7 @@ def choose_influence(params: dict, planned: dict, planned_path, out_path,
     else the planned model. The choice (the geometry, the chosen ``operator``,
     the ``resolved`` geometry and its key, the errors and tolerance, the
     planned file's content hash, provenance) is written to ``out_path``
-    (:func:`~roughcontact.study.storage.write_choice`) and returned. A
+    (:func:`~roughcontact.study.jobs.storage.write_choice`) and returned. A
     geometry whose choice is its planned model shares that model's file and
     results with a study configured with it.
     """

@@ -12,7 +12,7 @@ builds (:class:`~roughcontact.study.config.BuildSettings`).
 
 Check the model against a run's benchmarks::
 
-    python -m roughcontact.study.resources --compare <results>/benchmarks/rules \\
+    python -m roughcontact.study.plan.resources --compare <results>/benchmarks/rules \\
         --configfile config/quick.yaml
 """
 
@@ -31,23 +31,24 @@ import yaml
 
 from roughcontact.contact.halfspace_criterion import CALIBRATION
 from roughcontact.elasticity.operators import COARSE_MAX, coarsened_side
-from roughcontact.study.cells import study_plan
-from roughcontact.study.checks import ConfigProblems
 from roughcontact.study.config import (
+    PILOT_FRACTIONS,
     SCHEMA,
     BuildSettings,
     ContactSettings,
     ConvergenceSettings,
+    GridConvergenceSettings,
     SpeedReportSettings,
 )
 from roughcontact.study.contact_records import ContactJob
-from roughcontact.study.grid_convergence import grid_mem_mb, sweep_runtime
+from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.records import Generator, Geometry, InfluenceModel
 from roughcontact.study.settings import Study, load_study
 from roughcontact.units import GB
 
 #: The stored cost model of the source tree.
-COST_MODEL_FILE = Path(__file__).resolve().parents[2] / "config" / "cost_model.yaml"
+COST_MODEL_FILE = SCHEMA.parent / "cost_model.yaml"
 #: The configuration schema (its ``default:`` entries complete a config).
 SCHEMA_FILE = SCHEMA
 #: Bytes of one double-precision value.
@@ -174,7 +175,7 @@ def _dense(geometry: Geometry, build: BuildSettings) -> bool:
 def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSettings) -> float:
     """Wall time [s] of a contact job: surfaces x approach steps x one solve.
 
-    ``settings`` are the contact jobs' (:func:`roughcontact.study.studies.contact_settings`),
+    ``settings`` are the contact jobs' (:func:`roughcontact.study.plan.studies.contact_settings`),
     ``build`` the influence builds' (its memory limit plans the model). Measured
     35-186 s per cell of 60 surfaces x 30 steps on 60 x 60 (paper mesh; the
     converged mesh needs fewer iterations) and 4 s on 30 x 30. A sweep beyond
@@ -339,7 +340,7 @@ def contact_mem_mb(job: ContactJob, build: BuildSettings) -> int:
 
 
 def pair_mem_mb(pair) -> int:
-    """Peak memory [MB] of a pair's sum (:func:`roughcontact.study.jobs.build_pair`): both
+    """Peak memory [MB] of a pair's sum (:func:`roughcontact.study.jobs.influence.build_pair`): both
     bodies' matrices, a densified counter body's, the sum and its Cholesky factor (5 n^2
     doubles) and the interpreter's."""
     nx, ny = pair.first.grid
@@ -425,6 +426,27 @@ def speed_vs_error_mem_mb(geometry: Geometry, report: SpeedReportSettings,
     return int(fit["memory_base_mb"] + (peak + fit["dense_matrices"] * DOUBLE_BYTES * n**2) / MB)
 
 
+#: CPU seconds of one contact solve on 1024^2 elements at tol 1e-8 and 3-15 % contact
+#: (measured 4-11 s on the shared 2-core machine, cold starts) and the growth with the
+#: element count n (n log n products, iterations growing with the grid).
+SOLVE_SECONDS_1024 = 12.0
+SOLVE_EXPONENT = 1.2
+
+
+def sweep_runtime(settings: GridConvergenceSettings, grid: int, attempt: int = 1) -> int:
+    """Requested wall time [min] of the grid-convergence sweep on ``grid``
+    (:func:`roughcontact.study.jobs.grid_convergence.solve_grid`; a retry asks for more)."""
+    solves = settings.surfaces * (settings.steps + len(PILOT_FRACTIONS) / 10.0)
+    seconds = solves * SOLVE_SECONDS_1024 * (grid * grid / 1024**2) ** SOLVE_EXPONENT
+    return int(math.ceil(attempt * (2.0 + 2.0 * seconds / 60.0)))
+
+
+def grid_mem_mb(settings: GridConvergenceSettings, grid: int) -> int:
+    """Peak memory [MB] of a job on ``grid``: 300 MB of interpreter and libraries and 20
+    work arrays of doubles per surface (the batched sweep's iterates and products)."""
+    return int(300 + 20 * 8 * settings.surfaces * grid * grid / 1e6)
+
+
 # ---------------------------------------------------------------------------
 # Every job's request, by the kind of job (its rule) and its wildcards
 
@@ -507,7 +529,7 @@ def job_runtime(plan, kind: str, wildcards, attempt: int = 1) -> int:
 def predictions(plan) -> dict[str, dict[str, tuple[float, int]]]:
     """Rule -> wildcard -> (runtime [s] before the margin, memory [MB]) of the
     contact, influence and surfaces jobs of a study's
-    :func:`~roughcontact.study.cells.study_plan`."""
+    :func:`~roughcontact.study.plan.cells.study_plan`."""
     settings, build = plan.contact, plan.build
     return {
         "contact": {key: (contact_seconds(job, settings, build), contact_mem_mb(job, build))
@@ -641,7 +663,7 @@ def machine_problems(plan, total_mb: float | None = None,
 
 
 def check_machine(plan, kinds: tuple[str, ...] | None = None) -> None:
-    """Raise :class:`~roughcontact.study.checks.ConfigProblems` naming every kind of job
+    """Raise :class:`~roughcontact.study.plan.checks.ConfigProblems` naming every kind of job
     of a study's ``plan`` that would not fit (:func:`machine_problems`), before any job
     runs: the jobs of the default target, or the on-demand reports of ``kinds`` (when
     their target is asked for)."""

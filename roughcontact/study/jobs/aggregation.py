@@ -27,9 +27,9 @@ from roughcontact.errors import StoredFileError
 from roughcontact.hashes import file_sha256
 from roughcontact.study.config import in_unit
 from roughcontact.study.contact_records import StudyCell
+from roughcontact.study.jobs.storage import read_contact
 from roughcontact.study.probes import StudyProbe
 from roughcontact.study.provenance import NO_RUN, RunInfo, atomic_path, provenance
-from roughcontact.study.storage import read_contact
 from roughcontact.units import MPA
 
 log = logging.getLogger(__name__)

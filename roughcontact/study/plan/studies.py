@@ -11,7 +11,7 @@ every other default), and :func:`contact_cells` turns a study into
 :class:`~roughcontact.study.contact_records.StudyCell` records in SI units: every
 unit of a study's values is converted here, and every choice it writes as a
 string is resolved here (its counter bodies by
-:mod:`roughcontact.study.counter_entries`).
+:mod:`roughcontact.study.plan.counter_entries`).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import itertools
 
 from roughcontact.study.config import as_pair, from_unit
 from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.counter_entries import CounterfaceEntry, counterface_entries
+from roughcontact.study.plan.counter_entries import CounterfaceEntry, counterface_entries
 from roughcontact.study.records import Geometry, MeasuredCell
 from roughcontact.study.settings import Study, StudySection
 from roughcontact.study.sources import MeasurementImport, spectrum_from_entry
@@ -60,7 +60,7 @@ def study_surfaces(study: Study, section: StudySection) -> list:
 def counterface_groups(study: Study, name: str, cells: list[StudyCell],
                        ) -> list[tuple[CounterfaceEntry, list[StudyCell]]]:
     """Each counter body of the study ``name``
-    (:func:`~roughcontact.study.counter_entries.counterface_entries`) with the cells it
+    (:func:`~roughcontact.study.plan.counter_entries.counterface_entries`) with the cells it
     makes of ``cells``: each cell against it, carrying the entry it comes from (for the
     messages that name its keys); a smooth rigid counter body leaves a cell as it is
     (no ``counterface``: today's jobs and numbers)."""

@@ -3,9 +3,9 @@
 A figure is a notebook ``notebooks/<name>.ipynb`` (papermill parameters, drawn
 by the ``figure`` rule) and one entry of :data:`FIGURES`: its :class:`Kind` (the
 surfaces alone, a contact study's cells, or the studies it lists), its report
-caption (:mod:`roughcontact.study.captions`), the surface cells it draws
+caption (:mod:`roughcontact.study.plan.captions`), the surface cells it draws
 (``surfaces``), the other figures whose settings it draws with, and whether it
-needs the flow through the gap. The plan (:func:`roughcontact.study.cells.study_plan`)
+needs the flow through the gap. The plan (:func:`roughcontact.study.plan.cells.study_plan`)
 and the workflow read everything about a figure from here; its configuration keys
 and their defaults are in ``config/schema.yaml`` (``figures.<name>``).
 
@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from enum import Enum
 from types import MappingProxyType
 
-from roughcontact.study import captions
 from roughcontact.study.config import as_pair, from_unit
+from roughcontact.study.plan import captions
 from roughcontact.study.sources import spectrum_from_entry
 
 __all__ = ["FIGURES", "Figure", "Kind"]

@@ -7,7 +7,7 @@ so what would make its contact results meaningless is seen before any job:
   autocorrelation lag shorter than one spacing, :data:`MIN_CORRELATION_SPACINGS`)
   are not a height map that resolves its surface: a file read in a wrong
   format or channel, or random bytes;
-- *sigma out of range* (:data:`~roughcontact.study.body_checks.PLAUSIBLE`): a
+- *sigma out of range* (:data:`~roughcontact.study.plan.body_checks.PLAUSIBLE`): a
   measured sigma is not typed by the user, so the advice is about the unit
   the heights were read in (``height_unit``, or the file's own), and only for
   a map that passed the noise check (a unit that scales noise into range
@@ -16,7 +16,7 @@ so what would make its contact results meaningless is seen before any job:
 Both belong to the plausibility check (``plausibility_check: true``, the
 default), which stops the plan with every message before any job; it judges the
 measured map of a study and of a counter body alike
-(:func:`~roughcontact.study.body_checks.body_problems`).
+(:func:`~roughcontact.study.plan.body_checks.body_problems`).
 """
 
 from __future__ import annotations

@@ -249,7 +249,7 @@ class CounterfaceEntry:
 
     def keys(self, cell: StudyCell) -> dict:
         """The configuration key of each typed value of its counter body on ``cell``
-        (:class:`~roughcontact.study.body_checks.Body`'s ``keys``)."""
+        (:class:`~roughcontact.study.plan.body_checks.Body`'s ``keys``)."""
         return {**self.surface.keys(cell), **self.body.keys(cell.geometry)}
 
 

@@ -1,21 +1,21 @@
 """Checks of a configuration the schema cannot make, run when the workflow is planned.
 
 Each check returns one message per offending entry, naming the config keys
-to change; :func:`roughcontact.study.cells.study_plan` raises
+to change; :func:`roughcontact.study.plan.cells.study_plan` raises
 :class:`ConfigProblems` with them before any job is planned to run.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import logging
 import math
 
-from roughcontact.elasticity.influence import MESH_PRESETS
 from roughcontact.elasticity.operators import HYBRID_MESHES
 from roughcontact.study.config import BuildSettings, in_unit
-from roughcontact.study.counter_entries import counterface_entries, import_problems
+from roughcontact.study.memory_advice import memory_message
+from roughcontact.study.plan.counter_entries import counterface_entries, import_problems
+from roughcontact.study.plan.studies import CAP_MODES, as_list, study_surfaces
 from roughcontact.study.records import (
     GeneratedCell,
     Generator,
@@ -28,12 +28,11 @@ from roughcontact.study.sources import (
     load_measurement,
     spectrum_from_entry,
 )
-from roughcontact.study.studies import CAP_MODES, as_list, study_surfaces
 from roughcontact.surfaces import johnson, measured
 from roughcontact.surfaces.calibration import calibrate_filter, input_moments, kurt_min
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.surfaces.spectra import filter_kernel
-from roughcontact.units import GB, MM
+from roughcontact.units import MM
 
 
 class ConfigProblems(ValueError):
@@ -240,7 +239,7 @@ def _check_pressure_below_hardness(name: str, study: StudySection) -> list[str]:
 
 def check_counter_measured(study: Study, name: str) -> list[str]:
     """Messages for the measured counter surfaces of a study that cannot be imported
-    (:func:`~roughcontact.study.counter_entries.import_problems`, as a study's
+    (:func:`~roughcontact.study.plan.counter_entries.import_problems`, as a study's
     ``surface:``)."""
     return [problem for entry in counterface_entries(study, name)
             for problem in entry.surface.import_problems()]
@@ -436,60 +435,6 @@ def check_feasible(surfaces: dict) -> list[str]:
 
 # ---------------------------------------------------------------------------
 # Influence builds beyond the memory limit
-
-
-def _fits(geometry: Geometry, build: BuildSettings) -> float | None:
-    """The estimated peak memory [GB] of a geometry's build if it fits ``build``'s
-    limit, else None."""
-    peak = geometry.influence_cost(build).peak_bytes
-    return peak / GB if peak <= build.max_bytes else None
-
-
-def memory_options(geometry: Geometry, build: BuildSettings, peak_bytes: float,
-                   configured: Geometry) -> list[str]:
-    """The changes, as config text, that bring a build within the memory limit, each
-    estimated here (an option is offered only if its build fits), and none the
-    configuration already has: ``body.operator: auto`` only to a geometry configured
-    dense (``configured``: as the configuration gives it, before ``auto`` resolves)."""
-    options = []
-    if configured.operator is InfluenceModel.DENSE:
-        auto = dataclasses.replace(configured, operator=InfluenceModel.AUTO)
-        fits = _fits(auto.candidates(build.max_bytes)[0], build)
-        if fits is not None:
-            options.append(f"body.operator: auto (matrix-free above 64 x 64 elements: about "
-                           f"{fits:.3g} GB here)")
-    if build.solver == "superlu":  # auto: PARDISO where it loads (on this machine)
-        fits = _fits(geometry, dataclasses.replace(build, solver="auto"))
-        if fits is not None:
-            options.append(f"body.solver: auto (MKL PARDISO: about {fits:.3g} GB here)")
-    presets = list(MESH_PRESETS)
-    coarser = [(mesh, _fits(dataclasses.replace(geometry, mesh=mesh), build))
-               for mesh in presets[:presets.index(geometry.mesh)]
-               if isinstance(geometry.mesh, str) and geometry.mesh in presets]
-    options += [f"mesh {mesh} (body.mesh, or the study's meshes: about {fits:.3g} GB)"
-                for mesh, fits in coarser if fits is not None]
-    needed = math.ceil(peak_bytes / GB * 100) / 100
-    options += [f"body.max_memory_gb: {needed:g} or more (now {in_unit(build.max_bytes, GB):g}, "
-                "on a machine with that memory)",
-                "a smaller grid (surfaces.grid, or for a measured surface surface.crop_mm, "
-                "surface.decimate or surface.resample_grid)"]
-    return options
-
-
-def memory_message(geometry: Geometry, build: BuildSettings, peak_bytes: float,
-                   configured: Geometry | None = None) -> str:
-    """Why a geometry's influence build does not fit, and the config keys that change it
-    (:func:`memory_options`; ``configured`` the geometry as configured, by default
-    ``geometry``)."""
-    nx, ny = geometry.grid
-    limit_gb = in_unit(build.max_bytes, GB)
-    model = geometry.planned_model(build.max_bytes)
-    options = memory_options(geometry, build, peak_bytes,
-                             geometry if configured is None else configured)
-    return (f"influence geometry {geometry.key}: {nx} x {ny} elements, operator "
-            f"{model.value}, mesh {geometry.mesh}: estimated peak memory "
-            f"{peak_bytes / GB:.3g} GB, more than body.max_memory_gb = {limit_gb:g} GB. "
-            "Options: " + "; ".join(options))
 
 
 def check_memory(geometries: dict[str, Geometry], build: BuildSettings) -> list[str]:

@@ -1,10 +1,10 @@
 """Plan-time checks of the counter bodies of a study's cells (Eq 17-18).
 
-A counter body (:func:`~roughcontact.study.body_checks.counter_bodies`) meets the
+A counter body (:func:`~roughcontact.study.plan.body_checks.counter_bodies`) meets the
 first body's checks, by their code: its block the geometry limits of
-:mod:`~roughcontact.study.block_checks` (with the keys of the counter entry in the
+:mod:`~roughcontact.study.plan.block_checks` (with the keys of the counter entry in the
 message), its generated surface the correlation window of
-:func:`~roughcontact.study.checks.window_message`. Besides, its surface must be
+:func:`~roughcontact.study.plan.checks.window_message`. Besides, its surface must be
 sampled like the first (:mod:`roughcontact.contact.counterface` adds the two height
 maps element by element): a measured counter map on another grid or plan size is
 refused with the import options that bring it onto the first surface's, each tried
@@ -16,11 +16,11 @@ from __future__ import annotations
 import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
-from roughcontact.study.block_checks import block_message, block_problems
-from roughcontact.study.body_checks import Body, counter_body
-from roughcontact.study.checks import window_message
 from roughcontact.study.config import BuildSettings, in_unit, in_units
 from roughcontact.study.contact_records import StudyCell
+from roughcontact.study.plan.block_checks import block_message, block_problems
+from roughcontact.study.plan.body_checks import Body, counter_body
+from roughcontact.study.plan.checks import window_message
 from roughcontact.study.records import GeneratedCell, InfluenceModel, MeasuredCell, SurfaceCell
 from roughcontact.study.settings import Study
 from roughcontact.study.sources import MeasurementImport, load_measurement
@@ -40,7 +40,7 @@ def _block_problems(body: Body, geometry, build: BuildSettings) -> list[str]:
 
 def _window_problems(study: Study, name: str, body: Body) -> list[str]:
     """A generated counter surface of its own ``b_mm`` longer than half the surface (the
-    first surface's check: :func:`~roughcontact.study.checks.window_message`); one whose
+    first surface's check: :func:`~roughcontact.study.plan.checks.window_message`); one whose
     b is the first surface's is judged with it."""
     messages = (window_message(study, study.source_name(name), body.surface, key, written)
                 for key, written in body.entry.surface.own_b())
