@@ -131,13 +131,13 @@ class ScaledInfluence(_OnTheSameElements):
     factor: float
 
     @property
-    def _base(self):
-        return self.operator
-
-    @property
     def mean_compliance(self) -> float | None:
         value = self.operator.mean_compliance
         return None if value is None else float(value) * self.factor
+
+    @property
+    def _base(self):
+        return self.operator
 
     def matvec(self, pressure) -> np.ndarray:
         return np.asarray(self.operator.matvec(pressure), dtype=float) * self.factor

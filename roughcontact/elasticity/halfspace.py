@@ -171,10 +171,8 @@ def halfspace_influence(grid, size, E: float, nu: float) -> np.ndarray:
     size : (float, float)
         Nominal contact area ``(Lx, Ly)`` [m]; elements are ``dx = Lx/nx`` by
         ``dy = Ly/ny``.
-    E : float
-        Young's modulus [Pa].
-    nu : float
-        Poisson's ratio [-].
+    E, nu : float
+        Young's modulus [Pa] and Poisson's ratio [-] of the body.
 
     Returns
     -------

@@ -18,8 +18,10 @@ parameter is a new file. Under :data:`ROOT`:
 
 from __future__ import annotations
 
-__all__ = ["AGGREGATE_EXTENSIONS", "ROOT", "aggregate", "aggregates", "choice", "contact",
-           "figure", "grid_contact", "grid_surfaces", "influence", "pair", "report",
+from dataclasses import dataclass
+
+__all__ = ["AGGREGATE_EXTENSIONS", "ROOT", "Files", "aggregate", "aggregates", "choice",
+           "contact", "figure", "grid_contact", "grid_surfaces", "influence", "pair", "report",
            "surfaces"]
 
 #: The folder of every output, relative to the working directory.
@@ -29,29 +31,31 @@ ROOT = "results"
 AGGREGATE_EXTENSIONS = ("csv", "moduli.csv", "json", "validity.csv")
 
 
-def surfaces(key: str) -> str:
-    """A surface cell's file."""
-    return f"{ROOT}/surfaces/{key}.h5"
+@dataclass(frozen=True)
+class Files:
+    """The files of one kind, named by their record's key:
+    ``<ROOT>/<folder>/<prefix><key><suffix>``."""
+
+    folder: str
+    suffix: str = ".h5"
+    prefix: str = ""
+
+    def __call__(self, key) -> str:
+        return f"{ROOT}/{self.folder}/{self.prefix}{key}{self.suffix}"
 
 
-def influence(key: str) -> str:
-    """A geometry's influence file."""
-    return f"{ROOT}/influence/{key}.h5"
-
-
-def pair(key: str) -> str:
-    """A pair of influence models summed once."""
-    return f"{ROOT}/influence/pairs/{key}.h5"
-
-
-def choice(key: str) -> str:
-    """The choice of an ``operator: auto`` geometry."""
-    return f"{ROOT}/influence/choices/{key}.json"
-
-
-def contact(key: str) -> str:
-    """A contact job's file."""
-    return f"{ROOT}/contact/{key}.h5"
+#: A surface cell's file.
+surfaces = Files("surfaces")
+#: A geometry's influence file.
+influence = Files("influence")
+#: A pair of influence models summed once.
+pair = Files("influence/pairs")
+#: The choice of an ``operator: auto`` geometry.
+choice = Files("influence/choices", ".json")
+#: A contact job's file.
+contact = Files("contact")
+#: A report's file, by its name with its extension (``speed_vs_error.md``, ...).
+report = Files("reports", "")
 
 
 def aggregate(study: str, extension: str) -> str:
@@ -69,16 +73,7 @@ def figure(name: str, extension: str) -> str:
     return f"{ROOT}/figures/{name}.{extension}"
 
 
-def report(name: str) -> str:
-    """A report's file (``speed_vs_error.md``, ``influence_convergence.csv``, ...)."""
-    return f"{ROOT}/reports/{name}"
-
-
-def grid_surfaces(grid: int) -> str:
-    """The grid-convergence study's surfaces on ``grid``."""
-    return f"{ROOT}/grid_convergence/surfaces_{grid}.h5"
-
-
-def grid_contact(grid: int) -> str:
-    """The grid-convergence study's contact sweep on ``grid``."""
-    return f"{ROOT}/grid_convergence/contact_{grid}.h5"
+#: The grid-convergence study's surfaces on a grid (elements per side).
+grid_surfaces = Files("grid_convergence", prefix="surfaces_")
+#: The grid-convergence study's contact sweep on a grid.
+grid_contact = Files("grid_convergence", prefix="contact_")

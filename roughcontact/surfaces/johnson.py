@@ -282,12 +282,8 @@ class JohnsonCurve:
         return _LAWS[self.family].cdf(self, np.asarray(x, dtype=float))
 
     def pdf(self, x):
-        """Probability density of the law.
-
-        Parameters
-        ----------
-        x : float or array_like
-            Values in the unit of x.
+        """Probability density of the law at ``x`` (float or array_like, in the unit of
+        x).
 
         Returns
         -------

@@ -105,15 +105,6 @@ class Measurement:
 
 
 
-def _pair_m(value, what: str) -> tuple[float, float]:
-    pair = tuple(float(v) for v in np.broadcast_to(np.asarray(value, float), (2,)))
-    if not all(math.isfinite(v) and v > 0 for v in pair):
-        raise ValueError(f"{what} must be positive and finite [m]; got {value!r}")
-    return pair
-
-
-
-
 @dataclass(frozen=True)
 class ImportOptions:
     """How a measured height map is read and prepared (:func:`load_measurement`).
@@ -196,6 +187,13 @@ class ImportOptions:
                 "form_degree": int(self.form_degree), "outliers_sigma": self.outliers_sigma,
                 "decimate": self.decimate_by,
                 "resample_grid": None if grid is None else list(grid)}
+
+
+def _pair_m(value, what: str) -> tuple[float, float]:
+    pair = tuple(float(v) for v in np.broadcast_to(np.asarray(value, float), (2,)))
+    if not all(math.isfinite(v) and v > 0 for v in pair):
+        raise ValueError(f"{what} must be positive and finite [m]; got {value!r}")
+    return pair
 
 
 #: The default import: the file read as it says, the mean plane removed.

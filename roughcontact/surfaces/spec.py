@@ -33,13 +33,6 @@ def check_method(method: str) -> None:
         raise ValueError(f"method must be one of {GENERATION_METHODS}; got {method!r}")
 
 
-_SELF_AFFINE_FIELDS = ("hurst", "rolloff_wavelength", "cutoff_wavelength")
-#: The fields of each spectrum kind defined by its PSD (None for every other kind).
-_SPECTRUM_FIELDS = {"self-affine": _SELF_AFFINE_FIELDS, "psd": ("psd",)}
-#: Relative tolerance of "above the largest wavenumber" (cut-offs, table ends).
-Q_RTOL = 1e-12
-
-
 def as_pair(value, name: str) -> tuple:
     """``(value, value)`` for a number, else ``value`` as a 2-tuple (ValueError naming ``name``)."""
     if np.ndim(value) == 0:
@@ -48,6 +41,13 @@ def as_pair(value, name: str) -> tuple:
     if len(value) != 2:
         raise ValueError(f"{name} must be a number or a pair (x, y); got {value!r}")
     return value
+
+
+_SELF_AFFINE_FIELDS = ("hurst", "rolloff_wavelength", "cutoff_wavelength")
+#: The fields of each spectrum kind defined by its PSD (None for every other kind).
+_SPECTRUM_FIELDS = {"self-affine": _SELF_AFFINE_FIELDS, "psd": ("psd",)}
+#: Relative tolerance of "above the largest wavenumber" (cut-offs, table ends).
+Q_RTOL = 1e-12
 
 
 @dataclass(frozen=True)

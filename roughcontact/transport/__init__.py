@@ -19,76 +19,10 @@ without knowing them, so transport depends on contact (for what a probe is,
 and a cell's threshold.
 """
 
-from roughcontact.transport.flow import (
-    ARITHMETIC,
-    DIRECT,
-    FACE_RULES,
-    FLOW_DIRECTIONS,
-    HARMONIC,
-    PERIODIC,
-    SEALED,
-    BandedCholesky,
-    DirectSolver,
-    FaceRule,
-    FlowResult,
-    FlowSetup,
-    JacobiCG,
-    Seal,
-    Sides,
-    solve_flow,
-)
-from roughcontact.transport.probe import (
-    FLOW_COLUMNS,
-    FLOW_QUANTITIES,
-    LEAK_RATE,
-    NO_FLOW,
-    SIDE_CHOICES,
-    FlowProbe,
-    column_name,
-    flow_column_names,
-    flow_columns,
-)
-from roughcontact.transport.references import (
-    PATIR_CHENG_PRESSURE_FLOW,
-    PatirChengFit,
-    checkerboard_conductance,
-    flat_channel_conductance,
-    parallel_conductance,
-    patir_cheng_phi_x,
-    series_conductance,
-)
+from roughcontact.transport import flow, probe, references
+from roughcontact.transport.flow import *  # noqa: F403 (flow.__all__)
+from roughcontact.transport.probe import *  # noqa: F403 (probe.__all__)
+from roughcontact.transport.references import *  # noqa: F403 (references.__all__)
 
-__all__ = [
-    "ARITHMETIC",
-    "DIRECT",
-    "FACE_RULES",
-    "FLOW_COLUMNS",
-    "FLOW_DIRECTIONS",
-    "FLOW_QUANTITIES",
-    "HARMONIC",
-    "LEAK_RATE",
-    "NO_FLOW",
-    "PATIR_CHENG_PRESSURE_FLOW",
-    "PERIODIC",
-    "SEALED",
-    "SIDE_CHOICES",
-    "BandedCholesky",
-    "DirectSolver",
-    "FaceRule",
-    "FlowProbe",
-    "FlowResult",
-    "FlowSetup",
-    "JacobiCG",
-    "PatirChengFit",
-    "Seal",
-    "Sides",
-    "checkerboard_conductance",
-    "column_name",
-    "flat_channel_conductance",
-    "flow_column_names",
-    "flow_columns",
-    "parallel_conductance",
-    "patir_cheng_phi_x",
-    "series_conductance",
-    "solve_flow",
-]
+#: The public names of the stage's modules, from the stage.
+__all__ = [*flow.__all__, *probe.__all__, *references.__all__]

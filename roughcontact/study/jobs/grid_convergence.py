@@ -54,14 +54,7 @@ from roughcontact.elasticity.halfspace import PeriodicHalfSpace
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import arrays_sha256
 from roughcontact.study.config import PILOT_FRACTIONS, GridConvergenceSettings
-from roughcontact.study.jobs.storage import (
-    REBUILD,
-    check_attributes,
-    open_h5,
-    read_surfaces,
-    verify,
-    write_h5,
-)
+from roughcontact.study.jobs import storage
 from roughcontact.study.provenance import NO_RUN, RunInfo, canonical_json, provenance
 from roughcontact.surfaces.multiresolution import band_grid, generate_resolved
 from roughcontact.surfaces.statistics import height_stats, spectral_moments
@@ -118,7 +111,7 @@ def build_grid_surfaces(params: dict, study_seed: int, grid: int, path,
              "grid": int(grid), "band_grid": list(band_grid(spec)),
              "study_seed": int(study_seed), "generator": settings.generator,
              **provenance(run)}
-    write_h5(path, datasets, attrs)
+    storage.write_h5(path, datasets, attrs)
     log.info("grid %d: %d surfaces in %.2f s (band grid %s)", grid, len(seeds),
              time.perf_counter() - start, attrs["band_grid"])
     return attrs
@@ -173,8 +166,9 @@ def solve_grid(params: dict, surfaces_path, grid: int, out_path, run: RunInfo = 
     flagged and logged. Returns the root attributes written.
     """
     settings = GridConvergenceSettings.from_section(params)
-    surfaces = read_surfaces(surfaces_path)
-    check_attributes(surfaces_path, surfaces["attrs"], {"params": params, "grid": int(grid)})
+    surfaces = storage.read_surfaces(surfaces_path)
+    storage.check_attributes(surfaces_path, surfaces["attrs"],
+                             {"params": params, "grid": int(grid)})
     heights = surfaces["heights"]
     wall, cpu = time.perf_counter(), time.process_time()
     approaches = aimed_approaches(settings, surfaces["seeds"])
@@ -203,7 +197,7 @@ def solve_grid(params: dict, surfaces_path, grid: int, out_path, run: RunInfo = 
              "contact_modulus": settings.contact_modulus, "wall_seconds": wall,
              "cpu_seconds": cpu, "surfaces_content_sha256": surfaces["content_sha256"],
              **provenance(run)}
-    write_h5(out_path, datasets, attrs)
+    storage.write_h5(out_path, datasets, attrs)
     return attrs
 
 
@@ -211,14 +205,14 @@ def read_grid_contact(path) -> tuple[PhysicalSweep, dict]:
     """The sweep of a contact file as a :class:`~roughcontact.contact.curves.PhysicalSweep`
     (reference length and nominal area: the period ``L``, ``L^2``) and its attributes;
     the content hash is checked first (:class:`~roughcontact.errors.StoredFileError`)."""
-    with open_h5(path) as f:
+    with storage.open_h5(path) as f:
         names = (*CONTACT_FIELDS, *INTERFACE_SCALARS, "rms_gradient")
         missing = [name for name in names if name not in f]
         if missing:
-            raise StoredFileError(f"{path}: no {', '.join(missing)}; {REBUILD}", path)
+            raise StoredFileError(f"{path}: no {', '.join(missing)}; {storage.REBUILD}", path)
         arrays = {name: f[name][...] for name in names}
         attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
-    verify(path, attrs, arrays_sha256(arrays))
+    storage.verify(path, attrs, arrays_sha256(arrays))
     size = GridConvergenceSettings.from_section(json.loads(attrs["params"])).size
     nan = np.full(arrays["approach"].shape, math.nan)
     sweep = PhysicalSweep(**{name: arrays[name] for name in CONTACT_FIELDS + INTERFACE_SCALARS},
