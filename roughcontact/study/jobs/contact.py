@@ -9,10 +9,8 @@ compliances summed (the pair's file of :func:`roughcontact.study.jobs.influence.
 on a dense first body). The influence and pair jobs are in
 :mod:`roughcontact.study.jobs.influence`.
 
-A job takes its rule's params: the plain ``params()`` of the records of
-:mod:`roughcontact.study.records`, which its first lines turn into those
-records (the job's edge); everything after works on the records. The
-layouts of the files are described in :mod:`roughcontact.study.jobs.storage`.
+Its params become its records in its first lines (the job's edge, as every job of
+:mod:`roughcontact.study.jobs`).
 """
 
 from __future__ import annotations

@@ -6,11 +6,6 @@ block geometry (a dense finite-element matrix or a matrix-free operator); a
 *pair job* sums two bodies' models once, for the contact jobs with a compliant
 counter body on a dense first body (Eq 17-18). The aggregation of a study's
 cells is in :mod:`roughcontact.study.jobs.aggregation`.
-
-A job takes its rule's params: the plain ``params()`` of the records of
-:mod:`roughcontact.study.records`, which its first lines turn into those
-records (the job's edge); everything after works on the records. The
-layouts of the files are described in :mod:`roughcontact.study.jobs.storage`.
 """
 
 from __future__ import annotations
