@@ -5,9 +5,11 @@ surface cells and geometries they are made of), each with its file key, its
 ``params()`` (the configuration's units) and ``from_params``. A *study cell* is a
 surface cell on a geometry at one sigma and E over a nominal-pressure range, with
 the body it is pressed against (a counter body of
-:mod:`roughcontact.study.counter_records`; none: the paper's rigid smooth flat); the
-*contact job* that solves it is shared by every study cell with the same surfaces,
-geometry, sweep end, cap and counter body.
+:mod:`roughcontact.study.counter_records`, in SI units; the null: the paper's rigid
+smooth flat); the *contact job* that solves it (its counter body as ratios to the
+first body's) is shared by every study cell with the same surfaces, geometry, sweep
+end, cap and counter body. :func:`study_columns` gives the cells' columns as a study's
+tables have them.
 """
 
 from __future__ import annotations
@@ -20,12 +22,11 @@ from roughcontact.contact.cell import nondim_pressure
 from roughcontact.study import layout
 from roughcontact.study.config import from_unit, in_unit, in_units
 from roughcontact.study.counter_records import (
-    NO_COUNTERFACE,
-    AnyCounterface,
+    NO_COUNTER_BODY,
+    CounterBody,
+    JobCounter,
     JobFile,
     PairGeometry,
-    counter_from_params,
-    counterface_from_params,
 )
 from roughcontact.study.records import (
     Geometry,
@@ -63,7 +64,7 @@ class ContactJob:
     pressure_end: float
     accuracy: Accuracy = Accuracy()
     nondim_hardness: float | None = None
-    counter: AnyCounterface = NO_COUNTERFACE
+    counter: JobCounter = NO_COUNTER_BODY
 
     @classmethod
     def from_params(cls, params: dict) -> ContactJob:
@@ -73,7 +74,8 @@ class ContactJob:
                    accuracy=Accuracy(params["accuracy"],
                                      tuple(params["expected_error"].items()) or None),
                    nondim_hardness=params.get("hardness"),
-                   counter=counter_from_params(params))
+                   counter=(JobCounter.from_params(params["counter"]) if "counter" in params
+                            else NO_COUNTER_BODY))
 
     def params(self) -> dict:
         """The job as passed to it and stored with its result (``hardness``: the cap)."""
@@ -83,7 +85,7 @@ class ContactJob:
                   "expected_error": self.accuracy.errors()}
         if self.nondim_hardness is not None:
             params["hardness"] = self.nondim_hardness
-        params.update(self.counter.job_params())
+        params.update(self.counter.params())
         return params
 
     def pairs(self) -> dict[str, PairGeometry]:
@@ -131,8 +133,10 @@ class StudyCell:
     ``hardness`` H [Pa]: the cap 0 <= p <= H a capped cell is solved with (None:
     elastic). ``checked_hardness`` [Pa]: the values an elastic cell's results
     are checked against (the share of real area and load above each, no extra
-    solve), flagged beyond ``hardness_threshold``. ``counter_entry``: the configured
-    counter body the plan made ``counterface`` of
+    solve), flagged beyond ``hardness_threshold``. ``counterface``: the body its surfaces
+    are pressed against (:class:`~roughcontact.study.counter_records.CounterBody`; the
+    null :data:`~roughcontact.study.counter_records.NO_COUNTER_BODY`: the paper's rigid
+    smooth flat). ``counter_entry``: the configured counter body the plan made it of
     (:class:`~roughcontact.study.plan.counter_entries.CounterfaceEntry`, with the keys the
     plan's messages name; not a parameter of the cell).
     """
@@ -146,7 +150,7 @@ class StudyCell:
     hardness: float | None = None
     checked_hardness: tuple[float, ...] = ()
     hardness_threshold: float | None = None
-    counterface: AnyCounterface = NO_COUNTERFACE
+    counterface: CounterBody = NO_COUNTER_BODY
     counter_entry: object = field(default=None, compare=False, repr=False)
 
     @classmethod
@@ -162,7 +166,8 @@ class StudyCell:
                    hardness=None if cap is None else float(cap) * MPA,
                    checked_hardness=from_unit(params.get("hardness_MPa") or (), MPA),
                    hardness_threshold=None if threshold is None else float(threshold),
-                   counterface=counterface_from_params(params))
+                   counterface=(CounterBody.from_params(params["counterface"])
+                                if "counterface" in params else NO_COUNTER_BODY))
 
     def params(self) -> dict:
         """The cell as the configuration writes it (sigma in um, E and pressures in MPa),
@@ -212,9 +217,9 @@ class StudyCell:
                           nondim_hardness=self.nondim_hardness, counter=self.counter_job)
 
     @property
-    def counter_job(self) -> AnyCounterface:
-        """The counter body in the job's form (ratios to this cell's sigma and E)."""
-        return self.counterface.job_form(self.sigma, self.E)
+    def counter_job(self) -> JobCounter:
+        """The counter body of its job (ratios to this cell's sigma and E)."""
+        return self.counterface.in_job(self.sigma, self.E)
 
     @property
     def contact_key(self) -> str:
@@ -237,3 +242,14 @@ class StudyCell:
                 "size_mm": in_unit(g.size[0], MM), "nu": g.nu, "mesh": g.mesh,
                 "thickness_mm": in_unit(g.thickness, MM), "sigma_um": in_unit(self.sigma, UM),
                 "E_MPa": in_unit(self.E, MPA), **self.counterface.columns(self.height_scale)}
+
+
+def study_columns(cells) -> list[dict]:
+    """The columns of a study's ``cells`` (:meth:`StudyCell.columns`) as its tables have
+    them: where a cell has a counter body, every cell names its own in ``counter`` (the
+    rigid smooth flat's too); a study without counter bodies keeps its columns."""
+    rows = [cell.columns() for cell in cells]
+    if any("counter" in row for row in rows):
+        for row, cell in zip(rows, cells, strict=True):
+            row.setdefault("counter", cell.counterface.name)
+    return rows

@@ -115,9 +115,10 @@ class GeneratedCell(_SurfaceStatistics):
     :class:`SurfaceSpec` kind (``corr_length`` then only labels the cell);
     contact ``grid`` (nx, ny) over the plan ``size`` (Lx, Ly) [m]; periodic
     or padded filter; the ``method`` that generates them. ``stream``: the seed
-    stream ("" for a study's surfaces; ``counter`` for a counter body's,
-    :class:`Counterface`): it enters the statistics key, so a counter surface of
-    the same statistics as the first is another realisation, not the same one.
+    stream ("" for a study's surfaces; ``counter`` for a counter body's heights,
+    :class:`~roughcontact.study.counter_records.CounterHeights`): it enters the
+    statistics key, so a counter surface of the same statistics as the first is
+    another realisation, not the same one.
     """
 
     acf: str
