@@ -25,8 +25,8 @@ import numpy as np
 
 from roughcontact.contact import counterface
 from roughcontact.elasticity.operators import COARSE_MAX
-from roughcontact.study import layout
-from roughcontact.study.config import in_unit
+from roughcontact.study import codec, layout
+from roughcontact.study.codec import Record, in_unit
 from roughcontact.study.provenance import short_hash
 from roughcontact.study.records import (
     Geometry,
@@ -59,9 +59,6 @@ class _NoHeights:
 
     cell = None
 
-    def params(self) -> dict:
-        return {"surface": None, "surface_key": None}
-
     def height_scale(self, sigma: float, counter_sigma: float) -> float:
         return sigma
 
@@ -92,15 +89,14 @@ NO_HEIGHTS = _NoHeights()
 
 
 @dataclass(frozen=True)
-class CounterHeights:
+class CounterHeights(Record):
     """A rough counter surface: the surface ``cell`` whose file holds its heights (on the
     first cell's grid and plan size; generated with the seed stream ``counter``, or
-    measured), in units of its own sigma."""
+    measured), in units of its own sigma; written as ``surface`` and ``surface_key``
+    (None of :data:`NO_HEIGHTS`)."""
 
-    cell: SurfaceCell
-
-    def params(self) -> dict:
-        return {"surface": self.cell.params(), "surface_key": self.cell.key}
+    cell: SurfaceCell = codec.record(surface_cell_from_params, key="surface")
+    surface_key: str = codec.key_of("cell")
 
     def height_scale(self, sigma: float, counter_sigma: float) -> float:
         """``sqrt(sigma^2 + sigma2^2)``: the rms height of the sum of two independent
@@ -155,14 +151,8 @@ class _NoCompliance:
 
     geometry = None
 
-    def params(self) -> dict:
-        return {"geometry": None, "geometry_key": None}
-
     def modulus_ratio(self, E: float, counter_E) -> float:
         return 0.0
-
-    def in_MPa(self, E) -> None:
-        return None
 
     def label(self, E) -> str:
         return "rigid"
@@ -195,21 +185,17 @@ NO_COMPLIANCE = _NoCompliance()
 
 
 @dataclass(frozen=True)
-class CounterCompliance:
+class CounterCompliance(Record):
     """An elastic counter body: the ``geometry`` whose influence file holds its
-    unit-modulus operator (a block, or a half-space: ``operator`` halfspace)."""
+    unit-modulus operator (a block, or a half-space: ``operator`` halfspace); written as
+    ``geometry`` and ``geometry_key`` (None of :data:`NO_COMPLIANCE`)."""
 
-    geometry: Geometry
-
-    def params(self) -> dict:
-        return {"geometry": self.geometry.params(), "geometry_key": self.geometry.key}
+    geometry: Geometry = codec.record(Geometry)
+    geometry_key: str = codec.key_of("geometry")
 
     def modulus_ratio(self, E: float, counter_E: float) -> float:
         """E1 / E2 of a first body of modulus ``E`` [Pa] on this one of ``counter_E``."""
         return E / counter_E
-
-    def in_MPa(self, E: float) -> float:
-        return in_unit(E, MPA)
 
     def label(self, E: float) -> str:
         """Its legend text at Young's modulus ``E`` [Pa]."""
@@ -272,31 +258,12 @@ class CounterCompliance:
         return DOUBLE_BYTES * (COARSE_MAX**2) ** 2
 
 
-def _heights(params: dict) -> CounterHeights | _NoHeights:
-    """The heights of stored counter parameters (``surface``: none, the smooth face)."""
-    if params["surface"] is None:
-        return NO_HEIGHTS
-    return CounterHeights(surface_cell_from_params(params["surface"]))
-
-
-def _compliance(params: dict) -> CounterCompliance | _NoCompliance:
-    """The compliance of stored counter parameters (``geometry``: none, rigid)."""
-    if params["geometry"] is None:
-        return NO_COMPLIANCE
-    return CounterCompliance(Geometry.from_params(params["geometry"]))
-
-
 # ---------------------------------------------------------------------------
 # The counter body of a study cell (SI) and of its contact job (ratios)
 
 
-@dataclass(frozen=True)
 class _Sources:
-    """What a counter body is made of, on a cell and on its job: its ``heights`` and its
-    ``compliance``."""
-
-    heights: CounterHeights | _NoHeights = NO_HEIGHTS
-    compliance: CounterCompliance | _NoCompliance = NO_COMPLIANCE
+    """What a counter body asks its sources, on a cell and on its job."""
 
     def cells(self) -> dict:
         return self.heights.cells()
@@ -305,32 +272,32 @@ class _Sources:
         return self.compliance.geometries()
 
 
+def _heights():
+    """The counter heights, written flat (``surface``, ``surface_key``)."""
+    return codec.record(CounterHeights, null=NO_HEIGHTS, flatten=True, default=NO_HEIGHTS)
+
+
+def _compliance():
+    """The counter compliance, written flat (``geometry``, ``geometry_key``)."""
+    return codec.record(CounterCompliance, null=NO_COMPLIANCE, flatten=True,
+                        default=NO_COMPLIANCE)
+
+
 @dataclass(frozen=True)
-class CounterBody(_Sources):
+class CounterBody(_Sources, Record):
     """The body a study cell's surfaces are pressed against (Eq 17-18 of Kumar et al.
     2006; :mod:`roughcontact.contact.counterface`) in SI units: its ``heights`` at rms
     height ``sigma`` [m] (0: a smooth face) and its ``compliance`` at Young's modulus
     ``E`` [Pa] (None: rigid). ``rigid_share``: below this share of the pair's
     compliance the contact job treats the counter body as rigid (and logs it). The
-    smooth rigid one is no counter body at all (:data:`NO_COUNTER_BODY`)."""
+    smooth rigid one is no counter body at all (:data:`NO_COUNTER_BODY`). A cell's params
+    hold it under ``counterface`` (sigma in um, E in MPa)."""
 
-    sigma: float = 0.0
-    E: float | None = None
+    heights: CounterHeights | _NoHeights = _heights()
+    sigma: float = codec.si(UM, "sigma_um", default=0.0)
+    compliance: CounterCompliance | _NoCompliance = _compliance()
+    E: float | None = codec.si(MPA, "E_MPa", default=None)
     rigid_share: float = 0.001
-
-    @classmethod
-    def from_params(cls, params: dict) -> CounterBody:
-        """From a cell's ``counterface`` parameters (sigma_um, E_MPa)."""
-        E = params["E_MPa"]
-        return cls(_heights(params), _compliance(params), float(params["sigma_um"]) * UM,
-                   None if E is None else float(E) * MPA, float(params["rigid_share"]))
-
-    def params(self) -> dict:
-        """What the counter body adds to a cell's parameters (um, MPa)."""
-        return {"counterface": {**self.heights.params(), "sigma_um": in_unit(self.sigma, UM),
-                                **self.compliance.params(),
-                                "E_MPa": self.compliance.in_MPa(self.E),
-                                "rigid_share": self.rigid_share}}
 
     @property
     def label(self) -> str:
@@ -358,7 +325,7 @@ class CounterBody(_Sources):
     def in_job(self, sigma: float, E: float) -> JobCounter:
         """The counter body of the contact job on a first body of rms height ``sigma``
         [m] and Young's modulus ``E`` [Pa]: the ratios sigma2 / sigma1 and E1 / E2."""
-        return JobCounter(self.heights, self.compliance, self.sigma / sigma,
+        return JobCounter(self.heights, self.sigma / sigma, self.compliance,
                           self.compliance.modulus_ratio(E, self.E), self.rigid_share)
 
     def summary(self, attrs: dict, height_scale: float) -> dict:
@@ -378,33 +345,24 @@ COUNTER_ATTRIBUTES = ("counter_compliance_share", "counter_treated_as_rigid",
 
 
 @dataclass(frozen=True)
-class JobCounter(_Sources):
+class JobCounter(_Sources, Record):
     """A contact job's counter body: its ``heights`` and ``compliance`` at the ratios
     ``sigma_ratio`` sigma2 / sigma1 and ``modulus_ratio`` E1 / E2 to the first body
     (:meth:`CounterBody.in_job`), with the ``rigid_share`` of :class:`CounterBody`. It
     decides the files the job reads for it, and reads them into the contact's
-    :class:`~roughcontact.contact.counterface.Body`."""
+    :class:`~roughcontact.contact.counterface.Body`. A job's params hold it under
+    ``counter`` (stored with it and hashed)."""
 
+    heights: CounterHeights | _NoHeights = _heights()
     sigma_ratio: float = 0.0
+    compliance: CounterCompliance | _NoCompliance = _compliance()
     modulus_ratio: float = 0.0
     rigid_share: float = 0.001
-
-    @classmethod
-    def from_params(cls, params: dict) -> JobCounter:
-        """From a job's ``counter`` parameters."""
-        return cls(_heights(params), _compliance(params), float(params["sigma_ratio"]),
-                   float(params["modulus_ratio"]), float(params["rigid_share"]))
-
-    def params(self) -> dict:
-        """What the counter body adds to a job's parameters (stored with it and hashed)."""
-        return {"counter": {**self.heights.params(), "sigma_ratio": self.sigma_ratio,
-                            **self.compliance.params(), "modulus_ratio": self.modulus_ratio,
-                            "rigid_share": self.rigid_share}}
 
     def key(self) -> str:
         """What the counter body adds to a job's key: its parameters, hashed (names stay
         short)."""
-        return f"__cf{short_hash(self.params()['counter'], 10)}"
+        return f"__cf{short_hash(self.params(), 10)}"
 
     def pairs(self, first: Geometry) -> dict:
         return self.compliance.pairs(first, self.modulus_ratio, self.rigid_share)
@@ -434,12 +392,10 @@ class _NoCounterBody(_Sources):
     """The paper's counter body, a rigid smooth flat (the null), on a cell and on its job:
     nothing added to parameters, keys, files, columns or costs."""
 
+    heights, compliance = NO_HEIGHTS, NO_COMPLIANCE
     label = ""
     #: Its name in the ``counter`` column of a study of counter bodies.
     name = "rigid smooth flat"
-
-    def params(self) -> dict:
-        return {}
 
     def key(self) -> str:
         return ""
@@ -483,29 +439,19 @@ def counter_name(row) -> str:
 
 
 @dataclass(frozen=True)
-class PairGeometry:
+class PairGeometry(Record):
     """Two bodies' influence models summed once: the ``first`` body's (dense) and the
     ``second``'s scaled by ``modulus_ratio`` E1 / E2, with the ``rigid_share`` that
     decides whether the second is treated as rigid. Its file
     (:func:`roughcontact.study.layout.pair`) is shared by every contact job on the
     same pair (:func:`roughcontact.study.jobs.influence.build_pair`)."""
 
-    first: Geometry
-    second: Geometry
+    first: Geometry = codec.record(Geometry)
+    second: Geometry = codec.record(Geometry)
+    first_key: str = codec.key_of("first")
+    second_key: str = codec.key_of("second")
     modulus_ratio: float
     rigid_share: float
-
-    @classmethod
-    def from_params(cls, params: dict) -> PairGeometry:
-        return cls(first=Geometry.from_params(params["first"]),
-                   second=Geometry.from_params(params["second"]),
-                   modulus_ratio=float(params["modulus_ratio"]),
-                   rigid_share=float(params["rigid_share"]))
-
-    def params(self) -> dict:
-        return {"first": self.first.params(), "second": self.second.params(),
-                "first_key": self.first.key, "second_key": self.second.key,
-                "modulus_ratio": self.modulus_ratio, "rigid_share": self.rigid_share}
 
     @property
     def key(self) -> str:

@@ -121,9 +121,10 @@ def test_counter_columns_name_each_counter_body_and_the_flat_beside_them():
     flat's too in a study of counter bodies, none in a study without."""
     cell = plan_of("quick")[1].cells["fig07"][0]
     heights = CounterHeights(dataclasses.replace(cell.surface, skew=-0.5, kurt=4.0))
-    rough_rigid = CounterBody(heights, NO_COMPLIANCE, sigma=2e-6)
-    smooth_halfspace = CounterBody(NO_HEIGHTS, CounterCompliance(dataclasses.replace(
-        cell.geometry, nu=0.3, operator=InfluenceModel.HALFSPACE)), E=1e6)
+    rough_rigid = CounterBody(heights=heights, sigma=2e-6, compliance=NO_COMPLIANCE)
+    halfspace = dataclasses.replace(cell.geometry, nu=0.3, operator=InfluenceModel.HALFSPACE)
+    smooth_halfspace = CounterBody(heights=NO_HEIGHTS, compliance=CounterCompliance(halfspace),
+                                   E=1e6)
     cells = [dataclasses.replace(cell, counterface=counter)
              for counter in (rough_rigid, smooth_halfspace, NO_COUNTER_BODY)]
     rows = study_columns(cells)

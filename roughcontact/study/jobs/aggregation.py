@@ -25,7 +25,7 @@ from roughcontact.contact import aggregate, plausibility
 from roughcontact.contact import cell as cell_module
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import file_sha256
-from roughcontact.study.config import in_unit
+from roughcontact.study.codec import in_unit
 from roughcontact.study.contact_records import StudyCell, study_columns
 from roughcontact.study.jobs.storage import read_contact
 from roughcontact.study.probes import StudyProbe

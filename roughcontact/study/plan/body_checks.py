@@ -23,7 +23,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from roughcontact.study.config import BuildSettings, in_unit, unit_slips
+from roughcontact.study.codec import in_unit
+from roughcontact.study.config import BuildSettings, unit_slips
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.plan.block_checks import block_problems
 from roughcontact.study.plan.measured_checks import measured_problems

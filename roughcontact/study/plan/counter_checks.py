@@ -16,7 +16,8 @@ from __future__ import annotations
 import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
-from roughcontact.study.config import BuildSettings, in_unit, in_units
+from roughcontact.study.codec import in_unit, in_units
+from roughcontact.study.config import BuildSettings
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.plan.block_checks import block_message, block_problems
 from roughcontact.study.plan.checks import window_message
@@ -55,7 +56,7 @@ def _import_fix(entry: dict, grid, size) -> str | None:
     ``grid`` and plan ``size`` [m]: a window of that size from its first point (a whole
     number of its spacings) resampled to the grid; None where no window has it.
     Tested: the map imported so has that grid and size."""
-    whole = load_measurement(MeasurementImport.from_entry(
+    whole = load_measurement(MeasurementImport.from_params(
         {**entry, "crop_mm": None, "decimate": None, "resample_grid": None}))
     points = [length / spacing for length, spacing in zip(size, whole.spacing, strict=True)]
     if any(abs(p - round(p)) > 1e-6 * p or round(p) > n
@@ -65,7 +66,7 @@ def _import_fix(entry: dict, grid, size) -> str | None:
     options = {"crop_mm": None if window == whole.grid else [0, 0, *in_units(size)],
                "resample_grid": None if window == tuple(grid) else list(grid),
                "decimate": None}
-    trial = MeasuredCell.from_source(MeasurementImport.from_entry({**entry, **options}))
+    trial = MeasuredCell.from_source(MeasurementImport.from_params({**entry, **options}))
     if not _same_plan(trial, grid, size):
         return None
     words = [f"{key}: {value}".replace("'", "") for key, value in options.items()
@@ -84,7 +85,7 @@ def _smaller_area(study: Study, entry: dict, first: SurfaceCell):
         return None
     surfaces = study.surfaces
     spacing = [s / n * MM for s, n in zip(surfaces.size_mm, surfaces.grid, strict=True)]
-    whole = load_measurement(MeasurementImport.from_entry(
+    whole = load_measurement(MeasurementImport.from_params(
         {**entry, "crop_mm": None, "decimate": None, "resample_grid": None}))
     step = max(whole.spacing)  # no larger than the map, nor than the study's area
     side = min(*(n * d for n, d in zip(whole.grid, whole.spacing, strict=True)), *first.size)

@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-from roughcontact.study.config import as_pair, from_unit, in_unit, in_units
+from roughcontact.study.codec import as_pair, from_unit, in_unit, in_units
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.counter_records import (
     NO_COMPLIANCE,
@@ -46,7 +46,7 @@ def import_problems(where: str, entry) -> list[str]:
     """The refusal of a measured map that cannot be imported as its ``entry`` (a
     ``surface:`` or a counter surface's ``measured:``) says, named ``where``."""
     try:
-        MeasuredCell.from_source(MeasurementImport.from_entry(entry))
+        MeasuredCell.from_source(MeasurementImport.from_params(entry))
     except (OSError, ValueError) as err:
         return [f"{where}: {err}"]
     return []
@@ -121,7 +121,7 @@ class MeasuredEntry:
     key: str = field(default="counterface.surface", compare=False)
 
     def counter(self, surfaces, first: SurfaceCell) -> tuple:
-        cell = MeasuredCell.from_source(MeasurementImport.from_entry(self.measured))
+        cell = MeasuredCell.from_source(MeasurementImport.from_params(self.measured))
         sigma = cell.sigma if self.sigma_um is None else float(self.sigma_um) * UM
         return CounterHeights(cell), sigma
 
@@ -256,7 +256,8 @@ class CounterfaceEntry:
         the study's surface settings)."""
         heights, sigma = self.surface.counter(surfaces, cell.surface)
         compliance, E = self.body.counter(cell.geometry)
-        return CounterBody(heights, compliance, sigma, E, self.rigid_share)
+        return CounterBody(heights=heights, sigma=sigma, compliance=compliance, E=E,
+                           rigid_share=self.rigid_share)
 
     def typed_values(self, cell: StudyCell) -> dict:
         """The typed values of the counter body of ``cell``, each with its configuration
