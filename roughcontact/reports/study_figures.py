@@ -11,6 +11,7 @@ row of panels per study with the bands of
 from __future__ import annotations
 
 from roughcontact.reports.plotting import load_aggregates, plot_band
+from roughcontact.study.counter_records import NO_COUNTER_BODY, counter_name
 
 #: Files per study of a figure's ``aggregate_files`` (``rules/common.smk``:
 #: ``get_figure_aggregates``): table, moduli, sidecar, validity.
@@ -44,12 +45,11 @@ def _counter_modelled(cell) -> bool:
 
 def two_bodies_label(cell) -> str:
     """Legend text of a cell of a two-bodies study (its rows of an aggregate table): its
-    counter body (:func:`~roughcontact.study.plan.captions.counter_label`), and whether the
-    contact job treated it as rigid (below ``rigid_share``: no share reported)."""
-    from roughcontact.study.plan.captions import counter_label
-
-    label = counter_label(cell.iloc[0])
-    if label != "rigid smooth flat" and not _counter_modelled(cell):
+    counter body (its ``counter`` column:
+    :func:`~roughcontact.study.counter_records.counter_name`), and whether the contact
+    job treated it as rigid (below ``rigid_share``: no share reported)."""
+    label = counter_name(cell.iloc[0])
+    if label != NO_COUNTER_BODY.name and not _counter_modelled(cell):
         label += " (treated as rigid)"
     return label
 
@@ -85,7 +85,7 @@ def plot_two_bodies(tables):
         colors = iter(f"C{k}" for k in range(10))
         for _, cell in table.groupby("cell", sort=True):
             label = two_bodies_label(cell)
-            color = "k" if label == "rigid smooth flat" else next(colors)
+            color = "k" if label == NO_COUNTER_BODY.name else next(colors)
             for ax, (quantity, y_scale, _) in zip(row_axes, panels, strict=False):
                 plot_band(ax, cell, quantity, y_scale=y_scale, label=label, color=color)
             if _counter_modelled(cell):

@@ -19,7 +19,8 @@ fills every default) and holds the settings records of its sections in SI units;
 ``settings`` makes the one :class:`~roughcontact.study.settings.Study` of them;
 ``records``, ``contact_records`` and ``counter_records`` are the frozen records of
 surface cells, geometries, study cells, contact jobs and counter bodies, each with
-its file key and plain ``params()``; ``sources`` measured files and spectra;
+its file key and plain ``params()`` (``codec``: written and read back from the
+fields, each declaring its key and unit once); ``sources`` measured files and spectra;
 ``layout`` the ``results/`` layout; ``probes`` the one registry of the probes a
 contact job records (the flow: ``flow_settings``); ``provenance`` the version, commit
 and configuration hash of every output; ``presets`` the measured accuracy presets;

@@ -4,10 +4,12 @@
 when the configuration is validated: by the Snakefile, or by
 :func:`validated` for library users and tests). The dataclasses below take a
 validated section and convert its units once (``*_mm`` -> m, ``*_um`` -> m,
-``*_MPa`` -> Pa, ``*_gb`` -> bytes); nothing past this module converts units
-of configuration values or repeats a default. :func:`from_unit` and
-:func:`in_unit` are the two directions of that conversion, for the records
-of :mod:`roughcontact.study.records` and their plain ``params()``.
+``*_MPa`` -> Pa, ``*_gb`` -> bytes), each declared once on its field
+(:mod:`roughcontact.study.codec`, whose :func:`~roughcontact.study.codec.from_unit`
+and :func:`~roughcontact.study.codec.in_unit` are the two directions of that
+conversion, for these settings and for the records of
+:mod:`roughcontact.study.records` and their plain ``params()``); nothing past this
+module converts units of configuration values or repeats a default.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from roughcontact.study import codec
+from roughcontact.study.codec import Record
 from roughcontact.surfaces.spec import SurfaceSpec
 from roughcontact.transport.probe import NO_FLOW, FlowProbe, probe_from_params
 from roughcontact.units import GB, MM, MPA, UM
@@ -35,29 +39,6 @@ if TYPE_CHECKING:
 SCHEMA = Path(__file__).resolve().parents[2] / "config" / "schema.yaml"
 
 
-def in_unit(value: float, unit: float) -> float:
-    """``value`` [SI] in ``unit`` (e.g. :data:`~roughcontact.units.MM`), to 12 significant digits.
-
-    The form of a value for people and files (parameters, keys, labels,
-    table columns): a value read from the configuration comes back as it was
-    written, free of the rounding of the conversion.
-    """
-    return float(f"{value / unit:.12g}")
-
-
-def as_pair(value) -> tuple:
-    """``(a, b)`` of a pair, or ``(value, value)`` of a scalar (the configuration allows both)."""
-    if isinstance(value, list | tuple):
-        return (value[0], value[1])
-    return (value, value)
-
-
-def from_unit(values, unit: float = MM) -> tuple[float, ...] | None:
-    """Values written in ``unit`` (the configuration's) as a tuple in SI units (None stays
-    None)."""
-    return None if values is None else tuple(float(v) * unit for v in values)
-
-
 def unit_slips(key: str, value: float, slips, fits) -> list[str]:
     """The advice for a value of ``key`` that is almost surely a unit slip: for each
     ``(unit, factor)`` of ``slips`` (the unit it may have been typed in, and the factor
@@ -65,16 +46,6 @@ def unit_slips(key: str, value: float, slips, fits) -> list[str]:
     <key>: <value>``."""
     return [f"typed in {unit}? then write {key}: {value * factor:.6g}"
             for unit, factor in slips if fits(value * factor)]
-
-
-def in_units(values, unit: float = MM) -> list[float] | None:
-    """SI values as a list in ``unit`` (:func:`in_unit`; None stays None)."""
-    return None if values is None else [in_unit(v, unit) for v in values]
-
-
-def grid_pair(value) -> tuple[int, int]:
-    """A grid (nx, ny) of a pair or of a scalar (square)."""
-    return tuple(int(v) for v in as_pair(value))
 
 
 class ConfigError(ValueError):
@@ -293,7 +264,7 @@ def load_config(path: str | os.PathLike) -> dict:
 
 
 @dataclass(frozen=True)
-class ContactSettings:
+class ContactSettings(Record):
     """The contact solver of every contact job (config section ``contact``).
 
     ``method``, ``tol`` (dimensionless KKT residual) and ``precision`` of
@@ -301,7 +272,9 @@ class ContactSettings:
     sweep; ``pressure_levels`` nominal pressures per aggregated cell; ``flow`` the
     flow each sweep records (config section ``flow``,
     :mod:`roughcontact.study.flow_settings`; :data:`NO_FLOW`: none), its one probe
-    (:attr:`probes`).
+    (:attr:`probes`). Its params are a contact job's (the ``contact`` section's keys),
+    with the flow probe's settings under ``flow`` where the flow is on (none where it
+    is off: a study without flow keeps its jobs' parameters).
     """
 
     method: str
@@ -309,26 +282,8 @@ class ContactSettings:
     precision: str
     steps: int
     pressure_levels: int
-    flow: FlowProbe = NO_FLOW
-
-    @classmethod
-    def from_section(cls, section: dict) -> ContactSettings:
-        """The settings of a ``contact`` section, or of a contact job's :meth:`params`
-        (which hold the flow probe's under ``flow`` where the flow is on)."""
-        return cls(method=str(section["method"]), tol=float(section["tol"]),
-                   precision=str(section["precision"]), steps=int(section["steps"]),
-                   pressure_levels=int(section["pressure_levels"]),
-                   flow=probe_from_params(section.get("flow")))
-
-    def params(self) -> dict:
-        """The settings as the ``contact`` section writes them (a contact job's params),
-        with the flow probe's settings where the flow is on (none where it is off: a
-        study without flow keeps its jobs' parameters)."""
-        params = {"method": self.method, "tol": self.tol, "precision": self.precision,
-                  "steps": self.steps, "pressure_levels": self.pressure_levels}
-        for probe in self.probes:
-            params[probe.kind] = probe.params()
-        return params
+    flow: FlowProbe = codec.record(probe_from_params, omit=lambda probe: not probe.directions,
+                                   default=NO_FLOW)
 
     @property
     def probes(self) -> tuple:
@@ -339,20 +294,16 @@ class ContactSettings:
 
 
 @dataclass(frozen=True)
-class BuildSettings:
+class BuildSettings(Record):
     """How influence models are built (config section ``body``): the sparse
     ``solver`` and the largest estimated peak memory ``max_bytes`` [bytes]."""
 
     solver: str
-    max_bytes: float
-
-    @classmethod
-    def from_section(cls, body: dict) -> BuildSettings:
-        return cls(solver=str(body["solver"]), max_bytes=float(body["max_memory_gb"]) * GB)
+    max_bytes: float = codec.si(GB, "max_memory_gb")
 
 
 @dataclass(frozen=True)
-class ConvergenceSettings:
+class ConvergenceSettings(Record):
     """The mesh-convergence report (``reports.influence_convergence``), SI units.
 
     ``presets`` compared (mesh preset names; a library user may also give
@@ -366,20 +317,14 @@ class ConvergenceSettings:
 
     presets: tuple[str | MeshSpec, ...] = ("paper", "graded", "refined", "converged")
     surfaces: int = 3
-    sigma: float = 24.5e-6
-    corr_length: float = 1e-3
-    pressures: tuple[float, ...] = (0.3e6, 1e6, 2e6)
-
-    @classmethod
-    def from_section(cls, section: dict) -> ConvergenceSettings:
-        return cls(presets=tuple(section["presets"]), surfaces=int(section["surfaces"]),
-                   sigma=float(section["sigma_um"]) * UM,
-                   corr_length=float(section["b_mm"]) * MM,
-                   pressures=tuple(float(p) * MPA for p in section["pressures_MPa"]))
+    sigma: float = codec.si(UM, "sigma_um", default=24.5e-6)
+    corr_length: float = codec.si(MM, "b_mm", default=1e-3)
+    pressures: tuple[float, ...] = codec.si_tuple(MPA, "pressures_MPa",
+                                                  default=(0.3e6, 1e6, 2e6))
 
 
 @dataclass(frozen=True)
-class SpeedReportSettings:
+class SpeedReportSettings(Record):
     """The speed-against-error report (``reports.speed_vs_error``), SI units.
 
     ``surfaces`` per solver-study cell, the ``grids`` of the grid study,
@@ -398,23 +343,21 @@ class SpeedReportSettings:
     counts: tuple[int, ...] = (5, 10, 20, 40, 60, 120)
     tol_kP: float = 0.02
     tol_area: float = 0.05
-    pressures: tuple[float, ...] = (0.3e6, 1e6, 3e6)
-
-    @classmethod
-    def from_section(cls, section: dict) -> SpeedReportSettings:
-        return cls(surfaces=int(section["surfaces"]), grids=tuple(int(g) for g in section["grids"]),
-                   count_surfaces=int(section["count_surfaces"]),
-                   counts=tuple(int(c) for c in section["counts"]),
-                   tol_kP=float(section["tol_kP"]), tol_area=float(section["tol_area"]),
-                   pressures=tuple(float(p) * MPA for p in section["pressures_MPa"]))
+    pressures: tuple[float, ...] = codec.si_tuple(MPA, "pressures_MPa",
+                                                  default=(0.3e6, 1e6, 3e6))
 
 
 #: Pilot sweep on the coarsest grid: approaches as fractions of the mean initial gap.
 PILOT_FRACTIONS = np.geomspace(0.1, 0.95, 24)
 
 
+def _ascending(cast):
+    """Values read in ascending order, each ``cast``."""
+    return lambda values: tuple(sorted(cast(v) for v in values))
+
+
 @dataclass(frozen=True)
-class GridConvergenceSettings:
+class GridConvergenceSettings(Record):
     """The grid-convergence study (``reports.grid_convergence``), SI units.
 
     ``grids`` (elements per side, ascending), ``surfaces`` seeds, square
@@ -428,38 +371,21 @@ class GridConvergenceSettings:
     which an aggregate counts as converged.
     """
 
-    grids: tuple[int, ...]
+    grids: tuple[int, ...] = codec.field(read=_ascending(int))
     surfaces: int
-    size: float
+    size: float = codec.si(MM, "size_mm")
     hurst: float
-    rolloff_wavelength: float
-    cutoff_wavelength: float
+    rolloff_wavelength: float = codec.si(MM, "rolloff_mm")
+    cutoff_wavelength: float = codec.si(MM, "cutoff_mm")
     generator: str
     rms_gradient: float
-    E: float
+    E: float = codec.si(MPA, "E_MPa")
     nu: float
-    reduced_pressures: tuple[float, ...]
+    reduced_pressures: tuple[float, ...] = codec.field(read=_ascending(float))
     kappa_area: tuple[float, float]
     steps: int
     tol: float
     converged_within: float
-
-    @classmethod
-    def from_section(cls, section: dict) -> GridConvergenceSettings:
-        return cls(grids=tuple(sorted(int(g) for g in section["grids"])),
-                   surfaces=int(section["surfaces"]), size=float(section["size_mm"]) * MM,
-                   hurst=float(section["hurst"]),
-                   rolloff_wavelength=float(section["rolloff_mm"]) * MM,
-                   cutoff_wavelength=float(section["cutoff_mm"]) * MM,
-                   generator=str(section["generator"]),
-                   rms_gradient=float(section["rms_gradient"]),
-                   E=float(section["E_MPa"]) * MPA, nu=float(section["nu"]),
-                   reduced_pressures=tuple(sorted(float(p)
-                                                  for p in section["reduced_pressures"])),
-                   kappa_area=(float(section["kappa_area"][0]),
-                               float(section["kappa_area"][1])),
-                   steps=int(section["steps"]), tol=float(section["tol"]),
-                   converged_within=float(section["converged_within"]))
 
     @property
     def contact_modulus(self) -> float:

@@ -2,30 +2,32 @@
 
 Frozen dataclasses in SI units like those of :mod:`roughcontact.study.records` (the
 surface cells and geometries they are made of), each with its file key, its
-``params()`` (the configuration's units) and ``from_params``. A *study cell* is a
+``params()`` (the configuration's units) and ``from_params``, both declared on its
+fields (:mod:`roughcontact.study.codec`). A *study cell* is a
 surface cell on a geometry at one sigma and E over a nominal-pressure range, with
 the body it is pressed against (a counter body of
-:mod:`roughcontact.study.counter_records`; none: the paper's rigid smooth flat); the
-*contact job* that solves it is shared by every study cell with the same surfaces,
-geometry, sweep end, cap and counter body.
+:mod:`roughcontact.study.counter_records`, in SI units; the null: the paper's rigid
+smooth flat); the *contact job* that solves it (its counter body as ratios to the
+first body's) is shared by every study cell with the same surfaces, geometry, sweep
+end, cap and counter body. :func:`study_columns` gives the cells' columns as a study's
+tables have them.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from roughcontact.contact.cell import nondim_pressure
-from roughcontact.study import layout
-from roughcontact.study.config import from_unit, in_unit, in_units
+from roughcontact.study import codec, layout
+from roughcontact.study.codec import DEFAULT, Record, in_unit
 from roughcontact.study.counter_records import (
-    NO_COUNTERFACE,
-    AnyCounterface,
+    NO_COUNTER_BODY,
+    CounterBody,
+    JobCounter,
     JobFile,
     PairGeometry,
-    counter_from_params,
-    counterface_from_params,
 )
 from roughcontact.study.records import (
     Geometry,
@@ -36,55 +38,49 @@ from roughcontact.units import MM, MPA, UM
 
 
 @dataclass(frozen=True)
-class Accuracy:
+class Accuracy(Record):
     """The accuracy preset a cell is solved with (``accuracy:``; ``"as configured"``
     without one) and the preset's measured ``expected_error`` ((name, relative error)
-    pairs, in the presets file's order; None without a preset)."""
+    pairs, in the presets file's order; None without a preset: left out of a cell's
+    params)."""
 
-    name: str = "as configured"
-    expected_error: tuple[tuple[str, float], ...] | None = None
+    name: str = codec.field(key="accuracy", default="as configured")
+    expected_error: tuple[tuple[str, float], ...] | None = codec.pairs(omit=DEFAULT,
+                                                                      default=None)
 
     def errors(self) -> dict:
         """``expected_error`` as a dict ({} without a preset)."""
         return dict(self.expected_error or ())
 
 
+def _job_accuracy(accuracy: Accuracy) -> dict:
+    """A job's accuracy params: ``expected_error`` always ({} without a preset)."""
+    return {"accuracy": accuracy.name, "expected_error": accuracy.errors()}
+
+
+def _job_accuracy_from(params: dict) -> Accuracy:
+    return Accuracy(params["accuracy"], tuple(params["expected_error"].items()) or None)
+
+
 @dataclass(frozen=True)
-class ContactJob:
+class ContactJob(Record):
     """One contact job: every surface of a surface cell on one geometry, swept in
     non-dimensional form to ``pressure_end`` = P L / (E sigma) (a power of 2).
 
-    ``nondim_hardness``: the cap H L / (E sigma) of a capped job (None: elastic),
-    with which sigma and E no longer only rescale the solution.
+    ``nondim_hardness``: the cap H L / (E sigma) of a capped job (None: elastic,
+    ``hardness`` of its params), with which sigma and E no longer only rescale the
+    solution. Its params are passed to it and stored with its result.
     """
 
-    surface: SurfaceCell
-    geometry: Geometry
+    surface: SurfaceCell = codec.record(surface_cell_from_params)
+    geometry: Geometry = codec.record(Geometry)
+    surface_key: str = codec.key_of("surface")
+    geometry_key: str = codec.key_of("geometry")
     pressure_end: float
-    accuracy: Accuracy = Accuracy()
-    nondim_hardness: float | None = None
-    counter: AnyCounterface = NO_COUNTERFACE
-
-    @classmethod
-    def from_params(cls, params: dict) -> ContactJob:
-        return cls(surface=surface_cell_from_params(params["surface"]),
-                   geometry=Geometry.from_params(params["geometry"]),
-                   pressure_end=float(params["pressure_end"]),
-                   accuracy=Accuracy(params["accuracy"],
-                                     tuple(params["expected_error"].items()) or None),
-                   nondim_hardness=params.get("hardness"),
-                   counter=counter_from_params(params))
-
-    def params(self) -> dict:
-        """The job as passed to it and stored with its result (``hardness``: the cap)."""
-        params = {"surface": self.surface.params(), "geometry": self.geometry.params(),
-                  "surface_key": self.surface.key, "geometry_key": self.geometry.key,
-                  "pressure_end": self.pressure_end, "accuracy": self.accuracy.name,
-                  "expected_error": self.accuracy.errors()}
-        if self.nondim_hardness is not None:
-            params["hardness"] = self.nondim_hardness
-        params.update(self.counter.job_params())
-        return params
+    accuracy: Accuracy = codec.field(write=_job_accuracy, read=_job_accuracy_from,
+                                     flatten=True, default=Accuracy())
+    nondim_hardness: float | None = codec.field(key="hardness", omit=DEFAULT, default=None)
+    counter: JobCounter = codec.record(JobCounter, omit=DEFAULT, default=NO_COUNTER_BODY)
 
     def pairs(self) -> dict[str, PairGeometry]:
         """The pair of influence models summed once for this job, by key: of a compliant
@@ -124,63 +120,38 @@ class ContactJob:
 
 
 @dataclass(frozen=True)
-class StudyCell:
+class StudyCell(Record):
     """One cell of a contact study: a surface cell on a geometry, scaled by ``sigma``
     [m] and ``E`` [Pa] (Eq 28-32) over the nominal ``pressure_range`` (P_min, P_max) [Pa].
+    Its params are the cell as the configuration writes it (sigma in um, E and pressures
+    in MPa) with its surface and geometry keys, passed to the aggregation and the audit.
 
     ``hardness`` H [Pa]: the cap 0 <= p <= H a capped cell is solved with (None:
     elastic). ``checked_hardness`` [Pa]: the values an elastic cell's results
     are checked against (the share of real area and load above each, no extra
-    solve), flagged beyond ``hardness_threshold``. ``counter_entry``: the configured
-    counter body the plan made ``counterface`` of
+    solve), flagged beyond ``hardness_threshold``. ``counterface``: the body its surfaces
+    are pressed against (:class:`~roughcontact.study.counter_records.CounterBody`; the
+    null :data:`~roughcontact.study.counter_records.NO_COUNTER_BODY`: the paper's rigid
+    smooth flat). ``counter_entry``: the configured counter body the plan made it of
     (:class:`~roughcontact.study.plan.counter_entries.CounterfaceEntry`, with the keys the
     plan's messages name; not a parameter of the cell).
     """
 
-    surface: SurfaceCell
-    geometry: Geometry
-    sigma: float
-    E: float
-    pressure_range: tuple[float, float]
-    accuracy: Accuracy = Accuracy()
-    hardness: float | None = None
-    checked_hardness: tuple[float, ...] = ()
-    hardness_threshold: float | None = None
-    counterface: AnyCounterface = NO_COUNTERFACE
-    counter_entry: object = field(default=None, compare=False, repr=False)
-
-    @classmethod
-    def from_params(cls, params: dict) -> StudyCell:
-        cap, expected = params.get("cap_MPa"), params.get("expected_error")
-        threshold = params.get("hardness_threshold")
-        return cls(surface=surface_cell_from_params(params["surface"]),
-                   geometry=Geometry.from_params(params["geometry"]),
-                   sigma=float(params["sigma_um"]) * UM, E=float(params["E_MPa"]) * MPA,
-                   pressure_range=from_unit(params["pressure_MPa"], MPA),
-                   accuracy=Accuracy(params["accuracy"],
-                                     None if expected is None else tuple(expected.items())),
-                   hardness=None if cap is None else float(cap) * MPA,
-                   checked_hardness=from_unit(params.get("hardness_MPa") or (), MPA),
-                   hardness_threshold=None if threshold is None else float(threshold),
-                   counterface=counterface_from_params(params))
-
-    def params(self) -> dict:
-        """The cell as the configuration writes it (sigma in um, E and pressures in MPa),
-        with its surface and geometry keys; passed to the aggregation and the audit."""
-        params = {"surface": self.surface.params(), "geometry": self.geometry.params(),
-                  "sigma_um": in_unit(self.sigma, UM), "E_MPa": in_unit(self.E, MPA),
-                  "pressure_MPa": in_units(self.pressure_range, MPA),
-                  "surface_key": self.surface.key, "geometry_key": self.geometry.key,
-                  "accuracy": self.accuracy.name}
-        if self.accuracy.expected_error is not None:
-            params["expected_error"] = self.accuracy.errors()
-        if self.checked_hardness:
-            params["hardness_MPa"] = in_units(self.checked_hardness, MPA)
-            params["hardness_threshold"] = self.hardness_threshold
-        if self.hardness is not None:
-            params["cap_MPa"] = in_unit(self.hardness, MPA)
-        params.update(self.counterface.params())
-        return params
+    surface: SurfaceCell = codec.record(surface_cell_from_params)
+    geometry: Geometry = codec.record(Geometry)
+    sigma: float = codec.si(UM, "sigma_um")
+    E: float = codec.si(MPA, "E_MPa")
+    pressure_range: tuple[float, float] = codec.si_tuple(MPA, "pressure_MPa")
+    surface_key: str = codec.key_of("surface")
+    geometry_key: str = codec.key_of("geometry")
+    accuracy: Accuracy = codec.record(Accuracy, flatten=True, default=Accuracy())
+    checked_hardness: tuple[float, ...] = codec.si_tuple(MPA, "hardness_MPa", omit=DEFAULT,
+                                                         default=())
+    hardness_threshold: float | None = codec.field(when=lambda c: c.checked_hardness,
+                                                   default=None)
+    hardness: float | None = codec.si(MPA, "cap_MPa", omit=DEFAULT, default=None)
+    counterface: CounterBody = codec.record(CounterBody, omit=DEFAULT, default=NO_COUNTER_BODY)
+    counter_entry: object = codec.unwritten(default=None, compare=False, repr=False)
 
     @property
     def height_scale(self) -> float:
@@ -212,9 +183,9 @@ class StudyCell:
                           nondim_hardness=self.nondim_hardness, counter=self.counter_job)
 
     @property
-    def counter_job(self) -> AnyCounterface:
-        """The counter body in the job's form (ratios to this cell's sigma and E)."""
-        return self.counterface.job_form(self.sigma, self.E)
+    def counter_job(self) -> JobCounter:
+        """The counter body of its job (ratios to this cell's sigma and E)."""
+        return self.counterface.in_job(self.sigma, self.E)
 
     @property
     def contact_key(self) -> str:
@@ -237,3 +208,14 @@ class StudyCell:
                 "size_mm": in_unit(g.size[0], MM), "nu": g.nu, "mesh": g.mesh,
                 "thickness_mm": in_unit(g.thickness, MM), "sigma_um": in_unit(self.sigma, UM),
                 "E_MPa": in_unit(self.E, MPA), **self.counterface.columns(self.height_scale)}
+
+
+def study_columns(cells) -> list[dict]:
+    """The columns of a study's ``cells`` (:meth:`StudyCell.columns`) as its tables have
+    them: where a cell has a counter body, every cell names its own in ``counter`` (the
+    rigid smooth flat's too); a study without counter bodies keeps its columns."""
+    rows = [cell.columns() for cell in cells]
+    if any("counter" in row for row in rows):
+        for row, cell in zip(rows, cells, strict=True):
+            row.setdefault("counter", cell.counterface.name)
+    return rows

@@ -26,7 +26,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from roughcontact.study.config import in_unit, unit_slips
+from roughcontact.study.codec import in_unit
+from roughcontact.study.config import unit_slips
 from roughcontact.transport.flow import FACE_RULES, Seal
 from roughcontact.transport.probe import (
     CONDUCTANCE,

@@ -12,7 +12,8 @@ import dataclasses
 import math
 
 from roughcontact.elasticity.influence import MESH_PRESETS
-from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.codec import in_unit
+from roughcontact.study.config import BuildSettings
 from roughcontact.study.records import Geometry, InfluenceModel
 from roughcontact.units import GB
 

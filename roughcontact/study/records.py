@@ -9,9 +9,10 @@ Each has its file key and its ``params()``: the plain, JSON-able form the
 workflow passes to a job (Snakemake compares it to decide reruns) and stores
 with the result, with the configuration's units (lengths in mm, sigma in um,
 pressures and moduli in MPa); ``from_params`` builds the record again in the
-job. The choices the configuration writes as strings are resolved here once:
-:class:`Generator` (``surfaces.method``), :class:`InfluenceModel`
-(``body.operator``), a type per spectrum kind
+job. Both come from the fields' declarations (:mod:`roughcontact.study.codec`: each
+field's unit and key written once, beside it). The choices the configuration
+writes as strings are resolved here once: :class:`Generator` (``surfaces.method``),
+:class:`InfluenceModel` (``body.operator``), a type per spectrum kind
 (:data:`roughcontact.study.sources.SPECTRA`) and per surface source
 (:class:`GeneratedCell`, :class:`MeasuredCell`).
 
@@ -38,15 +39,9 @@ from typing import ClassVar
 from roughcontact.contact import counterface
 from roughcontact.elasticity.influence import BlockGeometry, CostEstimate, estimate_cost
 from roughcontact.elasticity.operators import HYBRID_MESHES, choose_operator, default_coarse_grid
-from roughcontact.study import sources
-from roughcontact.study.config import (
-    BuildSettings,
-    as_pair,
-    from_unit,
-    grid_pair,
-    in_unit,
-    in_units,
-)
+from roughcontact.study import codec, sources
+from roughcontact.study.codec import DEFAULT, Record, from_unit, grid_pair, in_unit, in_units
+from roughcontact.study.config import BuildSettings
 from roughcontact.study.provenance import short_hash
 from roughcontact.study.sources import MeasurementImport, Spectrum, spectrum_from_params
 from roughcontact.surfaces.spec import SurfaceSpec
@@ -94,16 +89,16 @@ class InfluenceModel(Enum):
 
 
 @dataclass(frozen=True)
-class _SurfaceStatistics:
+class _SurfaceStatistics(Record):
     """What every surface cell has: skewness ``skew`` and kurtosis ``kurt`` (Pearson),
     correlation lengths ``corr_length`` (bx, by) [m], contact ``grid`` (nx, ny) over the
     plan ``size`` (Lx, Ly) [m]."""
 
     skew: float
     kurt: float
-    corr_length: tuple[float, float]
-    grid: tuple[int, int]
-    size: tuple[float, float]
+    corr_length: tuple[float, float] = codec.si_pair(MM, "b_mm")
+    grid: tuple[int, int] = codec.grid()
+    size: tuple[float, float] = codec.si_pair(MM, "size_mm")
 
 
 @dataclass(frozen=True)
@@ -115,39 +110,20 @@ class GeneratedCell(_SurfaceStatistics):
     :class:`SurfaceSpec` kind (``corr_length`` then only labels the cell);
     contact ``grid`` (nx, ny) over the plan ``size`` (Lx, Ly) [m]; periodic
     or padded filter; the ``method`` that generates them. ``stream``: the seed
-    stream ("" for a study's surfaces; ``counter`` for a counter body's,
-    :class:`Counterface`): it enters the statistics key, so a counter surface of
-    the same statistics as the first is another realisation, not the same one.
+    stream ("" for a study's surfaces; ``counter`` for a counter body's heights,
+    :class:`~roughcontact.study.counter_records.CounterHeights`): it enters the
+    statistics key, so a counter surface of the same statistics as the first is
+    another realisation, not the same one.
     """
 
     acf: str
     periodic: bool
-    method: Generator
+    method: Generator = codec.enum(Generator)
     count: int
-    spectrum: Spectrum | None = None
-    stream: str = ""
-
-    @classmethod
-    def from_params(cls, params: dict) -> GeneratedCell:
-        return cls(skew=float(params["skew"]), kurt=float(params["kurt"]),
-                   corr_length=from_unit(as_pair(params["b_mm"])), grid=grid_pair(params["grid"]),
-                   size=from_unit(as_pair(params["size_mm"])), acf=str(params["acf"]),
-                   periodic=bool(params["periodic"]), method=Generator(params["method"]),
-                   count=int(params["count"]),
-                   spectrum=spectrum_from_params(params.get("spectrum")),
-                   stream=str(params.get("stream", "")))
-
-    def params(self) -> dict:
-        """The cell as stored and passed to its job (lengths in mm); ``spectrum`` only
-        with a spectrum, so a cell without one keeps the keys of before spectra."""
-        params = {"skew": self.skew, "kurt": self.kurt, "b_mm": in_units(self.corr_length),
-                  "grid": list(self.grid), "size_mm": in_units(self.size), "acf": self.acf,
-                  "periodic": self.periodic, "method": self.method.value, "count": self.count}
-        if self.spectrum is not None:
-            params["spectrum"] = self.spectrum.params()
-        if self.stream:  # a counter body's: a study's surfaces keep their keys
-            params["stream"] = self.stream
-        return params
+    # only with a spectrum, so a cell without one keeps the keys of before spectra
+    spectrum: Spectrum | None = codec.record(spectrum_from_params, omit=DEFAULT, default=None)
+    # a counter body's: a study's surfaces keep their keys
+    stream: str = codec.field(omit=DEFAULT, default="")
 
     @property
     def statistics_key(self) -> str:
@@ -212,13 +188,15 @@ class MeasuredCell(_SurfaceStatistics):
     deviation; ``file_sha256`` the file's content the workflow was planned with.
     """
 
-    source: MeasurementImport
-    file_sha256: str
-    sigma: float
-    count: ClassVar[int] = 1
-    method: ClassVar[Generator] = Generator.MEASURED
-    acf: ClassVar[str] = "measured"
-    periodic: ClassVar[bool] = False
+    acf: str = codec.constant("measured")
+    periodic: bool = codec.constant(False)
+    method: Generator = codec.constant(Generator.MEASURED)
+    count: int = codec.constant(1)
+    # ``measured`` holds the import options, the file's SHA-256 and the measured sigma
+    source: MeasurementImport = codec.record(MeasurementImport, flatten=True,
+                                             group="measured")
+    file_sha256: str = codec.field(group="measured")
+    sigma: float = codec.si(UM, "sigma_um", group="measured")
     spectrum: ClassVar[None] = None
 
     @classmethod
@@ -233,23 +211,6 @@ class MeasuredCell(_SurfaceStatistics):
                    source=source,
                    file_sha256=sources.load_measurement(source).sha256,
                    sigma=in_unit(stats["sigma"], UM) * UM)
-
-    @classmethod
-    def from_params(cls, params: dict) -> MeasuredCell:
-        info = params["measured"]
-        return cls(skew=float(params["skew"]), kurt=float(params["kurt"]),
-                   corr_length=from_unit(params["b_mm"]), grid=grid_pair(params["grid"]),
-                   size=from_unit(params["size_mm"]), source=MeasurementImport.from_entry(info),
-                   file_sha256=info["file_sha256"], sigma=float(info["sigma_um"]) * UM)
-
-    def params(self) -> dict:
-        """The cell as stored (lengths in mm); ``measured`` holds the import options, the
-        file's SHA-256 and the measured sigma [um]."""
-        return {"skew": self.skew, "kurt": self.kurt, "b_mm": in_units(self.corr_length),
-                "grid": list(self.grid), "size_mm": in_units(self.size), "acf": self.acf,
-                "periodic": self.periodic, "method": self.method.value, "count": self.count,
-                "measured": {**self.source.params(), "file_sha256": self.file_sha256,
-                             "sigma_um": in_unit(self.sigma, UM)}}
 
     @property
     def statistics_key(self) -> str:
@@ -294,46 +255,27 @@ def surface_cell_from_params(params: dict) -> SurfaceCell:
 
 
 @dataclass(frozen=True)
-class Geometry:
+class Geometry(Record):
     """An influence geometry: the block (``nu``, plan ``size`` (Lx, Ly) [m], ``thickness``
     L [m], contact ``grid`` (nx, ny), ``base``, ``mesh`` preset) and its influence model.
+    Its params (lengths in mm) hold every parameter that changes E * C; it is read from
+    them, or from a validated ``body`` section completed by ``grid`` and ``size_mm``.
 
     ``halfspace_tolerance`` ((quantity, relative error or None), ...) sorted by
     quantity: the half-space criterion of ``operator: auto`` (empty otherwise).
     """
 
     nu: float
-    size: tuple[float, float]
-    thickness: float
-    grid: tuple[int, int]
+    size: tuple[float, float] = codec.si_pair(MM, "size_mm")
+    thickness: float = codec.si(MM, "thickness_mm")
+    grid: tuple[int, int] = codec.grid()
     base: str
     mesh: str
-    operator: InfluenceModel = InfluenceModel.DENSE
-    halfspace_tolerance: tuple[tuple[str, float | None], ...] = ()
-
-    @classmethod
-    def from_params(cls, params: dict) -> Geometry:
-        """The geometry of its ``params()``, or of a validated ``body`` section completed
-        by ``grid`` and ``size_mm``."""
-        # a dense geometry's params name no operator (its files keep their names)
-        operator = InfluenceModel(params.get("operator", InfluenceModel.DENSE.value))
-        tolerance = params["halfspace_tolerance"] if operator is InfluenceModel.AUTO else {}
-        return cls(nu=float(params["nu"]), size=from_unit(as_pair(params["size_mm"])),
-                   thickness=float(params["thickness_mm"]) * MM, grid=grid_pair(params["grid"]),
-                   base=str(params["base"]), mesh=str(params["mesh"]), operator=operator,
-                   halfspace_tolerance=tuple(sorted(
-                       (k, None if v is None else float(v)) for k, v in tolerance.items())))
-
-    def params(self) -> dict:
-        """The geometry as stored (lengths in mm): every parameter that changes E * C."""
-        params = {"nu": self.nu, "size_mm": in_units(self.size),
-                  "thickness_mm": in_unit(self.thickness, MM), "grid": list(self.grid),
-                  "base": self.base, "mesh": self.mesh}
-        if self.operator is not InfluenceModel.DENSE:  # the paper's model adds no key
-            params["operator"] = self.operator.value
-        if self.operator is InfluenceModel.AUTO:
-            params["halfspace_tolerance"] = dict(self.halfspace_tolerance)
-        return params
+    # the paper's model adds no key (a dense geometry's files keep their names)
+    operator: InfluenceModel = codec.enum(InfluenceModel, omit=DEFAULT,
+                                          default=InfluenceModel.DENSE)
+    halfspace_tolerance: tuple[tuple[str, float | None], ...] = codec.pairs(
+        float, sort=True, when=lambda g: g.operator is InfluenceModel.AUTO, default=())
 
     @property
     def key(self) -> str:

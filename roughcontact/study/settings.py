@@ -26,17 +26,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
+from roughcontact.study import codec
+from roughcontact.study.codec import Record, in_unit, in_units
 from roughcontact.study.config import (
     BuildSettings,
     ContactSettings,
     ConvergenceSettings,
     GridConvergenceSettings,
     SpeedReportSettings,
-    as_pair,
-    from_unit,
-    grid_pair,
-    in_unit,
-    in_units,
     load_config,
     report_section,
 )
@@ -69,26 +66,19 @@ def thawed(value):
 
 
 @dataclass(frozen=True)
-class SurfaceSettings:
+class SurfaceSettings(Record):
     """The ``surfaces`` section: the contact ``grid`` (nx, ny) over the plan ``size``
     (Lx, Ly) [m], the ``acf`` (or, with a ``spectrum`` entry as configured, its kind),
     ``periodic`` or padded filter, the generator ``method`` and the surface ``count``
     per cell."""
 
-    grid: tuple[int, int]
-    size: tuple[float, float]
+    grid: tuple[int, int] = codec.grid()
+    size: tuple[float, float] = codec.si_pair(MM, "size_mm")
     acf: str
-    spectrum: dict
+    spectrum: dict = codec.field(read=thawed)
     periodic: bool
-    method: Generator
+    method: Generator = codec.enum(Generator)
     count: int
-
-    @classmethod
-    def from_section(cls, section: Mapping) -> SurfaceSettings:
-        return cls(grid=grid_pair(section["grid"]), size=from_unit(as_pair(section["size_mm"])),
-                   acf=str(section["acf"]), spectrum=thawed(section["spectrum"]),
-                   periodic=bool(section["periodic"]), method=Generator(section["method"]),
-                   count=int(section["count"]))
 
     @property
     def size_mm(self) -> tuple[float, float]:

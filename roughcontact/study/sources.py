@@ -5,8 +5,9 @@ A measured surface (a study's ``surface:``) or spectrum (``kind: table`` or
 know the file's content hash (their keys), grid, plan size and statistics.
 :class:`MeasurementImport` holds the import options of a measured file and
 a type per spectrum kind (:data:`SPECTRA`) its parameters, in SI units,
-with their plain ``params()`` (the configuration's units) as the surface
-cells of :mod:`roughcontact.study.records` store them. The readers keep
+with their plain ``params()`` (the configuration's units, declared on their fields:
+:mod:`roughcontact.study.codec`) as the surface cells of
+:mod:`roughcontact.study.records` store them. The readers keep
 what they read per file content (modification time and size) for the life
 of the process, since a plan reads every file several times.
 """
@@ -20,66 +21,41 @@ from typing import ClassVar
 
 from roughcontact.errors import MeasurementError
 from roughcontact.hashes import file_sha256
-from roughcontact.study.config import as_pair, from_unit, grid_pair, in_unit, in_units
+from roughcontact.study import codec
+from roughcontact.study.codec import Record
 from roughcontact.study.provenance import short_hash
 from roughcontact.surfaces import measured
 from roughcontact.units import MM
 
 
-@dataclass(frozen=True)
-class MeasurementImport:
+@dataclass(frozen=True, kw_only=True)
+class MeasurementImport(Record):
     """How a measured height map is imported and prepared (a study's ``surface:``).
 
     The :class:`~roughcontact.surfaces.measured.ImportOptions` of the file,
     lengths in metres: ``spacing`` (dx, dy) [m] or None (from the file),
     ``crop`` (x0, y0, x1, y1) [m] or None, ``resample_grid`` (nx, ny) or None;
     ``decimate`` a factor or None. Relative file paths are relative to the
-    working directory (Snakemake's ``--directory``).
+    working directory (Snakemake's ``--directory``). Read from a validated
+    ``surface:`` entry (lengths in mm; the keys the schema leaves optional may be
+    absent: None) or its params, the options as the configuration writes them
+    (lengths in mm, None where not given): the form stored with a cell and hashed
+    into its key.
     """
 
     file: str
     format: str
-    height_unit: str | None
+    height_unit: str | None = None
     lateral_unit: str
-    spacing: tuple[float, float] | None
+    spacing: tuple[float, float] | None = codec.si_pair(MM, "spacing_mm", default=None)
     fill_holes: float
-    channel: int | str | None
+    channel: int | str | None = None
     decimal: str
-    crop: tuple[float, ...] | None
+    crop: tuple[float, ...] | None = codec.si_tuple(MM, "crop_mm", default=None)
     form_degree: int
-    outliers_sigma: float | None
-    decimate: int | None
-    resample_grid: tuple[int, int] | None
-
-    @classmethod
-    def from_entry(cls, entry: dict) -> MeasurementImport:
-        """The import of a validated ``surface:`` entry (lengths in mm) or of its
-        :meth:`params`; the keys the schema leaves optional may be absent."""
-        spacing, grid = entry.get("spacing_mm"), entry.get("resample_grid")
-        outliers, decimate = entry.get("outliers_sigma"), entry.get("decimate")
-        return cls(
-            file=str(entry["file"]), format=str(entry["format"]),
-            height_unit=entry.get("height_unit"), lateral_unit=str(entry["lateral_unit"]),
-            spacing=None if spacing is None else from_unit(as_pair(spacing)),
-            fill_holes=float(entry["fill_holes"]), channel=entry.get("channel"),
-            decimal=str(entry["decimal"]), crop=from_unit(entry.get("crop_mm")),
-            form_degree=int(entry["form_degree"]),
-            outliers_sigma=None if outliers is None else float(outliers),
-            decimate=None if decimate is None else int(decimate),
-            resample_grid=None if grid is None else grid_pair(grid),
-        )
-
-    def params(self) -> dict:
-        """The options as the configuration writes them (lengths in mm, None where not
-        given): the form stored with a cell and hashed into its key."""
-        return {
-            "file": self.file, "format": self.format, "height_unit": self.height_unit,
-            "lateral_unit": self.lateral_unit, "spacing_mm": in_units(self.spacing),
-            "fill_holes": self.fill_holes, "channel": self.channel, "decimal": self.decimal,
-            "crop_mm": in_units(self.crop), "form_degree": self.form_degree,
-            "outliers_sigma": self.outliers_sigma, "decimate": self.decimate,
-            "resample_grid": None if self.resample_grid is None else list(self.resample_grid),
-        }
+    outliers_sigma: float | None = None
+    decimate: int | None = None
+    resample_grid: tuple[int, int] | None = codec.grid(default=None)
 
     def options(self) -> dict:
         """:meth:`params` without the file's name (what a key hashes beside the content)."""
@@ -156,27 +132,21 @@ def _psd_file(path: str, stamp) -> tuple[str, tuple]:
 
 
 @dataclass(frozen=True)
-class SelfAffineSpectrum:
-    """An isotropic self-affine PSD: Hurst exponent, roll-off and cut-off wavelengths [m]."""
+class SelfAffineSpectrum(Record):
+    """An isotropic self-affine PSD: Hurst exponent, roll-off and cut-off wavelengths [m]
+    (its entry is its params)."""
 
+    kind: str = codec.constant("self-affine")
     hurst: float
-    rolloff: float
-    cutoff: float
-    kind: ClassVar[str] = "self-affine"
+    rolloff: float = codec.si(MM, "rolloff_mm")
+    cutoff: float = codec.si(MM, "cutoff_mm")
     #: The :class:`SurfaceSpec` kind, and the ``acf`` of its cells.
     acf: ClassVar[str] = "self-affine"
     file: ClassVar[None] = None
 
     @classmethod
     def from_entry(cls, entry: dict) -> SelfAffineSpectrum:
-        return cls(hurst=float(entry["hurst"]), rolloff=float(entry["rolloff_mm"]) * MM,
-                   cutoff=float(entry["cutoff_mm"]) * MM)
-
-    from_params = from_entry
-
-    def params(self) -> dict:
-        return {"kind": self.kind, "hurst": self.hurst, "rolloff_mm": in_unit(self.rolloff, MM),
-                "cutoff_mm": in_unit(self.cutoff, MM)}
+        return cls.from_params(entry)
 
     def tag(self) -> str:
         """``sa-<8 hex>``: the hash of its parameters."""
@@ -206,26 +176,19 @@ class _FileSpectrum:
 
 
 @dataclass(frozen=True)
-class TableSpectrum(_FileSpectrum):
+class TableSpectrum(_FileSpectrum, Record):
     """An isotropic PSD read from a CSV table (``q_per_mm,C``,
     :func:`roughcontact.surfaces.measured.read_psd_table`) and the file's SHA-256."""
 
+    kind: str = codec.constant("table")
     file: str
     file_sha256: str
-    kind: ClassVar[str] = "table"
 
     @classmethod
     def from_entry(cls, entry: dict) -> TableSpectrum:
         """Reads the file (relative paths from the working directory) for its hash."""
         path = str(entry["file"])
         return cls(file=path, file_sha256=psd_file(path)[0])
-
-    @classmethod
-    def from_params(cls, params: dict) -> TableSpectrum:
-        return cls(file=params["file"], file_sha256=params["file_sha256"])
-
-    def params(self) -> dict:
-        return {"kind": self.kind, "file": self.file, "file_sha256": self.file_sha256}
 
     def tag(self) -> str:
         """``tab-<12 hex>``: the file's SHA-256 as ``sha256sum`` prints it."""
@@ -236,13 +199,13 @@ class TableSpectrum(_FileSpectrum):
 
 
 @dataclass(frozen=True)
-class MeasuredSpectrum(_FileSpectrum):
+class MeasuredSpectrum(_FileSpectrum, Record):
     """The isotropic PSD of a measured height map (its import, without decimation or
     resampling: the measurement's own grid) and the file's SHA-256."""
 
-    source: MeasurementImport
+    kind: str = codec.constant("measured")
+    source: MeasurementImport = codec.record(MeasurementImport, flatten=True)
     file_sha256: str
-    kind: ClassVar[str] = "measured"
 
     @property
     def file(self) -> str:
@@ -251,16 +214,9 @@ class MeasuredSpectrum(_FileSpectrum):
     @classmethod
     def from_entry(cls, entry: dict) -> MeasuredSpectrum:
         """Reads the measurement for its hash."""
-        source = MeasurementImport.from_entry({**entry, "decimate": None, "resample_grid": None})
+        source = MeasurementImport.from_params({**entry, "decimate": None,
+                                                "resample_grid": None})
         return cls(source=source, file_sha256=load_measurement(source).sha256)
-
-    @classmethod
-    def from_params(cls, params: dict) -> MeasuredSpectrum:
-        return cls(source=MeasurementImport.from_entry(params),
-                   file_sha256=params["file_sha256"])
-
-    def params(self) -> dict:
-        return {"kind": self.kind, **self.source.params(), "file_sha256": self.file_sha256}
 
     def tag(self) -> str:
         """``mpsd-<12 hex>-<8 hex>``: the file's SHA-256 and the hash of the import options."""

@@ -220,13 +220,17 @@ def test_the_figures_draw_only_surfaces_made_for_their_cells(tmp_path):
 
 
 #: The counter columns of a cell pressed against a half-space, a block, or nothing (the
-#: rigid smooth flat: NaN), as the aggregate tables write them.
-HALFSPACE = {"counter_body": "half-space E 110000 MPa nu 0.26", "counter_sigma_um": 1.5,
+#: rigid smooth flat: named, its other counter columns NaN), as the aggregate tables
+#: write them.
+HALFSPACE = {"counter": "half-space E 110000 MPa nu 0.26 (sigma 1.5 um)",
+             "counter_body": "half-space E 110000 MPa nu 0.26", "counter_sigma_um": 1.5,
              "counter_skew": 0.0, "counter_kurt": 3.0}
-BLOCK = {"counter_body": "block E 210000 MPa nu 0.3 10 mm refined", "counter_sigma_um": 0.8,
+BLOCK = {"counter": "block E 210000 MPa nu 0.3 10 mm refined (sigma 0.8 um)",
+         "counter_body": "block E 210000 MPa nu 0.3 10 mm refined", "counter_sigma_um": 0.8,
          "counter_skew": 0.0, "counter_kurt": 3.0}
-FLAT = {"counter_body": float("nan"), "counter_sigma_um": float("nan"),
-        "counter_skew": float("nan"), "counter_kurt": float("nan")}
+FLAT = {"counter": "rigid smooth flat", "counter_body": float("nan"),
+        "counter_sigma_um": float("nan"), "counter_skew": float("nan"),
+        "counter_kurt": float("nan")}
 
 
 def two_bodies_table(counters, shares, k_P, E_MPa) -> pd.DataFrame:
@@ -293,6 +297,13 @@ def test_plot_two_bodies_draws_each_counter_body_beside_the_rigid_flat():
     assert pad[0].get_title(loc="left").startswith("pad_on_disc: first body")
     assert "$E$ = 2000 MPa" in pad[0].get_title(loc="left")
     assert plates[3].get_ylabel() == "share of the mean-plane deflection $d_b$ [%]"
+    plt.close(fig)
+    # the legend is the table's counter column, as written
+    named = two_bodies_table([HALFSPACE | {"counter": "the disc"}, FLAT], [0.015, None],
+                             [1e9, 1.1e9], 2000.0)
+    fig = plot_two_bodies({"pad_on_disc": named})
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == [
+        "the disc", "rigid smooth flat"]
     plt.close(fig)
     # a study of one body only (no counter columns): no share, said so, on its P axis
     one = two_bodies_table([FLAT], [None], [1e9], 255.5)

@@ -8,6 +8,7 @@ roughcontact.study.plan.figures; the figure rule's params.caption), so that each
 true for every shipped config.
 """
 
+import dataclasses
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -15,9 +16,20 @@ import jinja2
 import pytest
 
 from roughcontact.study.config import load_config
-from roughcontact.study.plan.captions import counter_label, panels
+from roughcontact.study.contact_records import study_columns
+from roughcontact.study.counter_records import (
+    NO_COMPLIANCE,
+    NO_COUNTER_BODY,
+    NO_HEIGHTS,
+    CounterBody,
+    CounterCompliance,
+    CounterHeights,
+    counter_name,
+)
+from roughcontact.study.plan.captions import panels
 from roughcontact.study.plan.cells import figure_caption, study_plan
 from roughcontact.study.plan.figures import FIGURES, Kind
+from roughcontact.study.records import InfluenceModel
 from roughcontact.study.settings import Study
 
 REPO = Path(__file__).resolve().parents[2]
@@ -103,13 +115,29 @@ def test_the_leakage_caption_names_the_configured_seal_and_its_cells():
     assert "along x and y, y dashed" in shipped and "along y dotted" in shipped
 
 
-def test_counter_labels_and_panels():
-    assert counter_label({}) == "rigid smooth flat"
-    assert counter_label({"counter_body": float("nan")}) == "rigid smooth flat"
-    assert counter_label({"counter_body": "rigid", "counter_sigma_um": 2.0, "counter_skew": -0.5,
-                          "counter_kurt": 4.0}) == "rigid (sigma 2 um, Sk -0.5, Ku 4)"
-    assert counter_label({"counter_body": "half-space E 1 MPa nu 0.3", "counter_sigma_um": 0.0,
-                          "counter_skew": float("nan")}) == "half-space E 1 MPa nu 0.3 (smooth)"
+def test_counter_columns_name_each_counter_body_and_the_flat_beside_them():
+    """The ``counter`` column the figures and captions read: written by the counter body
+    (its body, and its surface in brackets, Sk and Ku unless Gaussian), the rigid smooth
+    flat's too in a study of counter bodies, none in a study without."""
+    cell = plan_of("quick")[1].cells["fig07"][0]
+    heights = CounterHeights(dataclasses.replace(cell.surface, skew=-0.5, kurt=4.0))
+    rough_rigid = CounterBody(heights=heights, sigma=2e-6, compliance=NO_COMPLIANCE)
+    halfspace = dataclasses.replace(cell.geometry, nu=0.3, operator=InfluenceModel.HALFSPACE)
+    smooth_halfspace = CounterBody(heights=NO_HEIGHTS, compliance=CounterCompliance(halfspace),
+                                   E=1e6)
+    cells = [dataclasses.replace(cell, counterface=counter)
+             for counter in (rough_rigid, smooth_halfspace, NO_COUNTER_BODY)]
+    rows = study_columns(cells)
+    assert [row["counter"] for row in rows] == [
+        "rigid (sigma 2 um, Sk -0.5, Ku 4)", "half-space E 1 MPa nu 0.3 (smooth)",
+        "rigid smooth flat"]
+    assert [counter_name(row) for row in rows] == [row["counter"] for row in rows]
+    assert "counter" not in cells[2].columns()  # the flat names itself only beside others
+    assert study_columns(cells[2:]) == [cell.columns()]  # a study without: its columns
+    assert counter_name(study_columns(cells[2:])[0]) == "rigid smooth flat"
+
+
+def test_panels():
     assert panels(["refined"]) == "one panel, the refined mesh"
     assert panels(["paper", "graded", "converged"]) == (
         "from left to right the paper's mesh (5 uniform trilinear layers), the graded mesh "

@@ -123,7 +123,7 @@ def test_a_counter_map_that_cannot_be_imported_is_refused_naming_its_file_key(tm
                               "lines with #")
     headed.write_text("# h1,h2\n" + rows + "\n")  # the advice, followed
     (cell,) = study_plan(Study.from_config(validated(section))).cells["pad"]
-    assert cell.counterface.surface.cell.grid == (16, 16)
+    assert cell.counterface.heights.cell.grid == (16, 16)
 
 
 def test_an_axis_that_names_a_value_twice_is_refused_naming_the_repeat():
@@ -263,7 +263,7 @@ def test_a_counter_map_smaller_than_the_surface_is_told_an_area_both_have(tmp_pa
     assert (size, options) == ("sweeps.pad.size_mm: 1.6", ["resample_grid: [11, 11]"])
     followed = follow(follow(cfg, size), f"{key}.{options[0]}")
     (cell,) = study_plan(Study.from_config(validated(followed))).cells["pad"]
-    assert cell.surface.grid == cell.counterface.surface.cell.grid == (11, 11)
+    assert cell.surface.grid == cell.counterface.heights.cell.grid == (11, 11)
 
 
 def test_a_counter_map_whose_spacing_does_not_divide_the_surface_gets_a_window_it_has(
@@ -282,4 +282,4 @@ def test_a_counter_map_whose_spacing_does_not_divide_the_surface_gets_a_window_i
     for option in options:
         followed = follow(followed, f"{key}.{option}")
     (cell,) = study_plan(Study.from_config(validated(followed))).cells["pad"]
-    assert cell.counterface.surface.cell.grid == cell.surface.grid == (16, 16)
+    assert cell.counterface.heights.cell.grid == cell.surface.grid == (16, 16)

@@ -20,7 +20,12 @@ from roughcontact.contact.cell import BULK_FACTOR
 from roughcontact.elasticity.protocol import DenseInfluence
 from roughcontact.study.config import ConfigError, validated
 from roughcontact.study.contact_records import ContactJob, StudyCell
-from roughcontact.study.counter_records import NO_COUNTERFACE, RIGID
+from roughcontact.study.counter_records import (
+    NO_COMPLIANCE,
+    NO_COUNTER_BODY,
+    CounterBody,
+    JobCounter,
+)
 from roughcontact.study.jobs.contact import contact_problem
 from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.plan.checks import ConfigProblems
@@ -41,9 +46,11 @@ def test_a_smooth_rigid_counter_body_plans_todays_jobs():
     explicit = study_plan(Study.from_config(
             config(counterface={"surface": "smooth", "body": "rigid"})))
     assert list(explicit.jobs) == list(today.jobs)
-    assert all(cell.counterface is NO_COUNTERFACE for cell in explicit.cells["pair"])
-    assert all(job.counter is NO_COUNTERFACE and set(job.files()) == {"surfaces", "influence"}
+    assert all(cell.counterface is NO_COUNTER_BODY for cell in explicit.cells["pair"])
+    assert all(job.counter is NO_COUNTER_BODY and set(job.files()) == {"surfaces", "influence"}
                for job in today.jobs.values())
+    assert all("counterface" not in cell.params() and "counter" not in cell.columns()
+               for cell in explicit.cells["pair"])
     assert all("__cf" not in key for key in today.jobs)
 
 
@@ -51,7 +58,7 @@ def test_a_counter_surface_is_another_realisation_of_its_statistics():
     plan = study_plan(Study.from_config(config(counterface={"surface": {"sigma_um": 10.0},
                                           "body": {"kind": "halfspace", "E_MPa": 2000.0}})))
     (cell,) = plan.cells["pair"]
-    first, counter = cell.surface, cell.counterface.surface.cell
+    first, counter = cell.surface, cell.counterface.heights.cell
     assert (counter.skew, counter.kurt, counter.corr_length) == (
         first.skew, first.kurt, first.corr_length)
     assert counter.statistics_key != first.statistics_key
@@ -60,8 +67,12 @@ def test_a_counter_surface_is_another_realisation_of_its_statistics():
     assert counter.key in plan.surfaces and first.key in plan.surfaces
     assert cell.height_scale == pytest.approx(np.hypot(24.5e-6, 10e-6), rel=1e-15)
     job = cell.job
-    assert job.counter.surface.sigma_ratio == pytest.approx(10.0 / 24.5)
-    assert job.counter.body.modulus_ratio == pytest.approx(511.0 / 2000.0)
+    assert isinstance(cell.counterface, CounterBody) and isinstance(job.counter, JobCounter)
+    assert cell.counterface.sigma == 10.0 * 1e-6 and cell.counterface.E == 2000e6
+    assert job.counter.sigma_ratio == pytest.approx(10.0 / 24.5)
+    assert job.counter.modulus_ratio == pytest.approx(511.0 / 2000.0)
+    assert job.counter.heights == cell.counterface.heights  # the same sources, scaled
+    assert cell.columns()["counter"] == "half-space E 2000 MPa nu 0 (sigma 10 um)"
     # a half-space on a dense first body: the pair is summed once, its file the job's
     assert set(job.files()) == {"surfaces", "influence", "counter_surfaces", "counter_influence"}
     assert job.files()["counter_influence"].path.startswith("results/influence/pairs/")
@@ -76,8 +87,8 @@ def test_a_list_of_counter_bodies_is_an_axis():
         {"body": {"kind": "block", "E_MPa": 1022.0}},
         {"body": "rigid"}])))
     cells = plan.cells["pair"]
-    assert [c.counterface.body.E for c in cells] == [511e6, 1022e6, None]
-    assert cells[2].counterface is NO_COUNTERFACE
+    assert [c.counterface.E for c in cells[:2]] == [511e6, 1022e6]
+    assert cells[2].counterface is NO_COUNTER_BODY
     assert len({c.contact_key for c in cells}) == 3
 
 
@@ -106,13 +117,13 @@ def test_a_measured_counter_surface_on_another_grid_is_refused_with_its_fix(meas
     plan = study_plan(Study.from_config(
             config(counterface=measured_entry(measured, resample_grid=[16, 16]))))
     (cell,) = plan.cells["pair"]
-    assert cell.counterface.surface.cell.grid == (16, 16)
-    assert cell.counterface.surface.sigma == pytest.approx(cell.counterface.surface.cell.sigma)
+    assert cell.counterface.heights.cell.grid == (16, 16)
+    assert cell.counterface.sigma == pytest.approx(cell.counterface.heights.cell.sigma)
     # measured face up like the first surface, the map meets every surface mirrored in x
     z1 = np.random.default_rng(3).standard_normal((3, 16, 16))
     z2 = np.random.default_rng(4).standard_normal((1, 16, 16))
-    r = cell.job.counter.surface.sigma_ratio
-    facing = cell.job.counter.surface.cell.facing(z2, r, "x")
+    r = cell.job.counter.sigma_ratio
+    facing = cell.job.counter.heights.cell.facing(z2, r, "x")
     problem = contact_problem(cell.job, z1, None, counterface.Body(facing))
     np.testing.assert_allclose(problem.heights, (z1 + r * z2[:, :, ::-1]) / np.hypot(1, r),
                                rtol=1e-14)
@@ -129,7 +140,7 @@ def test_a_measured_counter_surface_of_another_size_is_told_to_crop(measured):
     plan["surfaces"]["size_mm"] = [1.2, 1.2]
     plan["surfaces"]["grid"] = [8, 8]
     (cell,) = study_plan(Study.from_config(plan)).cells["pair"]
-    assert cell.counterface.surface.cell.grid == (8, 8)
+    assert cell.counterface.heights.cell.grid == (8, 8)
 
 
 def test_counter_entries_that_mix_kinds_are_refused_in_plain_words(measured):
@@ -204,8 +215,9 @@ def test_the_two_bodies_config_plans_a_pair_beside_each_rigid_flat():
     plan = study_plan(Study.from_config(validated(raw)))
     for name in ("pad_on_disc", "steel_plates"):
         pair, flat = plan.cells[name]
-        assert flat.counterface is NO_COUNTERFACE and pair.counterface.body is not RIGID
+        assert flat.counterface is NO_COUNTER_BODY
+        assert pair.counterface.compliance is not NO_COMPLIANCE
         assert pair.surface == flat.surface  # the same surfaces, against each body
     kinds = {g.operator.value for n in plan.studies for c in plan.cells[n]
-             for g in c.counterface.body.geometries().values()}
+             for g in c.counterface.geometries().values()}
     assert kinds == {"halfspace", "dense"}

@@ -69,7 +69,7 @@ def spiky_patch(root, n=16, spike=60.0):
     z /= z.std()
     z[n // 2, n // 2] += spike
     np.save(root / "patch.npy", z)
-    source = MeasurementImport.from_entry({
+    source = MeasurementImport.from_params({
         "file": str(root / "patch.npy"), "format": "npy", "height_unit": "um",
         "lateral_unit": "mm", "spacing_mm": [0.126 / n, 0.0944 / n], "fill_holes": 0,
         "decimal": "auto", "form_degree": 1})

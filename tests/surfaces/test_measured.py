@@ -331,7 +331,7 @@ def surface_entry(**surface) -> dict:
 
 def cell_key(entry: dict) -> str:
     """The key of the surface cell of a measured ``surface:`` entry."""
-    return MeasuredCell.from_source(MeasurementImport.from_entry(entry)).key
+    return MeasuredCell.from_source(MeasurementImport.from_params(entry)).key
 
 
 def test_measured_key_follows_content_and_options_not_the_name(tmp_path):

@@ -25,8 +25,8 @@ from roughcontact.contact import aggregate, plausibility
 from roughcontact.contact import cell as cell_module
 from roughcontact.errors import StoredFileError
 from roughcontact.hashes import file_sha256
-from roughcontact.study.config import in_unit
-from roughcontact.study.contact_records import StudyCell
+from roughcontact.study.codec import in_unit
+from roughcontact.study.contact_records import StudyCell, study_columns
 from roughcontact.study.jobs.storage import read_contact
 from roughcontact.study.probes import StudyProbe
 from roughcontact.study.provenance import NO_RUN, RunInfo, atomic_path, provenance
@@ -129,10 +129,11 @@ def _check_probes(path, stored: tuple, probes: tuple) -> None:
             "configured probes", path)
 
 
-def _aggregate_cell(index: int, cell: StudyCell, path, levels: int,
+def _aggregate_cell(index: int, cell: StudyCell, columns: dict, path, levels: int,
                     probes: tuple[StudyProbe, ...] = ()) -> _CellTables:
-    """Aggregate one cell's contact file at ``levels`` nominal pressures over its range
-    (with what the study-side records of its ``probes`` add: the flow's leak rate and
+    """Aggregate one cell's contact file at ``levels`` nominal pressures over its range,
+    labelled with its ``columns`` (:func:`~roughcontact.study.contact_records.study_columns`;
+    with what the study-side records of its ``probes`` add: the flow's leak rate and
     percolation thresholds, where the flow is on)."""
     nd, attrs = read_contact(path, job=cell.job.params())  # solved for this cell's job
     _check_probes(path, nd.probe_columns.probes, probes)
@@ -142,7 +143,7 @@ def _aggregate_cell(index: int, cell: StudyCell, path, levels: int,
                                                   hardness=cell.hardness)
     frame, implausible = _plausibility(cell, frame)
     frame = _with_probe_columns(frame, probes)
-    labels = {"cell": index, "label": label, "contact_key": key, **cell.columns()}
+    labels = {"cell": index, "label": label, "contact_key": key, **columns}
     probed = {record.kind: record.cell_rows(physical, {"cell": index, "label": label,
                                                        "contact_key": key})
               for record in probes}
@@ -188,8 +189,10 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
 
     ``contact_paths`` maps a contact key to its file. The table has one row per
     cell and pressure level (:func:`roughcontact.contact.aggregate.aggregate_cell`
-    columns plus the cell's parameters); the moduli table one row per cell and
-    surface (E_u, Eq 36) with the cell summary in the sidecar. Unconverged
+    columns plus the cell's parameters, as
+    :func:`~roughcontact.study.contact_records.study_columns` gives them: with counter
+    bodies, each cell's ``counter``); the moduli table one row per cell and surface
+    (E_u, Eq 36) with the cell summary in the sidecar. Unconverged
     solves are excluded by the aggregation and counted in both. With
     ``validity_path``, the validity table (:func:`validity_rows`: the share of
     each elastic cell's real area and load above each hardness it names, no
@@ -201,8 +204,10 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
     the leak rate of its seal), and the sidecar each record's entry under its kind
     (each cell's percolation thresholds).
     """
-    parts = [_aggregate_cell(index, cell, contact_paths[cell.contact_key], levels, probes)
-             for index, cell in enumerate(cells)]
+    parts = [_aggregate_cell(index, cell, columns, contact_paths[cell.contact_key], levels,
+                             probes)
+             for index, (cell, columns) in enumerate(zip(cells, study_columns(cells),
+                                                         strict=True))]
     table = pd.concat([part.rows for part in parts], ignore_index=True)
     with atomic_path(table_path) as tmp:
         table.to_csv(tmp, index=False)

@@ -99,7 +99,7 @@ class ContactProblem:
 
 class _ModelReader:
     """How a counter body's files are read (for
-    :meth:`~roughcontact.study.counter_records.Counterface.read`): each checked to have
+    :meth:`~roughcontact.study.counter_records.JobCounter.read`): each checked to have
     been made for its surface cell, geometry or pair, an operator certified."""
 
     @staticmethod

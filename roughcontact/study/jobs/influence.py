@@ -21,7 +21,8 @@ from roughcontact.elasticity import definiteness, influence, operators
 from roughcontact.elasticity.halfspace import halfspace_influence
 from roughcontact.elasticity.protocol import DenseInfluence
 from roughcontact.errors import FactorizationError
-from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.codec import in_unit
+from roughcontact.study.config import BuildSettings
 from roughcontact.study.counter_records import PairGeometry
 from roughcontact.study.jobs.storage import (
     read_influence,

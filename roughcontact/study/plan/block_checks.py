@@ -16,7 +16,8 @@ import dataclasses
 import math
 
 from roughcontact.elasticity.influence import MAX_SLENDERNESS, shape_problems
-from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.codec import in_unit
+from roughcontact.study.config import BuildSettings
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.plan.studies import PATCH_THICKNESS
 from roughcontact.study.records import Geometry, InfluenceModel, MeasuredCell

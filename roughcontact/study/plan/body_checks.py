@@ -2,11 +2,14 @@
 
 A study cell presses its surfaces (the first body: the study's surface cell, sigma,
 block and E) against a counter body (Eq 17-18: its own surface, sigma, block or
-half-space and E; none for the paper's rigid smooth flat). :func:`cell_bodies` gives
-both as :class:`Body` records with the configuration keys each value comes from
-(``sweeps.pad.E_MPa[1]``, ``body.thickness_mm``, ``counterface.body.E_MPa``,
-``sweeps.pad.counterface[1].surface.sigma_um``), and the checks below run on every
-body alike: one code, whichever body a value belongs to.
+half-space and E; none for the paper's rigid smooth flat). Each body's typed values
+come with the configuration keys they were written under (``sweeps.pad.E_MPa[1]``,
+``body.thickness_mm``, ``counterface.body.E_MPa``,
+``sweeps.pad.counterface[1].surface.sigma_um``): the first body's from the cell and its
+study's entry (:func:`first_body`), the counter body's from its configured entry
+(:meth:`~roughcontact.study.plan.counter_entries.CounterfaceEntry.typed_values`); the
+checks below run on every body alike (:func:`body_problems`): one code, whichever
+body a value belongs to.
 
 :func:`check_plausible` refuses values that are almost surely a unit slip
 (:data:`PLAUSIBLE`): sigma, E, the largest nominal pressure over E, and a block
@@ -19,14 +22,13 @@ the value in the unit it was likely typed in where that value passes; measured m
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 
-from roughcontact.study.config import BuildSettings, in_unit, unit_slips
+from roughcontact.study.codec import in_unit
+from roughcontact.study.config import BuildSettings, unit_slips
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.plan.block_checks import block_problems
-from roughcontact.study.plan.counter_entries import CounterfaceEntry
 from roughcontact.study.plan.measured_checks import measured_problems
-from roughcontact.study.records import Geometry, InfluenceModel, MeasuredCell, SurfaceCell
+from roughcontact.study.records import Geometry, InfluenceModel, MeasuredCell
 from roughcontact.study.settings import Study
 from roughcontact.units import MM, MPA, UM
 
@@ -41,28 +43,6 @@ _SLIPS = {"sigma_um": (("m", 1e6), ("mm", 1e3), ("nm", 1e-3)),
 _UNITS = {"sigma_um": "um", "E_MPa": "MPa", "thickness_mm": "mm"}
 
 
-@dataclass(frozen=True)
-class Body:
-    """One body of a study cell as the checks see it: ``surface`` (None: smooth) of
-    height standard deviation ``sigma`` [m], ``geometry`` (None: rigid) of Young's
-    modulus ``E`` [Pa], pressed up to ``p_max`` [Pa]; ``keys`` the configuration key
-    of each value (``sigma_um``, ``E_MPa``, ``thickness_mm``; absent where the value
-    is not typed: a measured sigma, a patch's thickness, a half-space's) and of a
-    measured surface's import (``measured``: ``sweeps.pad.surface``,
-    ``counterface.surface.measured``); ``where`` the study's configuration path
-    (``sweeps.pad``); ``entry`` the configured counter body it is (None: the first
-    body)."""
-
-    where: str
-    surface: SurfaceCell | None
-    sigma: float
-    geometry: Geometry | None
-    E: float | None
-    p_max: float
-    keys: dict
-    entry: CounterfaceEntry | None = None
-
-
 def _axis_key(where: str, entry: dict, key: str, value: float) -> str:
     """The key of ``value`` of a study axis: ``where.key``, with the index of the value
     nearest it when the study lists several."""
@@ -73,35 +53,31 @@ def _axis_key(where: str, entry: dict, key: str, value: float) -> str:
     return f"{where}.{key}[{index}]"
 
 
-def first_body(study: Study, name: str, cell: StudyCell) -> Body:
-    """The first body of a study cell (of the figure or sweep ``name``)."""
+def first_body(study: Study, name: str, cell: StudyCell) -> dict:
+    """The typed values of the first body of a study cell (of the figure or sweep
+    ``name``), each with its configuration key: ``E_MPa`` (E [Pa]), ``sigma_um`` (sigma
+    [m]; absent for a measured surface's own), ``measured`` (its measured cell) and
+    ``thickness_mm`` (its block's geometry; absent for a patch's or a half-space)."""
     where, entry = study.path(study.source_name(name)), study.source(name)
-    keys = {"E_MPa": (_axis_key(where, entry, "E_MPa", in_unit(cell.E, MPA))
-                      if "E_MPa" in entry else "body.E_MPa")}
+    values = {"E_MPa": (_axis_key(where, entry, "E_MPa", in_unit(cell.E, MPA))
+                        if "E_MPa" in entry else "body.E_MPa", cell.E)}
     if "sigma_um" in entry:  # else a measured surface's own sigma
-        keys["sigma_um"] = _axis_key(where, entry, "sigma_um", in_unit(cell.sigma, UM))
+        values["sigma_um"] = (_axis_key(where, entry, "sigma_um", in_unit(cell.sigma, UM)),
+                              cell.sigma)
     if isinstance(cell.surface, MeasuredCell):
-        keys["measured"] = f"{where}.surface"
+        values["measured"] = (f"{where}.surface", cell.surface)
     thickness = entry.get("thickness_mm")  # optional: a measured patch's own block
     if cell.geometry.operator is not InfluenceModel.HALFSPACE and thickness != "patch":
-        keys["thickness_mm"] = "body.thickness_mm" if thickness is None else f"{where}.thickness_mm"
-    return Body(where, cell.surface, cell.sigma, cell.geometry, cell.E,
-                cell.pressure_range[1], keys)
+        values["thickness_mm"] = ("body.thickness_mm" if thickness is None
+                                  else f"{where}.thickness_mm", cell.geometry)
+    return values
 
 
-def counter_body(study: Study, name: str, cell: StudyCell) -> Body:
-    """The counter body of a study cell (of the figure or sweep ``name``) as a
-    :class:`Body`, keyed to the configured entry the plan made it of (``counter_entry``;
-    the rigid smooth flat has no typed value, so no key)."""
-    counter, entry = cell.counterface, cell.counter_entry
-    return Body(study.path(study.source_name(name)), counter.surface.cell,
-                counter.surface.sigma, counter.body.geometry, counter.body.E,
-                cell.pressure_range[1], entry.keys(cell), entry)
-
-
-def cell_bodies(study: Study, name: str, cell: StudyCell) -> list[Body]:
-    """The bodies of a study cell: the first and its counter body."""
-    return [first_body(study, name, cell), counter_body(study, name, cell)]
+def cell_bodies(study: Study, name: str, cell: StudyCell) -> list[dict]:
+    """The typed values of the bodies of a study cell: the first's and its counter
+    body's (of the configured entry the plan made it of: ``counter_entry``; the rigid
+    smooth flat has none)."""
+    return [first_body(study, name, cell), cell.counter_entry.typed_values(cell)]
 
 
 def _slip(kind: str, key: str, value: float, fits) -> str:
@@ -115,10 +91,11 @@ def _in_range(kind: str, value: float) -> bool:
     return low <= value <= high
 
 
-def _modulus_problems(body: Body) -> list[str]:
-    """Messages for a body's E [MPa] out of range, or below its largest pressure over
-    :data:`PLAUSIBLE`'s ``pressure_over_E``."""
-    key, E, p_max = body.keys["E_MPa"], in_unit(body.E, MPA), in_unit(body.p_max, MPA)
+def _modulus_problems(where: str, key: str, E: float, p_max: float) -> list[str]:
+    """Messages for a body's E [Pa] (of the configuration ``key``) out of range, or below
+    the largest pressure ``p_max`` [Pa] of the study ``where`` over :data:`PLAUSIBLE`'s
+    ``pressure_over_E``."""
+    E, p_max = in_unit(E, MPA), in_unit(p_max, MPA)
     limit = PLAUSIBLE["pressure_over_E"]
 
     def fits(value):
@@ -129,17 +106,17 @@ def _modulus_problems(body: Body) -> list[str]:
         return [f"{key} = {E:g} lies outside {low:g}-{high:g} MPa{_slip('E_MPa', key, E, fits)}"]
     if p_max / E <= limit:
         return []
-    return [f"{body.where}.pressure_MPa up to {p_max:g} on {key} = {E:g} is P / E = "
+    return [f"{where}.pressure_MPa up to {p_max:g} on {key} = {E:g} is P / E = "
             f"{p_max / E:.3g}, beyond {limit:g}, where the linear elastic model has no "
             f"meaning{_slip('E_MPa', key, E, fits)}; else check the units of "
-            f"{body.where}.pressure_MPa and {key}"]
+            f"{where}.pressure_MPa and {key}"]
 
 
-def _thickness_problems(body: Body, build: BuildSettings) -> list[str]:
-    """Messages for a block thinner than one contact element (a thickness in metres
-    typed in mm), with the thickness it was likely meant as where that block passes
+def _thickness_problems(key: str, geometry: Geometry, build: BuildSettings) -> list[str]:
+    """Messages for a block ``geometry`` thinner than one contact element (a thickness in
+    metres typed in mm, under the configuration ``key``), with the thickness it was
+    likely meant as where that block passes
     :func:`~roughcontact.study.plan.block_checks.block_problems`."""
-    geometry, key = body.geometry, body.keys["thickness_mm"]
     spacing = min(s / n for s, n in zip(geometry.size, geometry.grid, strict=True))
     if geometry.thickness >= spacing * (1 - 1e-9):
         return []
@@ -154,22 +131,24 @@ def _thickness_problems(body: Body, build: BuildSettings) -> list[str]:
             f"else a block at least {in_unit(spacing, MM):g} mm thick"]
 
 
-def body_problems(body: Body, build: BuildSettings) -> list[str]:
-    """Messages for a body's typed values that are almost surely a unit slip."""
+def body_problems(where: str, values: dict, p_max: float, build: BuildSettings) -> list[str]:
+    """Messages for a body's typed ``values`` (:func:`cell_bodies`: each with its
+    configuration key) that are almost surely a unit slip, in the study ``where`` swept
+    up to ``p_max`` [Pa]."""
     problems = []
-    if "sigma_um" in body.keys:
-        key, sigma = body.keys["sigma_um"], in_unit(body.sigma, UM)
+    if "sigma_um" in values:
+        key, sigma = values["sigma_um"]
+        sigma = in_unit(sigma, UM)
         if not _in_range("sigma_um", sigma):
             low, high = PLAUSIBLE["sigma_um"]
             slip = _slip("sigma_um", key, sigma, lambda v: _in_range("sigma_um", v))
             problems.append(f"{key} = {sigma:g} lies outside {low:g}-{high:g} um{slip}")
-    if "E_MPa" in body.keys:
-        problems += _modulus_problems(body)
-    if "thickness_mm" in body.keys:
-        problems += _thickness_problems(body, build)
-    if "measured" in body.keys:
-        problems += measured_problems(body.keys["measured"], body.surface,
-                                      PLAUSIBLE["sigma_um"])
+    if "E_MPa" in values:
+        problems += _modulus_problems(where, *values["E_MPa"], p_max)
+    if "thickness_mm" in values:
+        problems += _thickness_problems(*values["thickness_mm"], build)
+    if "measured" in values:
+        problems += measured_problems(*values["measured"], PLAUSIBLE["sigma_um"])
     return problems
 
 
@@ -180,11 +159,12 @@ def check_plausible(study: Study, cells: dict[str, tuple[StudyCell, ...]]) -> li
     build = study.body.build
     problems = {}
     for name, study_cells in cells.items():
+        where = study.path(study.source_name(name))
         for cell in study_cells:
-            for body in cell_bodies(study, name, cell):
-                problems.update(dict.fromkeys(body_problems(body, build)))
+            for values in cell_bodies(study, name, cell):
+                found = body_problems(where, values, cell.pressure_range[1], build)
+                problems.update(dict.fromkeys(found))
     return list(problems)
 
 
-__all__ = ["PLAUSIBLE", "Body", "body_problems", "cell_bodies", "check_plausible",
-           "counter_body", "first_body"]
+__all__ = ["PLAUSIBLE", "body_problems", "cell_bodies", "check_plausible", "first_body"]

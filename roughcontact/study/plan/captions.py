@@ -2,7 +2,7 @@
 
 A caption states what its figure draws as the configuration made it: the
 meshes of its panels in their order, the surfaces per curve, the (Sk, Ku)
-pairs, sigma, b, the nominal areas, the counter bodies. Nothing in it is
+pairs, sigma, b, the nominal areas, the counter bodies (their ``counter`` column). Nothing in it is
 fixed text that one study makes true and another false (the quick study
 draws the refined mesh where the default one draws the converged mesh).
 Each writer takes the :class:`~roughcontact.study.plan.cells.StudyPlan` (its study's
@@ -14,9 +14,10 @@ workflow passes its text to the figure rule (``params.caption``, read by
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterable, Sequence
 
+from roughcontact.study.contact_records import study_columns
+from roughcontact.study.counter_records import counter_name
 from roughcontact.units import MPA
 
 #: The bands of every curve against nominal pressure (Figs 7, 9, 11-14 and beyond).
@@ -50,26 +51,11 @@ def panels(meshes: Sequence[str]) -> str:
     return f"from left to right {join(mesh_name(m) for m in meshes)}"
 
 
-def counter_label(row) -> str:
-    """The counter body of a cell, from its columns (``StudyCell.columns()`` or a row of
-    an aggregate table): ``rigid smooth flat`` (the paper's), or the counter body with
-    its surface in brackets (sigma, and Sk, Ku unless Gaussian; or smooth), e.g.
-    ``half-space E 110000 MPa nu 0.26 (sigma 1.5 um)``."""
-    body = row.get("counter_body")
-    if body is None or (isinstance(body, float) and math.isnan(body)):
-        return "rigid smooth flat"
-    sigma = float(row.get("counter_sigma_um") or 0.0)
-    surface = "smooth" if not sigma > 0 else f"sigma {sigma:g} um"
-    skew, kurt = row.get("counter_skew"), row.get("counter_kurt")
-    if sigma > 0 and not (skew == 0 and kurt == 3) and not math.isnan(float(skew)):
-        surface += f", Sk {skew:g}, Ku {kurt:g}"
-    return f"{body} ({surface})"
-
-
 def _columns(cells) -> list[dict]:
-    """Each study cell's columns (as the aggregate table has them) and its surface count."""
-    return [{**cell.columns(), "surfaces": cell.surface.count, "cap": cell.hardness}
-            for cell in cells]
+    """Each study cell's columns (as the aggregate table has them:
+    :func:`~roughcontact.study.contact_records.study_columns`) and its surface count."""
+    return [{**row, "surfaces": cell.surface.count, "cap": cell.hardness}
+            for row, cell in zip(study_columns(cells), cells, strict=True)]
 
 
 def _surfaces(rows) -> str:
@@ -266,7 +252,7 @@ def two_bodies(plan, name):
                 f"{numbers(r['nu'] for r in rows)}, a "
                 f"{numbers((r['thickness_mm'] for r in rows), 'mm')} block on "
                 f"{join(mesh_name(m) for m in _meshes(rows))}")
-        counters = join(f"the {label}" for label in dict.fromkeys(map(counter_label, rows)))
+        counters = join(f"the {name}" for name in dict.fromkeys(map(counter_name, rows)))
         parts.append(f"{study} ({body}) against {counters}")
     rows = [row for study in plan.study.entry(name)["studies"]
             for row in _columns(plan.cells[study])]

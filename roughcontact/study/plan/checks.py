@@ -12,7 +12,8 @@ import logging
 import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
-from roughcontact.study.config import BuildSettings, in_unit
+from roughcontact.study.codec import in_unit
+from roughcontact.study.config import BuildSettings
 from roughcontact.study.memory_advice import memory_message
 from roughcontact.study.plan.counter_entries import counterface_entries, import_problems
 from roughcontact.study.plan.studies import CAP_MODES, as_list, study_surfaces

@@ -1,9 +1,9 @@
 """Plan-time checks of the counter bodies of a study's cells (Eq 17-18).
 
-A counter body (:func:`~roughcontact.study.plan.body_checks.counter_bodies`) meets the
-first body's checks, by their code: its block the geometry limits of
-:mod:`~roughcontact.study.plan.block_checks` (with the keys of the counter entry in the
-message), its generated surface the correlation window of
+A counter body (a study cell's ``counterface``, with the configured entry the plan made
+it of, ``counter_entry``) meets the first body's checks, by their code: its block the
+geometry limits of :mod:`~roughcontact.study.plan.block_checks` (with the keys of the
+counter entry in the message), its generated surface the correlation window of
 :func:`~roughcontact.study.plan.checks.window_message`. Besides, its surface must be
 sampled like the first (:mod:`roughcontact.contact.counterface` adds the two height
 maps element by element): a measured counter map on another grid or plan size is
@@ -16,10 +16,10 @@ from __future__ import annotations
 import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
-from roughcontact.study.config import BuildSettings, in_unit, in_units
+from roughcontact.study.codec import in_unit, in_units
+from roughcontact.study.config import BuildSettings
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.plan.block_checks import block_message, block_problems
-from roughcontact.study.plan.body_checks import Body, counter_body
 from roughcontact.study.plan.checks import window_message
 from roughcontact.study.records import GeneratedCell, InfluenceModel, MeasuredCell, SurfaceCell
 from roughcontact.study.settings import Study
@@ -27,23 +27,22 @@ from roughcontact.study.sources import MeasurementImport, load_measurement
 from roughcontact.units import MM
 
 
-def _block_problems(body: Body, geometry, build: BuildSettings) -> list[str]:
+def _block_problems(where: str, key: str, geometry, build: BuildSettings) -> list[str]:
     """Why a counter block ``geometry`` cannot be built (none: it can), naming its entry's
-    keys."""
-    key = body.entry.body_key
+    ``key`` (of the study ``where``)."""
     if geometry.operator is InfluenceModel.HYBRID and geometry.mesh not in HYBRID_MESHES:
         return [f"{key}: operator hybrid needs an accurate coarse model: {key}.mesh one of "
                 f"{list(HYBRID_MESHES)}, not {geometry.mesh!r} (or {key}.operator: dense)"]
     found = block_problems(geometry, build)
-    return [block_message(body.where, geometry, build, found, False, body=key)] if found else []
+    return [block_message(where, geometry, build, found, False, body=key)] if found else []
 
 
-def _window_problems(study: Study, name: str, body: Body) -> list[str]:
+def _window_problems(study: Study, name: str, cell: StudyCell) -> list[str]:
     """A generated counter surface of its own ``b_mm`` longer than half the surface (the
     first surface's check: :func:`~roughcontact.study.plan.checks.window_message`); one whose
     b is the first surface's is judged with it."""
-    messages = (window_message(study, study.source_name(name), body.surface, key, written)
-                for key, written in body.entry.surface.own_b())
+    messages = (window_message(study, study.source_name(name), counter, key, written)
+                for key, written, counter in cell.counter_entry.surface.own_b(cell.counterface))
     return [message for message in messages if message]
 
 
@@ -57,7 +56,7 @@ def _import_fix(entry: dict, grid, size) -> str | None:
     ``grid`` and plan ``size`` [m]: a window of that size from its first point (a whole
     number of its spacings) resampled to the grid; None where no window has it.
     Tested: the map imported so has that grid and size."""
-    whole = load_measurement(MeasurementImport.from_entry(
+    whole = load_measurement(MeasurementImport.from_params(
         {**entry, "crop_mm": None, "decimate": None, "resample_grid": None}))
     points = [length / spacing for length, spacing in zip(size, whole.spacing, strict=True)]
     if any(abs(p - round(p)) > 1e-6 * p or round(p) > n
@@ -67,7 +66,7 @@ def _import_fix(entry: dict, grid, size) -> str | None:
     options = {"crop_mm": None if window == whole.grid else [0, 0, *in_units(size)],
                "resample_grid": None if window == tuple(grid) else list(grid),
                "decimate": None}
-    trial = MeasuredCell.from_source(MeasurementImport.from_entry({**entry, **options}))
+    trial = MeasuredCell.from_source(MeasurementImport.from_params({**entry, **options}))
     if not _same_plan(trial, grid, size):
         return None
     words = [f"{key}: {value}".replace("'", "") for key, value in options.items()
@@ -86,7 +85,7 @@ def _smaller_area(study: Study, entry: dict, first: SurfaceCell):
         return None
     surfaces = study.surfaces
     spacing = [s / n * MM for s, n in zip(surfaces.size_mm, surfaces.grid, strict=True)]
-    whole = load_measurement(MeasurementImport.from_entry(
+    whole = load_measurement(MeasurementImport.from_params(
         {**entry, "crop_mm": None, "decimate": None, "resample_grid": None}))
     step = max(whole.spacing)  # no larger than the map, nor than the study's area
     side = min(*(n * d for n, d in zip(whole.grid, whole.spacing, strict=True)), *first.size)
@@ -97,13 +96,13 @@ def _smaller_area(study: Study, entry: dict, first: SurfaceCell):
     return None if fix is None else (in_unit(side, MM), grid, fix)
 
 
-def _grid_problems(study: Study, name: str, cell: StudyCell, body: Body) -> list[str]:
+def _grid_problems(study: Study, name: str, cell: StudyCell) -> list[str]:
     """A measured counter map on another grid or plan size than the surface it meets."""
-    first, other = cell.surface, body.surface
+    first, other = cell.surface, cell.counterface.heights.cell
     if not isinstance(other, MeasuredCell) or _same_plan(other, first.grid, first.size):
         return []
-    key = f"{body.entry.surface_key}.measured"
-    entry = body.entry.surface.measured
+    key = f"{cell.counter_entry.surface_key}.measured"
+    entry = cell.counter_entry.surface.measured
     (nx, ny), (lx, ly) = first.grid, in_units(first.size)
     (ox, oy), (olx, oly) = other.grid, in_units(other.size)
     text = (f"{key}: {other.source.file}: {ox} x {oy} points over {olx:g} mm x {oly:g} mm, "
@@ -133,12 +132,12 @@ def check_counterfaces(study: Study, cells: dict[str, tuple[StudyCell, ...]]) ->
     ``cells`` by study name."""
     problems = {}
     for name, study_cells in cells.items():
+        where = study.path(study.source_name(name))
         for cell in study_cells:
-            body = counter_body(study, name, cell)
-            found = _window_problems(study, name, body)
-            found += _grid_problems(study, name, cell, body)
+            found = _window_problems(study, name, cell) + _grid_problems(study, name, cell)
             for geometry in cell.counterface.geometries().values():
-                found += _block_problems(body, geometry, study.body.build)
+                found += _block_problems(where, cell.counter_entry.body_key, geometry,
+                                         study.body.build)
             problems.update(dict.fromkeys(found))
     return list(problems)
 

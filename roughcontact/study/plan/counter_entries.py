@@ -8,9 +8,12 @@ entries, every default resolved (the ``body`` section's nu, thickness, base and
 mesh for a block; the first surface's b and the measured sigma stay None, each
 cell's), with the configuration keys of their values for the messages that name
 them. An entry answers what the plan and its checks ask of it: the counter body
-of a study cell (:meth:`CounterfaceEntry.counterface`), the keys of its typed
-values, a measured map's import problems, a block's; the smooth surface and the
-rigid body are its null values, so the code that asks never tests which it holds.
+of a study cell (:meth:`CounterfaceEntry.counterface`, a
+:class:`~roughcontact.study.counter_records.CounterBody`), its typed values with
+their keys (:meth:`CounterfaceEntry.typed_values`, what the plausibility checks
+judge), a measured map's import problems, a block's; the smooth surface and the
+rigid body are its null values, and a smooth rigid counter body is no counter body
+at all (:class:`FlatEntry`), so the code that asks never tests which it holds.
 """
 
 from __future__ import annotations
@@ -18,20 +21,22 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-from roughcontact.study.config import as_pair, from_unit, in_unit, in_units
+from roughcontact.study.codec import as_pair, from_unit, in_unit, in_units
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.counter_records import (
-    RIGID,
-    SMOOTH,
-    Counterface,
-    ElasticCounter,
-    RoughCounter,
+    NO_COMPLIANCE,
+    NO_COUNTER_BODY,
+    NO_HEIGHTS,
+    CounterBody,
+    CounterCompliance,
+    CounterHeights,
 )
 from roughcontact.study.records import Geometry, InfluenceModel, MeasuredCell, SurfaceCell
 from roughcontact.study.sources import MeasurementImport
 from roughcontact.units import MM, MPA, UM
 
-__all__ = ["BODY_INHERITED", "CounterfaceEntry", "counterface_entries", "import_problems"]
+__all__ = ["BODY_INHERITED", "CounterfaceEntry", "FlatEntry", "counterface_entries",
+           "import_problems"]
 
 #: The keys of a counter block that default to the ``body`` section's.
 BODY_INHERITED = ("nu", "thickness_mm", "base", "mesh")
@@ -41,7 +46,7 @@ def import_problems(where: str, entry) -> list[str]:
     """The refusal of a measured map that cannot be imported as its ``entry`` (a
     ``surface:`` or a counter surface's ``measured:``) says, named ``where``."""
     try:
-        MeasuredCell.from_source(MeasurementImport.from_entry(entry))
+        MeasuredCell.from_source(MeasurementImport.from_params(entry))
     except (OSError, ValueError) as err:
         return [f"{where}: {err}"]
     return []
@@ -53,17 +58,17 @@ def import_problems(where: str, entry) -> list[str]:
 
 @dataclass(frozen=True)
 class SmoothEntry:
-    """A smooth counter surface (the null): no heights, no keys."""
+    """A smooth counter surface (the null): no heights, no typed values."""
 
     key: str = field(default="counterface.surface", compare=False)
 
-    def counter(self, surfaces, first: SurfaceCell):
-        return SMOOTH
+    def counter(self, surfaces, first: SurfaceCell) -> tuple:
+        return NO_HEIGHTS, 0.0
 
-    def keys(self, cell) -> dict:
+    def typed_values(self, counter: CounterBody) -> dict:
         return {}
 
-    def own_b(self) -> tuple:
+    def own_b(self, counter: CounterBody) -> tuple:
         return ()
 
     def import_problems(self) -> list[str]:
@@ -81,23 +86,26 @@ class GeneratedEntry:
     b_mm: object = None
     key: str = field(default="counterface.surface", compare=False)
 
-    def counter(self, surfaces, first: SurfaceCell) -> RoughCounter:
-        """The counter surface of a first cell ``first``: the ``surfaces`` section's ACF,
-        periodicity and method on its grid and plan size, one counter surface per first
-        surface, b by default the first cell's."""
+    def counter(self, surfaces, first: SurfaceCell) -> tuple:
+        """The counter heights and sigma [m] of a first cell ``first``: the ``surfaces``
+        section's ACF, periodicity and method on its grid and plan size, one counter
+        surface per first surface, b by default the first cell's."""
         b = first.corr_length if self.b_mm is None else from_unit(as_pair(self.b_mm))
         cell = surfaces.cell(None, skew=self.skew, kurt=self.kurt, corr_length=b,
                              count=first.count, size=first.size, grid=first.grid)
-        return RoughCounter(dataclasses.replace(cell, stream="counter"),
-                            sigma=float(self.sigma_um) * UM)
+        return (CounterHeights(dataclasses.replace(cell, stream="counter")),
+                float(self.sigma_um) * UM)
 
-    def keys(self, cell) -> dict:
-        return {"sigma_um": f"{self.key}.sigma_um"}
+    def typed_values(self, counter: CounterBody) -> dict:
+        """Its sigma [m] with its key."""
+        return {"sigma_um": (f"{self.key}.sigma_um", counter.sigma)}
 
-    def own_b(self) -> tuple:
-        """The key and value of its own ``b_mm`` (none where b is each first surface's,
-        judged with it)."""
-        return () if self.b_mm is None else ((f"{self.key}.b_mm", self.b_mm),)
+    def own_b(self, counter: CounterBody) -> tuple:
+        """The key and value of its own ``b_mm`` with the counter cell it made (none
+        where b is each first surface's, judged with it)."""
+        if self.b_mm is None:
+            return ()
+        return ((f"{self.key}.b_mm", self.b_mm, counter.heights.cell),)
 
     def import_problems(self) -> list[str]:
         return []
@@ -112,18 +120,19 @@ class MeasuredEntry:
     sigma_um: float | None = None
     key: str = field(default="counterface.surface", compare=False)
 
-    def counter(self, surfaces, first: SurfaceCell) -> RoughCounter:
-        cell = MeasuredCell.from_source(MeasurementImport.from_entry(self.measured))
+    def counter(self, surfaces, first: SurfaceCell) -> tuple:
+        cell = MeasuredCell.from_source(MeasurementImport.from_params(self.measured))
         sigma = cell.sigma if self.sigma_um is None else float(self.sigma_um) * UM
-        return RoughCounter(cell, sigma=sigma)
+        return CounterHeights(cell), sigma
 
-    def keys(self, cell) -> dict:
-        keys = {"measured": f"{self.key}.measured"}
+    def typed_values(self, counter: CounterBody) -> dict:
+        """Its measured map and, where written, its sigma [m], with their keys."""
+        values = {"measured": (f"{self.key}.measured", counter.heights.cell)}
         if self.sigma_um is not None:
-            keys["sigma_um"] = f"{self.key}.sigma_um"
-        return keys
+            values["sigma_um"] = (f"{self.key}.sigma_um", counter.sigma)
+        return values
 
-    def own_b(self) -> tuple:
+    def own_b(self, counter: CounterBody) -> tuple:
         return ()
 
     def import_problems(self) -> list[str]:
@@ -136,14 +145,14 @@ class MeasuredEntry:
 
 @dataclass(frozen=True)
 class RigidEntry:
-    """A rigid counter body (the null): no compliance, no keys."""
+    """A rigid counter body (the null): no compliance, no typed values."""
 
     key: str = field(default="counterface.body", compare=False)
 
-    def counter(self, first: Geometry):
-        return RIGID
+    def counter(self, first: Geometry) -> tuple:
+        return NO_COMPLIANCE, None
 
-    def keys(self, geometry) -> dict:
+    def typed_values(self, counter: CounterBody) -> dict:
         return {}
 
 
@@ -155,16 +164,17 @@ class HalfspaceEntry:
     nu: float
     key: str = field(default="counterface.body", compare=False)
 
-    def counter(self, first: Geometry) -> ElasticCounter:
-        """Its geometry on the first body's grid and plan size (the thickness only the
-        reference length of the scaling)."""
+    def counter(self, first: Geometry) -> tuple:
+        """Its compliance, on the first body's grid and plan size (the thickness only the
+        reference length of the scaling), and E [Pa]."""
         params = {"nu": self.nu, "size_mm": in_units(first.size), "grid": list(first.grid),
                   "operator": InfluenceModel.HALFSPACE.value, "base": "clamped",
                   "mesh": "paper", "thickness_mm": in_unit(first.thickness, MM)}
-        return ElasticCounter(Geometry.from_params(params), E=float(self.E_MPa) * MPA)
+        return CounterCompliance(Geometry.from_params(params)), float(self.E_MPa) * MPA
 
-    def keys(self, geometry) -> dict:
-        return {"E_MPa": f"{self.key}.E_MPa"}
+    def typed_values(self, counter: CounterBody) -> dict:
+        """Its E [Pa] with its key."""
+        return {"E_MPa": (f"{self.key}.E_MPa", counter.E)}
 
 
 @dataclass(frozen=True)
@@ -182,20 +192,21 @@ class BlockEntry:
     inherited: tuple[str, ...] = field(default=(), compare=False)
     key: str = field(default="counterface.body", compare=False)
 
-    def counter(self, first: Geometry) -> ElasticCounter:
+    def counter(self, first: Geometry) -> tuple:
         params = {"nu": self.nu, "size_mm": in_units(first.size), "grid": list(first.grid),
                   "thickness_mm": self.thickness_mm, "base": self.base, "mesh": self.mesh,
                   "operator": self.operator.value}
-        return ElasticCounter(Geometry.from_params(params), E=float(self.E_MPa) * MPA)
+        return CounterCompliance(Geometry.from_params(params)), float(self.E_MPa) * MPA
 
-    def keys(self, geometry) -> dict:
-        """Its E's key and, of a finite block, its thickness's (the body section's where
-        inherited)."""
-        keys = {"E_MPa": f"{self.key}.E_MPa"}
+    def typed_values(self, counter: CounterBody) -> dict:
+        """Its E [Pa] and, of a finite block, its geometry (judged by its thickness), with
+        their keys (the body section's where inherited)."""
+        values = {"E_MPa": (f"{self.key}.E_MPa", counter.E)}
         if self.operator is not InfluenceModel.HALFSPACE:
-            keys["thickness_mm"] = ("body.thickness_mm" if "thickness_mm" in self.inherited
-                                    else f"{self.key}.thickness_mm")
-        return keys
+            values["thickness_mm"] = ("body.thickness_mm" if "thickness_mm" in self.inherited
+                                      else f"{self.key}.thickness_mm",
+                                      counter.compliance.geometry)
+        return values
 
 
 def _surface_entry(entry, key: str):
@@ -240,21 +251,43 @@ class CounterfaceEntry:
     def body_key(self) -> str:
         return self.body.key
 
-    def counterface(self, surfaces, cell: StudyCell):
+    def counterface(self, surfaces, cell: StudyCell) -> CounterBody:
         """The counter body of a study ``cell`` (on its grid and plan size; ``surfaces``
-        the study's surface settings); the smooth rigid one is no counter body at all
-        (:data:`~roughcontact.study.counter_records.NO_COUNTERFACE`: the paper's)."""
-        return Counterface.of(self.surface.counter(surfaces, cell.surface),
-                              self.body.counter(cell.geometry), self.rigid_share)
+        the study's surface settings)."""
+        heights, sigma = self.surface.counter(surfaces, cell.surface)
+        compliance, E = self.body.counter(cell.geometry)
+        return CounterBody(heights=heights, sigma=sigma, compliance=compliance, E=E,
+                           rigid_share=self.rigid_share)
 
-    def keys(self, cell: StudyCell) -> dict:
-        """The configuration key of each typed value of its counter body on ``cell``
-        (:class:`~roughcontact.study.plan.body_checks.Body`'s ``keys``)."""
-        return {**self.surface.keys(cell), **self.body.keys(cell.geometry)}
+    def typed_values(self, cell: StudyCell) -> dict:
+        """The typed values of the counter body of ``cell``, each with its configuration
+        key: ``sigma_um`` (sigma [m]), ``E_MPa`` (E [Pa]), ``thickness_mm`` (the block's
+        geometry), ``measured`` (the measured cell); absent where not typed (the checks
+        of :mod:`~roughcontact.study.plan.body_checks` judge each)."""
+        counter = cell.counterface
+        return {**self.surface.typed_values(counter), **self.body.typed_values(counter)}
 
 
-#: The counter body of a study that names none, in a section that names none.
-NO_ENTRY = CounterfaceEntry(SmoothEntry(), RigidEntry())
+@dataclass(frozen=True)
+class FlatEntry(CounterfaceEntry):
+    """The paper's rigid smooth flat as configured (a smooth surface on a rigid body):
+    no counter body at all."""
+
+    def counterface(self, surfaces, cell: StudyCell):
+        return NO_COUNTER_BODY
+
+    def typed_values(self, cell: StudyCell) -> dict:
+        return {}
+
+
+def _entry(surface, surface_key: str, counter, body_key: str, body: Geometry,
+           rigid_share: float):
+    """The counter body of its configured ``surface`` and ``body`` entries (a smooth
+    surface on a rigid body: a :class:`FlatEntry`, with their keys)."""
+    entry = (_surface_entry(surface, surface_key), _body_entry(counter, body_key, body))
+    if entry == (SmoothEntry(), RigidEntry()):
+        return FlatEntry(*entry, rigid_share)
+    return CounterfaceEntry(*entry, rigid_share)
 
 
 def counterface_entries(study, name: str) -> list[CounterfaceEntry]:
@@ -277,7 +310,6 @@ def counterface_entries(study, name: str) -> list[CounterfaceEntry]:
         (surface, surface_key), (counter, body_key) = (
             (entry[part], f"{key}.{part}") if part in entry else
             (getattr(section, part), f"counterface.{part}") for part in ("surface", "body"))
-        out.append(CounterfaceEntry(_surface_entry(surface, surface_key),
-                                    _body_entry(counter, body_key, body), section.rigid_share))
+        out.append(_entry(surface, surface_key, counter, body_key, body, section.rigid_share))
     return out
 

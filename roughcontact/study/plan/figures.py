@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from enum import Enum
 from types import MappingProxyType
 
-from roughcontact.study.config import as_pair, from_unit
+from roughcontact.study.codec import as_pair, from_unit
 from roughcontact.study.plan import captions
 from roughcontact.study.sources import spectrum_from_entry
 

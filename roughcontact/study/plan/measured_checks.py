@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 
-from roughcontact.study.config import in_unit
+from roughcontact.study.codec import in_unit
 from roughcontact.study.records import MeasuredCell
 from roughcontact.surfaces.readers import HEIGHT_UNITS
 from roughcontact.units import MM, UM

@@ -19,7 +19,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 
-from roughcontact.study.config import as_pair, from_unit
+from roughcontact.study.codec import as_pair, from_unit
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.plan.counter_entries import CounterfaceEntry, counterface_entries
 from roughcontact.study.records import Geometry, MeasuredCell
@@ -44,7 +44,7 @@ def study_surfaces(study: Study, section: StudySection) -> list:
     lengths on its grid and plan size, with the study's surface count and
     spectrum and the ``surfaces`` section's ACF, periodicity and method.
     """
-    measured = MeasuredCell.from_source(MeasurementImport.from_entry(section.surface))
+    measured = MeasuredCell.from_source(MeasurementImport.from_params(section.surface))
     if not section.compare_synthetic:
         return [measured]
     twin = study.surfaces.cell(spectrum_from_entry(section.spectrum), skew=measured.skew,
