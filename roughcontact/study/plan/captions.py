@@ -74,11 +74,30 @@ def _meshes(rows) -> list[str]:
     return list(dict.fromkeys(row["mesh"] for row in rows))
 
 
+def _values(rows, key: str, unit: str = "") -> str:
+    """The distinct values of a column of ``rows`` (:func:`numbers`)."""
+    return numbers((row[key] for row in rows), unit)
+
+
+def _mesh_names(rows) -> str:
+    """The meshes of ``rows`` in words, in the order of the cells."""
+    return join(mesh_name(m) for m in _meshes(rows))
+
+
+def _of_cells(writer: Callable) -> Callable:
+    """A caption writer of ``(plan, name)`` from one of the rows of the figure's cells
+    (:func:`_columns`)."""
+    def caption(plan, name):
+        return writer(_columns(plan.cells[name]))
+    caption.__doc__ = writer.__doc__
+    return caption
+
+
 def _study(rows) -> str:
     """sigma, b and the mesh of a study's cells."""
     meshes = _meshes(rows)
-    return (f"sigma {numbers((r['sigma_um'] for r in rows), 'um')}, "
-            f"b {numbers((r['b_mm'] for r in rows), 'mm')}, "
+    return (f"sigma {_values(rows, 'sigma_um', 'um')}, "
+            f"b {_values(rows, 'b_mm', 'mm')}, "
             f"{join(mesh_name(m) for m in meshes)}")
 
 
@@ -86,8 +105,8 @@ def _by_mesh(title: str, rows, finding: Callable[[list[str]], str] = lambda mesh
     """Figs 7, 12, 13 and the gaps: one panel per mesh of the (Sk, Ku) cells."""
     meshes = _meshes(rows)
     return (f"{title} for (Sk, Ku) = {_pairs(rows)}, sigma "
-            f"{numbers((r['sigma_um'] for r in rows), 'um')}, b "
-            f"{numbers((r['b_mm'] for r in rows), 'mm')}; {panels(meshes)}"
+            f"{_values(rows, 'sigma_um', 'um')}, b "
+            f"{_values(rows, 'b_mm', 'mm')}; {panels(meshes)}"
             f"{finding(meshes)}. {_surfaces(rows)}. {BANDS}")
 
 
@@ -149,28 +168,27 @@ def fig07(plan, name):
                     _columns(plan.cells[name]))
 
 
-def fig09(plan, name):
-    rows = _columns(plan.cells[name])
+@_of_cells
+def fig09(rows):
     return (f"Fig 9: mean-plane deflection d_b and asperity deflection d_a = d - d_b against "
             f"nominal pressure for (Sk, Ku) = {_pairs(rows)}, {_study(rows)}. "
             f"{_surfaces(rows)}. {BANDS}")
 
 
-def fig10(plan, name):
-    rows = _columns(plan.cells[name])
+@_of_cells
+def fig10(rows):
+    where = f"sigma {_values(rows, 'sigma_um', 'um')}, b {_values(rows, 'b_mm', 'mm')}"
     return (f"Fig 10: cumulative height distributions as depth below the highest point of the "
-            f"surfaces of (Sk, Ku) = {_pairs(rows)}, sigma "
-            f"{numbers((r['sigma_um'] for r in rows), 'um')}, b "
-            f"{numbers((r['b_mm'] for r in rows), 'mm')} (the Fig 9 cells), pooled over the "
-            f"{numbers(r['surfaces'] for r in rows)} surfaces of each.")
+            f"surfaces of (Sk, Ku) = {_pairs(rows)}, {where} (the Fig 9 cells), pooled over "
+            f"the {_values(rows, 'surfaces')} surfaces of each.")
 
 
-def fig11(plan, name):
-    rows = _columns(plan.cells[name])
-    return (f"Fig 11: normalized stiffness for the correlation lengths b = "
-            f"{numbers((r['b_mm'] for r in rows), 'mm')}, surfaces of (Sk, Ku) = "
-            f"{_pairs(rows)}, sigma {numbers((r['sigma_um'] for r in rows), 'um')}, "
-            f"{join(mesh_name(m) for m in _meshes(rows))}. {_surfaces(rows)}. {BANDS}")
+@_of_cells
+def fig11(rows):
+    b, sigma = _values(rows, "b_mm", "mm"), _values(rows, "sigma_um", "um")
+    return (f"Fig 11: normalized stiffness for the correlation lengths b = {b}, surfaces of "
+            f"(Sk, Ku) = {_pairs(rows)}, sigma {sigma}, {_mesh_names(rows)}. "
+            f"{_surfaces(rows)}. {BANDS}")
 
 
 def fig11_resolved(plan, name):
@@ -178,9 +196,8 @@ def fig11_resolved(plan, name):
     return (f"Beyond the paper: Fig 11 on a grid that resolves the ACF ({_grid(plan)}): "
             f"k_P, real area, peak pressure, the number of contact spots, their mean area "
             f"and the real area corrected by its perimeter, for b = "
-            f"{numbers((r['b_mm'] for r in rows), 'mm')}, sigma "
-            f"{numbers((r['sigma_um'] for r in rows), 'um')}, "
-            f"{join(mesh_name(m) for m in _meshes(rows))}. {_surfaces(rows)}. {BANDS}")
+            f"{_values(rows, 'b_mm', 'mm')}, sigma {_values(rows, 'sigma_um', 'um')}, "
+            f"{_mesh_names(rows)}. {_surfaces(rows)}. {BANDS}")
 
 
 def fig12(plan, name):
@@ -193,14 +210,14 @@ def fig13(plan, name):
                     _columns(plan.cells[name]), _paper_beside("underestimates"))
 
 
-def fig14(plan, name):
-    rows = _columns(plan.cells[name])
+@_of_cells
+def fig14(rows):
     areas = join(f"{size:g} mm x {size:g} mm" for size in dict.fromkeys(r["size_mm"] for r in rows))
     return (f"Fig 14: normalized stiffness for the nominal areas {areas} on the same contact "
             f"elements, surfaces of (Sk, Ku) = {_pairs(rows)}, sigma "
-            f"{numbers((r['sigma_um'] for r in rows), 'um')}, b "
-            f"{numbers((r['b_mm'] for r in rows), 'mm')}, nu = "
-            f"{numbers(r['nu'] for r in rows)}. {_surfaces(rows)}. {BANDS}")
+            f"{_values(rows, 'sigma_um', 'um')}, b "
+            f"{_values(rows, 'b_mm', 'mm')}, nu = "
+            f"{_values(rows, 'nu')}. {_surfaces(rows)}. {BANDS}")
 
 
 def gaps(plan, name):
@@ -211,10 +228,10 @@ def gaps(plan, name):
 def table_eu(plan, name):
     rows = _columns(plan.cells[name])
     return (f"Mean-plane modulus E_u = P L / d_b (Eq 36) for nu = "
-            f"{numbers(r['nu'] for r in rows)} (for nu = 0 it equals E), surfaces of "
-            f"(Sk, Ku) = {_pairs(rows)}, {join(mesh_name(m) for m in _meshes(rows))}, as a "
+            f"{_values(rows, 'nu')} (for nu = 0 it equals E), surfaces of "
+            f"(Sk, Ku) = {_pairs(rows)}, {_mesh_names(rows)}, as a "
             f"table (also {name}.csv): per cell, the mean over its "
-            f"{numbers(r['surfaces'] for r in rows)} surfaces with their standard deviation.")
+            f"{_values(rows, 'surfaces')} surfaces with their standard deviation.")
 
 
 def hardness(plan, name):
@@ -227,7 +244,7 @@ def hardness(plan, name):
             f"{_pairs(rows)}, elastic (solid) and with the pressure capped at H = {H} (dashed, "
             f"on {join(mesh_name(m) for m in capped)}), and the validity map: the share of "
             f"the elastic real area (solid) and load (dotted) above H; one row per mesh, "
-            f"{join(mesh_name(m) for m in _meshes(rows))}. {_surfaces(rows)}. {BANDS}")
+            f"{_mesh_names(rows)}. {_surfaces(rows)}. {BANDS}")
 
 
 def measured(plan, name):
@@ -247,11 +264,11 @@ def two_bodies(plan, name):
     parts = []
     for study in plan.study.entry(name)["studies"]:
         rows = _columns(plan.cells[study])
-        body = (f"first body: sigma {numbers((r['sigma_um'] for r in rows), 'um')}, E "
-                f"{numbers((r['E_MPa'] for r in rows), 'MPa')}, nu "
-                f"{numbers(r['nu'] for r in rows)}, a "
-                f"{numbers((r['thickness_mm'] for r in rows), 'mm')} block on "
-                f"{join(mesh_name(m) for m in _meshes(rows))}")
+        body = (f"first body: sigma {_values(rows, 'sigma_um', 'um')}, E "
+                f"{_values(rows, 'E_MPa', 'MPa')}, nu "
+                f"{_values(rows, 'nu')}, a "
+                f"{_values(rows, 'thickness_mm', 'mm')} block on "
+                f"{_mesh_names(rows)}")
         counters = join(f"the {name}" for name in dict.fromkeys(map(counter_name, rows)))
         parts.append(f"{study} ({body}) against {counters}")
     rows = [row for study in plan.study.entry(name)["studies"]
@@ -272,12 +289,12 @@ def leakage(plan, name):
     parts = []
     for study in plan.study.entry(name)["studies"]:
         rows = _columns(plan.cells[study])
-        parts.append(f"{study} (sigma {numbers((r['sigma_um'] for r in rows), 'um')}, b "
-                     f"{numbers((r['b_mm'] for r in rows), 'mm')}, E "
-                     f"{numbers((r['E_MPa'] for r in rows), 'MPa')}, nu "
-                     f"{numbers(r['nu'] for r in rows)}, a "
-                     f"{numbers((r['thickness_mm'] for r in rows), 'mm')} block on "
-                     f"{join(mesh_name(m) for m in _meshes(rows))}; (Sk, Ku) = {_pairs(rows)})")
+        parts.append(f"{study} (sigma {_values(rows, 'sigma_um', 'um')}, b "
+                     f"{_values(rows, 'b_mm', 'mm')}, E "
+                     f"{_values(rows, 'E_MPa', 'MPa')}, nu "
+                     f"{_values(rows, 'nu')}, a "
+                     f"{_values(rows, 'thickness_mm', 'mm')} block on "
+                     f"{_mesh_names(rows)}; (Sk, Ku) = {_pairs(rows)})")
     rows = [row for study in plan.study.entry(name)["studies"]
             for row in _columns(plan.cells[study])]
     contact = plan.study.contact
