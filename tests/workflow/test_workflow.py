@@ -349,6 +349,13 @@ logging.getLogger("roughcontact.study.jobs.contact").addHandler(_Hold())
 """
 
 
+#: Run the command after it with SIGINT's default action: a test run in the background of
+#: a shell (``make test &``) inherits SIGINT ignored, and Python started so never raises
+#: KeyboardInterrupt (Snakemake and its job would outlive the interrupt).
+WITH_SIGINT = [sys.executable, "-c", "import os, signal, sys; "
+               "signal.signal(signal.SIGINT, signal.SIG_DFL); os.execvp(sys.argv[1], sys.argv[1:])"]
+
+
 def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path):
     config = quick_config()
     path = tmp_path / "study.yaml"
@@ -368,8 +375,8 @@ def test_interrupted_contact_job_resumes_without_redoing_finished_work(tmp_path)
                PYTHONPATH=os.pathsep.join(filter(None, [str(hold),
                                                         os.environ.get("PYTHONPATH")])))
     proc = subprocess.Popen(
-        [*SNAKEMAKE, "--snakefile", str(REPO / "Snakefile"), "--directory", str(tmp_path),
-         "--configfile", str(path), "--cores", "2", target],
+        [*WITH_SIGINT, *SNAKEMAKE, "--snakefile", str(REPO / "Snakefile"), "--directory",
+         str(tmp_path), "--configfile", str(path), "--cores", "2", target],
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True, env=env,
     )
     deadline = time.time() + 300
