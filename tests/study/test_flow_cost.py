@@ -93,7 +93,7 @@ def test_the_planned_memory_covers_a_measured_flow(sides):
 
 
 def test_the_flow_memory_at_1024_is_the_issues_gigabyte_and_more():
-    """One 1024 x 1024 flow solve peaked at 1.55 GB (results/benchmarks/flow_memory.md);
+    """One 1024 x 1024 flow solve peaked at 1.55-1.64 GB (results/benchmarks/flow_memory.md);
     the plan of a 1024 x 1024 job with the flow asks for more than that beyond its
     contact solve's memory."""
     with_flow = plan_of(flow_config(1024, count=2))
@@ -102,11 +102,11 @@ def test_the_flow_memory_at_1024_is_the_issues_gigabyte_and_more():
     (bare,) = without.jobs.values()
     added = (resources.job_memory_mb(with_flow, "contact", {"job": job.key})
              - resources.job_memory_mb(without, "contact", {"job": bare.key}))
-    assert added >= 1550
-    # the flow's time: 2 surfaces x 20 steps x 2 directions, at least the 15.7 s measured
+    assert added >= 1640
+    # the flow's time: 2 surfaces x 20 steps x 2 directions, at least the 20 s measured
     seconds = (resources.contact_seconds(job, with_flow.contact, with_flow.build)
                - resources.contact_seconds(bare, without.contact, without.build))
-    assert seconds >= 2 * 20 * 2 * 15.7
+    assert seconds >= 2 * 20 * 2 * 20.2
 
 
 def test_no_flow_adds_nothing():
