@@ -737,9 +737,8 @@ def long_jobs(plan, limit_seconds: float = LONG_JOB_SECONDS) -> list[str]:
     over = sorted(((seconds, kind, key) for kind, jobs in predictions(plan).items()
                    for key, (seconds, _) in jobs.items() if seconds > limit_seconds),
                   reverse=True)
-    return [f"{kind} job {key}: estimated {_duration(seconds)} of wall time "
-            f"({threads} BLAS thread{'s' if threads > 1 else ''}, blas_threads). "
-            f"{TIME_KEYS[kind]}" for seconds, kind, key in over]
+    return [f"{kind} job {key}: estimated {_duration(seconds)} of wall time with "
+            f"blas_threads = {threads}. {TIME_KEYS[kind]}" for seconds, kind, key in over]
 
 
 def warn_long_jobs(plan) -> None:
