@@ -36,6 +36,7 @@ try:
     resources.check_machine(PLAN)
 except ConfigProblems as err:
     raise WorkflowError(str(err)) from None
+resources.warn_long_jobs(PLAN)  # a job estimated beyond a day, named once
 
 
 wildcard_constraints:

@@ -7,12 +7,12 @@ import os
 import sys
 from pathlib import Path
 
-from roughcontact.errors import DiskFullError, MeasurementError, StoredFileError
+from roughcontact.errors import DiskFullError, InfeasibleMoments, MeasurementError, StoredFileError
 
-#: Errors a user can meet whose message says all there is to do (the file, what was
-#: expected and found, the command that fixes it): a job that ends in one logs the
-#: message alone, not the traceback.
-USER_ERRORS = (DiskFullError, MeasurementError, StoredFileError)
+#: Errors a user can meet whose message says all there is to do (the file or the cell,
+#: what was expected and found, the command or the value that fixes it): a job that
+#: ends in one logs the message alone, not the traceback.
+USER_ERRORS = (DiskFullError, InfeasibleMoments, MeasurementError, StoredFileError)
 
 
 def _excepthook(kind, value, traceback) -> None:

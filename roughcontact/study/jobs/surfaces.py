@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from roughcontact.errors import MeasurementError
+from roughcontact.errors import InfeasibleMoments, MeasurementError
 from roughcontact.study import sources
 from roughcontact.study.jobs.storage import read_surfaces, write_surfaces
 from roughcontact.study.provenance import NO_RUN, RunInfo, canonical_json, provenance
@@ -211,6 +211,17 @@ def _generated_surfaces(cell: GeneratedCell, study_seed: int) -> _Surfaces:
                      lags, spec.as_dict(), attrs, datasets, {})
 
 
+def _calibration(key: str, spec):
+    """The filter's calibration of cell ``key`` (:func:`calibrate_filter`). The plan leaves
+    a target near the reachable region's edge to the job
+    (:func:`roughcontact.study.plan.checks.check_feasible`): one it cannot reach ends the
+    job with the message the plan gives, the cell's key first."""
+    try:
+        return calibrate_filter(spec)
+    except InfeasibleMoments as err:
+        raise InfeasibleMoments(f"{key}: {err}") from None
+
+
 def _filtered_surfaces(cell: GeneratedCell, spec, seeds, *, calibrated: bool) -> tuple:
     """The paper's filter (Eq 12-13); ``calibrated`` (``filter``): the white noise's
     moments aim at the process whose windows have the target expected sample moments."""
@@ -219,7 +230,7 @@ def _filtered_surfaces(cell: GeneratedCell, spec, seeds, *, calibrated: bool) ->
     s3, s4 = moment_transfer(spec)
     attrs, process = {}, spec
     if calibrated:
-        cal = calibrate_filter(spec)
+        cal = _calibration(key, spec)
         attrs = cal.as_attrs()
         process = dataclasses.replace(spec, skew=cal.skew, kurt=cal.kurt)
         log.info(

@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
+import logging
 import math
 import os
 import sys
@@ -62,7 +63,9 @@ _REQUIRED = {
                 "reference_tol_digits", "method_cost", "reference_reach",
                 "matrix_free_solve_seconds", "matrix_free_reference_elements",
                 "matrix_free_floor_seconds", "memory_base_mb", "dense_matrices",
-                "dense_batch_arrays", "matrix_free_batch_arrays"),
+                "dense_batch_arrays", "matrix_free_batch_arrays", "flow_solve_seconds",
+                "flow_exponent", "flow_memory_mb", "flow_memory_reference_elements",
+                "flow_memory_exponent", "flow_memory_floor_elements", "flow_field_arrays"),
     "influence": ("anchor_seconds", "anchor_peak_gb", "exponent", "memory_margin_mb"),
     "surfaces": ("reference_elements", "exact_seconds", "filter_seconds", "exponent",
                  "calibration_seconds",
@@ -103,6 +106,8 @@ def load_cost_model(path: str | os.PathLike = COST_MODEL_FILE) -> MappingProxyTy
 
 
 _MODEL = load_cost_model()
+
+log = logging.getLogger(__name__)
 
 
 # ---------------------------------------------------------------------------
@@ -160,11 +165,31 @@ def matrix_free_solve_seconds(grid) -> float:
 
 def flow_solve_seconds(grid) -> float:
     """Wall time [s] of one flow solve through a gap on ``grid`` (one surface, one step,
-    one direction; :mod:`roughcontact.transport`): 8 ms on 60 x 60 by SuperLU, growing
-    as n^1.3 (45 ms measured on 128 x 128, 0.26 s on 256 x 256)."""
+    one direction; :mod:`roughcontact.transport`): 55 ms (n / 3600)^1.1, above every
+    measured size (44 ms on 64 x 64, 1.33 s on 256 x 256, 15.7 s on 1024 x 1024;
+    ``benchmarks/bench_flow_memory.py``)."""
     contact = _MODEL["contact"]
     scale = grid[0] * grid[1] / contact["reference_elements"]
     return contact["flow_solve_seconds"] * scale ** contact["flow_exponent"]
+
+
+def flow_memory_bytes(grid, count: int, directions=()) -> float:
+    """Peak memory [bytes] the flow through the gap adds to a contact job on ``grid``
+    [nx, ny] recording ``directions`` (none: 0) for batches of ``count`` surfaces
+    (:mod:`roughcontact.transport`): one field's linear solve (SuperLU's factors or the
+    band Cholesky's band, the solves one after another), measured 6.6 MB on 64 x 64,
+    178 MB on 256 x 256, 381 MB on 512 x 512 and 1.55 GB on 1024 x 1024, counted as
+    180 MB (n / 256^2) (fields smaller than 64 x 64 are solved several at once:
+    counted as 64 x 64), plus 4 (count, n) double arrays of the batch's gaps
+    (``benchmarks/bench_flow_memory.py``)."""
+    if not directions:
+        return 0.0
+    fit = _MODEL["contact"]
+    n = grid[0] * grid[1]
+    solved = max(n, fit["flow_memory_floor_elements"])
+    solve = fit["flow_memory_mb"] * MB * (
+        solved / fit["flow_memory_reference_elements"]) ** fit["flow_memory_exponent"]
+    return solve + fit["flow_field_arrays"] * DOUBLE_BYTES * count * n
 
 
 def _dense(geometry: Geometry, build: BuildSettings) -> bool:
@@ -314,7 +339,7 @@ def speed_vs_error_runtime(geometry: Geometry, report: SpeedReportSettings,
 # Memory
 
 
-def contact_mem_mb(job: ContactJob, build: BuildSettings) -> int:
+def contact_mem_mb(job: ContactJob, build: BuildSettings, flow_directions=()) -> int:
     """Peak memory [MB] of a contact job.
 
     Dense model: E * C in double and single precision and the contact-set
@@ -324,14 +349,16 @@ def contact_mem_mb(job: ContactJob, build: BuildSettings) -> int:
     correction (64^2 x 64^2 doubles at most) and FFT work arrays of the batch
     (30 (count, n) arrays: 4 padded copies per surface). A compliant counter body
     adds its model and, on a dense first body, the pair's matrix (2 n^2 doubles),
-    and its surfaces (count, n).
+    and its surfaces (count, n). With the flow on (``flow_directions``, the contact
+    settings' ``flow.directions``), its peak (:func:`flow_memory_bytes`) is added.
     """
     fit = _MODEL["contact"]
     nx, ny = job.geometry.grid
     n = nx * ny
     count = job.surface.count
     dense = _dense(job.geometry, build)
-    extra = job.counter.bytes(count, n, dense)
+    extra = job.counter.bytes(count, n, dense) + flow_memory_bytes((nx, ny), count,
+                                                                    flow_directions)
     if not dense:
         return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2 + extra
                    + fit["matrix_free_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
@@ -392,9 +419,10 @@ def audit_mem_mb(geometries, build: BuildSettings) -> int:
     return int(audit["memory_base_mb"] + audit["model_copies"] * largest / MB)
 
 
-def audit_verify_mem_mb(jobs, geometries, build: BuildSettings) -> int:
-    """Peak memory [MB] of audit_verify: the audit's or the largest contact job's."""
-    largest = max((contact_mem_mb(job, build) for job in jobs), default=0)
+def audit_verify_mem_mb(jobs, geometries, build: BuildSettings, flow_directions=()) -> int:
+    """Peak memory [MB] of audit_verify: the audit's or the largest contact job's (with
+    the flow of ``flow_directions``, as the jobs record it)."""
+    largest = max((contact_mem_mb(job, build, flow_directions) for job in jobs), default=0)
     return max(audit_mem_mb(geometries, build), largest)
 
 
@@ -473,7 +501,8 @@ class JobCost:
 #: its wildcards name (``job``, ``geometry``, ``pair``, ``auto``, ``cell``, ``gcgrid``).
 JOB_COSTS = MappingProxyType({
     "contact": JobCost(
-        lambda plan, w: contact_mem_mb(plan.jobs[w["job"]], plan.build),
+        lambda plan, w: contact_mem_mb(plan.jobs[w["job"]], plan.build,
+                                       plan.contact.flow.directions),
         lambda plan, w, a: contact_runtime(plan.jobs[w["job"]], plan.contact, plan.build, a)),
     "influence": JobCost(
         lambda plan, w: influence_mem_mb(plan.geometries[w["geometry"]], plan.build),
@@ -492,7 +521,7 @@ JOB_COSTS = MappingProxyType({
         lambda plan, w, a: audit_runtime(len(plan.audit_files(plan.jobs)), a)),
     "audit_verify": JobCost(
         lambda plan, w: audit_verify_mem_mb(plan.jobs.values(), plan.geometries.values(),
-                                            plan.build),
+                                            plan.build, plan.contact.flow.directions),
         lambda plan, w, a: audit_verify_runtime(plan.jobs.values(), plan.contact, plan.build,
                                                 plan.study.audit.verify_sample, a)),
     "influence_convergence": JobCost(
@@ -532,7 +561,8 @@ def predictions(plan) -> dict[str, dict[str, tuple[float, int]]]:
     :func:`~roughcontact.study.plan.cells.study_plan`."""
     settings, build = plan.contact, plan.build
     return {
-        "contact": {key: (contact_seconds(job, settings, build), contact_mem_mb(job, build))
+        "contact": {key: (contact_seconds(job, settings, build),
+                            contact_mem_mb(job, build, settings.flow.directions))
                     for key, job in plan.jobs.items()},
         "influence": {k: (influence_seconds(g, build), influence_mem_mb(g, build))
                       for k, g in plan.geometries.items()},
@@ -591,7 +621,8 @@ def _report_memory(plan) -> dict[str, dict[str, int]]:
         out["audit"] = {"audit": audit_mem_mb(plan.geometries.values(), plan.build)}
         if study.audit.verify:
             out["audit_verify"] = {"audit_verify": audit_verify_mem_mb(
-                plan.jobs.values(), plan.geometries.values(), plan.build)}
+                plan.jobs.values(), plan.geometries.values(), plan.build,
+                plan.contact.flow.directions)}
     return out
 
 
@@ -672,6 +703,51 @@ def check_machine(plan, kinds: tuple[str, ...] | None = None) -> None:
     problems = machine_problems(plan, jobs=jobs)
     if problems:
         raise ConfigProblems("Jobs planned beyond the memory a job may use", problems)
+
+
+#: [s] A job planned to take longer than this (a day) is named when the plan is made.
+LONG_JOB_SECONDS = 86400.0
+
+#: What shortens each kind of job the long-job warning names: the config keys to change.
+TIME_KEYS = MappingProxyType({
+    "contact": "Use fewer surfaces per cell (surfaces.count or the study's count), fewer "
+               "contact.steps or a smaller grid (surfaces.grid), set body.operator: auto "
+               "(matrix-free above 64 x 64 elements) where it is dense, or, with the flow "
+               "on, record it along one direction (flow.directions: [x])",
+    "influence": "Set body.operator: auto (matrix-free above 64 x 64 elements), or use a "
+                 "coarser body.mesh or a smaller grid (surfaces.grid)",
+    "surfaces": "Use fewer surfaces per cell (surfaces.count or the study's count), a "
+                "smaller grid (surfaces.grid) or surfaces.method: filter",
+})
+
+
+def _duration(seconds: float) -> str:
+    """A wall time [s] in days or hours."""
+    days = seconds / 86400.0
+    return f"{days:.3g} days" if days >= 1.0 else f"{seconds / 3600.0:.3g} hours"
+
+
+def long_jobs(plan, limit_seconds: float = LONG_JOB_SECONDS) -> list[str]:
+    """One message for each contact, influence and surfaces job of a study's ``plan``
+    whose estimated wall time (:func:`predictions`, before the margin; measured on the
+    reference machine's 2 cores, one BLAS thread a job: ``blas_threads``) exceeds
+    ``limit_seconds``: the job, its estimate and the keys that shorten it
+    (:data:`TIME_KEYS`), the longest first."""
+    threads = plan.study.blas_threads
+    over = sorted(((seconds, kind, key) for kind, jobs in predictions(plan).items()
+                   for key, (seconds, _) in jobs.items() if seconds > limit_seconds),
+                  reverse=True)
+    return [f"{kind} job {key}: estimated {_duration(seconds)} of wall time with "
+            f"blas_threads = {threads}. {TIME_KEYS[kind]}" for seconds, kind, key in over]
+
+
+def warn_long_jobs(plan) -> None:
+    """Log one warning naming every job of a study's ``plan`` estimated to take more than a
+    day (:func:`long_jobs`), before any job runs; nothing when there is none."""
+    messages = long_jobs(plan)
+    if messages:
+        log.warning("Jobs planned to run longer than a day (the cost model's estimate):\n  "
+                    + "\n  ".join(messages))
 
 
 def _number(text: str) -> float:
