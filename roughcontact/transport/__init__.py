@@ -17,6 +17,12 @@ without knowing them, so transport depends on contact (for what a probe is,
 :mod:`roughcontact.contact.probes`) and never the other way round;
 ``percolation`` reads a sweep's connectivity off for each surface's sealing point
 and a cell's threshold.
+
+``conduction`` (a room of its own) is the heat or current that crosses the
+contact spots: the thermal influence of a half-space or of the finite block (a
+scalar Laplace problem on the elastic model's meshes) and the spot conductance
+of a contact set through it, split into bulk and constriction
+(:mod:`roughcontact.transport.conduction`, imported by its own name).
 """
 
 from roughcontact.transport import flow, probe, references

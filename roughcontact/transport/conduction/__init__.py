@@ -1,0 +1,28 @@
+"""Conduction across the interface: thermal and electrical contact conductance.
+
+The influence of a body's contact face on its temperature, as the elasticity
+stage's compliance is on its deflection: ``halfspace`` (dense, periodic and
+free half-spaces, the kernel ``1 / (2 pi k r)``) and ``block`` (the finite
+block's scalar Laplace problem on the elastic model's meshes); ``spot`` the
+conductance of a contact set through them (CG on the set, the bulk and
+constriction resistances, bodies in series). A walk::
+
+    >>> import numpy as np
+    >>> from roughcontact.transport.conduction import halfspace_thermal_influence, spot_conductance
+    >>> R = halfspace_thermal_influence((16, 16), (1e-3, 1e-3), conductivity=50.0)
+    >>> y, x = np.mgrid[:16, :16] - 7.5
+    >>> spot = spot_conductance(R, np.hypot(x, y) < 4.0, element_area=(1e-3 / 16) ** 2)
+    >>> bool(abs(spot.conductance / (4 * 50.0 * 4.0 * 1e-3 / 16) - 1) < 0.06)  # Holm, 4 k a
+    True
+
+Nothing here knows about surfaces or the workflow; a probe of the contact
+sweep and the study's settings come later.
+"""
+
+from roughcontact.transport.conduction import block, halfspace, spot
+from roughcontact.transport.conduction.block import *  # noqa: F403 (block.__all__)
+from roughcontact.transport.conduction.halfspace import *  # noqa: F403 (halfspace.__all__)
+from roughcontact.transport.conduction.spot import *  # noqa: F403 (spot.__all__)
+
+#: The public names of the room's modules.
+__all__ = [*block.__all__, *halfspace.__all__, *spot.__all__]
