@@ -298,18 +298,23 @@ def plot_leakage(tables, thresholds, pressure_drops=None):
 def sealing_text(found) -> str:
     """A cell's sealing pressure as the figure's legend and caption give it: the nominal
     pressure [MPa] at which half its surfaces have sealed and its 95 % band (a
-    percolation threshold's row, :func:`load_percolation`), 3 significant digits; where
-    not found, why (none sealed, or too few inside the swept range)."""
+    percolation threshold's row, :func:`load_percolation`), 3 significant digits; a band
+    open at one end (too few surfaces sealed inside the swept range to bound it) says
+    "above" or "below"; a pressure not found says so."""
     import math
 
-    def shown(value) -> str:
-        return "-" if value is None or not math.isfinite(float(value)) else f"{float(value):.3g}"
+    def shown(key: str) -> str | None:
+        value = found.get(key)
+        return None if value is None or not math.isfinite(float(value)) else \
+            f"{float(value):.3g}"
 
-    pressure = found.get("pressure_MPa")
-    if pressure is None or not math.isfinite(float(pressure)):
+    pressure, low, high = (shown(key) for key in ("pressure_MPa", "pressure_low_MPa",
+                                                  "pressure_high_MPa"))
+    if pressure is None:
         return "not sealed inside the swept range"
-    return (f"{shown(pressure)} MPa (95 %: {shown(found.get('pressure_low_MPa'))}-"
-            f"{shown(found.get('pressure_high_MPa'))})")
+    band = (f"{low}-{high}" if low and high else f"above {low}" if low
+            else f"below {high}" if high else "unbounded")
+    return f"{pressure} MPa (95 %: {band})"
 
 
 def sealing_sentence(tables, thresholds) -> str:

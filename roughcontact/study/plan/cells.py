@@ -31,8 +31,8 @@ from roughcontact.study.plan.checks import (
     check_windows,
 )
 from roughcontact.study.plan.counter_checks import check_counterfaces
-from roughcontact.study.plan.flow_checks import check_open_faces
 from roughcontact.study.plan.figures import FIGURES, Kind
+from roughcontact.study.plan.flow_checks import check_open_faces
 from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.records import (
     SEEDED_PER_SURFACE,
