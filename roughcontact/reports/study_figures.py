@@ -169,8 +169,8 @@ def cell_labels(table, study: str) -> dict:
     """Legend text of each cell of a study of the leakage figure (its rows of an aggregate
     ``table``), by cell: the ``study``'s name and the cell's (Sk, Ku), then each column
     that differs between the study's cells (the counter body, sigma, b, E, ...), and a
-    measured surface's source (its ``label``'s ``measured <file>: ``); a cell its columns
-    do not tell apart from another gets its index. Two studies of equal moments, or a
+    measured surface's source (the start of its ``label``, ``measured <file>``); a cell
+    its columns do not tell apart from another gets its index. Two studies of equal moments, or a
     measured map and its twin, thus never share a label."""
     import pandas as pd
 
