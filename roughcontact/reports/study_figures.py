@@ -150,9 +150,45 @@ def flow_directions(table) -> tuple[str, ...]:
     return tuple(d for d in DIRECTION_STYLES if f"{column_name(LEAK_RATE, d)}_mean" in table)
 
 
-def cell_label(row) -> str:
-    """Legend text of a cell of the leakage figure: its (Sk, Ku)."""
-    return f"Sk = {row['skew']:g}, Ku = {row['kurt']:g}"
+#: The columns of an aggregate table that may tell a study's cells apart beside their
+#: (Sk, Ku), with the unit a legend gives each.
+_LABEL_COLUMNS = (("counter", ""), ("sigma_um", " µm"), ("b_mm", " mm"), ("E_MPa", " MPa"),
+                  ("nu", ""), ("size_mm", " mm"), ("thickness_mm", " mm"), ("mesh", ""),
+                  ("cap_MPa", " MPa"))
+
+
+def _shown_value(column: str, value, unit: str) -> str:
+    text = f"{value:g}" if isinstance(value, float) else str(value)
+    names = {"counter": "against", "sigma_um": "σ", "b_mm": "b", "E_MPa": "E",
+             "nu": "ν", "size_mm": "L", "thickness_mm": "block", "mesh": "mesh",
+             "cap_MPa": "cap"}
+    return f"{names[column]} {text}{unit}"
+
+
+def cell_labels(table, study: str) -> dict:
+    """Legend text of each cell of a study of the leakage figure (its rows of an aggregate
+    ``table``), by cell: the ``study``'s name and the cell's (Sk, Ku), then each column
+    that differs between the study's cells (the counter body, sigma, b, E, ...), and a
+    measured surface's source (the start of its ``label``, ``measured <file>``); a cell
+    its columns do not tell apart from another gets its index. Two studies of equal moments, or a
+    measured map and its twin, thus never share a label."""
+    import pandas as pd
+
+    first = table.drop_duplicates("cell").sort_values("cell").set_index("cell")
+    varying = [(c, unit) for c, unit in _LABEL_COLUMNS
+               if c in first and first[c].astype(str).nunique() > 1]
+    labels = {}
+    for cell, row in first.iterrows():
+        parts = [f"Sk = {row['skew']:g}, Ku = {row['kurt']:g}"]
+        parts += [_shown_value(c, row[c], unit) for c, unit in varying
+                  if not (isinstance(row[c], float) and pd.isna(row[c]))]
+        source = str(row.get("label", ""))
+        if source.startswith("measured ") and ": " in source:
+            parts.insert(0, source.split(": ", 1)[0])
+        labels[cell] = f"{study}: {', '.join(parts)}"
+    texts = list(labels.values())
+    return {cell: text if texts.count(text) == 1 else f"{text} (cell {cell})"
+            for cell, text in labels.items()}
 
 
 def load_percolation(paths, names) -> dict:
@@ -183,20 +219,42 @@ _THRESHOLD_KEYS = ("area", "area_low", "area_high", "pressure_MPa", "pressure_lo
                    "pressure_high_MPa")
 
 
-def plot_leakage(tables, thresholds):
+def load_pressure_drops(paths, names) -> dict:
+    """The pressure drop [MPa] across the seal of several studies by name (the sidecar's
+    ``flow.pressure_drop_Pa`` of each :data:`AGGREGATE_FILES` paths of ``paths``; the
+    sidecar checked as by :func:`load_aggregates`); a study solved without the flow has
+    none."""
+    paths, names = list(paths), list(names)
+    found = {}
+    for k, name in enumerate(names):
+        meta = load_aggregates(paths[AGGREGATE_FILES * k:AGGREGATE_FILES * (k + 1)])[2]
+        if "flow" in meta:
+            found[name] = meta["flow"]["pressure_drop_Pa"] / 1e6
+    return found
+
+
+def plot_leakage(tables, thresholds, pressure_drops=None):
     """Will the seal leak? The flow through the contact gap of each study, one row of
-    four panels per study, one colour per cell (legend: its Sk, Ku), the flow along x
-    solid and along y dashed.
+    four panels per study, one colour per cell (legend: :func:`cell_labels`, the study's
+    name and what tells its cells apart), the flow along x solid and along y dashed.
 
     ``tables``: study name -> aggregate table with the flow columns
     (:func:`flow_directions`); ``thresholds``: study name -> its percolation
-    thresholds (:func:`load_percolation`). Panels:
+    thresholds (:func:`load_percolation`); ``pressure_drops``: study name -> the
+    pressure drop across its seal [MPa] (:func:`load_pressure_drops`), whose levels
+    below it (the tables' ``faces_open``: the fluid would lift the faces apart) are
+    shaded grey and hatched in the panels against P. Panels:
 
     (a) the leak rate of the seal along ``d`` [m^3/s] against nominal
         pressure P [MPa], both log, with its band (:func:`plot_band`): the
         levels of a positive mean only (the leak rate is 0 once every surface
-        has sealed, which a log axis cannot show);
-    (b) the flow factor phi = K / mean(g)^3 along ``d`` against P;
+        has sealed, which a log axis cannot show); each cell's sealing pressure
+        along the first direction (the sidecar's ``pressure_MPa``) a dash-dotted
+        line in its colour;
+    (b) the flow factor phi = K / mean(g)^3 along ``d`` against P; its legend
+        explains the marks (hollow markers: a level resting on fewer surfaces
+        than the cell has, :func:`plot_band`; the open faces; the sealing
+        pressure);
     (c) the flow factor against the real area fraction up to
         :data:`AREA_AXIS_END`, the cells' mean curves (log, where > 0: the
         approach to sealing), each cell's percolation threshold along x (the
@@ -204,7 +262,9 @@ def plot_leakage(tables, thresholds):
         (``area_low`` to ``area_high``) shaded (along y a dotted line), and
         :data:`DAPP_THRESHOLD` grey dashed;
     (d) the share of surfaces still leaking along ``d`` [%] against P, with its
-        band (:func:`fraction_band`).
+        band (:func:`fraction_band`), each cell's sealing pressure a dash-dotted
+        line with its 95 % band shaded, its numbers in the legend
+        (:func:`sealing_text`).
 
     The columns are named by :func:`roughcontact.transport.probe.column_name`.
 
@@ -217,15 +277,102 @@ def plot_leakage(tables, thresholds):
     for row_axes, name in zip(axes, names, strict=True):
         table = tables[name]
         directions = flow_directions(table)
+        labels = cell_labels(table, name)
+        found = thresholds.get(name)
+        sealing = []
         for (cell, rows), color in zip(table.groupby("cell", sort=True),
                                        (f"C{k}" for k in range(10)), strict=False):
-            label = cell_label(rows.iloc[0])
             for d in directions:
-                _draw_flow_cell(row_axes, rows, d, color, label if d == directions[0] else None)
-            _mark_thresholds(row_axes[2], thresholds.get(name), cell, color, directions)
+                _draw_flow_cell(row_axes, rows, d, color,
+                                labels[cell] if d == directions[0] else None)
+            _mark_thresholds(row_axes[2], found, cell, color, directions)
+            sealing += _mark_sealing(row_axes, found, cell, color, directions, labels[cell])
+        drop = (pressure_drops or {}).get(name)
+        _shade_open_faces(row_axes, table, drop)
         _finish_leakage_row(row_axes, name, table, directions)
+        _leakage_keys(row_axes, directions, drop, sealing)
     fig.tight_layout()
     return fig
+
+
+def sealing_text(found) -> str:
+    """A cell's sealing pressure as the figure's legend and caption give it: the nominal
+    pressure [MPa] at which half its surfaces have sealed and its 95 % band (a
+    percolation threshold's row, :func:`load_percolation`), 3 significant digits; a band
+    open at one end (too few surfaces sealed inside the swept range to bound it) says
+    "above" or "below"; a pressure not found says so."""
+    import math
+
+    def shown(key: str) -> str | None:
+        value = found.get(key)
+        return None if value is None or not math.isfinite(float(value)) else \
+            f"{float(value):.3g}"
+
+    pressure, low, high = (shown(key) for key in ("pressure_MPa", "pressure_low_MPa",
+                                                  "pressure_high_MPa"))
+    if pressure is None:
+        return "not sealed inside the swept range"
+    band = (f"{low}-{high}" if low and high else f"above {low}" if low
+            else f"below {high}" if high else "unbounded")
+    return f"{pressure} MPa (95 %: {band})"
+
+
+def sealing_sentence(tables, thresholds) -> str:
+    """The leakage figure's answers for its caption: each cell's sealing pressure along
+    each flow direction (:func:`sealing_text`), labelled by :func:`cell_labels`."""
+    parts = []
+    for name, table in tables.items():
+        labels = cell_labels(table, name)
+        found = thresholds.get(name)
+        for cell, label in labels.items():
+            rows = [] if found is None else [row for _, row in found.iterrows()
+                                             if row["cell"] == cell]
+            texts = [f"{sealing_text(row)} along {row['direction']}" for row in rows]
+            if texts:
+                parts.append(f"{label}: {', '.join(texts)}")
+    return ("Sealing pressure (the nominal pressure at which half the surfaces have "
+            "sealed, with its 95 % band): " + "; ".join(parts) + ".") if parts else ""
+
+
+def _mark_sealing(row_axes, thresholds, cell, color: str, directions, label: str) -> list:
+    """A cell's sealing pressure along the first of ``directions`` on the panels against
+    P: a dash-dotted line in its colour on (a) and (d), its 95 % band shaded on (d).
+    Returns the legend entry of (d) (its numbers, :func:`sealing_text`), none where the
+    thresholds have no pressure."""
+    import math
+
+    from matplotlib.lines import Line2D
+
+    if thresholds is None or len(thresholds) == 0 or "pressure_MPa" not in thresholds:
+        return []
+    rows = thresholds[(thresholds["cell"] == cell)
+                      & (thresholds["direction"] == directions[0])]
+    if len(rows) == 0:
+        return []
+    found = rows.iloc[0]
+    entry = Line2D([], [], color=color, linestyle="-.",
+                   label=f"{label}: {sealing_text(found)}")
+    if not math.isfinite(found["pressure_MPa"]):
+        return [entry]
+    leak, _, _, connected = row_axes
+    for ax in (leak, connected):
+        ax.axvline(found["pressure_MPa"], color=color, linestyle="-.", linewidth=1.0)
+    low, high = found.get("pressure_low_MPa"), found.get("pressure_high_MPa")
+    if low is not None and high is not None and math.isfinite(low) and math.isfinite(high):
+        connected.axvspan(low, high, color=color, alpha=0.12, linewidth=0)
+    return [entry]
+
+
+def _shade_open_faces(row_axes, table, drop) -> None:
+    """The levels at which the faces would open (the table's ``faces_open``: the pressure
+    drop ``drop`` [MPa] exceeds P) shaded grey and hatched, from the first level to the
+    drop, on the panels against P; nothing without a drop or such a level."""
+    if drop is None or "faces_open" not in table or not table["faces_open"].astype(bool).any():
+        return
+    first = float(table["nominal_pressure"].min()) / 1e6
+    for ax in (row_axes[0], row_axes[1], row_axes[3]):
+        ax.axvspan(first, drop, facecolor="0.5", alpha=0.15, hatch="//", edgecolor="0.6",
+                   linewidth=0, zorder=0)
 
 
 def _leakage_columns(d: str) -> tuple[str, str, str]:
@@ -287,7 +434,6 @@ def _finish_leakage_row(row_axes, name: str, table, directions) -> None:
     for ax in (leak, factor, connected):
         ax.grid(True, which="both", alpha=0.3)
     area.grid(True, alpha=0.3)  # major only: its log axis spans many decades
-    leak.legend(fontsize=7)
     key = [Line2D([], [], color="0.3", linestyle=DIRECTION_STYLES[d], label=f"along {d}")
            for d in directions]
     key += [Line2D([], [], color="0.3", linewidth=1.0,
@@ -302,6 +448,29 @@ def _finish_leakage_row(row_axes, name: str, table, directions) -> None:
              for column in ("sigma_um", "E_MPa", "b_mm")}
     leak.set_title(f"{name}: $\\sigma$ = {first['sigma_um']} µm, $b$ = {first['b_mm']} mm, "
                    f"$E$ = {first['E_MPa']} MPa", fontsize=9, loc="left")
+
+
+def _leakage_keys(row_axes, directions, drop, sealing) -> None:
+    """The legends of one row of :func:`plot_leakage` that name the cells and explain
+    every mark: the cells on (a), the marks on (b), the sealing pressures on (d)."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    leak, factor, _, connected = row_axes
+    leak.legend(fontsize=7)
+    marks = [Line2D([], [], color="0.3", marker="o", mfc="none", linestyle="none", ms=4,
+                    label="hollow: a level on fewer surfaces than the cell has")]
+    if drop is not None and any(p.get_hatch() for p in factor.patches):
+        marks.append(Patch(facecolor="0.5", alpha=0.15, hatch="//", edgecolor="0.6",
+                           label=f"faces would open: pressure drop {drop:g} MPa > P "
+                                 "(fluid pressure not on the faces)"))
+    if sealing:
+        marks.append(Line2D([], [], color="0.3", linestyle="-.",
+                            label=f"sealing pressure ({directions[0]}): half the surfaces "
+                                  "sealed; band in (d)"))
+        connected.legend(handles=sealing, fontsize=6, title=f"sealing pressure "
+                         f"({directions[0]})", title_fontsize=7)
+    factor.legend(handles=marks, fontsize=7)
 
 
 def leak_rates_at(table, pressures):

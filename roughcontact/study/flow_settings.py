@@ -11,6 +11,10 @@ flow's study-side record, :class:`~roughcontact.study.probes.StudyProbe`)
 - the leak rate of the configured seal, ``Q = K W dp / (12 eta L)`` [m^3/s]
   (:meth:`~roughcontact.transport.flow.Seal.leak_rate`; linear in ``K``, so its mean
   and band are those of ``K`` scaled);
+- at every level, whether the faces would open (:data:`FACES_OPEN`): the pressure drop
+  exceeds the nominal contact pressure, so the fluid would lift the faces apart; the model
+  does not load the faces with the fluid's pressure, so its leak rate there is that of
+  faces held shut, not the seal's;
 - each cell's percolation threshold (:mod:`roughcontact.transport.percolation`): the
   real area and the nominal pressure at which half the surfaces have sealed, with a
   distribution-free 95 % band.
@@ -40,7 +44,11 @@ from roughcontact.transport.probe import (
 )
 from roughcontact.units import MM, MPA
 
-__all__ = ["FLOW_OFF", "FlowSettings", "check_flow", "flow_settings"]
+__all__ = ["FACES_OPEN", "FLOW_OFF", "FlowSettings", "check_flow", "flow_settings"]
+
+#: The aggregate tables' column (with the flow on) that flags a level where the pressure
+#: drop exceeds the nominal contact pressure: the fluid would lift the faces apart.
+FACES_OPEN = "faces_open"
 
 #: Plausible ranges of the seal's values (outside: almost surely a unit slip), with the
 #: unit each is likely typed in by mistake and its factor to the key's unit.
@@ -92,12 +100,26 @@ class FlowSettings:
                 f"{w['seal_width_mm']:g} mm wide and {w['seal_length_mm']:g} mm long with "
                 f"{w['pressure_drop_MPa']:g} MPa across it")
 
+    def faces_open(self, nominal_pressure):
+        """Whether the pressure drop exceeds each nominal contact pressure [Pa] (an array
+        of bools): there the fluid, at up to the pressure drop at the inlet, would lift
+        the faces apart. The model does not load the faces with the fluid's pressure, so
+        its leak rate at such a level is that of faces held shut. All False with the flow
+        off."""
+        pressures = np.asarray(nominal_pressure, dtype=float)
+        if not self.enabled:
+            return np.zeros(pressures.shape, dtype=bool)
+        return self.seal.pressure_drop > pressures
+
     def table_columns(self, rows) -> tuple[dict, dict]:
         """The leak-rate columns of a cell's aggregated ``rows`` (a table with the flow
         conductance's ``_mean``, ``_half_width`` and ``_count`` columns along each
-        direction, :func:`~roughcontact.transport.probe.column_name`): the leak rate's
-        (``LEAK_RATE`` along each direction) ``_mean`` and ``_half_width`` [m^3/s] and
-        ``_count``, and their units; empty with the flow off."""
+        direction, :func:`~roughcontact.transport.probe.column_name`, and the
+        ``nominal_pressure`` [Pa]): the leak rate's (``LEAK_RATE`` along each direction)
+        ``_mean`` and ``_half_width`` [m^3/s] and ``_count``, then :data:`FACES_OPEN`
+        (:meth:`faces_open` at each level), and their units; empty with the flow off."""
+        if not self.enabled:
+            return {}, {}
         columns, units = {}, {}
         for d in self.directions:
             conductance, leak = column_name(CONDUCTANCE, d), column_name(LEAK_RATE, d)
@@ -106,6 +128,8 @@ class FlowSettings:
                 units[f"{leak}_{part}"] = "m^3/s"
             columns[f"{leak}_count"] = rows[f"{conductance}_count"]
             units[f"{leak}_count"] = "1"
+        columns[FACES_OPEN] = self.faces_open(rows["nominal_pressure"])
+        units[FACES_OPEN] = "-"
         return columns, units
 
     def cell_rows(self, sweep, labels: dict) -> list[dict]:

@@ -374,11 +374,12 @@ THRESHOLDS = pd.DataFrame([
 def test_plot_leakage_draws_each_cell_along_x_and_y_with_its_threshold():
     """Four panels a study: leak rate (the positive levels only, log), flow factor against
     P, flow factor against real area with the thresholds and Dapp's 0.42, share still
-    leaking; a curve per cell and direction, y dashed; the legend names each (Sk, Ku)."""
+    leaking; a curve per cell and direction, y dashed; the legend names each by its study
+    and (Sk, Ku)."""
     fig = plot_leakage({"seal": leakage_table()}, {"seal": THRESHOLDS})
     leak, factor, area, connected = fig.axes
     assert [t.get_text() for t in leak.get_legend().get_texts()] == [
-        "Sk = 0, Ku = 3", "Sk = -0.8, Ku = 4"]
+        "seal: Sk = 0, Ku = 3", "seal: Sk = -0.8, Ku = 4"]
     for ax in (leak, factor, connected):  # a curve and a band per cell and direction
         assert len(ax.lines) == len(ax.collections) == 4
         assert ax.get_xscale() == "log"

@@ -110,6 +110,12 @@ def test_the_leakage_caption_names_the_configured_seal_and_its_cells():
             "(Sk, Ku) = (0, 3), (-0.8, 4), (0.8, 4), (0, 4.5) and (1, 4.5))") in caption
     assert "20 surfaces per curve, 24 steps each, 16 pressure levels" in caption
     assert "dashed" not in caption.split("Dapp")[0] and "dotted" not in caption
+    # the levels 0.2 * 100^(k/15) MPa (16, log-spaced) below the 2.5 MPa drop: k = 0..8
+    opened = ", ".join(f"{0.2 * 10 ** (2 * k / 15):.3g}" for k in range(8))
+    assert (f"the pressure drop of 2.5 MPa exceeds the nominal contact pressure, so the "
+            f"fluid would lift the faces apart (seal at {opened} and 2.33 MPa;") in caption
+    assert "Hollow markers: a level resting on fewer surfaces than the cell has" in caption
+    assert "sealing pressure along x" in caption
     shipped = figure_caption(plan_of("seal")[1], "leakage")
     assert "viscosity 0.001 Pa s" in shipped and "with 1 MPa across it" in shipped
     assert "along x and y, y dashed" in shipped and "along y dotted" in shipped

@@ -66,18 +66,23 @@ def test_the_seal_in_si_units_and_its_leak_rate():
     flow = flow_settings(config(flow={**ON, "viscosity_Pa_s": 0.05, "pressure_drop_MPa": 2.0,
                                       "seal_width_mm": 80.0, "seal_length_mm": 4.0})["flow"])
     assert flow.params()["pressure_drop_Pa"] == 2.0e6
-    rows = pd.DataFrame({f"flow_conductance_{d}_{part}": [1e-18, 2e-18]
+    rows = pd.DataFrame({f"flow_conductance_{d}_{part}": [1e-18, 2e-18, 4e-18]
                          for d in "xy" for part in ("mean", "half_width")}
-                        | {f"flow_conductance_{d}_count": [3, 3] for d in "xy"})
+                        | {f"flow_conductance_{d}_count": [3, 3, 3] for d in "xy"}
+                        | {"nominal_pressure": [1.0e6, 2.0e6, 3.0e6]})
     columns, units = flow.table_columns(rows)
     # Q = K W dp / (12 eta L), by hand
-    expected = np.array([1e-18, 2e-18]) * 80e-3 * 2.0e6 / (12 * 0.05 * 4e-3)
+    expected = np.array([1e-18, 2e-18, 4e-18]) * 80e-3 * 2.0e6 / (12 * 0.05 * 4e-3)
     np.testing.assert_allclose(columns["leak_rate_x_mean"], expected, rtol=1e-15)
     np.testing.assert_allclose(columns["leak_rate_y_half_width"], expected, rtol=1e-15)
-    assert list(columns["leak_rate_x_count"]) == [3, 3]
+    assert list(columns["leak_rate_x_count"]) == [3, 3, 3]
+    # the faces open where the 2 MPa drop exceeds the contact pressure: at 1 MPa only
+    # (at 2 MPa it equals it, at 3 MPa it is below)
+    assert list(columns["faces_open"]) == [True, False, False]
     assert list(columns) == [f"leak_rate_{d}_{part}" for d in "xy"
-                             for part in ("mean", "half_width", "count")]
-    assert units == {name: "1" if name.endswith("_count") else "m^3/s" for name in columns}
+                             for part in ("mean", "half_width", "count")] + ["faces_open"]
+    assert units == {name: "1" if name.endswith("_count") else "-" if name == "faces_open"
+                     else "m^3/s" for name in columns}
     assert FLOW_OFF.table_columns(rows) == ({}, {})
 
 

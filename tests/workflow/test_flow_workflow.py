@@ -88,6 +88,21 @@ def test_the_leak_rate_is_the_seals(runs):
         assert (leaking.first() == 1.0).all() and (leaking.last() < 0.5).all()
 
 
+def test_the_tables_mark_the_open_faces_and_give_the_pressure_in_mpa(runs):
+    """``faces_open`` where the 0.5 MPa drop exceeds the level (none of 2-45 MPa: by hand),
+    with the flow on only; ``nominal_pressure_MPa`` beside the Pa column in both (to 12
+    significant digits, as the tables write values for people)."""
+    on, off = _table(runs["on"]), _table(runs["off"])
+    np.testing.assert_array_equal(on["faces_open"].to_numpy(),
+                                  SEAL["pressure_drop_MPa"] * 1e6 > on["nominal_pressure"])
+    assert not on["faces_open"].any() and "faces_open" not in off
+    for table in (on, off):
+        np.testing.assert_allclose(table["nominal_pressure_MPa"],
+                                   table["nominal_pressure"] / 1e6, rtol=1e-11)
+        columns = list(table.columns)
+        assert columns.index("nominal_pressure_MPa") == columns.index("nominal_pressure") + 1
+
+
 def test_each_cells_threshold_lies_inside_its_sweep(runs):
     meta = json.loads((runs["on"] / "results" / "aggregates" / "seal.json").read_text())
     rows = meta["flow"]["percolation"]

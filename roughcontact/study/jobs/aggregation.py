@@ -103,6 +103,17 @@ def _plausibility(cell: StudyCell, frame: pd.DataFrame) -> tuple[pd.DataFrame, l
     return frame, reasons
 
 
+def _with_pressure_in_mpa(frame: pd.DataFrame) -> pd.DataFrame:
+    """The table with ``nominal_pressure_MPa`` beside ``nominal_pressure`` [Pa]: the unit the
+    configuration, the figures and the sidecar speak (``nominal_pressure`` unchanged)."""
+    units = {**frame.attrs["units"], "nominal_pressure_MPa": "MPa"}
+    frame = frame.copy()
+    frame.insert(frame.columns.get_loc("nominal_pressure") + 1, "nominal_pressure_MPa",
+                 [in_unit(p, MPA) for p in frame["nominal_pressure"]])
+    frame.attrs["units"] = units
+    return frame
+
+
 def _with_probe_columns(frame: pd.DataFrame, probes: tuple) -> pd.DataFrame:
     """The table with the columns each study-side probe record adds (the flow's leak
     rate; none without probes)."""
@@ -142,7 +153,7 @@ def _aggregate_cell(index: int, cell: StudyCell, columns: dict, path, levels: in
     physical, frame = cell_module.aggregate_sweep(nd, cell.height_scale, cell.E, axis,
                                                   hardness=cell.hardness)
     frame, implausible = _plausibility(cell, frame)
-    frame = _with_probe_columns(frame, probes)
+    frame = _with_probe_columns(_with_pressure_in_mpa(frame), probes)
     labels = {"cell": index, "label": label, "contact_key": key, **columns}
     probed = {record.kind: record.cell_rows(physical, {"cell": index, "label": label,
                                                        "contact_key": key})
@@ -192,7 +203,8 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
     columns plus the cell's parameters, as
     :func:`~roughcontact.study.contact_records.study_columns` gives them: with counter
     bodies, each cell's ``counter``); the moduli table one row per cell and surface
-    (E_u, Eq 36) with the cell summary in the sidecar. Unconverged
+    (E_u, Eq 36) with the cell summary in the sidecar; the nominal pressure is in Pa
+    (``nominal_pressure``) and in MPa (``nominal_pressure_MPa``). Unconverged
     solves are excluded by the aggregation and counted in both. With
     ``validity_path``, the validity table (:func:`validity_rows`: the share of
     each elastic cell's real area and load above each hardness it names, no
@@ -201,7 +213,8 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
     probes the contact files must have recorded
     (:func:`~roughcontact.study.probes.study_probes`); the table has their columns and
     what each record adds (with the flow on, :mod:`roughcontact.study.flow_settings`:
-    the leak rate of its seal), and the sidecar each record's entry under its kind
+    the leak rate of its seal and, per level, whether the pressure drop would open the
+    faces, ``faces_open``), and the sidecar each record's entry under its kind
     (each cell's percolation thresholds).
     """
     parts = [_aggregate_cell(index, cell, columns, contact_paths[cell.contact_key], levels,

@@ -279,6 +279,29 @@ def two_bodies(plan, name):
             f"dashed with crosses) against nominal pressure. {_surfaces(rows)}. {BANDS}")
 
 
+def _open_faces(plan, studies) -> str:
+    """Which levels of each study lie below the pressure drop (the faces would open), in
+    MPa (:func:`~roughcontact.study.plan.flow_checks.open_levels_MPa`)."""
+    from roughcontact.study.plan.flow_checks import open_levels_MPa
+
+    drop = plan.study.flow.written()["pressure_drop_MPa"]
+    parts = []
+    for study in studies:
+        p_min, p_max = plan.study.section(study).pressure_MPa
+        opened = open_levels_MPa(plan.study, p_min, p_max)
+        parts.append(f"{study} at {_levels(opened)}" if opened else f"{study} at no level")
+    return (f"Shaded grey and hatched: the levels at which the pressure drop of "
+            f"{drop:g} MPa exceeds the nominal contact pressure, so the fluid would lift the "
+            f"faces apart ({'; '.join(parts)}; the tables' faces_open): the model does not "
+            f"load the faces with the fluid's pressure, so its leak rate there is that of "
+            f"faces held shut, not the seal's.")
+
+
+def _levels(levels_MPa) -> str:
+    """Pressure levels [MPa] in a caption: each to 3 significant digits."""
+    return f"{join(f'{p:.3g}' for p in levels_MPa)} MPa"
+
+
 def leakage(plan, name):
     flow = plan.study.flow
     ordered = [d for d in ("x", "y") if d in flow.directions]  # as the figure draws them
@@ -287,7 +310,8 @@ def leakage(plan, name):
             f"{flow.probe.face_rule.name} face rule, {flow.probe.sides} sides; along "
             f"{directions}{', y dashed' if len(ordered) > 1 else ''})")
     parts = []
-    for study in plan.study.entry(name)["studies"]:
+    studies = plan.study.entry(name)["studies"]
+    for study in studies:
         rows = _columns(plan.cells[study])
         parts.append(f"{study} (sigma {_values(rows, 'sigma_um', 'um')}, b "
                      f"{_values(rows, 'b_mm', 'mm')}, E "
@@ -295,8 +319,7 @@ def leakage(plan, name):
                      f"{_values(rows, 'nu')}, a "
                      f"{_values(rows, 'thickness_mm', 'mm')} block on "
                      f"{_mesh_names(rows)}; (Sk, Ku) = {_pairs(rows)})")
-    rows = [row for study in plan.study.entry(name)["studies"]
-            for row in _columns(plan.cells[study])]
+    rows = [row for study in studies for row in _columns(plan.cells[study])]
     contact = plan.study.contact
     return (f"Beyond the paper: will the seal leak? The flow of {seal}, one row per study: "
             f"{'; '.join(parts)}. Columns: the leak rate Q against nominal pressure (log "
@@ -307,8 +330,13 @@ def leakage(plan, name):
             f"sealed; along {ordered[0]} a line in the cell's colour, its 95 % band "
             f"shaded{', along y dotted' if len(ordered) > 1 else ''}) and Dapp et "
             f"al. 2012's 0.42 (grey dashed), and the share of surfaces still leaking. "
+            f"Each cell's sealing pressure along {ordered[0]} (the nominal pressure at which "
+            f"half its surfaces have sealed): a dash-dot line in its colour on the leak "
+            f"rate and on the share still leaking, its 95 % band shaded on the latter, its "
+            f"value and band in MPa in that panel's legend (and printed by the notebook; "
+            f"the sidecar's flow.percolation). {_open_faces(plan, studies)} Each curve is "
+            f"labelled by its study and (Sk, Ku) and, where a study's cells share them, "
+            f"what tells them apart. Hollow markers: a level resting on fewer surfaces than "
+            f"the cell has (its band is not to be read as a tight one). "
             f"{_surfaces(rows)}, {contact.steps} steps each, {contact.pressure_levels} "
             f"pressure levels. {BANDS}")
-
-
-

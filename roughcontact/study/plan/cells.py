@@ -32,6 +32,7 @@ from roughcontact.study.plan.checks import (
 )
 from roughcontact.study.plan.counter_checks import check_counterfaces
 from roughcontact.study.plan.figures import FIGURES, Kind
+from roughcontact.study.plan.flow_checks import check_open_faces
 from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.records import (
     SEEDED_PER_SURFACE,
@@ -147,6 +148,7 @@ def study_plan(study: Study) -> StudyPlan:
     jobs = contact_jobs(cell for name in studies for cell in cells[name])
     _raise("Flow settings that cannot be used", check_flow(study.flow, study.plausibility_check, {
         f"the contact grid of {job.geometry.key}": job.geometry.grid for job in jobs.values()}))
+    _raise("Studies whose every level the fluid would open", check_open_faces(study, studies))
     figure_cells = {name: tuple(FIGURES[name].surfaces(study, name, cells)) for name in figures}
     generated = [name for name in figures if FIGURES[name].generated]
     surfaces = {cell.key: cell for name in generated for cell in figure_cells[name]}
