@@ -1,7 +1,8 @@
 # Last stage: the paper's figures from papermill-parameterised notebooks. Each figure's
 # caption in the report (report/figure.rst) is written from the study's own settings
 # (params.caption: roughcontact.study.plan.captions, named by the figure registry
-# roughcontact.study.plan.figures).
+# roughcontact.study.plan.figures), followed by the numbers the notebook found (its
+# `answers` file: reStructuredText, empty where a figure states none).
 
 
 rule figure:
@@ -17,6 +18,7 @@ rule figure:
         ),
         pdf="results/figures/{fig}.pdf",
         notebook="results/figures/{fig}.ipynb",
+        answers="results/figures/{fig}.answers.rst",
     log:
         "results/logs/figures/{fig}.log",
     benchmark:
@@ -45,6 +47,7 @@ use rule figure as table with:
         ),
         pdf="results/figures/{fig}.pdf",
         notebook="results/figures/{fig}.ipynb",
+        answers="results/figures/{fig}.answers.rst",
         csv="results/figures/{fig}.csv",
     wildcard_constraints:
         fig=r"table_\w+",

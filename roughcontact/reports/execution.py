@@ -22,7 +22,7 @@ from pathlib import Path
 
 from roughcontact.study.provenance import atomic_path
 
-__all__ = ["dead_writers", "execute_notebook", "process_running", "remove_stale_temporaries"]
+__all__ = ["dead_writers", "execute_figure", "execute_notebook", "process_running", "remove_stale_temporaries"]
 
 log = logging.getLogger(__name__)
 
@@ -108,3 +108,19 @@ def execute_notebook(notebook, output, parameters: dict, log_path=None) -> None:
             progress_bar=False,
         )
     log.info("executed %s in %.1f s -> %s", notebook, time.perf_counter() - start, output)
+
+
+def execute_figure(notebook, output, parameters: dict, answers, log_path=None) -> None:
+    """Execute a figure's ``notebook`` (:func:`execute_notebook`) and leave its answers
+    at ``answers``: the numbers the figure shows, as reStructuredText, that the report's
+    caption includes after the plan's text (``report/figure.rst``).
+
+    A notebook that states numbers declares a parameter ``answers`` and writes the
+    file; for every other notebook the file is written empty. A file an earlier run
+    left is removed first, so the caption never shows another run's numbers.
+    """
+    answers = Path(answers)
+    answers.unlink(missing_ok=True)
+    execute_notebook(notebook, output, dict(parameters, answers=str(answers)), log_path)
+    if not answers.exists():
+        answers.write_text("")

@@ -334,6 +334,28 @@ def sealing_sentence(tables, thresholds) -> str:
             "sealed, with its 95 % band): " + "; ".join(parts) + ".") if parts else ""
 
 
+def open_levels_sentence(tables, drops) -> str:
+    """The levels of each study at which the pressure drop across the seal exceeds the
+    nominal contact pressure (the tables' ``faces_open``: the fluid would lift the faces
+    apart, which the model does not load them with), in MPa; ``drops``: study name ->
+    pressure drop [MPa] (:func:`load_pressure_drops`)."""
+    parts = []
+    for name, table in tables.items():
+        opened = sorted(set(table.loc[table["faces_open"], "nominal_pressure_MPa"]))
+        parts.append(f"{name}: pressure drop {drops[name]:g} MPa above P at "
+                     + (", ".join(f"{p:.3g}" for p in opened) + " MPa (faces open)"
+                        if opened else "no level"))
+    return "; ".join(parts) + "." if parts else ""
+
+
+def leakage_answers(tables, thresholds, drops) -> str:
+    """The leakage figure's numbers for the report's caption: each cell's sealing
+    pressure with its band (:func:`sealing_sentence`) and the open levels
+    (:func:`open_levels_sentence`), one paragraph each."""
+    return "\n\n".join(text for text in (sealing_sentence(tables, thresholds),
+                                          open_levels_sentence(tables, drops)) if text) + "\n"
+
+
 def _mark_sealing(row_axes, thresholds, cell, color: str, directions, label: str) -> list:
     """A cell's sealing pressure along the first of ``directions`` on the panels against
     P: a dash-dotted line in its colour on (a) and (d), its 95 % band shaded on (d).

@@ -16,7 +16,9 @@ from roughcontact.hashes import file_sha256  # noqa: E402
 from roughcontact.reports.study_figures import (  # noqa: E402
     cell_labels,
     load_percolation,
+    leakage_answers,
     load_pressure_drops,
+    open_levels_sentence,
     plot_leakage,
     sealing_sentence,
 )
@@ -150,3 +152,20 @@ def test_the_figure_marks_the_open_faces_and_the_sealing_pressures(tmp_path):
     hollow = [line for line in leak.lines if line.get_marker() == "o"]
     assert hollow and all(line.get_markerfacecolor() == "none" for line in hollow)
     plt.close(fig)
+
+
+def test_the_open_levels_sentence_lists_the_levels_below_the_drop(tmp_path):
+    """``open_levels_sentence``: the levels whose nominal pressure lies below the drop, in
+    MPa (computed here from the pressures, not from the table's ``faces_open``)."""
+    table = seal_table()
+    pressures = sorted(set(table["nominal_pressure_MPa"]))
+    drop = pressures[1] * 1.01  # the two lowest levels lie below it
+    table["faces_open"] = table["nominal_pressure_MPa"] < drop
+    sentence = open_levels_sentence({"seal": table}, {"seal": drop})
+    listed = [float(x) for x in re.findall(r"([\d.e+-]+)(?:,| MPa \(faces open\))",
+                                            sentence.split(" at ", 1)[1])]
+    np.testing.assert_allclose(listed, pressures[:2], rtol=5e-3)
+    closed = open_levels_sentence({"seal": table.assign(faces_open=False)}, {"seal": 0.1})
+    assert closed == "seal: pressure drop 0.1 MPa above P at no level."
+    both = leakage_answers({"seal": table}, {}, {"seal": drop})
+    assert both == sentence + "\n"  # no thresholds: no sealing paragraph

@@ -20,7 +20,7 @@ import pytest
 import yaml
 from papermill.exceptions import PapermillExecutionError
 
-from roughcontact.reports.execution import execute_notebook
+from roughcontact.reports.execution import execute_figure, execute_notebook
 from roughcontact.reports.notebook_engine import ENGINE_NAME
 
 REPO = Path(__file__).resolve().parents[2]
@@ -142,7 +142,7 @@ def record(self, args, *rest, **options):
     started.append(args)
     init(self, args, *rest, **options)
 subprocess.Popen.__init__ = record
-from roughcontact.reports.execution import execute_notebook
+from roughcontact.reports.execution import execute_figure, execute_notebook
 execute_notebook({str(REPO / "notebooks" / "fig01.ipynb")!r}, {str(figures / "fig01.ipynb")!r},
                  json.loads({json.dumps(parameters)!r}))
 kernel = [m for m in sys.modules if m.split(".")[0] in ("ipykernel", "IPython")]
@@ -172,3 +172,17 @@ def test_figure_notebooks_are_plain_python_on_agg(path):
     if "matplotlib" in source:
         agg = source.index('matplotlib.use("Agg")')
         assert "pyplot" not in source[:agg]
+
+
+def test_a_figure_leaves_its_answers_for_the_caption(tmp_path):
+    """``execute_figure``: a notebook declaring ``answers`` writes the numbers there; one
+    that does not gets an empty file; an earlier run's file never survives."""
+    stating = write_notebook(tmp_path / "stating.ipynb",
+                             'if answers:\n    open(answers, "w").write(f"Found {count}.\\n")',
+                             parameters='count = 1\nanswers = ""')
+    silent = write_notebook(tmp_path / "silent.ipynb", "count + 1")
+    found = tmp_path / "found.rst"
+    execute_figure(stating, tmp_path / "out1.ipynb", {"count": 7}, answers=found)
+    assert found.read_text() == "Found 7.\n"
+    execute_figure(silent, tmp_path / "out2.ipynb", {"count": 7}, answers=found)
+    assert found.read_text() == ""  # the stale numbers removed, none written

@@ -154,7 +154,27 @@ def test_the_report_template_shows_the_caption_of_the_job():
     """report/figure.rst (rendered by Snakemake's report with the job's params)."""
     template = jinja2.Template((REPO / "report" / "figure.rst").read_text())
     job = SimpleNamespace(params=SimpleNamespace(caption="Fig 7: right the refined mesh."),
-                          wildcards=SimpleNamespace(fig="fig07"))
+                          wildcards=SimpleNamespace(fig="fig07"),
+                          output=SimpleNamespace(answers="results/figures/fig07.answers.rst"))
     text = template.render(snakemake=job)
     assert text.startswith("Fig 7: right the refined mesh.")
     assert "results/figures/fig07.ipynb" in text
+    assert ".. include:: results/figures/fig07.answers.rst" in text
+
+
+def test_the_report_caption_includes_the_numbers_the_notebook_found(tmp_path, monkeypatch):
+    """The include resolves against the working directory (Snakemake renders captions
+    there) and an empty answers file leaves the plan's caption alone."""
+    from docutils.core import publish_parts
+
+    template = jinja2.Template((REPO / "report" / "figure.rst").read_text())
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "found.rst").write_text("Sealing pressure: 4.57 MPa (95 %: 3.88-4.72).\n")
+    (tmp_path / "empty.rst").write_text("")
+    for answers, expected in (("found.rst", "4.57 MPa (95 %: 3.88-4.72)"), ("empty.rst", None)):
+        job = SimpleNamespace(params=SimpleNamespace(caption="The caption."),
+                              wildcards=SimpleNamespace(fig="leakage"),
+                              output=SimpleNamespace(answers=answers))
+        html = publish_parts(template.render(snakemake=job), writer="html")["body"]
+        assert "The caption." in html and "leakage.ipynb" in html
+        assert (expected in html) if expected else ("MPa" not in html)

@@ -174,3 +174,11 @@ def test_the_report_shows_the_leakage_figure_with_the_seals_caption(runs):
     assert "leakage.png" in report
     assert ("a fluid of viscosity 0.002 Pa s through a seal 50 mm wide and 3 mm long with "
             "0.5 MPa across it") in report
+    # the numbers after the plan's text: each cell's sealing pressure from the sidecar
+    found = json.loads((workdir / "results" / "aggregates" / "seal.json").read_text())
+    answers = (workdir / "results" / "figures" / "leakage.answers.rst").read_text()
+    assert answers.startswith("Sealing pressure")
+    assert "Sealing pressure (the nominal pressure at which half the surfaces" in report
+    for row in found["flow"]["percolation"]:
+        if row["pressure_MPa"] is not None:
+            assert f"{row['pressure_MPa']:.3g} MPa" in report
