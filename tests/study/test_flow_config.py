@@ -48,7 +48,8 @@ def test_on_every_contact_job_gets_the_probe_and_its_parameters_change():
     assert settings.flow == FlowProbe(directions=("y",), sides="sealed", face_rule=ARITHMETIC)
     params = settings.params()
     assert params["flow"] == {"directions": ["y"], "sides": "sealed",
-                              "face_rule": "arithmetic", "closed_below": 1e-7}
+                              "face_rule": "arithmetic", "closed_below": 1e-7,
+                              "balance_tol": 1e-6}
     # the job reads its settings back from these parameters
     assert ContactSettings.from_section(params) == settings
     assert probe_from_params(params["flow"]) == settings.flow
