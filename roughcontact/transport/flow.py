@@ -137,6 +137,7 @@ G. Strang, Introduction to Applied Mathematics, Wellesley-Cambridge (1986), Sec 
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -170,6 +171,8 @@ __all__ = [
     "solve_flow",
 ]
 
+
+logger = logging.getLogger("roughcontact.transport")
 
 # --------------------------------------------------------------------------- face rules
 
@@ -281,6 +284,10 @@ class DirectSolver:
                            options={"SymmetricMode": True})
         return factor.solve(rhs), 0
 
+    def solve_by(self, matrix: sp.csr_matrix, rhs: np.ndarray) -> tuple[np.ndarray, int, str]:
+        """:meth:`solve`, and the name of the solver that gave the answer (its own)."""
+        return (*self.solve(matrix, rhs), type(self).__name__)
+
 
 @dataclass(frozen=True)
 class JacobiCG:
@@ -313,6 +320,10 @@ class JacobiCG:
                                    f"{self.max_iter} iterations; use DirectSolver()")
         return x, count[0]
 
+    def solve_by(self, matrix: sp.csr_matrix, rhs: np.ndarray) -> tuple[np.ndarray, int, str]:
+        """:meth:`solve`, and the name of the solver that gave the answer (its own)."""
+        return (*self.solve(matrix, rhs), type(self).__name__)
+
 
 #: The default solver.
 DIRECT = DirectSolver()
@@ -340,16 +351,28 @@ class BandedCholesky:
 
     def solve(self, matrix: sp.csr_matrix, rhs: np.ndarray) -> tuple[np.ndarray, int]:
         """``matrix^-1 rhs`` and the number of iterations (0: a direct solve)."""
+        return self.solve_by(matrix, rhs)[:2]
+
+    def solve_by(self, matrix: sp.csr_matrix, rhs: np.ndarray) -> tuple[np.ndarray, int, str]:
+        """:meth:`solve`, and the name of the solver that gave the answer: its own, or
+        its ``fallback``'s (said on the ``roughcontact.transport`` logger: at debug
+        level beyond the bandwidth, the usual path of periodic sides; at info level
+        without a positive pivot)."""
         upper = sp.triu(matrix, format="coo")
         width = int((upper.col - upper.row).max(initial=0))
         if width > self.max_bandwidth:
-            return self.fallback.solve(matrix, rhs)
+            logger.debug("flow: bandwidth %d over BandedCholesky's %d; solved by %s",
+                         width, self.max_bandwidth, type(self.fallback).__name__)
+            return self.fallback.solve_by(matrix, rhs)
         band = np.zeros((width + 1, matrix.shape[0]))
         band[width + upper.row - upper.col, upper.col] = upper.data
         try:
-            return linalg.solveh_banded(band, rhs, lower=False, check_finite=False), 0
+            return (linalg.solveh_banded(band, rhs, lower=False, check_finite=False), 0,
+                    type(self).__name__)
         except np.linalg.LinAlgError:  # not positive definite to rounding: pivot instead
-            return self.fallback.solve(matrix, rhs)
+            logger.info("flow: BandedCholesky found no positive pivot (%d unknowns); "
+                        "solved by %s", matrix.shape[0], type(self.fallback).__name__)
+            return self.fallback.solve_by(matrix, rhs)
 
 
 # --------------------------------------------------------------------------- setup and seal
@@ -391,7 +414,9 @@ class FlowSetup:
     face_rule : FaceRule
         :data:`HARMONIC` (default) or :data:`ARITHMETIC`.
     solver : DirectSolver, BandedCholesky or JacobiCG
-        The linear solver, default :data:`DIRECT`.
+        The linear solver, default :data:`DIRECT` (any value with their
+        ``batch_unknowns``, ``solve(matrix, rhs) -> (x, iterations)`` and
+        ``solve_by(matrix, rhs) -> (x, iterations, name of the solver that answered)``).
     balance_tol : float
         The largest balance (:attr:`FlowResult.balance`, the relative disagreement of
         the dissipation and the outlet's flow) a field's solve is accepted with; a
@@ -511,6 +536,9 @@ class FlowResult:
         field of its batch was off balance); None: not recorded.
     balance_tol : float
         The tolerance of :attr:`balanced` (:attr:`FlowSetup.balance_tol`).
+    solved_by : ndarray of str or None
+        The linear solver that gave the answer of the system that held the field (the
+        setup's, or :class:`BandedCholesky`'s fallback); None: not recorded.
     """
 
     conductance: np.ndarray
@@ -523,6 +551,7 @@ class FlowResult:
     pressure: np.ndarray | None = None
     refined: np.ndarray | None = None
     balance_tol: float = BALANCE_TOL
+    solved_by: np.ndarray | None = None
 
     @property
     def balanced(self) -> np.ndarray:
@@ -617,6 +646,7 @@ def solve_flow(gap, setup: FlowSetup, *, keep_pressure: bool = False) -> FlowRes
         direction=setup.direction,
         pressure=pressure,
         refined=joined["refined"].reshape(stack),
+        solved_by=joined["solved_by"].reshape(stack),
         balance_tol=setup.balance_tol,
     )
 
@@ -674,7 +704,8 @@ def _solve_batch(g: np.ndarray, spacing, setup: FlowSetup, keep_pressure: bool) 
     matrix, rhs = _system(through, (a, b, t), boundary, inlet, outlet)
     field_of = np.arange(k.size) // (ny * nx)
     connected = np.bincount(field_of[through], minlength=count) > 0
-    solved, iterations = setup.solver.solve(matrix, rhs) if rhs.size else (rhs, 0)
+    solved, iterations, used = (setup.solver.solve_by(matrix, rhs) if rhs.size
+                                else (rhs, 0, type(setup.solver).__name__))
     refined = False
     while True:
         pressure[through] = solved
@@ -690,6 +721,7 @@ def _solve_batch(g: np.ndarray, spacing, setup: FlowSetup, keep_pressure: bool) 
         "balance": balance,
         "iterations": np.full(count, iterations),
         "refined": np.full(count, refined),
+        "solved_by": np.full(count, used),
     }
     if keep_pressure:
         out["pressure"] = pressure.reshape(count, ny, nx)

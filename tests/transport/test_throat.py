@@ -24,6 +24,7 @@ from roughcontact.transport import (
     PERIODIC,
     SEALED,
     BandedCholesky,
+    DirectSolver,
     FlowProbe,
     FlowSetup,
     solve_flow,
@@ -146,10 +147,8 @@ def test_a_chain_of_rounding_size_gaps_gets_its_series_conductance_after_refinem
         assert abs(float(result.conductance) / expected - 1.0) < 1e-9
 
 
-class _Sloppy:
+class _Sloppy(DirectSolver):
     """A linear solver that returns half the solution (a solve that lost its way)."""
-
-    batch_unknowns = 1 << 12
 
     def solve(self, matrix, rhs):
         return 0.5 * spla.spsolve(matrix.tocsc(), rhs), 0
@@ -177,3 +176,22 @@ def test_a_solve_off_balance_is_retried_then_flagged(caplog):
     good = FlowProbe(directions=("x",), sides="periodic").measure(fields)
     assert (good["flow_conductance_x"] > 0).all() and (good["flow_balance_x"] < 1e-10).all()
     assert "off balance" not in caplog.text
+
+
+def test_the_band_solvers_fallback_is_named_and_logged(caplog):
+    """Periodic sides couple the first row and the last (11 rows of 12 apart: bandwidth
+    132): too wide for the band Cholesky solver, whose fallback answers; sealed sides
+    keep the band at the 12 elements along the flow."""
+    gap = np.ones((2, 12, 12))
+    with caplog.at_level(logging.DEBUG, logger="roughcontact.transport"):
+        wide = solve_flow(gap, FlowSetup((1.0, 1.0), "x", PERIODIC,
+                                         solver=BandedCholesky(max_bandwidth=8)))
+    assert (wide.solved_by == "DirectSolver").all()
+    assert "bandwidth 132 over BandedCholesky's 8; solved by DirectSolver" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.DEBUG, logger="roughcontact.transport"):
+        narrow = solve_flow(gap, FlowSetup((1.0, 1.0), "x", SEALED,
+                                           solver=BandedCholesky(max_bandwidth=12)))
+    assert (narrow.solved_by == "BandedCholesky").all() and "solved by" not in caplog.text
+    np.testing.assert_allclose(wide.conductance, 1.0, rtol=1e-12)  # a flat channel
+    np.testing.assert_allclose(narrow.conductance, 1.0, rtol=1e-12)
