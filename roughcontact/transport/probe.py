@@ -77,6 +77,11 @@ __all__ = ["BALANCE", "CONDUCTANCE", "CONNECTED", "FACTOR", "FLOW_COLUMNS", "FLO
 
 logger = logging.getLogger("roughcontact.transport")
 
+#: Balances this close are the same to rounding (a re-solve's comparison,
+#: :attr:`~roughcontact.contact.probes.Column.rounding`): the balance measures rounding
+#: itself (1e-16 to 1e-8 on the fields measured), far below the tolerance.
+BALANCE_ROUNDING = 1e-3 * BALANCE_TOL
+
 #: The quantities of a direction's columns, in order (module docstring).
 CONDUCTANCE, FACTOR, PRESSURE_FACTOR, CONNECTED, BALANCE = (
     "flow_conductance", "flow_factor", "pressure_flow_factor", "flow_connected",
@@ -118,7 +123,8 @@ def flow_columns(direction: str) -> tuple[Column, ...]:
         Column(column_name(BALANCE, d), "1",
                f"|D - Q_out| / D along {d}: relative disagreement of the flow's "
                "dissipation (K's measure) and its flow through the outlet (0 where sealed; "
-               "above the probe's balance_tol: K flagged, NaN)"),
+               "above the probe's balance_tol: K flagged, NaN)",
+               rounding=BALANCE_ROUNDING),
     )
 
 
