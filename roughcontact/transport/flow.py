@@ -706,15 +706,15 @@ def _solve_batch(g: np.ndarray, spacing, setup: FlowSetup, keep_pressure: bool) 
     connected = np.bincount(field_of[through], minlength=count) > 0
     solved, iterations, used = (setup.solver.solve_by(matrix, rhs) if rhs.size
                                 else (rhs, 0, type(setup.solver).__name__))
-    refined = False
-    while True:
+    for refined in (False, True):  # the first solve, then its refinement if off balance
+        if refined:
+            solved = _refined(matrix, rhs, solved, setup.solver)
         pressure[through] = solved
         dissipation, q_out = _measures(pressure, through, (a, b, t), boundary,
                                        (inlet, outlet), field_of, count)
         balance = _balance(dissipation, q_out, connected)
-        if refined or not np.any(~(balance <= setup.balance_tol)):
+        if np.all(balance <= setup.balance_tol):
             break
-        solved, refined = _refined(matrix, rhs, solved, setup.solver), True
     out = {
         "conductance": dissipation * unit**3 * (nx * dx) / (ny * dy),
         "connected": connected,
