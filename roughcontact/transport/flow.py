@@ -131,8 +131,8 @@ S. V. Patankar, Numerical Heat Transfer and Fluid Flow, Hemisphere (1980).
 
 N. J. Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., SIAM (2002).
 
-G. Strang, Introduction to Applied Mathematics, Wellesley-Cambridge (1986), Sec 2.3
-(the minimum principle of a network's equilibrium).
+G. Strang, Introduction to Applied Mathematics, Wellesley-Cambridge (1986), Ch 2
+(equilibrium equations: the minimum principle of a network).
 """
 
 from __future__ import annotations
@@ -729,23 +729,22 @@ def _solve_batch(g: np.ndarray, spacing, setup: FlowSetup, keep_pressure: bool) 
 
 
 def _measures(pressure, through, faces, boundary, ends, field_of, count: int):
-    """Two measures of each field's flow [-] (inlet pressure 1, outlet 0, unit
-    transmissibilities): the dissipation ``D = sum t (p_i - p_j)^2`` over the faces of the
-    ``through`` elements, the inlet's and outlet's half faces included, and the flow
-    ``Q_out = sum b p`` through the outlet side.
+    """Two measures of each field's flow (inlet pressure 1, outlet 0, transmissibilities
+    in units of the field's largest ``k``): the dissipation ``D = sum t (p_i - p_j)^2``
+    over the faces of the ``through`` elements, the inlet's and outlet's half faces
+    included, and the flow ``Q_out = sum b p`` through the outlet side.
 
     Both equal the flow ``Q`` at the exact solution (multiply the row of each unknown by
     its pressure and sum: Green's identity of the discrete Laplacian). ``D`` is the
     quantity the solution minimises (the discrete Dirichlet principle: the pressures
-    minimise the dissipation at the given inlet and outlet pressures; Patankar 1980,
-    Sec 4.2; Strang, Introduction to Applied Mathematics, 1986, Sec 2.3), so an error
+    minimise the dissipation at the given inlet and outlet pressures, the minimum
+    principle of a network in equilibrium; Strang 1986, Ch 2), so an error
     ``e`` of the pressures changes it by ``e^T A e`` only, second order, and a sum of
     non-negative terms it is never negative. ``Q_out`` reads the pressures next to the
     outlet, near 0, where a double keeps its relative precision; the inlet's flow
     ``sum b (1 - p)`` does not: upstream of a narrow throat ``1 - p`` is below the
-    rounding of 1 (a 32 x 32 field with one throat cell of 1e-5 of the open gap gave
-    a negative conductance with sealed sides and 17 times the exact one with periodic
-    sides, issue 49)."""
+    rounding of 1 (on a 32 x 32 field with one throat cell of 1e-5 of the open gap it
+    gave -59 to +58 times the exact conductance, module docstring)."""
     a, b, t = faces
     inside = through[a]
     a, b, t = a[inside], b[inside], t[inside]
