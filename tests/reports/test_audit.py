@@ -49,4 +49,5 @@ def test_a_columns_rounding_is_not_counted_as_a_difference():
     # beyond the rounding, the difference counts, relative to at least the rounding
     beyond = _relative_difference(np.array([1e-6]), np.array([3e-6]), rounding=1e-9)
     assert beyond == pytest.approx(2.0)
-    assert _relative_difference(np.array([np.nan]), np.array([1.0]), rounding=1e-9) == np.inf
+    nan = _relative_difference(np.array([np.nan, 1.0]), np.array([1.0, 1.0]), rounding=1e-9)
+    assert nan == np.inf
