@@ -174,7 +174,7 @@ def test_the_layout_count_sees_a_path_and_spares_a_docstring(tmp_path):
 def test_the_flow_names_its_columns_in_transport_only():
     import re
 
-    pattern = re.compile(r"flow_conductance|flow_factor|flow_connected|leak_rate_")
+    pattern = re.compile(r"flow_conductance|flow_factor|flow_connected|flow_balance|leak_rate_")
     spelled = {str(path.relative_to(ROOT)).split("/")[0] for path in ROOT.rglob("*.py")
                if pattern.search(path.read_text())}
     assert spelled == {"transport"}

@@ -29,6 +29,7 @@ from roughcontact.contact.result import (
     INTERFACE,
     INTERFACE_SCALARS,
     INTERFACE_UNITS,
+    METHOD_NAME,
     InterfaceColumns,
     ProbedColumns,
     SweepResult,
@@ -159,6 +160,10 @@ class NondimSweep(CellSweep):
         The solutions' pressure profiles (dimensionless, like ``max_pressure``)
         and load profiles at the ranks ``profile_ranks``
         (:mod:`roughcontact.contact.validity`); None when not recorded.
+    solved_by : ndarray of str
+        (m, k): the method whose solution each step holds, ``method`` or the
+        fallback that answered where it fell short
+        (:mod:`roughcontact.contact.retries`); ``method`` everywhere when not given.
     """
 
     element_area: float
@@ -172,6 +177,13 @@ class NondimSweep(CellSweep):
     profile_ranks: np.ndarray | None = None
     pressure_profile: np.ndarray | None = None
     load_profile: np.ndarray | None = None
+    solved_by: np.ndarray | None = None
+
+    def __post_init__(self):
+        super().__post_init__()
+        named = (np.full(np.shape(self.approach), self.method, dtype=METHOD_NAME)
+                 if self.solved_by is None else np.asarray(self.solved_by).astype(METHOD_NAME))
+        object.__setattr__(self, "solved_by", named)
 
     @property
     def nominal_area(self) -> float:

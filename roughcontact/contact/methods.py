@@ -298,7 +298,7 @@ def solve_problem(problem: Problem, approach=None, *, mean_pressure=None, p0=Non
     pressure = checks.check_initial_pressure(p0, m, n, hardness=hardness)
     batch, d = solver.settle(control, pressure)
     return tuple(batch.contact_result(j, gaps[j] - d[j], problem.operator.element_area,
-                                      problem.shape, solver.method.name, options.tol, d[j],
+                                      problem.shape, str(batch.solved_by[j]), options.tol, d[j],
                                       hardness)
                  for j in range(m))
 

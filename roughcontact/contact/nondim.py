@@ -462,6 +462,7 @@ def _sweep_batches(operator, gaps, steps, options: CellOptions) -> dict:
                              interface=options.interface, element_area=1.0 / n)
         result = sweep_problem(problem, steps[rows], options=options.solver)
         batch = solver_arrays(result, FROM_SOLVER, stiffness="normalized_stiffness")
+        batch["solved_by"] = result.solved_by
         if options.solver.profile:
             batch.update({name: getattr(result, name) for name in PROFILES})
         batch.update(interface_arrays(result))

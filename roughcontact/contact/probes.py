@@ -56,6 +56,10 @@ class Column:
     dtype : {float, bool}
         A number (averaged by interpolation in log P) or a yes/no state (averaged as
         the share of surfaces in it, each read at its step nearest in log P).
+    rounding : float
+        Values that differ by at most this much are the same to rounding (a measure
+        of rounding error itself, e.g. the flow's balance): the scale below which a
+        re-solve's relative difference is not counted (the audit); 0: none.
     """
 
     name: str
@@ -63,6 +67,7 @@ class Column:
     meaning: str
     length_power: int = 0
     dtype: type = float
+    rounding: float = 0.0
 
     def __post_init__(self):
         if not (isinstance(self.name, str) and self.name.isidentifier()):

@@ -18,7 +18,8 @@ from roughcontact.contact import interface, probes, validity
 from roughcontact.contact.kkt import plastic_fraction
 from roughcontact.contact.probes import ProbeColumns
 
-__all__ = ["INTERFACE", "INTERFACE_SCALARS", "INTERFACE_UNITS", "Batch", "ContactResult",
+__all__ = ["INTERFACE", "INTERFACE_SCALARS", "INTERFACE_UNITS", "METHOD_NAME", "Batch",
+           "ContactResult",
            "InterfaceColumns", "ProbedColumns", "SweepResult", "SweepTable",
            "zero_plastic_area"]
 
@@ -58,7 +59,8 @@ class ContactResult:
     converged : bool
         ``residual <= tol``.
     method : str
-        Method used.
+        The method whose solution this is: the one asked for, or the fallback that
+        answered where it did not converge (:mod:`roughcontact.contact.retries`).
     tol : float
         Requested tolerance on ``residual``.
     plastic_area_fraction : float
@@ -168,7 +170,7 @@ class SweepResult(InterfaceColumns, ProbedColumns):
     pressure : ndarray or None
         Pressure fields [Pa] when ``return_fields=True``.
     method : str
-        Contact method.
+        Contact method asked for (``"auto"`` resolved).
     tol : float
         Contact tolerance.
     plastic_area_fraction : ndarray
@@ -183,6 +185,10 @@ class SweepResult(InterfaceColumns, ProbedColumns):
         at the ranks ``r`` of ``profile_ranks``.
     load_profile : ndarray or None
         (m, k, R): share of the load on the ``r`` most loaded elements [-].
+    solved_by : ndarray of str
+        (m, k): the method whose solution each step holds: ``method``, or the
+        fallback that answered where it did not converge
+        (:mod:`roughcontact.contact.retries`); ``method`` everywhere when not given.
     counter_deflection : ndarray or None
         (m, k): the mean-plane deflection of the counter body [m] of a pair of
         elastic bodies (``w . p``, the ``counter_weights`` of the ``interface``
@@ -223,9 +229,13 @@ class SweepResult(InterfaceColumns, ProbedColumns):
     pressure_profile: np.ndarray | None = None
     load_profile: np.ndarray | None = None
     counter_deflection: np.ndarray | None = None
+    solved_by: np.ndarray | None = None
 
     def __post_init__(self):
         zero_plastic_area(self)
+        if self.solved_by is None:
+            object.__setattr__(self, "solved_by",
+                               np.full(np.shape(self.approach), self.method, dtype=METHOD_NAME))
 
 
 def zero_plastic_area(result) -> None:
@@ -239,9 +249,15 @@ def zero_plastic_area(result) -> None:
 # Work records
 
 
+#: The dtype of a method's name in the per-step records (``solved_by``).
+METHOD_NAME = "<U16"
+
+
 @dataclass
 class Batch:
-    """Per-surface outputs of a batched solve at one approach (mutable), rows = surfaces."""
+    """Per-surface outputs of a batched solve at one approach (mutable), rows = surfaces;
+    ``solved_by`` the method whose solution each row holds (set by
+    :func:`roughcontact.contact.retries.settle`; None before)."""
 
     pressure: np.ndarray
     displacement: np.ndarray
@@ -249,6 +265,7 @@ class Batch:
     matvecs: np.ndarray
     residual: np.ndarray
     converged: np.ndarray
+    solved_by: np.ndarray | None = None
 
     @classmethod
     def empty(cls, m: int, n: int) -> Batch:
@@ -343,6 +360,7 @@ class SweepTable:
             self.columns[name] = np.zeros((m, k), dtype=int)
         for name in ("converged", "stiffness_converged"):
             self.columns[name] = np.zeros((m, k), dtype=bool)
+        self.columns["solved_by"] = np.full((m, k), "", dtype=METHOD_NAME)
         self.fields = np.zeros((m, k, *shape)) if return_fields else None
         self.ranks = validity.rank_grid(n) if profile else None
         if profile:
@@ -410,11 +428,15 @@ class SweepTable:
                        np.stack([pending[j][1] for j in rows]),
                        np.array([pending[j][2] for j in rows]))
 
-    def record_work(self, rows, step: int, iterations, matvecs, converged) -> None:
-        """The work of a step's contact solve for ``rows``."""
+    def record_work(self, rows, step: int, iterations, matvecs, converged,
+                    solved_by=None) -> None:
+        """The work of a step's contact solve for ``rows``, and the method whose solution
+        each holds (None: the sweep's)."""
         self.columns["iterations"][rows, step] = iterations
         self.columns["matvecs"][rows, step] = matvecs
         self.columns["converged"][rows, step] = converged
+        if solved_by is not None:
+            self.columns["solved_by"][rows, step] = solved_by
 
     def record_stiffness(self, rows, step: int, stiffness, converged) -> None:
         """A step's tangent ``dF/dd`` [N/m] for ``rows`` and whether its solve converged."""
@@ -425,6 +447,8 @@ class SweepTable:
         """The frozen :class:`SweepResult` at approaches ``steps`` (m, k) [m]."""
         for step in list(self._pending):  # a step some surface never reached
             self._describe_pending(step)
+        unnamed = self.columns["solved_by"] == ""
+        self.columns["solved_by"][unnamed] = method
         return SweepResult(approach=np.array(steps), pressure=self.fields, method=method,
                            tol=tol, hardness=hardness, profile_ranks=self.ranks,
                            probe_columns=self.probe_columns, **self.columns)

@@ -20,6 +20,12 @@ short is
    error). A sweep starts the next step of such a surface from zero, never
    from it (:mod:`roughcontact.contact.sweeps`).
 
+Every row records the method whose solution it holds (the batch's ``solved_by``,
+a result's ``method``, a sweep's per-step ``solved_by``): the method asked for,
+or the fallback whose answer was taken, and a fallback's answer is a warning on
+the same logger naming the surface, its step (approach or load), the method that
+failed and the one used.
+
 The work of every attempt is counted in ``iterations`` and ``matvecs``.
 """
 
@@ -29,16 +35,17 @@ import logging
 
 import numpy as np
 
-from roughcontact.contact.result import Batch
+from roughcontact.contact.result import METHOD_NAME, Batch
 
 __all__ = ["settle"]
 
 logger = logging.getLogger("roughcontact.contact")
 
 
-def _take(batch: Batch, approaches, rows, other: Batch, other_approaches) -> None:
-    """Rows ``rows`` of ``batch`` from ``other`` where it converged or, neither having
-    converged, has the smaller residual; the work of both is summed."""
+def _take(batch: Batch, approaches, rows, other: Batch, other_approaches, name: str) -> None:
+    """Rows ``rows`` of ``batch`` from ``other`` (solved by the method ``name``) where it
+    converged or, neither having converged, has the smaller residual; the work of both is
+    summed."""
     better = other.converged | (~batch.converged[rows] & (other.residual < batch.residual[rows]))
     iterations = batch.iterations[rows] + other.iterations
     matvecs = batch.matvecs[rows] + other.matvecs
@@ -48,6 +55,7 @@ def _take(batch: Batch, approaches, rows, other: Batch, other_approaches) -> Non
     batch.residual[chosen] = other.residual[better]
     batch.converged[chosen] = other.converged[better]
     approaches[chosen] = other_approaches[better]
+    batch.solved_by[chosen] = name
     batch.iterations[rows] = iterations
     batch.matvecs[rows] = matvecs
 
@@ -77,7 +85,7 @@ def _retry(batch: Batch, approaches, rows, attempt, gaps, control, tol: float, h
         return
     for r, j in enumerate(rows):
         tried[int(j)].append(_attempt(f"{method.name} {how}", again, subset, r))
-    _take(batch, approaches, rows, again, found)
+    _take(batch, approaches, rows, again, found, method.name)
 
 
 def settle(method, products, gaps, control, start, tol: float, max_iter: int, hardness,
@@ -109,6 +117,7 @@ def settle(method, products, gaps, control, start, tol: float, max_iter: int, ha
     """
     m, n = gaps.shape
     batch, approaches = control.solve(method, products, gaps, start, tol, max_iter, hardness)
+    batch.solved_by = np.full(m, method.name, dtype=METHOD_NAME)
     if batch.converged.all():
         return batch, approaches
     warm = start.any(axis=1)
@@ -127,6 +136,11 @@ def settle(method, products, gaps, control, start, tol: float, max_iter: int, ha
         if rows.size:
             _retry(batch, approaches, rows, (attempt_method, attempt_products, limit, how),
                    gaps, control, tol, hardness, tried)
+    for j in np.flatnonzero(batch.converged & (batch.solved_by != method.name)):
+        logger.warning("contact solve for surface %d at %s: %s fell short of tol %.3g; "
+                       "fallback %s answered, recorded as the method; attempts: %s", j,
+                       control.describe(j), method.name, tol, batch.solved_by[j],
+                       "; ".join(tried[int(j)]))
     for j in np.flatnonzero(~batch.converged):
         logger.warning("contact solve did not converge for surface %d at %s (tol %.3g); "
                        "tried: %s; returned flagged (converged=False)", j,

@@ -121,7 +121,8 @@ def _record(solver: Solver, batch, step: int, table: SweepTable, approach):
     gap = (batch.displacement + problem.gaps - approach[:, None]) if table.interface else None
     table.record(slice(None), step, batch.pressure, batch.displacement, batch.residual,
                  problem.operator.element_area, problem.hardness, gap)
-    table.record_work(slice(None), step, batch.iterations, batch.matvecs, batch.converged)
+    table.record_work(slice(None), step, batch.iterations, batch.matvecs, batch.converged,
+                      batch.solved_by)
     if solver.options.stiffness:
         return _tangent(solver, batch.pressure, step, table)
     return None

@@ -405,7 +405,7 @@ def _compare(stored, again, rows: slice) -> tuple[bool, float]:
         a, b = stored.probe_columns[column.name][rows], again.probe_columns[column.name]
         identical &= bool(np.array_equal(a, b, equal_nan=not column.state))
         if not column.state:
-            worst = max(worst, _relative_difference(a, b))
+            worst = max(worst, _relative_difference(a, b, column.rounding))
     for name in continuous:
         a = getattr(stored, name)[rows]
         b = getattr(again, name)
@@ -414,14 +414,15 @@ def _compare(stored, again, rows: slice) -> tuple[bool, float]:
     return identical, worst
 
 
-def _relative_difference(stored, again) -> float:
-    """The largest ``|a - b| / max(|a|, 1e-12 max |a|)`` of two columns: 0 where they are
-    equal (NaN and NaN included), infinite where one is NaN and the other not."""
+def _relative_difference(stored, again, rounding: float = 0.0) -> float:
+    """The largest ``|a - b| / max(|a|, 1e-12 max |a|, rounding)`` of two columns: 0 where
+    they are equal (NaN and NaN included) or differ by at most ``rounding``, infinite where
+    one is NaN and the other not."""
     a, b = np.asarray(stored, dtype=float), np.asarray(again, dtype=float)
-    same = (a == b) | (np.isnan(a) & np.isnan(b))
+    same = (a == b) | (np.isnan(a) & np.isnan(b)) | (np.abs(a - b) <= rounding)
     if same.all():
         return 0.0
-    scale = np.maximum(np.abs(a), np.nanmax(np.abs(a)) * 1e-12)
+    scale = np.maximum(np.maximum(np.abs(a), np.nanmax(np.abs(a)) * 1e-12), rounding)
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.abs(a - b) / scale
     return float(np.where(same, 0.0, np.where(np.isnan(ratio), np.inf, ratio)).max())

@@ -34,6 +34,7 @@ from roughcontact.study.codec import in_unit
 from roughcontact.study.config import unit_slips
 from roughcontact.transport.flow import FACE_RULES, Seal
 from roughcontact.transport.probe import (
+    BALANCE,
     CONDUCTANCE,
     CONNECTED,
     LEAK_RATE,
@@ -136,8 +137,9 @@ class FlowSettings:
         """A cell's percolation thresholds
         (:func:`roughcontact.transport.percolation.threshold`) per flow direction of its
         SI ``sweep``: the real area fraction [-] and the nominal pressure [MPa] at which
-        half its surfaces have sealed, with 95 % bands, each row with the cell's
-        ``labels``."""
+        half its surfaces have sealed, with 95 % bands, and the steps whose flow stayed
+        off balance (``unbalanced_steps``: conductance flagged, NaN;
+        :mod:`roughcontact.transport.probe`), each row with the cell's ``labels``."""
         from roughcontact.transport.percolation import sealing_points, threshold
 
         rows = []
@@ -149,6 +151,8 @@ class FlowSettings:
             for key in ("pressure", "pressure_low", "pressure_high"):
                 found[f"{key}_MPa"] = found.pop(key) / MPA
             found["reopened_steps"] = int(np.sum(points.reopened))
+            balance = sweep.probe_columns[column_name(BALANCE, d)]
+            found["unbalanced_steps"] = int(np.sum(~(balance <= self.probe.balance_tol)))
             rows.append({**labels, "direction": d, **found})
         return rows
 

@@ -20,7 +20,16 @@ every surface, in each of its ``directions``, and gives the sweep its columns
     0 where sealed, NaN where the gap leaks and ``h <= 0`` (the flat below the
     undeformed mean plane: the factor is not defined there);
 :data:`CONNECTED`
-    the free space connects inlet to outlet (bool).
+    the free space connects inlet to outlet (bool);
+:data:`BALANCE`
+    ``|D - Q_out| / D`` [-], the relative disagreement of the flow's two measures
+    (:attr:`~roughcontact.transport.flow.FlowResult.balance`: the dissipation the
+    conductance is read from and the flow through the outlet), 0 where sealed. A step
+    whose balance exceeds ``balance_tol`` after the flow's retry (iterative refinement)
+    is flagged like an unconverged contact solve: its conductance and factors are
+    recorded as NaN (so the aggregation, which reads finite values only, leaves it
+    out, and the cell's table counts it), its balance kept, and a warning on the
+    ``roughcontact.transport`` logger names the surfaces.
 
 The gap a flow sees is the solution's gap with the elements in contact
 (``p > 0``) closed, and closed too where it is at most ``closed_below`` times the
@@ -39,6 +48,7 @@ figure read the columns through :func:`column_name`.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import ClassVar
@@ -47,6 +57,7 @@ import numpy as np
 
 from roughcontact.contact.probes import Column, SolvedFields
 from roughcontact.transport.flow import (
+    BALANCE_TOL,
     FACE_RULES,
     FLOW_DIRECTIONS,
     HARMONIC,
@@ -60,14 +71,22 @@ from roughcontact.transport.flow import (
     solve_flow,
 )
 
-__all__ = ["CONDUCTANCE", "CONNECTED", "FACTOR", "FLOW_COLUMNS", "FLOW_QUANTITIES",
+__all__ = ["BALANCE", "CONDUCTANCE", "CONNECTED", "FACTOR", "FLOW_COLUMNS", "FLOW_QUANTITIES",
            "LEAK_RATE", "NO_FLOW", "PRESSURE_FACTOR", "SIDE_CHOICES", "FlowProbe",
            "column_name", "flow_column_names", "flow_columns", "probe_from_params"]
 
+logger = logging.getLogger("roughcontact.transport")
+
+#: Balances this close are the same to rounding (a re-solve's comparison,
+#: :attr:`~roughcontact.contact.probes.Column.rounding`): the balance measures rounding
+#: itself (1e-16 to 1e-8 on the fields measured), far below the tolerance.
+BALANCE_ROUNDING = 1e-3 * BALANCE_TOL
+
 #: The quantities of a direction's columns, in order (module docstring).
-CONDUCTANCE, FACTOR, PRESSURE_FACTOR, CONNECTED = (
-    "flow_conductance", "flow_factor", "pressure_flow_factor", "flow_connected")
-FLOW_QUANTITIES = (CONDUCTANCE, FACTOR, PRESSURE_FACTOR, CONNECTED)
+CONDUCTANCE, FACTOR, PRESSURE_FACTOR, CONNECTED, BALANCE = (
+    "flow_conductance", "flow_factor", "pressure_flow_factor", "flow_connected",
+    "flow_balance")
+FLOW_QUANTITIES = (CONDUCTANCE, FACTOR, PRESSURE_FACTOR, CONNECTED, BALANCE)
 #: The leak rate of a seal, ``Q = K W dp / (12 eta L)`` [m^3/s]
 #: (:meth:`~roughcontact.transport.flow.Seal.leak_rate`), named like the columns
 #: (``leak_rate_<d>``) in the study's tables.
@@ -101,6 +120,11 @@ def flow_columns(direction: str) -> tuple[Column, ...]:
                f"share of surfaces whose free space connects inlet to outlet along {d} "
                "(still leaking; each surface's state at its step nearest in log P)",
                dtype=bool),
+        Column(column_name(BALANCE, d), "1",
+               f"|D - Q_out| / D along {d}: relative disagreement of the flow's "
+               "dissipation (K's measure) and its flow through the outlet (0 where sealed; "
+               "above the probe's balance_tol: K flagged, NaN)",
+               rounding=BALANCE_ROUNDING),
     )
 
 
@@ -138,6 +162,9 @@ class FlowProbe:
         along x in 1.83 s against SuperLU's 2.63 s (``benchmarks/bench_flow_cost.py``).
     closed_below : float
         Gaps at most this share of the field's largest are closed (module docstring).
+    balance_tol : float
+        The largest balance a step's conductance is recorded with (module docstring,
+        :attr:`~roughcontact.transport.flow.FlowSetup.balance_tol`).
     """
 
     #: The name its settings are stored under (:class:`~roughcontact.contact.probes.Probe`).
@@ -149,6 +176,7 @@ class FlowProbe:
     solver: BandedCholesky | DirectSolver | JacobiCG = field(default=BandedCholesky(),
                                                             repr=False)
     closed_below: float = 1e-7
+    balance_tol: float = BALANCE_TOL
 
     def __post_init__(self):
         directions = tuple(self.directions)
@@ -161,6 +189,8 @@ class FlowProbe:
             raise ValueError(f"sides must be one of {tuple(SIDE_CHOICES)}, got {self.sides!r}")
         if not (0.0 <= float(self.closed_below) < 1.0):
             raise ValueError(f"closed_below must be in [0, 1), got {self.closed_below!r}")
+        if not (float(self.balance_tol) > 0.0):
+            raise ValueError(f"balance_tol must be positive, got {self.balance_tol!r}")
         if not isinstance(self.face_rule, FaceRule):
             raise ValueError(f"face_rule must be one of the FaceRule values "
                              f"{tuple(FACE_RULES)}, got {self.face_rule!r}")
@@ -179,7 +209,8 @@ class FlowProbe:
     def params(self) -> dict:
         """Its settings as plain values (a stored file's record of what was solved)."""
         return {"directions": list(self.directions), "sides": self.sides,
-                "face_rule": self.face_rule.name, "closed_below": self.closed_below}
+                "face_rule": self.face_rule.name, "closed_below": self.closed_below,
+                "balance_tol": self.balance_tol}
 
     def measure(self, fields: SolvedFields) -> dict:
         """The flow columns (module docstring) of the solutions of ``fields`` (pressure and
@@ -197,17 +228,35 @@ class FlowProbe:
         out = {}
         for direction in self.directions:
             result = solve_flow(open_gap, FlowSetup(fields.spacing, direction, sides,
-                                                    self.face_rule, self.solver))
+                                                    self.face_rule, self.solver,
+                                                    self.balance_tol))
             sealed = ~result.connected  # no flow: both factors are 0, even at full contact
+            flagged = ~result.balanced
             with np.errstate(invalid="ignore", divide="ignore"):
                 pressure_factor = np.where(
                     positive, result.conductance / np.where(positive, h, 1.0) ** 3, np.nan)
-            out[column_name(CONDUCTANCE, direction)] = result.conductance
-            out[column_name(FACTOR, direction)] = np.where(sealed, 0.0, result.flow_factor)
-            out[column_name(PRESSURE_FACTOR, direction)] = np.where(sealed, 0.0,
-                                                                    pressure_factor)
+            columns = {CONDUCTANCE: result.conductance,
+                       FACTOR: np.where(sealed, 0.0, result.flow_factor),
+                       PRESSURE_FACTOR: np.where(sealed, 0.0, pressure_factor)}
+            for quantity, values in columns.items():
+                out[column_name(quantity, direction)] = np.where(flagged, np.nan, values)
             out[column_name(CONNECTED, direction)] = result.connected
+            out[column_name(BALANCE, direction)] = result.balance
+            if flagged.any():
+                _warn_flagged(direction, result, flagged)
         return out
+
+
+def _warn_flagged(direction: str, result, flagged) -> None:
+    """A warning naming the fields (flat indices of the probe's stack) whose flow along
+    ``direction`` stayed off balance after the retry."""
+    where = np.flatnonzero(np.ravel(flagged))
+    logger.warning(
+        "flow along %s off balance for %d of %d fields (indices %s; balance up to %.3g, "
+        "tolerance %.3g) after a retry with iterative refinement; their conductance "
+        "recorded as NaN, flagged in %s", direction, where.size, np.size(flagged),
+        where[:10].tolist(), float(np.nanmax(np.where(flagged, result.balance, 0.0))),
+        result.balance_tol, column_name(BALANCE, direction))
 
 
 #: A flow probe that records nothing (the flow setting of a study without flow).
@@ -220,4 +269,7 @@ def probe_from_params(params: dict | None) -> FlowProbe:
         return NO_FLOW
     return FlowProbe(directions=tuple(params["directions"]), sides=str(params["sides"]),
                      face_rule=FACE_RULES[params["face_rule"]],
-                     closed_below=float(params["closed_below"]))
+                     closed_below=float(params["closed_below"]),
+                     # a file written before the balance was recorded has no tolerance:
+                     # read as the default, its missing balance column then refused
+                     balance_tol=float(params.get("balance_tol", BALANCE_TOL)))

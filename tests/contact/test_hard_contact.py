@@ -328,3 +328,35 @@ def test_tiny_iteration_limit_in_a_sweep_is_flagged(block, caplog):
                  "contact_stiffness"):
         assert np.isfinite(getattr(result, name)).all()
     assert sum("did not converge" in r.getMessage() for r in caplog.records) == 6
+
+
+@pytest.mark.parametrize("method", ["steepest", "cg"])
+def test_a_fallbacks_answer_names_its_method_and_is_logged(block, method, caplog):
+    # the pivoting fallback's answer is recorded as its own, not the method asked for,
+    # in a single solve and per step of a sweep, and a warning names both methods
+    _, C, area = block
+    gap = rough_gap(1, 1e-6)
+    d = float(np.quantile(gap, 0.3))
+    with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
+        result = contact.solve(C, gap, d, element_area=area,
+                               options=SolverOptions(method=method, max_iter=1))
+    assert result.converged and result.method == "exact"
+    fell_back = [r.getMessage() for r in caplog.records if "fallback" in r.getMessage()]
+    assert len(fell_back) == 1
+    assert f"surface 0 at approach {d:.6g} m: {method} fell short" in fell_back[0]
+    assert "fallback exact answered" in fell_back[0]
+    # a sweep: every step answered by the fallback, each recorded and logged
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
+        swept = contact.sweep(C, np.stack([gap, gap]), [0.5 * d, d], element_area=area,
+                              options=SolverOptions(method=method, max_iter=1,
+                                                    stiffness=False))
+    assert swept.method == method and swept.converged.all()
+    assert swept.solved_by.shape == (2, 2) and (swept.solved_by == "exact").all()
+    assert sum("fallback exact answered" in r.getMessage() for r in caplog.records) == 4
+    # the method's own answer, where it converges, is recorded as its own, silently
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
+        own = contact.sweep(C, gap[None], [0.5 * d, d], element_area=area,
+                            options=SolverOptions(method=method, stiffness=False))
+    assert (own.solved_by == method).all() and not caplog.records

@@ -217,3 +217,30 @@ def test_to_physical_rejects_other_geometry(cell):
         nondim.to_physical(nd, 1e-6, 1e9, area=2 * SIZE**2)
     with pytest.raises(ValueError, match="sigma"):
         nondim.to_physical(replace(nd), -1.0, 1e9)
+
+
+def test_a_fallbacks_steps_are_named_in_the_cell_and_its_contact_file(heights, unit_influence,
+                                                                       tmp_path, caplog):
+    """cg stopped after one iteration: pivoting answers every step; the cell's sweep and
+    its contact file name it per step, and a file without fallbacks stores nothing more."""
+    from roughcontact.study.jobs import storage
+
+    approaches = np.linspace(0.5, 1.5, 3)
+    with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
+        nd = nondim.solve_cell(unit_influence, heights[:2], thickness=LENGTH,
+                               element_area=AREA, approaches=approaches,
+                               options=CellOptions().with_(method="cg", max_iter=1,
+                                                           stiffness=False))
+    assert nd.method == "cg" and nd.converged.all() and (nd.solved_by == "exact").all()
+    assert sum("fallback exact answered" in r.getMessage() for r in caplog.records) == 6
+    storage.write_contact(tmp_path / "c.h5", nd, {"job": "{}"})
+    back, _ = storage.read_contact(tmp_path / "c.h5")
+    np.testing.assert_array_equal(back.solved_by, nd.solved_by)
+    plain = nondim.solve_cell(unit_influence, heights[:2], thickness=LENGTH,
+                              element_area=AREA, approaches=approaches,
+                              options=CellOptions().with_(method="cg", stiffness=False))
+    assert (plain.solved_by == "cg").all()
+    storage.write_contact(tmp_path / "p.h5", plain, {"job": "{}"})
+    with storage.open_h5(tmp_path / "p.h5") as f:
+        assert "solved_by" not in f
+    assert (storage.read_contact(tmp_path / "p.h5")[0].solved_by == "cg").all()

@@ -38,3 +38,16 @@ def test_the_exact_generator_must_hit_its_targets_to_rounding():
     off = stats([-0.8] * 3, [4.0 * (1 + 10 * EXACT_MOMENT_TOL)] * 3)
     assert _moment_check(off, {"skew": -0.8, "kurt": 4.0, "method": "exact"})[1] == [
         "kurt off target"]
+
+
+def test_a_columns_rounding_is_not_counted_as_a_difference():
+    from roughcontact.reports.audit import _relative_difference
+
+    stored, again = np.array([1e-13, 3e-12, 0.0]), np.array([2e-13, 1e-12, 0.0])
+    assert _relative_difference(stored, again) > 0.5  # rounding-size values, relative
+    assert _relative_difference(stored, again, rounding=1e-9) == 0.0
+    # beyond the rounding, the difference counts, relative to at least the rounding
+    beyond = _relative_difference(np.array([1e-6]), np.array([3e-6]), rounding=1e-9)
+    assert beyond == pytest.approx(2.0)
+    nan = _relative_difference(np.array([np.nan, 1.0]), np.array([1.0, 1.0]), rounding=1e-9)
+    assert nan == np.inf

@@ -48,7 +48,8 @@ def test_on_every_contact_job_gets_the_probe_and_its_parameters_change():
     assert settings.flow == FlowProbe(directions=("y",), sides="sealed", face_rule=ARITHMETIC)
     params = settings.params()
     assert params["flow"] == {"directions": ["y"], "sides": "sealed",
-                              "face_rule": "arithmetic", "closed_below": 1e-7}
+                              "face_rule": "arithmetic", "closed_below": 1e-7,
+                              "balance_tol": 1e-6}
     # the job reads its settings back from these parameters
     assert ContactSettings.from_section(params) == settings
     assert probe_from_params(params["flow"]) == settings.flow
@@ -125,3 +126,18 @@ def test_a_grid_of_one_row_cannot_carry_a_flow():
 def test_the_schema_refuses_bad_flow_values_naming_the_key(bad):
     with pytest.raises(ValueError, match="flow"):
         config(flow={**ON, **bad})
+
+
+def test_a_cells_flow_rows_count_the_steps_off_balance():
+    from types import SimpleNamespace
+
+    settings = flow_settings(config(flow={**ON, "directions": ["x"]})["flow"])
+    connected = np.array([[True, True, False], [True, False, False]])
+    balance = np.array([[1e-14, 3e-3, 0.0], [np.nan, 0.0, 0.0]])  # NaN: not computed
+    sweep = SimpleNamespace(
+        probe_columns={"flow_connected_x": connected, "flow_balance_x": balance},
+        real_area_fraction=np.array([[0.2, 0.4, 0.6], [0.3, 0.5, 0.7]]),
+        nominal_pressure=np.array([[1e6, 2e6, 4e6], [1e6, 2e6, 4e6]]),
+        converged=np.ones((2, 3), dtype=bool))
+    (row,) = settings.cell_rows(sweep, {"cell": "c"})
+    assert row["direction"] == "x" and row["unbalanced_steps"] == 2

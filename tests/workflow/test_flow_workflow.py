@@ -73,7 +73,10 @@ def test_the_flow_changes_no_contact_number(runs):
     pd.testing.assert_frame_equal(on[CONTACT], off[CONTACT])
     assert not [c for c in off.columns if "flow" in c or "leak" in c]
     assert {f"{q}_{d}_mean" for q in ("flow_conductance", "flow_factor", "leak_rate",
-                                       "flow_connected") for d in "xy"} <= set(on.columns)
+                                       "flow_connected", "flow_balance") for d in "xy"
+            } <= set(on.columns)
+    for d in "xy":  # every step's flow balanced: rounding-size, none flagged
+        assert (on[f"flow_balance_{d}_mean"].dropna() < 1e-6).all()
 
 
 def test_the_leak_rate_is_the_seals(runs):

@@ -50,6 +50,8 @@ Layout of a contact file (``results/contact/<surface cell>__<geometry>.h5``)::
                (:mod:`roughcontact.contact.probes`; in units of
                ``sigma**length_power``), under its name, e.g. the flow through the gap
                (:mod:`roughcontact.transport.probe`)
+    /solved_by (m, k) ASCII: the method whose solution each step holds, only where a
+               fallback answered some step (absent: every step is ``sweep_method``'s)
     attributes: job (JSON), each probe's settings (JSON) under its kind (``flow``; the
                 probes are made again from them, :mod:`roughcontact.study.probes`),
                 the NondimSweep settings (``sweep_*``; ``sweep_hardness``
@@ -104,6 +106,10 @@ INTERFACE_ARRAYS = ("spot_count", "mean_spot_area", "perimeter",
 #: Optional arrays of a contact file: of a pair of elastic bodies, the counter body's
 #: mean-plane deflection (m, k) (:mod:`roughcontact.contact.counterface`).
 COUNTER_ARRAYS = ("counter_deflection",)
+#: Stored only where a fallback answered some step (:mod:`roughcontact.contact.retries`):
+#: the method whose solution each step holds (fixed-length ASCII); absent, every step
+#: holds the sweep's ``method``.
+METHOD_ARRAYS = ("solved_by",)
 #: Scalar settings of NondimSweep, stored as ``sweep_<name>`` attributes.
 SWEEP_SETTINGS = ("thickness", "element_area", "n_elements", "method", "tol", "stiffness_tol",
                   "precision")
@@ -593,6 +599,8 @@ def contact_datasets(sweep: NondimSweep) -> dict:
     for name in COUNTER_ARRAYS:
         if getattr(sweep, name) is not None:
             datasets[name] = np.asarray(getattr(sweep, name))
+    if (sweep.solved_by != sweep.method).any():
+        datasets["solved_by"] = np.char.encode(sweep.solved_by, "ascii")
     datasets.update({name: np.asarray(values) for name, values in sweep.probe_columns.items()})
     return datasets
 
@@ -655,6 +663,8 @@ def read_contact(path: str | os.PathLike, *,
     max_iter = int(attrs["sweep_max_iter"])
     hardness = float(attrs["sweep_hardness"])
     fields = {CONTACT_FIELDS.get(name, name): values for name, values in arrays.items()}
+    if "solved_by" in fields:
+        fields["solved_by"] = np.char.decode(fields["solved_by"], "ascii")
     from roughcontact.contact.curves import NondimSweep
 
     return NondimSweep(**fields, **settings, max_iter=None if max_iter < 0 else max_iter,
@@ -674,7 +684,7 @@ def _probe_columns(path, attrs: dict, arrays: dict):
     probes = probes_from_attrs(attrs)
     names = [column.name for probe in probes for column in probe.columns]
     absent = [name for name in names if name not in arrays]
-    known = CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS + COUNTER_ARRAYS
+    known = CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS + COUNTER_ARRAYS + METHOD_ARRAYS
     unknown = sorted(set(arrays) - set(known) - set(names))
     if absent or unknown:
         raise StoredFileError(
