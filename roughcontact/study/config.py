@@ -131,7 +131,8 @@ def yaml_number_forms(number: float, integer: bool = False) -> list[str]:
         mantissa = mantissa.rstrip("0")
         mantissa += "0" if mantissa.endswith(".") else ""
         plain = repr(float(number))
-        forms = ([plain] if "e" not in plain else []) + [f"{mantissa}e{int(exponent):+d}"]
+        forms = ([plain] if "e" not in plain else []) + (
+            [f"{mantissa}e{int(exponent):+d}"] if int(exponent) else [])
     return [form for form in dict.fromkeys(forms) if _yaml_number(form) == number]
 
 
