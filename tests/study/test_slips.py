@@ -191,30 +191,37 @@ def smooth_map(path, n, spacing):
     return {"file": str(path), "format": "npy", "height_unit": "um", "spacing_mm": spacing}
 
 
+@pytest.mark.parametrize(("points", "surfaces", "body", "changed", "grid"), [
+    # the issue's case: a 6.4 mm map under 9 mm surfaces on 10 mm refined blocks, whose
+    # elements would be over 20 times longer than wide under 6.4 mm: thinner blocks too
+    (64, {"grid": [60, 60], "size_mm": [9.0, 9.0]}, {"thickness_mm": 10.0, "mesh": "refined"},
+     {"body.thickness_mm", "sweeps.pad.counterface.body.thickness_mm"}, (43, 43)),
+    # a 0.8 mm map under 2.4 mm surfaces: a 10 mm paper block is 12.5 times as thick as
+    # 0.8 mm, and b = 0.5 mm is longer than half of it; the counter block inherits the
+    # first's thickness (one key)
+    (8, {"grid": [16, 16], "size_mm": [2.4, 2.4]}, {"thickness_mm": 10.0},
+     {"body.thickness_mm", "sweeps.pad.b_mm"}, (5, 5)),
+])
 def test_a_counter_map_smaller_than_the_surfaces_gets_advice_that_plans_in_one_round(
-        tmp_path):
-    """The issue's case: a 6.4 mm map (64 points at 0.1 mm) under 9 mm surfaces (60 x 60)
-    on 10 mm blocks: the smaller area needs thinner blocks too (a 10 mm refined block
-    under 6.4 mm has elements over 20 times longer than wide)."""
-    entry = smooth_map(tmp_path / "disc.npy", 64, 0.1)
-    cfg = raw(counterface={"surface": {"measured": entry},
-                           "body": {**STEEL, "thickness_mm": 10.0}})
-    cfg["surfaces"] = {"grid": [60, 60], "size_mm": [9.0, 9.0], "count": 2}
-    cfg["body"] = {"thickness_mm": 10.0, "mesh": "refined"}
+        tmp_path, points, surfaces, body, changed, grid):
+    entry = smooth_map(tmp_path / "disc.npy", points, 0.1)
+    counter = {**STEEL, "thickness_mm": 10.0} if points == 64 else STEEL
+    cfg = raw(counterface={"surface": {"measured": entry}, "body": counter})
+    cfg["surfaces"] = {**surfaces, "count": 2}
+    cfg["body"] = body
     (problem,) = refusal(cfg)
     key = "sweeps.pad.counterface.surface.measured"
     head, options = problem.split(f"set in {key}: ")
-    advice = re.findall(r"(\S+(?:size_mm|thickness_mm): [\d.]+)",
+    advice = re.findall(r"(\S+(?:size_mm|thickness_mm|b_mm): [\d.]+)",
                         head.split("make the study's area one it has")[1])
-    assert advice[0] == "sweeps.pad.size_mm: 6.4"
-    assert {a.split(": ")[0] for a in advice[1:]} == {
-        "body.thickness_mm", "sweeps.pad.counterface.body.thickness_mm"}
+    assert advice[0] == f"sweeps.pad.size_mm: {points / 10:g}"
+    assert {a.split(": ")[0] for a in advice[1:]} == changed
     for item in advice:
         cfg = follow(cfg, item)
     for option in options.split(" and "):
         cfg = follow(cfg, f"{key}.{option}")
     (cell,) = plan(cfg).cells["pad"]  # one round
-    assert cell.surface.grid == cell.counterface.heights.cell.grid == (43, 43)
+    assert cell.surface.grid == cell.counterface.heights.cell.grid == grid
 
 
 # ---------------------------------------------------------------------------

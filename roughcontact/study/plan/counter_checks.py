@@ -22,7 +22,7 @@ from roughcontact.study.config import BuildSettings
 from roughcontact.study.contact_records import StudyCell
 from roughcontact.study.plan.block_checks import block_message, block_problems, thickest_block
 from roughcontact.study.plan.body_checks import cell_bodies
-from roughcontact.study.plan.checks import window_message
+from roughcontact.study.plan.checks import MAX_CORRELATION_FRACTION, window_message
 from roughcontact.study.records import GeneratedCell, InfluenceModel, MeasuredCell, SurfaceCell
 from roughcontact.study.settings import Study
 from roughcontact.study.sources import MeasurementImport, load_measurement
@@ -149,6 +149,13 @@ def _grid_problems(study: Study, name: str, cell: StudyCell) -> list[str]:
     blocks = ("" if not thicker else
               f", with {' and '.join(thicker)} (the thickest block{'s' * (len(thicker) > 1)} "
               f"that area carries)")
+    b = max(in_units(first.corr_length))
+    if b > MAX_CORRELATION_FRACTION * side:  # the window check's bound, on the new area
+        shortest = math.floor(MAX_CORRELATION_FRACTION * side * 1e3 + 1e-9) / 1e3
+        written = study.entry(study.source_name(name)).get("b_mm")
+        scans = isinstance(written, list) and len(written) > 1
+        blocks += (f", with {where}.b_mm: {shortest:g}{f' in place of {b:g}' if scans else ''}"
+                   f" (at most half that area)")
     return [f"{text}; no window of the counter map has the first surface's plan size (the "
             f"map is {olx:g} x {oly:g} mm): make the study's area one it has, "
             f"{where}.size_mm: {side:g} ({gx} x {gy} elements at the surfaces' spacing)"
