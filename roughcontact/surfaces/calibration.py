@@ -162,6 +162,8 @@ CALIBRATION_SOLVE_SE = 0.05
 #: Noise points (surfaces x noise field) drawn and filtered at once by the calibration.
 CALIBRATION_BATCH_POINTS = 2**19
 _CALIBRATION_MAX_EVALUATIONS = 12
+#: Halvings of a Broyden step toward the last point whose sample moments were finite.
+_CALIBRATION_MAX_HALVINGS = 6
 
 
 @dataclass(frozen=True)
@@ -468,6 +470,19 @@ def _solve(spec: SurfaceSpec, estimate, count: int, theta, g, se, scale):
                 proposal[1] = _on_bound(spec, proposal[0])
                 on_edge = True
         new_g, se = estimate(proposal, count)
+        for _ in range(_CALIBRATION_MAX_HALVINGS):  # a law the sampler cannot draw: nan
+            if np.all(np.isfinite(new_g)):
+                break
+            proposal = 0.5 * (theta + proposal)
+            proposal[1] = max(proposal[1], _on_bound(spec, proposal[0]))
+            new_g, se = estimate(proposal, count)
+        if not np.all(np.isfinite(new_g)):
+            raise InfeasibleMoments(
+                f"kurtosis {spec.kurt:g} at skewness {spec.skew:g} could not be calibrated "
+                f"for the filter on a {spec.grid[0]} x {spec.grid[1]} grid over "
+                f"{mm_text(spec.size)} mm: the process near the filter's bound (Eq 15) "
+                f"gives no finite sample moments here. Raise kurt, use a larger surface "
+                "relative to corr_length, or use method='exact'.")
         evaluations += 1
         d_theta, d_g = proposal - theta, new_g - g
         if np.dot(d_theta, d_theta) > 0:

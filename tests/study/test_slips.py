@@ -313,3 +313,15 @@ def test_a_study_smaller_than_four_elements_is_refused_and_its_advice_plans(size
     assert side >= 4 * 0.15 - 1e-12 and side / 0.15 == pytest.approx(round(side / 0.15))
     planned = plan(follow(cfg, advice))
     assert all(min(c.surface.grid) >= 4 for c in planned.cells["pad"])
+
+
+def test_a_kurtosis_the_calibration_cannot_draw_on_a_small_window_is_refused_in_words():
+    """On 8 x 8 over 1.2 mm with b = 0.5 mm (0.42 L) the process near the filter's bound
+    at Sk 2 gives no finite sample moments: refused in words (not a nan skewness), and
+    the generator it names plans."""
+    cfg = raw(moments=[[2.0, 6.0]])
+    (problem,) = refusal(cfg)
+    assert "nan" not in problem and "could not be calibrated for the filter" in problem
+    assert "method='exact'" in problem
+    cfg["surfaces"]["method"] = "exact"
+    plan(cfg)
