@@ -448,8 +448,11 @@ def _solve(spec: SurfaceSpec, estimate, count: int, theta, g, se, scale):
             break
         if on_edge and abs(residual[0]) <= tol[0]:
             if residual[1] < 0:  # the skewness is right, the kurtosis cannot go lower
+                absolute = spec.skew**2 + 1.0
+                below = (f"below the absolute limit Ku >= Sk^2 + 1 = {absolute:g} (Eq 14) "
+                         "and so " if spec.kurt < absolute else "")
                 raise InfeasibleMoments(
-                    f"kurtosis {spec.kurt:g} at skewness {spec.skew:g} is not reachable in "
+                    f"kurtosis {spec.kurt:g} at skewness {spec.skew:g} is {below}not reachable in "
                     f"expectation by the filter generator for the {spec.acf} ACF with "
                     f"corr_length = {mm_text(spec.corr_length)} mm on a {spec.grid[0]} x "
                     f"{spec.grid[1]} grid over {mm_text(spec.size)} mm: on the filter's bound "
