@@ -106,17 +106,54 @@ _BOUNDS = {"minimum": "at least", "maximum": "at most", "exclusiveMinimum": "abo
            "exclusiveMaximum": "below"}
 
 
+def _yaml_number(text: str):
+    """The number YAML 1.1 reads ``text`` as (PyYAML's loaders, Snakemake's among them),
+    or None where it reads text (``1e-3``, ``1.0e5``: an exponent needs a point in the
+    mantissa and a sign)."""
+    import yaml
+
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    try:
+        number = yaml.load(f"value: {text}", Loader=loader)["value"]
+    except yaml.YAMLError:
+        return None
+    return number if isinstance(number, int | float) and not isinstance(number, bool) else None
+
+
+def yaml_number_forms(number: float, integer: bool = False) -> list[str]:
+    """Ways to write ``number`` that YAML 1.1 reads as that number: the plain decimal
+    (``0.001``, ``100000.0``) and the exponent form with a point and a sign (``1.0e-3``,
+    ``1.0e+5``); each read back by YAML here, so every form offered works."""
+    if integer:
+        forms = [str(int(number))]
+    else:
+        mantissa, exponent = f"{number:.15e}".split("e")
+        mantissa = mantissa.rstrip("0")
+        mantissa += "0" if mantissa.endswith(".") else ""
+        plain = repr(float(number))
+        forms = ([plain] if "e" not in plain else []) + (
+            [f"{mantissa}e{int(exponent):+d}"] if int(exponent) else [])
+    return [form for form in dict.fromkeys(forms) if _yaml_number(form) == number]
+
+
 def _unquoted(value, kinds) -> str:
-    """The advice for a number written in quotes (text) where a number is expected."""
+    """The advice for a number that YAML read as text where a number is expected: one
+    written in quotes, or in a form YAML 1.1 reads as text (``1e-3``), with forms that
+    YAML reads as the number."""
     if not isinstance(value, str) or not {"number", "integer"} & set(kinds):
         return ""
     try:
         number = float(value)
     except ValueError:
         return ""
-    if not math.isfinite(number) or ("number" not in kinds and not number.is_integer()):
+    integer = "number" not in kinds
+    if not math.isfinite(number) or (integer and not number.is_integer()):
         return ""
-    return f" (text: write {value.strip()} without quotes)"
+    text = value.strip()
+    if _yaml_number(text) is not None:
+        return f" (text: write {text} without quotes)"
+    forms = yaml_number_forms(number, integer)
+    return f" (YAML reads {text} as text, quoted or not: write {' or '.join(forms)})"
 
 
 def _plain(error) -> str:
@@ -164,9 +201,26 @@ def _specific(branches) -> list:
     return [e for e in branches if e.validator != "type" or e.path]
 
 
+def _branch_errors(error) -> list:
+    """The errors of ``error`` to report, each at its deepest place: of a ``oneOf``'s
+    (``anyOf``'s) branches, every error of the branch the value's type matched best (a
+    block entry with a bad ``nu`` and a bad ``E_MPa``: both, in one round), not only the
+    first."""
+    from jsonschema.exceptions import best_match
+
+    if error.validator not in ("oneOf", "anyOf") or not error.context:
+        return [error]
+    specific = _specific(error.context)
+    if not specific:
+        return [error]
+    branch = best_match(specific).relative_schema_path[0]
+    same = [e for e in specific if e.relative_schema_path[0] == branch]
+    return [deeper for e in same for deeper in _branch_errors(e)]
+
+
 def schema_errors(config: dict) -> list[str]:
     """``key.path: message`` in plain words of every schema violation of ``config``
-    (none: []).
+    (none: []), every bad value of an entry at once.
 
     jsonschema is imported here, not with the module: a job that only reads its
     typed settings does not pay for it.
@@ -177,15 +231,13 @@ def schema_errors(config: dict) -> list[str]:
     validator = jsonschema.validators.validator_for(schema)(schema)
     lines = []
     for error in sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.path))):
-        # of a oneOf's branches, the one for a value of the right type gives the place
-        deepest = error
-        while deepest.validator in ("oneOf", "anyOf") and deepest.context:
-            specific = _specific(deepest.context)
-            if not specific:
-                break
-            deepest = jsonschema.exceptions.best_match(specific)
-        lines.append(f"{config_path(deepest.absolute_path)}: {_plain(error)}")
-    return lines
+        # of a oneOf's branches, the one for a value of the right type gives the places
+        found = _branch_errors(error)
+        if len(found) == 1:  # the oneOf's own words (its message, its alternatives)
+            lines.append(f"{config_path(found[0].absolute_path)}: {_plain(error)}")
+        else:
+            lines += [f"{config_path(e.absolute_path)}: {_plain(e)}" for e in found]
+    return list(dict.fromkeys(lines))
 
 
 def apply_schema(config: dict) -> dict:

@@ -51,13 +51,16 @@ __all__ = ["FACES_OPEN", "FLOW_OFF", "FlowSettings", "check_flow", "flow_setting
 #: drop exceeds the nominal contact pressure: the fluid would lift the faces apart.
 FACES_OPEN = "faces_open"
 
-#: Plausible ranges of the seal's values (outside: almost surely a unit slip), with the
-#: unit each is likely typed in by mistake and its factor to the key's unit.
+#: Plausible ranges of the seal's values (outside: almost surely a unit slip), the
+#: narrower range of the values a seal has (a unit slip is guessed only where the value
+#: it gives lies in it: 1e6 as a pressure drop is 1 MPa in Pa, not 1000 MPa in kPa), and
+#: the units each is likely typed in by mistake with their factors to the key's unit.
 PLAUSIBLE = {
-    "viscosity_Pa_s": ((1e-6, 1e4), (("mPa s", 1e-3),)),
-    "pressure_drop_MPa": ((0.0, 1e3), (("Pa", 1e-6), ("kPa", 1e-3), ("bar", 0.1))),
-    "seal_width_mm": ((1.0, 1e5), (("m", 1e3), ("um", 1e-3))),
-    "seal_length_mm": ((1e-3, 1e4), (("m", 1e3), ("um", 1e-3))),
+    "viscosity_Pa_s": ((1e-6, 1e4), (1e-5, 1e3), (("mPa s", 1e-3),)),
+    "pressure_drop_MPa": ((0.0, 1e3), (1e-3, 50.0),
+                          (("Pa", 1e-6), ("kPa", 1e-3), ("bar", 0.1))),
+    "seal_width_mm": ((1.0, 1e5), (1.0, 1e4), (("m", 1e3), ("um", 1e-3))),
+    "seal_length_mm": ((1e-3, 1e4), (1e-2, 1e3), (("m", 1e3), ("um", 1e-3))),
 }
 
 
@@ -198,28 +201,51 @@ def flow_settings(section) -> FlowSettings:
     return FlowSettings(probe, seal)
 
 
-def _slip(key: str, value: float) -> str | None:
-    """The message for a value of ``flow.<key>`` outside its plausible range, or None."""
-    (low, high), slips = PLAUSIBLE[key]
-    if low <= value <= high:
+def _slip(key: str, value: float, shortest: tuple[float, str] = (0.0, "")) -> str | None:
+    """The message for a value of ``flow.<key>`` outside its plausible range, or None;
+    ``shortest`` a lower bound [the key's unit] beyond the range's and its reason (the
+    seal's length: one contact element along the flow)."""
+    (low, high), (usual_low, usual_high), slips = PLAUSIBLE[key]
+    floor, reason = shortest
+    if max(low, floor) <= value <= high:
         return None
-    guesses = unit_slips(f"flow.{key}", value, slips, lambda v: low <= v <= high)
+    guesses = unit_slips(f"flow.{key}", value, slips,
+                         lambda v: max(usual_low, floor) <= v <= usual_high)
     unit = key.rsplit("_", 1)[-1] if key != "viscosity_Pa_s" else "Pa s"
-    return (f"flow.{key}: {value:g} is outside the plausible {low:g}-{high:g} {unit}"
+    why = (f"is shorter than {reason}" if value < floor and value >= low
+           else f"is outside the plausible {low:g}-{high:g} {unit}")
+    return (f"flow.{key}: {value:g} {why}"
             + (f" ({'; '.join(guesses)})" if guesses else "")
             + " (plausibility_check: false accepts it)")
 
 
-def check_flow(flow: FlowSettings, plausibility_check: bool, grids: dict) -> list[str]:
+def _longest_element(flow: FlowSettings, spacings: dict) -> tuple[float, str]:
+    """The longest contact element along a flow direction [mm] of the grids
+    ``spacings`` (a grid's name -> its element (dx, dy) [m]), in words: a seal band is
+    at least one element long (the patch's conductance averages the flow over many)."""
+    found = [(in_unit(spacing["xy".index(d)], MM), where)
+             for where, spacing in spacings.items() for d in flow.directions]
+    if not found:
+        return 0.0, ""
+    length, where = max(found)
+    return length, f"one contact element ({length:.3g} mm along the flow on {where})"
+
+
+def check_flow(flow: FlowSettings, plausibility_check: bool, grids: dict,
+               spacings: dict | None = None) -> list[str]:
     """The problems of the ``flow`` settings: values that are almost surely a unit slip
-    (with ``plausibility_check``), and contact grids (``grids``: a geometry's
-    configuration key -> its (nx, ny)) too small to carry a flow (at least two elements
-    along and across each direction)."""
+    (with ``plausibility_check``: outside their plausible range, and a seal shorter along
+    the flow than one contact element of the grids ``spacings``, a grid's name -> its
+    element (dx, dy) [m]), and contact grids (``grids``: a geometry's configuration key
+    -> its (nx, ny)) too small to carry a flow (at least two elements along and across
+    each direction)."""
     written = flow.written()
     problems = []
     if plausibility_check:
+        shortest = _longest_element(flow, spacings or {}) if written else (0.0, "")
         problems += [message for key, value in written.items()
-                     if (message := _slip(key, float(value))) is not None]
+                     if (message := _slip(key, float(value), shortest if key ==
+                                          "seal_length_mm" else (0.0, ""))) is not None]
     if written and written["pressure_drop_MPa"] == 0.0:
         problems.append("flow.pressure_drop_MPa: 0 gives no leak rate; give the inlet minus "
                         "outlet pressure [MPa] (e.g. 0.1 for 1 bar)")

@@ -69,6 +69,13 @@ def kurt_min(spec: SurfaceSpec, skew=None):
     return 3.0 + s4 * (skew**2 / s3**2 - 2.0)
 
 
+def reachable(kurt: float) -> str:
+    """A bound on the kurtosis as advice: rounded up to 2 decimals and 0.01 above it, so
+    the value written is reached (a bound rounded down, or the bound itself, would be
+    refused again)."""
+    return f"{math.ceil(kurt * 100.0 + 1e-9) / 100.0 + 0.01:.2f}"
+
+
 def _transfer_to_input(skew, kurt, s3, s4):
     """Eq 12-13 inverted: the white noise's (Sk_x, Ku_x) for surface moments (skew, kurt)."""
     return skew / s3, 3.0 + (kurt - 3.0) / s4
@@ -81,13 +88,18 @@ def input_moments(spec: SurfaceSpec) -> tuple[float, float]:
     below :func:`kurt_min` for this grid and ACF.
     """
     absolute = spec.skew**2 + 1.0
+    s3, s4 = moment_transfer(spec)
     if spec.kurt < absolute:
+        kmin = 3.0 + s4 * (spec.skew**2 / s3**2 - 2.0)
         raise InfeasibleMoments(
             f"kurtosis {spec.kurt:g} at skewness {spec.skew:g} is below the absolute limit "
-            f"Ku >= Sk^2 + 1 = {absolute:g} (Eq 14): no distribution has these moments. "
-            f"Raise kurt above {absolute:g}."
+            f"Ku >= Sk^2 + 1 = {absolute:g} (Eq 14): no distribution has these moments, "
+            f"and the filter for a {spec.acf} ACF with corr_length = "
+            f"{mm_text(spec.corr_length)} mm on this grid reaches at this skewness a "
+            f"kurtosis of at least {kmin:.4f} (Eq 15 with Eq 12-13). Raise kurt to at least "
+            f"{reachable(kmin)}, or use method='exact', which is limited only by "
+            f"Ku >= Sk^2 + 1."
         )
-    s3, s4 = moment_transfer(spec)
     skew_x, kurt_x = _transfer_to_input(spec.skew, spec.kurt, s3, s4)
     limit = skew_x**2 + 1.0
     if kurt_x < limit - 1e-12 * max(1.0, limit):
@@ -97,7 +109,8 @@ def input_moments(spec: SurfaceSpec) -> tuple[float, float]:
             f"filter for a {spec.acf} ACF with corr_length = {mm_text(spec.corr_length)} mm on a "
             f"{spec.grid[0]} x {spec.grid[1]} grid over {mm_text(spec.size)} mm "
             f"(b/dx = {spec.corr_length[0] / spec.spacing[0]:.3g}): the minimum kurtosis at this "
-            f"skewness is {kmin:.4f} (Eq 15 with Eq 12-13). Raise kurt to at least {kmin:.4f}, "
+            f"skewness is {kmin:.4f} (Eq 15 with Eq 12-13). Raise kurt to at least "
+            f"{reachable(kmin)}, "
             "shorten the correlation length relative to the grid spacing, or use "
             "method='exact', which is limited only by Ku >= Sk^2 + 1."
         )
@@ -149,6 +162,8 @@ CALIBRATION_SOLVE_SE = 0.05
 #: Noise points (surfaces x noise field) drawn and filtered at once by the calibration.
 CALIBRATION_BATCH_POINTS = 2**19
 _CALIBRATION_MAX_EVALUATIONS = 12
+#: Halvings of a Broyden step toward the last point whose sample moments were finite.
+_CALIBRATION_MAX_HALVINGS = 6
 
 
 @dataclass(frozen=True)
@@ -352,9 +367,8 @@ def calibrate_filter(spec: SurfaceSpec, *, rse: float = CALIBRATION_RSE,
 @functools.lru_cache(maxsize=256)
 def _calibrate(spec: SurfaceSpec, rse: float, max_points: float, seed: int) -> FilterCalibration:
     start = time.perf_counter()
-    absolute = spec.skew**2 + 1.0
-    if spec.kurt < absolute:
-        input_moments(spec)  # raises the absolute-bound message
+    # a target below the absolute limit (Eq 14) is solved from the filter's bound like
+    # one below the bound: the refusal gives the kurtosis this generator reaches
     target = np.array([spec.skew, spec.kurt])
     scale = _moment_scale(target)
     sampler = _SampleMoments(spec, seed)
@@ -434,13 +448,17 @@ def _solve(spec: SurfaceSpec, estimate, count: int, theta, g, se, scale):
             break
         if on_edge and abs(residual[0]) <= tol[0]:
             if residual[1] < 0:  # the skewness is right, the kurtosis cannot go lower
+                absolute = spec.skew**2 + 1.0
+                below = (f"below the absolute limit Ku >= Sk^2 + 1 = {absolute:g} (Eq 14) "
+                         "and so " if spec.kurt < absolute else "")
                 raise InfeasibleMoments(
-                    f"kurtosis {spec.kurt:g} at skewness {spec.skew:g} is not reachable in "
+                    f"kurtosis {spec.kurt:g} at skewness {spec.skew:g} is {below}not reachable in "
                     f"expectation by the filter generator for the {spec.acf} ACF with "
                     f"corr_length = {mm_text(spec.corr_length)} mm on a {spec.grid[0]} x "
                     f"{spec.grid[1]} grid over {mm_text(spec.size)} mm: on the filter's bound "
                     f"(Eq 15) a window's expected sample kurtosis at this skewness is "
-                    f"{g[1]:.4f}. Raise kurt to at least {g[1]:.4f}, or use method='exact', "
+                    f"{g[1]:.4f}. Raise kurt to at least {reachable(g[1])}, or use "
+                    "method='exact', "
                     "which is limited only by Ku >= Sk^2 + 1."
                 )
             on_edge = False  # the target lies above the bound: leave it
@@ -455,6 +473,19 @@ def _solve(spec: SurfaceSpec, estimate, count: int, theta, g, se, scale):
                 proposal[1] = _on_bound(spec, proposal[0])
                 on_edge = True
         new_g, se = estimate(proposal, count)
+        for _ in range(_CALIBRATION_MAX_HALVINGS):  # a law the sampler cannot draw: nan
+            if np.all(np.isfinite(new_g)):
+                break
+            proposal = 0.5 * (theta + proposal)
+            proposal[1] = max(proposal[1], _on_bound(spec, proposal[0]))
+            new_g, se = estimate(proposal, count)
+        if not np.all(np.isfinite(new_g)):
+            raise InfeasibleMoments(
+                f"kurtosis {spec.kurt:g} at skewness {spec.skew:g} could not be calibrated "
+                f"for the filter on a {spec.grid[0]} x {spec.grid[1]} grid over "
+                f"{mm_text(spec.size)} mm: the process near the filter's bound (Eq 15) "
+                f"gives no finite sample moments here. Raise kurt, use a larger surface "
+                "relative to corr_length, or use method='exact'.")
         evaluations += 1
         d_theta, d_g = proposal - theta, new_g - g
         if np.dot(d_theta, d_theta) > 0:

@@ -489,13 +489,17 @@ def _finite_float(value, name):
 
 
 def _infeasible_message(skew, kurt):
+    """Why (skew, kurt) has no distribution (Eq 14), with values that have one: the limit
+    rounded up (kurt) and down (|skew|) at 4 decimals, so the advice followed lies inside."""
     limit = skew * skew + 1.0
     message = (
-        f"kurtosis {kurt!r} is below the limit Sk^2 + 1 = {limit!r} for skewness {skew!r} "
-        f"(Eq 14); no distribution exists; raise kurt to at least {limit!r}"
+        f"kurtosis {kurt:g} is below the limit Sk^2 + 1 = {limit:g} for skewness {skew:g} "
+        f"(Eq 14); no distribution exists; raise kurt to at least "
+        f"{math.ceil(limit * 1e4 - 1e-9) / 1e4:g}"
     )
     if kurt >= 1.0:
-        message += f" or reduce |skew| to at most {math.sqrt(kurt - 1.0)!r}"
+        message += (" or reduce |skew| to at most "
+                    f"{math.floor(math.sqrt(kurt - 1.0) * 1e4) / 1e4:g}")
     return message + "."
 
 

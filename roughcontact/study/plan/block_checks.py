@@ -36,7 +36,7 @@ def block_problems(geometry: Geometry, build: BuildSettings) -> list[str]:
     return shape_problems(geometry.finite_element_model(build.max_bytes))
 
 
-def _thickest(geometry: Geometry, build: BuildSettings) -> float | None:
+def thickest_block(geometry: Geometry, build: BuildSettings) -> float | None:
     """The largest thickness [m], rounded down to 2 digits in mm, whose block passes
     :func:`block_problems` (None: none up to the slenderness limit does)."""
     side = min(geometry.size)
@@ -57,7 +57,7 @@ def _remedies(where: str, geometry: Geometry, build: BuildSettings,
     block's keys (``body``, or a counter body's ``counterface.body``)."""
     passes = [] if not measured else [(f"{where}.thickness_mm: {PATCH_THICKNESS}",
                                        max(geometry.size), geometry.mesh)]
-    thickest = _thickest(geometry, build)
+    thickest = thickest_block(geometry, build)
     thickness_key = f"{where}.thickness_mm" if measured else f"{body}.thickness_mm"
     if thickest is not None:
         passes.append((f"{thickness_key}: {in_unit(thickest, MM):g}", thickest, geometry.mesh))
@@ -102,4 +102,4 @@ def check_blocks(cells: dict[str, tuple[StudyCell, ...]], build: BuildSettings) 
     return problems
 
 
-__all__ = ["block_message", "block_problems", "check_blocks"]
+__all__ = ["block_message", "block_problems", "check_blocks", "thickest_block"]

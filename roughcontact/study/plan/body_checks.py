@@ -26,7 +26,7 @@ import dataclasses
 from roughcontact.study.codec import in_unit
 from roughcontact.study.config import BuildSettings, unit_slips
 from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.plan.block_checks import block_problems
+from roughcontact.study.plan.block_checks import block_problems, thickest_block
 from roughcontact.study.plan.measured_checks import measured_problems
 from roughcontact.study.records import Geometry, InfluenceModel, MeasuredCell
 from roughcontact.study.settings import Study
@@ -116,7 +116,8 @@ def _thickness_problems(key: str, geometry: Geometry, build: BuildSettings) -> l
     """Messages for a block ``geometry`` thinner than one contact element (a thickness in
     metres typed in mm, under the configuration ``key``), with the thickness it was
     likely meant as where that block passes
-    :func:`~roughcontact.study.plan.block_checks.block_problems`."""
+    :func:`~roughcontact.study.plan.block_checks.block_problems`, else (that thickness too
+    thick for the patch) the thickest block that passes."""
     spacing = min(s / n for s, n in zip(geometry.size, geometry.grid, strict=True))
     if geometry.thickness >= spacing * (1 - 1e-9):
         return []
@@ -125,10 +126,19 @@ def _thickness_problems(key: str, geometry: Geometry, build: BuildSettings) -> l
         block = dataclasses.replace(geometry, thickness=value * MM)
         return block.thickness >= spacing and not block_problems(block, build)
 
-    thickness = in_unit(geometry.thickness, MM)
-    return [f"{key} = {thickness:g} is thinner than one contact element "
-            f"({in_unit(spacing, MM):g} mm){_slip('thickness_mm', key, thickness, fits)}; "
-            f"else a block at least {in_unit(spacing, MM):g} mm thick"]
+    thickness, element = in_unit(geometry.thickness, MM), in_unit(spacing, MM)
+    text = f"{key} = {thickness:g} is thinner than one contact element ({element:g} mm)"
+    slips = _slip("thickness_mm", key, thickness, fits)
+    if slips:
+        return [f"{text}{slips}; otherwise give a block at least {element:g} mm thick"]
+    meant = thickness * dict(_SLIPS["thickness_mm"])["m"]
+    largest = thickest_block(geometry, build)
+    if largest is not None and meant * MM > largest and fits(in_unit(largest, MM)):
+        (lx, ly) = (in_unit(v, MM) for v in geometry.size)
+        return [f"{text}; typed in m, it would be {meant:g} mm, too thick for the "
+                f"{lx:.3g} x {ly:.3g} mm patch (the thickest block it carries is "
+                f"{in_unit(largest, MM):g} mm): write {key}: {in_unit(largest, MM):g}"]
+    return [f"{text}: give a block at least {element:g} mm thick"]
 
 
 def body_problems(where: str, values: dict, p_max: float, build: BuildSettings) -> list[str]:

@@ -146,8 +146,11 @@ def study_plan(study: Study) -> StudyPlan:
     _raise("Blocks that do not fit their surfaces",
            check_blocks({study.path(name): c for name, c in by_source.items()}, build))
     jobs = contact_jobs(cell for name in studies for cell in cells[name])
-    _raise("Flow settings that cannot be used", check_flow(study.flow, study.plausibility_check, {
-        f"the contact grid of {job.geometry.key}": job.geometry.grid for job in jobs.values()}))
+    grids = {f"the contact grid of {job.geometry.key}": job.geometry for job in jobs.values()}
+    _raise("Flow settings that cannot be used", check_flow(
+        study.flow, study.plausibility_check, {k: g.grid for k, g in grids.items()},
+        {k: tuple(s / n for s, n in zip(g.size, g.grid, strict=True))
+         for k, g in grids.items()}))
     _raise("Studies whose every level the fluid would open", check_open_faces(study, studies))
     figure_cells = {name: tuple(FIGURES[name].surfaces(study, name, cells)) for name in figures}
     generated = [name for name in figures if FIGURES[name].generated]

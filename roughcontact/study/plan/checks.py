@@ -7,6 +7,7 @@ to change; :func:`roughcontact.study.plan.cells.study_plan` raises
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -98,6 +99,7 @@ def check_studies(study: Study, names) -> list[str]:
             problems.append(f"{name}.pressure_MPa = [{low}, {high}]: expected [P_min, P_max] "
                             f"with P_min < P_max (MPa)")
         problems += check_duplicates(study, name)
+        problems += _check_size(study, name, section)
         problems += check_measured(study, name, study.source(name))
         problems += check_counter_measured(study, name)
         problems += _check_operator(study, name, section)
@@ -106,6 +108,56 @@ def check_studies(study: Study, names) -> list[str]:
     if not problems:  # a refusal comes alone
         warn_single_surfaces(study, names)
     return list(dict.fromkeys(problems))  # a study drawn from another: its messages once
+
+
+#: Fewest contact elements along a side of a study's own ``size_mm`` (a smaller area
+#: would need elements finer than the surfaces' spacing the schema promises).
+MIN_STUDY_ELEMENTS = 4
+
+
+def _smallest_size(study: Study, section: StudySection, spacing: list[float]) -> float:
+    """The smallest square side [mm], in whole elements of ``spacing`` [mm] and at least
+    :data:`MIN_STUDY_ELEMENTS` of them, that holds two of the study's longest correlation
+    length and whose block passes the block check (its advice then plans in one round)."""
+    from roughcontact.study.plan.block_checks import block_problems
+
+    body, build = study.body.geometry, study.body.build
+    b = max((max(as_list(v)) if isinstance(v, list) else float(v))
+            for v in as_list(section.b_mm)) if section.b_mm is not None else 0.0
+    step = max(spacing)
+    for count in range(MIN_STUDY_ELEMENTS, 100 * MIN_STUDY_ELEMENTS):
+        side = math.ceil(count * step * 1e6 - 1e-6) / 1e6
+        grid = tuple(max(MIN_STUDY_ELEMENTS, round(side / h)) for h in spacing)
+        block = dataclasses.replace(body, size=(side * MM, side * MM), grid=grid)
+        if b <= MAX_CORRELATION_FRACTION * side and not any(
+                block_problems(dataclasses.replace(block, mesh=str(mesh)), build)
+                for mesh in as_list(section.meshes)):
+            return side
+    return math.ceil(MIN_STUDY_ELEMENTS * step * 1e6 - 1e-6) / 1e6
+
+
+def _check_size(study: Study, name: str, section: StudySection) -> list[str]:
+    """A study's own ``size_mm`` that holds fewer than :data:`MIN_STUDY_ELEMENTS`
+    contact elements of the surfaces' spacing along a side (the schema promises that
+    spacing: the study is refused, not solved on finer elements), with the smallest size
+    that plans (:func:`_smallest_size`)."""
+    if section.size_mm is None:
+        return []
+    surfaces = study.surfaces
+    spacing = [s / n for s, n in zip(surfaces.size_mm, surfaces.grid, strict=True)]
+    where = study.path(study.source_name(name))
+    problems = []
+    for index, size in enumerate(as_list(section.size_mm)):
+        elements = min(round(size / h) for h in spacing)
+        if elements >= MIN_STUDY_ELEMENTS:
+            continue
+        key = f"{where}.size_mm" + (f"[{index}]" if isinstance(section.size_mm, list) else "")
+        problems.append(
+            f"{key} = {size:g} holds {elements} contact element{'' if elements == 1 else 's'} "
+            f"of the surfaces' spacing ({_pair_text(spacing)} mm: surfaces.size_mm / "
+            f"surfaces.grid) along a side, fewer than {MIN_STUDY_ELEMENTS}; write {key}: "
+            f"{_smallest_size(study, section, spacing):g}, or a finer surfaces.grid")
+    return problems
 
 
 #: The list axes of a contact study (one cell per value) and of the surface figures.

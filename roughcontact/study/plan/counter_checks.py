@@ -13,14 +13,16 @@ here by importing the map so (an option is offered only if the map it makes fits
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from roughcontact.elasticity.operators import HYBRID_MESHES
 from roughcontact.study.codec import in_unit, in_units
 from roughcontact.study.config import BuildSettings
 from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.plan.block_checks import block_message, block_problems
-from roughcontact.study.plan.checks import window_message
+from roughcontact.study.plan.block_checks import block_message, block_problems, thickest_block
+from roughcontact.study.plan.body_checks import cell_bodies
+from roughcontact.study.plan.checks import MAX_CORRELATION_FRACTION, window_message
 from roughcontact.study.records import GeneratedCell, InfluenceModel, MeasuredCell, SurfaceCell
 from roughcontact.study.settings import Study
 from roughcontact.study.sources import MeasurementImport, load_measurement
@@ -96,6 +98,31 @@ def _smaller_area(study: Study, entry: dict, first: SurfaceCell):
     return None if fix is None else (in_unit(side, MM), grid, fix)
 
 
+def _thickness_fixes(study: Study, name: str, cell: StudyCell, side: float,
+                     grid) -> list[str] | None:
+    """The thicknesses, as config text, that let the blocks of ``cell`` (the first body's
+    and a counter block's, :func:`~roughcontact.study.plan.body_checks.cell_bodies`) pass
+    the block check on a square area of ``side`` [mm] and ``grid``: none where they pass
+    as they are, None where no thickness does. Each tried here on every block it sets."""
+    build = study.body.build
+    blocks = [values["thickness_mm"] for values in cell_bodies(study, name, cell)
+              if "thickness_mm" in values]
+    planform = {"size": (side * MM, side * MM), "grid": tuple(grid)}
+    moved = [(key, dataclasses.replace(geometry, **planform)) for key, geometry in blocks]
+    chosen = {}
+    for key, geometry in moved:
+        if block_problems(geometry, build):
+            thickest = thickest_block(geometry, build)
+            if thickest is None:
+                return None
+            chosen[key] = min(chosen.get(key, thickest), thickest)
+    for key, geometry in moved:
+        thickness = chosen.get(key, geometry.thickness)
+        if block_problems(dataclasses.replace(geometry, thickness=thickness), build):
+            return None
+    return [f"{key}: {in_unit(thickness, MM):g}" for key, thickness in chosen.items()]
+
+
 def _grid_problems(study: Study, name: str, cell: StudyCell) -> list[str]:
     """A measured counter map on another grid or plan size than the surface it meets."""
     first, other = cell.surface, cell.counterface.heights.cell
@@ -118,10 +145,21 @@ def _grid_problems(study: Study, name: str, cell: StudyCell) -> list[str]:
                 f"crop both maps to one window of the same size, on the same grid"]
     side, (gx, gy), fix = smaller
     where = study.path(study.source_name(name))
+    thicker = _thickness_fixes(study, name, cell, side, (gx, gy))
+    blocks = ("" if not thicker else
+              f", with {' and '.join(thicker)} (the thickest block{'s' * (len(thicker) > 1)} "
+              f"that area carries)")
+    b = max(in_units(first.corr_length))
+    if b > MAX_CORRELATION_FRACTION * side:  # the window check's bound, on the new area
+        shortest = math.floor(MAX_CORRELATION_FRACTION * side * 1e3 + 1e-9) / 1e3
+        written = study.entry(study.source_name(name)).get("b_mm")
+        scans = isinstance(written, list) and len(written) > 1
+        blocks += (f", with {where}.b_mm: {shortest:g}{f' in place of {b:g}' if scans else ''}"
+                   f" (at most half that area)")
     return [f"{text}; no window of the counter map has the first surface's plan size (the "
             f"map is {olx:g} x {oly:g} mm): make the study's area one it has, "
-            f"{where}.size_mm: {side:g} ({gx} x {gy} elements at the surfaces' spacing), "
-            f"and set in {key}: {fix}"]
+            f"{where}.size_mm: {side:g} ({gx} x {gy} elements at the surfaces' spacing)"
+            f"{blocks}, and set in {key}: {fix}"]
 
 
 def check_counterfaces(study: Study, cells: dict[str, tuple[StudyCell, ...]]) -> list[str]:

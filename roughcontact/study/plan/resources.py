@@ -602,6 +602,23 @@ MEMORY_KEYS = MappingProxyType({
     "audit_verify": "Set audit.verify: false or body.operator: auto, or use a smaller grid "
                     "(surfaces.grid)",
 })
+#: The advice of :data:`MEMORY_KEYS` where ``body.operator`` is already auto or hybrid
+#: (never advise what the configuration already has).
+_MATRIX_FREE_KEYS = MappingProxyType({
+    "contact": "Use a smaller grid (surfaces.grid) or fewer surfaces per cell "
+               "(surfaces.count or the study's count)",
+    "influence": "Use a coarser body.mesh or a smaller grid (surfaces.grid)",
+    "audit": "Use a smaller grid (surfaces.grid)",
+    "audit_verify": "Set audit.verify: false, or use a smaller grid (surfaces.grid)",
+})
+
+
+def memory_advice(plan, kind: str) -> str:
+    """The keys that change the memory of a ``kind`` of job (:data:`MEMORY_KEYS`), less
+    ``body.operator: auto`` where the study's body already has it (or hybrid)."""
+    if plan.study.body.geometry.operator is InfluenceModel.DENSE:
+        return MEMORY_KEYS[kind]
+    return _MATRIX_FREE_KEYS.get(kind, MEMORY_KEYS[kind])
 
 
 def _report_memory(plan) -> dict[str, dict[str, int]]:
@@ -688,7 +705,7 @@ def machine_problems(plan, total_mb: float | None = None,
         more = f" (and {len(over) - 1} more of its kind)" if len(over) > 1 else ""
         problems.append(
             f"{kind} job {key}: planned {_amount(mem)} of memory{more}, more than {source}. "
-            f"{MEMORY_KEYS[kind]}; or, if the jobs run on cluster nodes with more, set "
+            f"{memory_advice(plan, kind)}; or, if the jobs run on cluster nodes with more, set "
             "job_memory_gb to their memory [GB]")
     return problems
 
