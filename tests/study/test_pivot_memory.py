@@ -47,12 +47,12 @@ def test_the_contact_fraction_from_the_slope_worked_by_hand():
     spacing = 0.15e-3
     slope = math.sqrt(2 * 2 * (1 - math.exp(-2.3 * 0.15)) / spacing**2)
     assert resources.slope_per_height(job().surface) == pytest.approx(slope, rel=1e-12)
-    # kappa 5 (cost_model.yaml) x P L / (E sigma) 4 / (L 10 mm x slope)
-    assert resources.contact_fraction_bound(job()) == pytest.approx(5 * 4 / (0.01 * slope))
+    # kappa 4 (cost_model.yaml) x P L / (E sigma) 4 / (L 10 mm x slope)
+    assert resources.contact_fraction_bound(job()) == pytest.approx(4 * 4 / (0.01 * slope))
     # Gaussian ACF exp(-2.3 r^2 / b^2): smoother, more contact at the same load
     gaussian = math.sqrt(2 * 2 * (1 - math.exp(-2.3 * 0.15**2)) / spacing**2)
     assert resources.contact_fraction_bound(job(acf="gaussian")) == \
-        pytest.approx(5 * 4 / (0.01 * gaussian))
+        pytest.approx(4 * 4 / (0.01 * gaussian))
     # a compliant counter body of the same modulus halves E*: twice the contact
     soft = dataclasses.replace(job(), counter=JobCounter(modulus_ratio=1.0))
     assert resources.contact_fraction_bound(soft) == \
@@ -91,12 +91,16 @@ def test_the_planned_batch_is_the_contact_jobs():
 def test_the_seal_study_plans_its_measured_peak_and_the_default_study_little_more():
     """The seal's contact jobs (60 x 60, 20 surfaces to near full contact) peaked at
     2.19-2.43 GB (Snakemake's max_rss) and 2.53 GB (the resident high-water mark of one
-    job run alone; docs/performance/run-time.md); the default study's 60 x 60 jobs at
-    0.33-0.68 GB."""
+    job run alone; docs/performance/run-time.md), the two-body study's at 0.61-1.05 GB;
+    the default study's 60 x 60 jobs at 0.33-0.68 GB."""
     seal = study_plan(load_study(ROOT / "config" / "seal.yaml"))
     planned = [resources.job_memory_mb(seal, "contact", {"job": key}) for key in seal.jobs]
     assert min(planned) >= 2530
     assert max(planned) <= 1.25 * 2530
+    # config/two_bodies.yaml (60 x 60, 20 surfaces to 30-54 % contact): 609-1045 MB
+    pairs = study_plan(load_study(ROOT / "config" / "two_bodies.yaml"))
+    assert min(resources.job_memory_mb(pairs, "contact", {"job": key})
+               for key in pairs.jobs) >= 1045
     default = study_plan(load_study(ROOT / "config" / "config.yaml"))
     largest = max(resources.job_memory_mb(default, "contact", {"job": key})
                   for key in default.jobs)

@@ -366,14 +366,15 @@ def contact_fraction_bound(job: ContactJob) -> float:
 
     The contact area grows about in proportion to the load, ``A / A0 = kappa P / (E*
     h')`` (Bush, Gibson and Thomas 1975; Persson 2001: kappa 1.6-2.5 at small
-    fractions), with the rms slope ``h' = sigma`` :func:`slope_per_height`; in the
-    sweep's variable P L / (E sigma) (``job.pressure_end``, L the block's thickness) the
-    fraction is ``kappa (1 + E1 / E2) pressure_end / (L h' / sigma)``, a compliant
-    counter body lowering E* by ``1 + E1 / E2``. kappa is the cost model's
-    ``contact_fraction_slope``: 5, above kappa = A L h' / (P sigma) of every measured
-    step (4.7 at most, at 1-5 % contact; 2.0-2.3 at 50-80 %) and the sweep's end
-    overshoot (the last step reaches 1.11-1.13 times ``pressure_end``). A cell whose
-    slope the plan does not know counts as full contact."""
+    fractions), ``h'`` the rms slope of the heights (:func:`slope_per_height` times
+    sigma); in the sweep's variable P L / (E sigma) (``job.pressure_end``, L the
+    block's thickness) the fraction is ``kappa (1 + E1 / E2) pressure_end / (L h' /
+    sigma)``, a compliant counter body lowering E* by ``1 + E1 / E2``. kappa is the
+    cost model's ``contact_fraction_slope``: 4, above kappa = A L h' / (P sigma) at the
+    last step of every measured job, P the sweep's end (3.2 at most; 0.6 on the paper
+    mesh; the last step overshoots the end by 1.1-2.1); a step's own kappa reaches 4.7
+    at 1-5 % contact, where the factors are a few MB. A cell whose slope the plan does
+    not know (measured, or of a spectrum) counts as full contact."""
     slope = slope_per_height(job.surface)
     if not math.isfinite(slope):
         return 1.0
