@@ -391,7 +391,7 @@ def pivot_factor_bytes(job: ContactJob, settings: ContactSettings, dense: bool) 
     one surface while one is factored or extended (the block and its factor, the old
     factor and the new). Measured on the seal study (60 x 60, 20 surfaces swept to
     P L / (E sigma) = 128, 98-100 % contact at the end): 1.95 GB of factors held at
-    once, a peak of 2.43-2.53 GB in all against 0.73 GB counted without them."""
+    once, a peak of 2.19-2.53 GB in all against 0.73 GB counted without them."""
     method = settings.method
     if method not in PIVOTING and not (method == "auto" and dense):
         return 0.0
