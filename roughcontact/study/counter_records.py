@@ -394,6 +394,8 @@ class _NoCounterBody(_Sources):
 
     heights, compliance = NO_HEIGHTS, NO_COMPLIANCE
     label = ""
+    #: E1 / E2 of a rigid body (as :attr:`JobCounter.modulus_ratio`).
+    modulus_ratio = 0.0
     #: Its name in the ``counter`` column of a study of counter bodies.
     name = "rigid smooth flat"
 

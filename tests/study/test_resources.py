@@ -92,13 +92,13 @@ def test_matrix_free_contact_runtime_in_proportion_to_n():
 
 def test_contact_memory_dense_and_matrix_free():
     n = 60 * 60
-    assert resources.contact_mem_mb(dense_job(), BUILD) == \
+    assert resources.contact_mem_mb(dense_job(), CG, BUILD) == \
         int(400 + (24 * n**2 + 80 * 60 * n) / 1e6)
     n = 256 * 256
     # the 64 x 64 coarse correction, not a 34 GB dense matrix
-    assert resources.contact_mem_mb(hybrid_job(), BUILD) == \
+    assert resources.contact_mem_mb(hybrid_job(), CG, BUILD) == \
         int(400 + (8 * 4096**2 + 240 * 20 * n) / 1e6)
-    assert resources.contact_mem_mb(hybrid_job(), BUILD) < 1000
+    assert resources.contact_mem_mb(hybrid_job(), CG, BUILD) < 1000
 
 
 def test_the_body_memory_limit_plans_the_model_of_every_estimate():
@@ -106,9 +106,10 @@ def test_the_body_memory_limit_plans_the_model_of_every_estimate():
     # body allows less than the dense build's estimated peak (about 0.9 GB)
     job = dense_job(operator=InfluenceModel.AUTO)
     tight = dataclasses.replace(BUILD, max_bytes=0.1e9)
-    assert resources.contact_mem_mb(job, BUILD) == resources.contact_mem_mb(dense_job(), BUILD)
+    assert resources.contact_mem_mb(job, CG, BUILD) == \
+        resources.contact_mem_mb(dense_job(), CG, BUILD)
     hybrid = hybrid_job(60, 60)
-    assert resources.contact_mem_mb(job, tight) == resources.contact_mem_mb(hybrid, BUILD)
+    assert resources.contact_mem_mb(job, CG, tight) == resources.contact_mem_mb(hybrid, CG, BUILD)
     assert resources.contact_seconds(job, CG, tight) == \
         pytest.approx(resources.contact_seconds(hybrid, CG, BUILD))
     # stored: the dense matrix, or the coarse correction bound (64^2 x 64^2 doubles)
@@ -119,8 +120,8 @@ def test_the_body_memory_limit_plans_the_model_of_every_estimate():
 def test_memory_and_time_grow_with_the_grid():
     grids = [16, 30, 60, 120]
     for small, large in zip(grids, grids[1:], strict=False):
-        assert resources.contact_mem_mb(dense_job(small), BUILD) < \
-            resources.contact_mem_mb(dense_job(large), BUILD)
+        assert resources.contact_mem_mb(dense_job(small), CG, BUILD) < \
+            resources.contact_mem_mb(dense_job(large), CG, BUILD)
         assert resources.contact_seconds(dense_job(small), CG, BUILD) < \
             resources.contact_seconds(dense_job(large), CG, BUILD)
         assert resources.surfaces_mem_mb(cell(small)) <= resources.surfaces_mem_mb(cell(large))

@@ -223,7 +223,7 @@ def _surfaces(plan, config, job):
 
 def _contact(plan, config, job):
     contact = plan.jobs[wildcard_values(job)["job"]]
-    return (resources.contact_mem_mb(contact, plan.build),
+    return (resources.contact_mem_mb(contact, plan.contact, plan.build),
             resources.contact_runtime(contact, plan.contact, plan.build))
 
 

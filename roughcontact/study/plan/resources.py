@@ -44,8 +44,9 @@ from roughcontact.study.config import (
 from roughcontact.study.contact_records import ContactJob
 from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.plan.checks import ConfigProblems
-from roughcontact.study.records import Generator, Geometry, InfluenceModel
+from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
 from roughcontact.study.settings import Study, load_study
+from roughcontact.surfaces.spectra import autocorrelation
 from roughcontact.units import GB
 
 #: The stored cost model of the source tree.
@@ -65,7 +66,8 @@ _REQUIRED = {
                 "matrix_free_floor_seconds", "memory_base_mb", "dense_matrices",
                 "dense_batch_arrays", "matrix_free_batch_arrays", "flow_solve_seconds",
                 "flow_exponent", "flow_memory_mb", "flow_memory_reference_elements",
-                "flow_memory_exponent", "flow_memory_floor_elements", "flow_field_arrays"),
+                "flow_memory_exponent", "flow_memory_floor_elements", "flow_field_arrays",
+                "pivot_batch_surfaces", "pivot_transient_factors", "contact_fraction_slope"),
     "influence": ("anchor_seconds", "anchor_peak_gb", "exponent", "memory_margin_mb"),
     "surfaces": ("reference_elements", "exact_seconds", "filter_seconds", "exponent",
                  "calibration_seconds",
@@ -339,26 +341,88 @@ def speed_vs_error_runtime(geometry: Geometry, report: SpeedReportSettings,
 # Memory
 
 
-def contact_mem_mb(job: ContactJob, build: BuildSettings, flow_directions=()) -> int:
-    """Peak memory [MB] of a contact job.
+#: Methods that factor ``C`` on each surface's contact set (block principal pivoting).
+PIVOTING = frozenset({"pivot", "exact"})
+
+
+def slope_per_height(cell) -> float:
+    """Root-mean-square slope of a surface cell's heights on its grid per unit of their
+    rms height [1/m]: the finite differences along x and y from the ACF of Eq 1,
+    ``sqrt(sum 2 (1 - R(spacing) / sigma^2) / spacing^2)``; nan where the plan does not
+    know the ACF (a measured cell, a cell of a spectrum)."""
+    if not isinstance(cell, GeneratedCell) or cell.spectrum is not None:
+        return math.nan
+    spec = cell.spec()
+    dx, dy = spec.spacing
+    try:
+        drops = 1.0 - autocorrelation(spec, dx, 0.0), 1.0 - autocorrelation(spec, 0.0, dy)
+    except ValueError:  # an ACF given by its spectrum
+        return math.nan
+    return math.sqrt(2.0 * drops[0] / dx**2 + 2.0 * drops[1] / dy**2)
+
+
+def contact_fraction_bound(job: ContactJob) -> float:
+    """Real contact area fraction a contact job's sweep may reach, at most 1.
+
+    The contact area grows about in proportion to the load, ``A / A0 = kappa P / (E*
+    h')`` (Bush, Gibson and Thomas 1975; Persson 2001: kappa 1.6-2.5 at small
+    fractions), ``h'`` the rms slope of the heights (:func:`slope_per_height` times
+    sigma); in the sweep's variable P L / (E sigma) (``job.pressure_end``, L the
+    block's thickness) the fraction is ``kappa (1 + E1 / E2) pressure_end / (L h' /
+    sigma)``, a compliant counter body lowering E* by ``1 + E1 / E2``. kappa is the
+    cost model's ``contact_fraction_slope``: 4, above kappa = A L h' / (P sigma) at the
+    last step of every measured job, P the sweep's end (3.2 at most; 0.6 on the paper
+    mesh; the last step overshoots the end by 1.1-2.1); a step's own kappa reaches 4.7
+    at 1-5 % contact, where the factors are a few MB. A cell whose slope the plan does
+    not know (measured, or of a spectrum) counts as full contact."""
+    slope = slope_per_height(job.surface)
+    if not math.isfinite(slope):
+        return 1.0
+    kappa = _MODEL["contact"]["contact_fraction_slope"] * (1.0 + job.counter.modulus_ratio)
+    return min(1.0, kappa * job.pressure_end / (job.geometry.thickness * slope))
+
+
+def pivot_factor_bytes(job: ContactJob, settings: ContactSettings, dense: bool) -> float:
+    """Bytes of the Cholesky factors block principal pivoting holds
+    (:mod:`roughcontact.contact.pivot`; method ``pivot`` or ``exact``, and ``auto`` on
+    a dense matrix): one of ``C`` on the contact set of each surface of a batch in
+    flight (``pivot_batch_surfaces``, the contact job's batch: 20), each (a n)^2
+    doubles at the contact fraction a (:func:`contact_fraction_bound`), and 2 more of
+    one surface while one is factored or extended (the block and its factor, the old
+    factor and the new). Measured on the seal study (60 x 60, 20 surfaces swept to
+    P L / (E sigma) = 128, 98-100 % contact at the end): 1.95 GB of factors held at
+    once, a peak of 2.19-2.53 GB in all against 0.73 GB counted without them."""
+    method = settings.method
+    if method not in PIVOTING and not (method == "auto" and dense):
+        return 0.0
+    fit = _MODEL["contact"]
+    contact_set = contact_fraction_bound(job) * job.geometry.grid[0] * job.geometry.grid[1]
+    factors = min(job.surface.count, fit["pivot_batch_surfaces"]) + fit["pivot_transient_factors"]
+    return factors * DOUBLE_BYTES * contact_set**2
+
+
+def contact_mem_mb(job: ContactJob, settings: ContactSettings, build: BuildSettings) -> int:
+    """Peak memory [MB] of a contact job solved with ``settings`` (the contact jobs').
 
     Dense model: E * C in double and single precision and the contact-set
     matrix of the stiffness (3 n^2 doubles at most), the batch of surfaces
     (10 (count, n) arrays) and 400 MB of interpreter and libraries (measured:
-    415 MB on 60 x 60, 167 MB on 30 x 30). Matrix-free model: the coarse
+    415 MB on 60 x 60, 167 MB on 30 x 30), and with block principal pivoting (the
+    default on a dense matrix) its factors on the contact sets
+    (:func:`pivot_factor_bytes`). Matrix-free model: the coarse
     correction (64^2 x 64^2 doubles at most) and FFT work arrays of the batch
     (30 (count, n) arrays: 4 padded copies per surface). A compliant counter body
     adds its model and, on a dense first body, the pair's matrix (2 n^2 doubles),
-    and its surfaces (count, n). With the flow on (``flow_directions``, the contact
-    settings' ``flow.directions``), its peak (:func:`flow_memory_bytes`) is added.
+    and its surfaces (count, n). With the flow on (``settings.flow.directions``), its
+    peak (:func:`flow_memory_bytes`) is added.
     """
     fit = _MODEL["contact"]
     nx, ny = job.geometry.grid
     n = nx * ny
     count = job.surface.count
     dense = _dense(job.geometry, build)
-    extra = job.counter.bytes(count, n, dense) + flow_memory_bytes((nx, ny), count,
-                                                                    flow_directions)
+    extra = (job.counter.bytes(count, n, dense) + pivot_factor_bytes(job, settings, dense)
+             + flow_memory_bytes((nx, ny), count, settings.flow.directions))
     if not dense:
         return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2 + extra
                    + fit["matrix_free_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
@@ -419,10 +483,11 @@ def audit_mem_mb(geometries, build: BuildSettings) -> int:
     return int(audit["memory_base_mb"] + audit["model_copies"] * largest / MB)
 
 
-def audit_verify_mem_mb(jobs, geometries, build: BuildSettings, flow_directions=()) -> int:
-    """Peak memory [MB] of audit_verify: the audit's or the largest contact job's (with
-    the flow of ``flow_directions``, as the jobs record it)."""
-    largest = max((contact_mem_mb(job, build, flow_directions) for job in jobs), default=0)
+def audit_verify_mem_mb(jobs, geometries, settings: ContactSettings,
+                        build: BuildSettings) -> int:
+    """Peak memory [MB] of audit_verify: the audit's or the largest contact job's (solved
+    with the contact jobs' ``settings``, the flow as the jobs record it)."""
+    largest = max((contact_mem_mb(job, settings, build) for job in jobs), default=0)
     return max(audit_mem_mb(geometries, build), largest)
 
 
@@ -501,8 +566,7 @@ class JobCost:
 #: its wildcards name (``job``, ``geometry``, ``pair``, ``auto``, ``cell``, ``gcgrid``).
 JOB_COSTS = MappingProxyType({
     "contact": JobCost(
-        lambda plan, w: contact_mem_mb(plan.jobs[w["job"]], plan.build,
-                                       plan.contact.flow.directions),
+        lambda plan, w: contact_mem_mb(plan.jobs[w["job"]], plan.contact, plan.build),
         lambda plan, w, a: contact_runtime(plan.jobs[w["job"]], plan.contact, plan.build, a)),
     "influence": JobCost(
         lambda plan, w: influence_mem_mb(plan.geometries[w["geometry"]], plan.build),
@@ -521,7 +585,7 @@ JOB_COSTS = MappingProxyType({
         lambda plan, w, a: audit_runtime(len(plan.audit_files(plan.jobs)), a)),
     "audit_verify": JobCost(
         lambda plan, w: audit_verify_mem_mb(plan.jobs.values(), plan.geometries.values(),
-                                            plan.build, plan.contact.flow.directions),
+                                            plan.contact, plan.build),
         lambda plan, w, a: audit_verify_runtime(plan.jobs.values(), plan.contact, plan.build,
                                                 plan.study.audit.verify_sample, a)),
     "influence_convergence": JobCost(
@@ -562,7 +626,7 @@ def predictions(plan) -> dict[str, dict[str, tuple[float, int]]]:
     settings, build = plan.contact, plan.build
     return {
         "contact": {key: (contact_seconds(job, settings, build),
-                            contact_mem_mb(job, build, settings.flow.directions))
+                            contact_mem_mb(job, settings, build))
                     for key, job in plan.jobs.items()},
         "influence": {k: (influence_seconds(g, build), influence_mem_mb(g, build))
                       for k, g in plan.geometries.items()},
@@ -638,8 +702,7 @@ def _report_memory(plan) -> dict[str, dict[str, int]]:
         out["audit"] = {"audit": audit_mem_mb(plan.geometries.values(), plan.build)}
         if study.audit.verify:
             out["audit_verify"] = {"audit_verify": audit_verify_mem_mb(
-                plan.jobs.values(), plan.geometries.values(), plan.build,
-                plan.contact.flow.directions)}
+                plan.jobs.values(), plan.geometries.values(), plan.contact, plan.build)}
     return out
 
 
