@@ -61,6 +61,10 @@ def test_contact_runtime_scales_with_surfaces_steps_grid_and_reach():
     # a sweep to P L / (E sigma) = 12 reaches three times the study's 4
     assert resources.contact_seconds(dense_job(pressure_end=12.0), CG, BUILD) == \
         pytest.approx(3 * base)
+    # pivoting: its steps stay about as cheap beyond the study's reach
+    pivot = dataclasses.replace(CG, method="pivot")
+    assert resources.contact_seconds(dense_job(pressure_end=12.0), pivot, BUILD) == \
+        pytest.approx(resources.contact_seconds(dense_job(), pivot, BUILD))
     # steepest descent: 3 times the products; tol 1e-12: 12 / 8 digits
     steepest = dataclasses.replace(CG, method="steepest")
     assert resources.contact_seconds(dense_job(), steepest, BUILD) == pytest.approx(3 * base)

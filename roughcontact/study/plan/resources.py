@@ -207,16 +207,22 @@ def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSett
     35-186 s per cell of 60 surfaces x 30 steps on 60 x 60 (paper mesh; the
     converged mesh needs fewer iterations) and 4 s on 30 x 30. A sweep beyond
     P L / (E sigma) = 4 (the study's) reaches larger contact fractions, where
-    CG needs more iterations: counted in proportion. With the flow on, each step's
+    CG needs more iterations: counted in proportion (not for a factoring method,
+    :func:`factoring`: the seal's jobs, swept to 128 by pivoting, took 37-43 s for 20
+    surfaces x 24 steps with the flow along x and y, against 1742 s counted so). With the flow on, each step's
     flow solves (:func:`flow_solve_seconds`, one per direction) are added.
     """
     solves = job.surface.count * settings.steps
     flow = solves * len(settings.flow.directions) * flow_solve_seconds(job.geometry.grid)
-    reach = max(1.0, job.pressure_end / _MODEL["contact"]["reference_reach"])
+    dense = _dense(job.geometry, build)
+    # beyond the study's reach CG needs more iterations; pivoting's steps stay about
+    # as cheap (the seal, swept to 128: 37-43 s a job of 480 steps, flow included)
+    reach = 1.0 if factoring(settings, dense) else max(
+        1.0, job.pressure_end / _MODEL["contact"]["reference_reach"])
     # a compliant counter body: more contact at the same pressure (cost_model.yaml)
     pair = job.counter.time_factor(_MODEL)
     grid = job.geometry.grid
-    if not _dense(job.geometry, build):
+    if not dense:
         return (solves * matrix_free_solve_seconds(grid) * tolerance_factor(settings)
                 * method_factor(settings) * reach * pair + flow)
     return solves * dense_solve_seconds(grid, settings) * reach * pair + flow
@@ -382,6 +388,13 @@ def contact_fraction_bound(job: ContactJob) -> float:
     return min(1.0, kappa * job.pressure_end / (job.geometry.thickness * slope))
 
 
+def factoring(settings: ContactSettings, dense: bool) -> bool:
+    """Whether the contact jobs' method factors ``C`` on the contact set (block principal
+    pivoting: ``pivot`` or ``exact``, and ``auto`` on a dense matrix) rather than
+    iterating with its products."""
+    return settings.method in PIVOTING or (settings.method == "auto" and dense)
+
+
 def pivot_factor_bytes(job: ContactJob, settings: ContactSettings, dense: bool) -> float:
     """Bytes of the Cholesky factors block principal pivoting holds
     (:mod:`roughcontact.contact.pivot`; method ``pivot`` or ``exact``, and ``auto`` on
@@ -392,13 +405,12 @@ def pivot_factor_bytes(job: ContactJob, settings: ContactSettings, dense: bool) 
     factor and the new). Measured on the seal study (60 x 60, 20 surfaces swept to
     P L / (E sigma) = 128, 98-100 % contact at the end): 1.95 GB of factors held at
     once, a peak of 2.19-2.53 GB in all against 0.73 GB counted without them."""
-    method = settings.method
-    if method not in PIVOTING and not (method == "auto" and dense):
+    if not factoring(settings, dense):
         return 0.0
     fit = _MODEL["contact"]
     contact_set = contact_fraction_bound(job) * job.geometry.grid[0] * job.geometry.grid[1]
-    factors = min(job.surface.count, fit["pivot_batch_surfaces"]) + fit["pivot_transient_factors"]
-    return factors * DOUBLE_BYTES * contact_set**2
+    held = min(job.surface.count, fit["pivot_batch_surfaces"]) + fit["pivot_transient_factors"]
+    return held * DOUBLE_BYTES * contact_set**2
 
 
 def contact_mem_mb(job: ContactJob, settings: ContactSettings, build: BuildSettings) -> int:
