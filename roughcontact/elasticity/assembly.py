@@ -222,6 +222,18 @@ def _axis_lattice(edges: tuple[float, ...], p: int) -> np.ndarray:
     return out
 
 
+def top_face_layout(mesh: HexMesh, grid) -> tuple[int, int, float, float]:
+    """How a mesh's top face covers the contact ``grid`` [nx, ny]: ``(r, p, dx, dy)``,
+    ``r x r`` finite-element faces of order ``p`` per contact element, whose sides are
+    ``dx`` and ``dy`` [m]; ValueError unless the mesh's plan refines the grid evenly."""
+    nx, ny = grid
+    ex, ey, _ = mesh.n_elements
+    if ex % nx or ey % ny or ex // nx != ey // ny:
+        raise ValueError(f"mesh plan {ex} x {ey} is not a refinement of the grid {nx} x {ny}")
+    return (ex // nx, mesh.order, mesh.x_edges[1] - mesh.x_edges[0],
+            mesh.y_edges[1] - mesh.y_edges[0])
+
+
 def top_face_operators(
     mesh: HexMesh, grid: tuple[int, int], base: str = "clamped"
 ) -> tuple[sp.csr_array, sp.csr_array]:
@@ -243,12 +255,7 @@ def top_face_operators(
     """
     nx, ny = grid
     ex, ey, _ = mesh.n_elements
-    if ex % nx or ey % ny or ex // nx != ey // ny:
-        raise ValueError(f"mesh plan {ex} x {ey} is not a refinement of the grid {nx} x {ny}")
-    r = ex // nx
-    p = mesh.order
-    dx = mesh.x_edges[1] - mesh.x_edges[0]
-    dy = mesh.y_edges[1] - mesh.y_edges[0]
+    r, p, dx, dy = top_face_layout(mesh, grid)
     face = reference_top_face(mesh.element, dx, dy)
     _, numbers, _ = numbered_slabs(mesh)
     top = numbers[-1][-1]

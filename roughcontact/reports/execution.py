@@ -22,7 +22,8 @@ from pathlib import Path
 
 from roughcontact.study.provenance import atomic_path
 
-__all__ = ["dead_writers", "execute_figure", "execute_notebook", "process_running", "remove_stale_temporaries"]
+__all__ = ["dead_writers", "execute_figure", "execute_notebook", "process_running",
+           "remove_stale_temporaries"]
 
 log = logging.getLogger(__name__)
 

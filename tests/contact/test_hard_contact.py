@@ -283,16 +283,23 @@ def test_tiny_iteration_limit_is_reported_not_hidden(block, method, max_iter, ca
     assert any("did not converge" in r.getMessage() for r in caplog.records)
 
 
-@pytest.mark.parametrize("method", ["steepest", "cg", "pcg"])
-def test_tiny_iteration_limit_is_retried_by_pivoting(block, method, caplog):
-    # an iterative method stopped by its limit is solved again by block principal
-    # pivoting on the dense matrix; the log names both attempts
+def _stopped_after_one_iteration(block, method, caplog):
+    """``(C, area, gap, d, result)``: a rough gap at its 30 % quantile solved by
+    ``method`` limited to one iteration, the warnings captured."""
     _, C, area = block
     gap = rough_gap(1, 1e-6)
     d = float(np.quantile(gap, 0.3))
     with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
         result = contact.solve(C, gap, d, element_area=area,
                                options=SolverOptions(method=method, max_iter=1))
+    return C, area, gap, d, result
+
+
+@pytest.mark.parametrize("method", ["steepest", "cg", "pcg"])
+def test_tiny_iteration_limit_is_retried_by_pivoting(block, method, caplog):
+    # an iterative method stopped by its limit is solved again by block principal
+    # pivoting on the dense matrix; the log names both attempts
+    C, area, gap, d, result = _stopped_after_one_iteration(block, method, caplog)
     reference = contact.solve(C, gap, d, element_area=area, options=SolverOptions(method="exact"))
     assert result.converged and result.residual <= result.tol
     np.testing.assert_array_equal(result.pressure, reference.pressure)
@@ -334,12 +341,7 @@ def test_tiny_iteration_limit_in_a_sweep_is_flagged(block, caplog):
 def test_a_fallbacks_answer_names_its_method_and_is_logged(block, method, caplog):
     # the pivoting fallback's answer is recorded as its own, not the method asked for,
     # in a single solve and per step of a sweep, and a warning names both methods
-    _, C, area = block
-    gap = rough_gap(1, 1e-6)
-    d = float(np.quantile(gap, 0.3))
-    with caplog.at_level(logging.WARNING, logger="roughcontact.contact"):
-        result = contact.solve(C, gap, d, element_area=area,
-                               options=SolverOptions(method=method, max_iter=1))
+    C, area, gap, d, result = _stopped_after_one_iteration(block, method, caplog)
     assert result.converged and result.method == "exact"
     fell_back = [r.getMessage() for r in caplog.records if "fallback" in r.getMessage()]
     assert len(fell_back) == 1

@@ -15,8 +15,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 from roughcontact.hashes import file_sha256  # noqa: E402
 from roughcontact.reports.study_figures import (  # noqa: E402
     cell_labels,
-    load_percolation,
     leakage_answers,
+    load_percolation,
     load_pressure_drops,
     open_levels_sentence,
     plot_leakage,

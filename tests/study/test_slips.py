@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 from snakemake.common.configfile import _load_configfile
+from test_counterface_checks import follow  # a config with an advice "key: value" set
 
 from roughcontact.study.config import ConfigError, validated, yaml_number_forms
 from roughcontact.study.plan.cells import study_plan
@@ -48,20 +49,6 @@ def refusal(cfg: dict) -> list[str]:
         plan(cfg)
     assert "no job was started" in str(raised.value)
     return raised.value.problems
-
-
-def follow(cfg: dict, advice: str) -> dict:
-    """``cfg`` with the ``a.b[1].c: value`` of an advice set (the value read as YAML)."""
-    import yaml
-
-    key, value = advice.split(": ", 1)
-    parts = [int(p) if p.isdigit() else p for p in re.split(r"\.|\[|\]\.?", key) if p != ""]
-    out = copy.deepcopy(cfg)
-    node = out
-    for part in parts[:-1]:
-        node = node.setdefault(part, {}) if isinstance(part, str) else node[part]
-    node[parts[-1]] = yaml.safe_load(value)
-    return out
 
 
 def guesses(problem: str) -> list[str]:

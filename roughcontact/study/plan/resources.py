@@ -209,8 +209,9 @@ def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSett
     P L / (E sigma) = 4 (the study's) reaches larger contact fractions, where
     CG needs more iterations: counted in proportion (not for a factoring method,
     :func:`factoring`: the seal's jobs, swept to 128 by pivoting, took 37-43 s for 20
-    surfaces x 24 steps with the flow along x and y, against 1742 s counted so). With the flow on, each step's
-    flow solves (:func:`flow_solve_seconds`, one per direction) are added.
+    surfaces x 24 steps with the flow along x and y, against 1742 s counted so). With
+    the flow on, each step's flow solves (:func:`flow_solve_seconds`, one per
+    direction) are added.
     """
     solves = job.surface.count * settings.steps
     flow = solves * len(settings.flow.directions) * flow_solve_seconds(job.geometry.grid)

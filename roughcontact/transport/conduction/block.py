@@ -57,6 +57,7 @@ import scipy.sparse as sp
 from skfem import Basis, FacetBasis, LinearForm, MeshHex, asm
 from skfem.models.poisson import laplace
 
+from roughcontact.elasticity.assembly import top_face_layout
 from roughcontact.elasticity.dofs import dof_map
 from roughcontact.elasticity.elements import ELEMENTS
 from roughcontact.elasticity.influence import BlockGeometry, build_mesh
@@ -161,12 +162,7 @@ def top_face_flux(mesh: HexMesh, grid: tuple[int, int]) -> sp.csr_array:
     """
     nx, ny = grid
     ex, ey, _ = mesh.n_elements
-    if ex % nx or ey % ny or ex // nx != ey // ny:
-        raise ValueError(f"mesh plan {ex} x {ey} is not a refinement of the grid {nx} x {ny}")
-    r = ex // nx
-    p = mesh.order
-    dx = mesh.x_edges[1] - mesh.x_edges[0]
-    dy = mesh.y_edges[1] - mesh.y_edges[0]
+    r, p, dx, dy = top_face_layout(mesh, grid)
     kind = mesh.element_type
     dz = 0.5 * (dx + dy)
     box = _box(dx, dy, dz)
