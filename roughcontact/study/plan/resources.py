@@ -401,10 +401,11 @@ def pivot_factor_bytes(job: ContactJob, settings: ContactSettings, dense: bool) 
     (:mod:`roughcontact.contact.pivot`; method ``pivot`` or ``exact``, and ``auto`` on
     a dense matrix): one of ``C`` on the contact set of each surface of a batch in
     flight (``pivot_batch_surfaces``, the contact job's batch: 20), each (a n)^2
-    doubles at the contact fraction a (:func:`contact_fraction_bound`), and 2 more of
-    one surface while one is factored or extended (the block and its factor, the old
-    factor and the new). Measured on the seal study (60 x 60, 20 surfaces swept to
-    P L / (E sigma) = 128, 98-100 % contact at the end): 1.95 GB of factors held at
+    doubles at the contact fraction a (:func:`contact_fraction_bound`), and 3 more
+    (``pivot_transient_factors``: the block and its factor, or the old factor and the
+    new, while one surface is factored or extended, and their work arrays). Measured
+    on the seal study (60 x 60, 20 surfaces swept to P L / (E sigma) = 128, 98-100 %
+    contact at the end): 1.95 GB of factors held at
     once, a peak of 2.19-2.53 GB in all against 0.73 GB counted without them."""
     if not factoring(settings, dense):
         return 0.0
