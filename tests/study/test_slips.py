@@ -304,11 +304,14 @@ def test_a_study_smaller_than_four_elements_is_refused_and_its_advice_plans(size
 
 def test_a_kurtosis_the_calibration_cannot_draw_on_a_small_window_is_refused_in_words():
     """On 8 x 8 over 1.2 mm with b = 0.5 mm (0.42 L) the process near the filter's bound
-    at Sk 2 gives no finite sample moments: refused in words (not a nan skewness), and
-    the generator it names plans."""
+    at Sk 2 gives no finite sample moments on the way (where the calibration's steps go
+    depends on the CPU's rounding): refused in words, either as not calibrated or with
+    the bound it found (never a nan skewness), and the generator it names plans."""
     cfg = raw(moments=[[2.0, 6.0]])
     (problem,) = refusal(cfg)
-    assert "nan" not in problem and "could not be calibrated for the filter" in problem
+    assert not re.search(r"\bnan\b", problem, flags=re.IGNORECASE)
+    assert ("could not be calibrated for the filter" in problem
+            or "Raise kurt to at least" in problem)
     assert "method='exact'" in problem
     cfg["surfaces"]["method"] = "exact"
     plan(cfg)
