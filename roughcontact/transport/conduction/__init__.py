@@ -15,14 +15,18 @@ constriction resistances, bodies in series). A walk::
     >>> bool(abs(spot.conductance / (4 * 50.0 * 4.0 * 1e-3 / 16) - 1) < 0.06)  # Holm, 4 k a
     True
 
-Nothing here knows about surfaces or the workflow; a probe of the contact
-sweep and the study's settings come later.
+``probe`` is what a contact sweep records of it at every step
+(:class:`ConductanceProbe`, a :class:`~roughcontact.contact.probes.Probe`: the
+conductance of each solution's contact set ``p > 0``; its columns' names and units
+live there only). Nothing else here knows about surfaces or the workflow; the
+study's settings come later.
 """
 
-from roughcontact.transport.conduction import block, halfspace, spot
+from roughcontact.transport.conduction import block, halfspace, probe, spot
 from roughcontact.transport.conduction.block import *  # noqa: F403 (block.__all__)
 from roughcontact.transport.conduction.halfspace import *  # noqa: F403 (halfspace.__all__)
+from roughcontact.transport.conduction.probe import *  # noqa: F403 (probe.__all__)
 from roughcontact.transport.conduction.spot import *  # noqa: F403 (spot.__all__)
 
 #: The public names of the room's modules.
-__all__ = [*block.__all__, *halfspace.__all__, *spot.__all__]
+__all__ = [*block.__all__, *halfspace.__all__, *probe.__all__, *spot.__all__]

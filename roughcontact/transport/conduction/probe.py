@@ -1,0 +1,355 @@
+"""What a contact sweep records of the conductance across each of its solutions' spots.
+
+A :class:`ConductanceProbe` is a probe (:class:`~roughcontact.contact.probes.Probe`)
+a sweep is given through its interface grid
+(:class:`~roughcontact.contact.interface.InterfaceGrid`, ``probes``). At every step it
+takes each surface's contact set, the elements with ``p > 0`` (the same in a
+dimensionless sweep and in SI: the pressure's scale does not move its support), and
+solves the spot conductance through the thermal body's influence
+(:func:`~roughcontact.transport.conduction.spot.spot_conductance`'s equation, ``R_AA q
+= 1``, ``C = dA 1^T q``, by the tangent stiffness's CG). The body is a value:
+
+:class:`HalfSpaceBody`
+    a half-space, periodic (FFT; the face's mean temperature the reference, so the
+    conductance is the constriction's alone) or free (the zero-padded FFT, or the
+    dense element integral);
+:class:`BlockBody`
+    the finite block of the elastic model
+    (:class:`~roughcontact.elasticity.influence.BlockGeometry`), isothermal base,
+    insulated sides (:func:`~roughcontact.transport.conduction.block.unit_conductivity_influence`).
+
+The counter body is a perfect conductor (isothermal face). Two bodies of the same
+kind in series have the influence ``R_unit (1/k1 + 1/k2)`` on half-spaces: give the
+series conductivity ``k1 k2 / (k1 + k2)``.
+
+The influence is built once per grid for unit conductivity, ``k R`` [m] (it depends
+on the geometry only), kept on the value (not in its settings), and one CG per
+surface and step serves both quantities: the thermal conductance is ``k C_1`` and the
+electrical resistance ``rho_e / C_1`` (``C_1`` [m] the unit-conductivity
+conductance). The grid spacing the sweep passes is in metres in both forms of a sweep,
+so every column is in SI units as recorded (``length_power`` 0).
+
+Columns (those of the thermal quantity with a conductivity, the electrical one with a
+resistivity):
+
+:data:`CONDUCTANCE`
+    ``C`` [W/K]: 0 without contact; inf at full contact of a periodic half-space (no
+    constriction left, and a half-space has no bulk);
+:data:`CONDUCTANCE_PER_AREA`
+    ``h_c = C / A_n`` [W/(m^2 K)], likewise;
+:data:`BULK_SHARE`
+    ``R_bulk C`` [-], the bulk's share of the resistance (0 on half-spaces and
+    without contact; 1 at full contact of a block);
+:data:`ELECTRICAL_RESISTANCE`
+    ``1 / C_e`` [Ohm]: inf without contact (recorded only at zero load, which the
+    aggregation never reads), 0 at full contact of a periodic half-space;
+:data:`CONVERGED`
+    the CG met its tolerance; where it did not, the step's conductances and
+    resistance are recorded as NaN (the aggregation leaves them out) and a warning
+    on the ``roughcontact.transport`` logger names the surfaces.
+
+These names are the conductance's only spelling.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+from roughcontact.contact.cg import default_max_iter
+from roughcontact.contact.checks import as_operator
+from roughcontact.contact.probes import Column, SolvedFields
+from roughcontact.contact.products import Products
+from roughcontact.contact.stiffness import free_set_cg
+from roughcontact.elasticity.influence import BlockGeometry, MeshSpec
+from roughcontact.transport.conduction.block import unit_conductivity_influence
+from roughcontact.transport.conduction.halfspace import (
+    free_thermal_halfspace,
+    halfspace_thermal_influence,
+    periodic_thermal_halfspace,
+)
+from roughcontact.transport.conduction.spot import full_contact_resistance
+
+__all__ = ["BULK_SHARE", "CONDUCTANCE", "CONDUCTANCE_PER_AREA", "CONVERGED",
+           "ELECTRICAL_RESISTANCE", "BlockBody", "ConductanceProbe", "HalfSpaceBody",
+           "body_from_params", "conductance_probe_from_params"]
+
+logger = logging.getLogger("roughcontact.transport")
+
+#: The columns' names (module docstring).
+CONDUCTANCE, CONDUCTANCE_PER_AREA, BULK_SHARE, ELECTRICAL_RESISTANCE, CONVERGED = (
+    "thermal_conductance", "thermal_conductance_per_area", "conduction_bulk_share",
+    "electrical_resistance", "conduction_converged")
+#: Relative agreement of a block's grid spacing with the sweep's.
+SPACING_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class HalfSpaceBody:
+    """A half-space's face (module docstring).
+
+    Parameters
+    ----------
+    periodic : bool
+        Periodic (FFT, mean temperature the reference) or free.
+    dense : bool
+        Free only: the dense element integral
+        (:func:`~roughcontact.transport.conduction.halfspace.halfspace_thermal_influence`,
+        ``n^2`` numbers) instead of the zero-padded FFT (the default).
+    """
+
+    name: ClassVar[str] = "halfspace"
+
+    periodic: bool = False
+    dense: bool = False
+
+    def __post_init__(self):
+        for key in ("periodic", "dense"):
+            if not isinstance(getattr(self, key), bool | np.bool_):
+                raise ValueError(f"body.{key} must be true or false, got "
+                                 f"{getattr(self, key)!r}")
+        if self.periodic and self.dense:
+            raise ValueError("body.dense is for a free half-space: set periodic or dense "
+                             "false")
+
+    def unit_influence(self, grid, spacing):
+        """``k R`` [m] on ``grid`` ``(nx, ny)`` of element sides ``spacing`` [m]."""
+        size = (grid[0] * spacing[0], grid[1] * spacing[1])
+        if self.periodic:
+            return periodic_thermal_halfspace(grid, size, 1.0)
+        if self.dense:
+            return halfspace_thermal_influence(grid, size, 1.0)
+        return free_thermal_halfspace(grid, size, 1.0)
+
+    def unit_bulk_resistance(self, operator, tol: float) -> float:
+        """The bulk resistance times ``k`` [1/m]: 0, a half-space has none."""
+        return 0.0
+
+    @property
+    def unbounded_at_full_contact(self) -> bool:
+        """A periodic half-space's full contact has no resistance at all."""
+        return self.periodic
+
+    def params(self) -> dict:
+        return {"body": self.name, "periodic": bool(self.periodic), "dense": bool(self.dense)}
+
+
+@dataclass(frozen=True)
+class BlockBody:
+    """The finite block of the elastic model (module docstring).
+
+    Parameters
+    ----------
+    geometry : BlockGeometry
+        Plan size, thickness, contact grid and mesh (``E``, ``nu``, ``base`` unused).
+    solver : {"auto", "pardiso", "superlu"}
+        Sparse solver of the condensation.
+    """
+
+    name: ClassVar[str] = "block"
+    unbounded_at_full_contact: ClassVar[bool] = False
+
+    geometry: BlockGeometry
+    solver: str = "auto"
+
+    def __post_init__(self):
+        if not isinstance(self.geometry, BlockGeometry):
+            raise ValueError(f"body.geometry must be a BlockGeometry, got "
+                             f"{type(self.geometry).__name__}")
+
+    def unit_influence(self, grid, spacing):
+        """``k R`` [m] of the block; ``grid`` and ``spacing`` must be its own."""
+        geom = self.geometry
+        own = (geom.size[0] / geom.grid[0], geom.size[1] / geom.grid[1])
+        if tuple(grid) != tuple(geom.grid) or not np.allclose(spacing, own,
+                                                              rtol=SPACING_RTOL, atol=0.0):
+            raise ValueError(
+                f"body.geometry has grid {geom.grid} of elements {own} m, the sweep's "
+                f"fields grid {tuple(grid)} of elements {tuple(spacing)} m: give the "
+                f"block the sweep's grid and size")
+        return unit_conductivity_influence(geom, solver=self.solver)
+
+    def unit_bulk_resistance(self, operator, tol: float) -> float:
+        """The bulk resistance times ``k`` [1/m]: full contact's, ``L / A_n``."""
+        return full_contact_resistance(operator, tol=tol)
+
+    def params(self) -> dict:
+        geom = self.geometry
+        mesh = geom.mesh if isinstance(geom.mesh, str) else dataclasses.asdict(geom.mesh)
+        return {"body": self.name, "size": list(geom.size), "thickness": geom.thickness,
+                "grid": list(geom.grid), "mesh": mesh, "solver": self.solver}
+
+
+def body_from_params(params: dict) -> HalfSpaceBody | BlockBody:
+    """The body of stored settings (``params()`` of :class:`HalfSpaceBody` or
+    :class:`BlockBody`)."""
+    name = params.get("body")
+    if name == HalfSpaceBody.name:
+        return HalfSpaceBody(periodic=bool(params["periodic"]), dense=bool(params["dense"]))
+    if name == BlockBody.name:
+        mesh = params["mesh"]
+        geometry = BlockGeometry(size=tuple(params["size"]), thickness=params["thickness"],
+                                 grid=tuple(params["grid"]),
+                                 mesh=mesh if isinstance(mesh, str) else MeshSpec(**mesh))
+        return BlockBody(geometry, solver=str(params["solver"]))
+    raise ValueError(f"body.body must be one of ('{HalfSpaceBody.name}', "
+                     f"'{BlockBody.name}'), got {name!r}")
+
+
+def _check_material(key: str, value, unit: str):
+    """``value`` as a finite positive float, or None when not given."""
+    if value is None:
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not (math.isfinite(number) and number > 0.0):
+        raise ValueError(f"{key} must be a finite positive number [{unit}] or absent, "
+                         f"got {value!r}")
+    return number
+
+
+@dataclass(frozen=True)
+class ConductanceProbe:
+    """The conductance a sweep records at every step (module docstring).
+
+    Parameters
+    ----------
+    body : HalfSpaceBody or BlockBody
+        The body the heat or current enters through the spots.
+    conductivity : float, optional
+        Thermal conductivity ``k`` [W/(m K)]: records the thermal columns.
+    resistivity : float, optional
+        Electrical resistivity ``rho_e`` [Ohm m]: records the electrical resistance.
+        At least one of the two.
+    tol : float
+        Estimated relative error of ``C`` at which the CG stops.
+    """
+
+    #: The name its settings are stored under (:class:`~roughcontact.contact.probes.Probe`).
+    kind: ClassVar[str] = "conductance"
+
+    body: HalfSpaceBody | BlockBody
+    conductivity: float | None = None
+    resistivity: float | None = None
+    tol: float = 1e-10
+    _influences: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        if not isinstance(self.body, HalfSpaceBody | BlockBody):
+            raise ValueError(f"body must be a HalfSpaceBody or a BlockBody, got "
+                             f"{type(self.body).__name__}")
+        conductivity = _check_material("conductivity", self.conductivity, "W/(m K)")
+        resistivity = _check_material("resistivity", self.resistivity, "Ohm m")
+        if conductivity is None and resistivity is None:
+            raise ValueError("conductivity or resistivity must be given (a thermal "
+                             "conductivity [W/(m K)], an electrical resistivity [Ohm m], "
+                             "or both): the probe has nothing to record without one")
+        tol = _check_material("tol", self.tol, "-")
+        if tol is None or tol >= 1.0:
+            raise ValueError(f"tol must be in (0, 1), got {self.tol!r}")
+        object.__setattr__(self, "conductivity", conductivity)
+        object.__setattr__(self, "resistivity", resistivity)
+        object.__setattr__(self, "tol", tol)
+
+    @property
+    def columns(self) -> tuple[Column, ...]:
+        """Its columns (module docstring): the thermal ones with a conductivity, the
+        electrical resistance with a resistivity, then the CG's convergence."""
+        thermal = (
+            Column(CONDUCTANCE, "W/K",
+                   "C, thermal conductance of the contact spots (isothermal spots, no flux "
+                   "elsewhere, perfectly conducting counter body; 0 without contact, inf at "
+                   "full contact of a periodic half-space, NaN where the CG did not "
+                   "converge)"),
+            Column(CONDUCTANCE_PER_AREA, "W/(m^2 K)",
+                   "h_c = C / A_n, thermal contact conductance per nominal area (0 without "
+                   "contact)"),
+            Column(BULK_SHARE, "1",
+                   "R_bulk C, the bulk's share of the resistance (0 on half-spaces and "
+                   "without contact, 1 at full contact of a block)"),
+        ) if self.conductivity is not None else ()
+        electrical = (
+            Column(ELECTRICAL_RESISTANCE, "Ohm",
+                   "electrical contact resistance 1 / C_e (inf without contact, at zero "
+                   "load only; 0 at full contact of a periodic half-space; NaN where the "
+                   "CG did not converge)"),
+        ) if self.resistivity is not None else ()
+        return (*thermal, *electrical,
+                Column(CONVERGED, "1", "share of surfaces whose conductance CG met its "
+                       "tolerance", dtype=bool))
+
+    def params(self) -> dict:
+        """Its settings as plain values (a stored file's record of what was solved)."""
+        return {"body": self.body.params(), "conductivity": self.conductivity,
+                "resistivity": self.resistivity, "tol": self.tol}
+
+    def influence(self, grid, spacing):
+        """The body's ``k R`` [m] on ``grid`` ``(nx, ny)`` of sides ``spacing`` [m] and its
+        bulk resistance times ``k`` [1/m], built once and kept."""
+        key = (tuple(int(g) for g in grid), tuple(float(s) for s in spacing))
+        if key not in self._influences:
+            operator = as_operator(self.body.unit_influence(*key), key[1][0] * key[1][1])
+            self._influences[key] = (operator,
+                                     self.body.unit_bulk_resistance(operator, self.tol))
+        return self._influences[key]
+
+    def _unit_conductance(self, operator, contact):
+        """``(C_1, converged)`` (m,) of the contact sets ``contact`` (m, n): ``dA 1^T
+        (k R_AA)^-1 1`` [m] by CG on every set together (0 for an empty set, inf for a
+        full one where the body has no resistance there)."""
+        m, n = contact.shape
+        unit = np.zeros(m)
+        converged = np.ones(m, dtype=bool)
+        full = contact.all(axis=1) & self.body.unbounded_at_full_contact
+        unit[full] = np.inf
+        rows = np.flatnonzero(contact.any(axis=1) & ~full)
+        if rows.size:
+            solution = free_set_cg(Products(operator), contact[rows], np.zeros((rows.size, n)),
+                                   self.tol, default_max_iter(n))
+            unit[rows] = operator.element_area * solution.total
+            converged[rows] = solution.converged
+        return unit, converged
+
+    def measure(self, fields: SolvedFields) -> dict:
+        """The columns (module docstring) of the solutions of ``fields``: the contact set
+        ``pressure > 0`` of every field (..., ny, nx), on elements of sides ``spacing``
+        [m]; name -> array of the leading shape."""
+        pressure = np.asarray(fields.pressure)
+        lead, (ny, nx) = pressure.shape[:-2], pressure.shape[-2:]
+        operator, unit_bulk = self.influence((nx, ny), fields.spacing)
+        contact = (pressure > 0.0).reshape(-1, nx * ny)
+        unit, converged = self._unit_conductance(operator, contact)
+        unit = np.where(converged, unit, np.nan)
+        out = {}
+        if self.conductivity is not None:
+            conductance = self.conductivity * unit
+            out[CONDUCTANCE] = conductance.reshape(lead)
+            out[CONDUCTANCE_PER_AREA] = (conductance / (operator.element_area * nx * ny)
+                                         ).reshape(lead)
+            out[BULK_SHARE] = (unit_bulk * unit if unit_bulk > 0.0 else np.where(
+                np.isnan(unit), np.nan, 0.0)).reshape(lead)
+        if self.resistivity is not None:
+            with np.errstate(divide="ignore"):
+                out[ELECTRICAL_RESISTANCE] = (self.resistivity / unit).reshape(lead)
+        out[CONVERGED] = converged.reshape(lead)
+        if not converged.all():
+            where = np.flatnonzero(~converged)
+            logger.warning(
+                "conductance CG did not reach tol %.3g for %d of %d fields (indices %s); "
+                "their conductance recorded as NaN, flagged in %s", self.tol, where.size,
+                converged.size, where[:10].tolist(), CONVERGED)
+        return out
+
+
+def conductance_probe_from_params(params: dict) -> ConductanceProbe:
+    """The probe of stored settings (:meth:`ConductanceProbe.params`)."""
+    return ConductanceProbe(body_from_params(params["body"]),
+                            conductivity=params.get("conductivity"),
+                            resistivity=params.get("resistivity"), tol=float(params["tol"]))
