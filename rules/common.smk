@@ -10,7 +10,7 @@ import re
 from snakemake.exceptions import IncompleteCheckpointException, WorkflowError
 
 from roughcontact.study import layout
-from roughcontact.study.plan import resources
+from roughcontact.study.plan import machine, resources
 from roughcontact.study.plan.cells import (
     figure_aggregates,
     figure_caption,
@@ -33,10 +33,10 @@ NOTEBOOKS = os.path.join(workflow.basedir, "notebooks")
 # and every job's memory, reports included, within what a job may use (job_memory_gb)
 try:
     PLAN = study_plan(STUDY)
-    resources.check_machine(PLAN)
+    machine.check_machine(PLAN)
 except ConfigProblems as err:
     raise WorkflowError(str(err)) from None
-resources.warn_long_jobs(PLAN)  # a job estimated beyond a day, named once
+machine.warn_long_jobs(PLAN)  # a job estimated beyond a day, named once
 
 
 wildcard_constraints:
@@ -291,7 +291,7 @@ def _on_demand_fits(kind):
     """Refuse an on-demand report (asked for: its job is being planned) that would not
     fit the memory a job may use."""
     try:
-        resources.check_machine(PLAN, kinds=(kind,))
+        machine.check_machine(PLAN, kinds=(kind,))
     except ConfigProblems as err:
         raise WorkflowError(str(err)) from None
 

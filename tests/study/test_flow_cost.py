@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from roughcontact.study.config import validated
-from roughcontact.study.plan import resources
+from roughcontact.study.plan import machine, resources
 from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.settings import Study
 
@@ -119,7 +119,7 @@ def test_a_job_planned_beyond_a_day_is_named_once_with_what_to_change(caplog):
     (job,) = plan.jobs.values()
     caplog.clear()  # the plan's own warnings
     with caplog.at_level(logging.WARNING, logger="roughcontact"):
-        resources.warn_long_jobs(plan)
+        machine.warn_long_jobs(plan)
     (record,) = [r for r in caplog.records if r.levelno == logging.WARNING]
     text = record.getMessage()
     assert text.startswith("Jobs planned to run longer than a day")
@@ -136,8 +136,8 @@ def test_the_advice_followed_brings_the_job_within_a_day(change, caplog):
     config = flow_config(1024, count=2) if change == "grid" else flow_config(4096, count=1)
     config["contact"]["steps"] = 5
     plan = plan_of(config)
-    assert resources.long_jobs(plan) == []
+    assert machine.long_jobs(plan) == []
     caplog.clear()  # the plan's own warnings
     with caplog.at_level(logging.WARNING, logger="roughcontact"):
-        resources.warn_long_jobs(plan)
+        machine.warn_long_jobs(plan)
     assert not [r for r in caplog.records if r.levelno == logging.WARNING]

@@ -15,7 +15,7 @@ from roughcontact.study.config import (
     validated,
 )
 from roughcontact.study.contact_records import ContactJob
-from roughcontact.study.plan import resources
+from roughcontact.study.plan import machine, resources
 from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
@@ -213,13 +213,13 @@ def test_jobs_planned_beyond_the_machine_are_named_with_the_keys_to_change():
     config = yaml.safe_load(quick.read_text())
     validate(config, str(resources.SCHEMA_FILE))
     plan = study_plan(Study.from_config(config))
-    planned = resources.planned_memory(plan)
+    planned = machine.planned_memory(plan)
     # the study's jobs and, beside them, the configured report and the audit
     assert {"contact", "influence", "surfaces", "influence_convergence", "audit"} <= set(planned)
     largest = max(mem for jobs in planned.values() for mem in jobs.values())
-    assert resources.machine_problems(plan, total_mb=largest) == []
+    assert machine.machine_problems(plan, total_mb=largest) == []
     contact = max(resources.predictions(plan)["contact"].values())[1]
-    problems = resources.machine_problems(plan, total_mb=contact - 1)
+    problems = machine.machine_problems(plan, total_mb=contact - 1)
     by_kind = {p.split(" job ")[0]: p for p in problems}
     assert "contact" in by_kind and "body.operator: auto" in by_kind["contact"]
     assert "more than the limit of" in by_kind["contact"]
@@ -244,32 +244,32 @@ def huge_grid_config(**extra):
 def test_a_report_beyond_the_machine_is_refused_before_any_job():
     config = validated(huge_grid_config(job_memory_gb=64))
     with pytest.raises(ConfigProblems) as err:
-        resources.check_machine(plan_of(config))
+        machine.check_machine(plan_of(config))
     (problem,) = err.value.problems
     assert problem.startswith("influence_convergence job influence_convergence: planned "
                               "6.76 PB of memory, more than job_memory_gb = 64. Remove "
                               "reports.influence_convergence")
     # the advice, followed: without the report the plan fits
     del config["reports"]["influence_convergence"]
-    resources.check_machine(plan_of(config))
-    assert "influence_convergence" not in resources.planned_memory(plan_of(config))
+    machine.check_machine(plan_of(config))
+    assert "influence_convergence" not in machine.planned_memory(plan_of(config))
 
 
 def test_a_report_made_on_demand_is_refused_only_when_asked_for():
     config = validated(huge_grid_config(job_memory_gb=64))
     del config["reports"]["influence_convergence"]
     plan = plan_of(config)
-    resources.check_machine(plan)  # the default target fits
+    machine.check_machine(plan)  # the default target fits
     with pytest.raises(ConfigProblems, match=r"speed_vs_error job speed_vs_error: planned "
                                              r"[\d.]+ PB .* reports.speed_vs_error.grids"):
-        resources.check_machine(plan, kinds=("speed_vs_error",))
+        machine.check_machine(plan, kinds=("speed_vs_error",))
 
 
 def test_the_memory_a_job_may_use_is_this_machines_unless_configured():
     config = validated(huge_grid_config())
     assert config["job_memory_gb"] is None
-    limit, source = resources.memory_limit_mb(Study.from_config(config))
-    assert limit == resources.machine_memory_mb() and source.startswith("this machine's ")
+    limit, source = machine.memory_limit_mb(Study.from_config(config))
+    assert limit == machine.machine_memory_mb() and source.startswith("this machine's ")
     config["job_memory_gb"] = 2.5
-    assert resources.memory_limit_mb(Study.from_config(config)) == (2500.0,
+    assert machine.memory_limit_mb(Study.from_config(config)) == (2500.0,
                                                                     "job_memory_gb = 2.5")

@@ -20,7 +20,7 @@ from test_counterface_checks import follow  # a config with an advice "key: valu
 from roughcontact.study.config import ConfigError, validated, yaml_number_forms
 from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.plan.checks import ConfigProblems
-from roughcontact.study.plan.resources import machine_problems
+from roughcontact.study.plan.machine import machine_problems
 from roughcontact.study.settings import Study
 
 SWEEP = {"sigma_um": 10.0, "b_mm": 0.5, "pressure_MPa": [0.1, 2.0], "count": 2}
