@@ -348,12 +348,11 @@ def open_levels_sentence(tables, drops) -> str:
     return "; ".join(parts) + "." if parts else ""
 
 
-def leakage_answers(tables, thresholds, drops) -> str:
-    """The leakage figure's numbers for the report's caption: each cell's sealing
-    pressure with its band (:func:`sealing_sentence`) and the open levels
-    (:func:`open_levels_sentence`), one paragraph each."""
-    return "\n\n".join(text for text in (sealing_sentence(tables, thresholds),
-                                          open_levels_sentence(tables, drops)) if text) + "\n"
+def leakage_answers(tables, thresholds) -> str:
+    """The leakage figure's numbers for the report's caption, those only the run knows:
+    each cell's sealing pressure with its band (:func:`sealing_sentence`; the open levels
+    the caption gives from the configuration, :mod:`roughcontact.study.plan.captions`)."""
+    return sealing_sentence(tables, thresholds) + "\n"
 
 
 def _mark_sealing(row_axes, thresholds, cell, color: str, directions, label: str) -> list:
