@@ -18,6 +18,7 @@ from roughcontact.study.plan.cells import (
     study_plan,
 )
 from roughcontact.study.plan.checks import ConfigProblems
+from roughcontact.study.probes import study_probe_params
 from roughcontact.study.provenance import canonical_json
 from roughcontact.study.records import InfluenceModel
 from roughcontact.study.settings import Study, thawed

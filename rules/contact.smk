@@ -47,8 +47,9 @@ rule aggregate:
     params:
         cells=get_aggregate_cells,
         levels=config["contact"]["pressure_levels"],
-        # the seal whose leak rate the table gives (empty with the flow off)
-        flow=canonical(STUDY.flow.params()),
+        # the probes' study-side settings by kind (the seal whose leak rate the table
+        # gives, the conductance's materials; empty with every probe off)
+        probes=canonical(study_probe_params(STUDY.probes)),
         # version of the stored layout (2: the sidecar holds the tables' SHA-256; 3: the
         # validity table against the hardness)
         layout=3,

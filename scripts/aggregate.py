@@ -2,10 +2,9 @@
 
 from roughcontact.study import layout
 from roughcontact.study.contact_records import StudyCell
-from roughcontact.study.flow_settings import FlowSettings
 from roughcontact.study.jobs.aggregation import aggregate_study
 from roughcontact.study.logs import route_logging
-from roughcontact.study.probes import study_probes
+from roughcontact.study.probes import study_probes_from_params
 from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
@@ -23,5 +22,5 @@ aggregate_study(
     snakemake.output.meta,
     run=RunInfo.of(snakemake.config),
     validity_path=snakemake.output.validity,
-    probes=study_probes(FlowSettings.from_params(snakemake.params.flow)),
+    probes=study_probes_from_params(snakemake.params.probes),
 )

@@ -29,6 +29,11 @@ import numpy as np
 from roughcontact.study import codec
 from roughcontact.study.codec import Record
 from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.transport.conduction.probe import (
+    NO_CONDUCTION,
+    ConductionMaterials,
+    materials_from_params,
+)
 from roughcontact.transport.probe import NO_FLOW, FlowProbe, probe_from_params
 from roughcontact.units import GB, MM, MPA, UM
 
@@ -336,13 +341,21 @@ class ContactSettings(Record):
     pressure_levels: int
     flow: FlowProbe = codec.record(probe_from_params, omit=lambda probe: not probe.directions,
                                    default=NO_FLOW)
+    conductance: ConductionMaterials = codec.record(
+        materials_from_params, omit=lambda materials: not materials.enabled,
+        default=NO_CONDUCTION)
 
-    @property
-    def probes(self) -> tuple:
-        """The probes every contact job's sweep records
-        (:mod:`roughcontact.contact.probes`): the flow probe where the flow is on, none
-        where it is off."""
-        return (self.flow,) if self.flow.directions else ()
+    def probes(self, geometry) -> tuple:
+        """The probes the sweep of a contact job on ``geometry``
+        (:class:`~roughcontact.study.records.Geometry`) records
+        (:mod:`roughcontact.contact.probes`): the flow probe where the flow is on, the
+        conductance through the geometry's body
+        (:meth:`~roughcontact.study.records.Geometry.thermal_body`) where the
+        ``conductance`` section is; none where both are off."""
+        flow = (self.flow,) if self.flow.directions else ()
+        conduction = ((self.conductance.probe(geometry.thermal_body()),)
+                      if self.conductance.enabled else ())
+        return flow + conduction
 
 
 @dataclass(frozen=True)

@@ -86,6 +86,10 @@ class FlowSettings:
         """The flow is on (a probe with directions)."""
         return bool(self.probe.directions)
 
+    def job_probe(self, geometry) -> FlowProbe:
+        """The probe a contact job records (the same on every ``geometry``)."""
+        return self.probe
+
     def written(self) -> dict:
         """The seal's values in the configuration's units, by key (none with the flow
         off)."""

@@ -45,6 +45,7 @@ from roughcontact.study.config import BuildSettings
 from roughcontact.study.provenance import short_hash
 from roughcontact.study.sources import MeasurementImport, Spectrum, spectrum_from_params
 from roughcontact.surfaces.spec import SurfaceSpec
+from roughcontact.transport.conduction.probe import BlockBody, HalfSpaceBody
 from roughcontact.units import MM, UM
 
 
@@ -295,6 +296,18 @@ class Geometry(Record):
         ``E`` [Pa] (1: the unit-modulus model of an influence file)."""
         return BlockGeometry(size=self.size, thickness=self.thickness, grid=self.grid, E=E,
                              nu=self.nu, base=self.base, mesh=self.mesh)
+
+    def thermal_body(self):
+        """The body heat and current enter (the conductance probe's,
+        :mod:`roughcontact.transport.conduction.probe`): a free half-space where the
+        configuration models the body as one (``operator: halfspace``), else the block
+        itself, isothermal base and insulated sides, on its mesh (also where the elastic
+        build picks the half-space's operator: its bulk resistance ``L / (k A)`` is the
+        block's whatever its stiffness)."""
+        if self.operator is InfluenceModel.HALFSPACE:
+            return HalfSpaceBody(periodic=False)
+        return BlockBody(BlockGeometry(size=self.size, thickness=self.thickness,
+                                       grid=self.grid, mesh=self.mesh))
 
     def resolved(self, model: InfluenceModel) -> Geometry:
         """The geometry with the influence ``model`` in place of ``auto``: the key, params

@@ -4,7 +4,7 @@ The configuration's edge: :func:`~roughcontact.study.config.validated` checks a
 configuration against ``config/schema.yaml`` and fills every default, and
 :meth:`Study.from_config` turns it into a :class:`Study` once, the settings
 records of each section in SI units (``surfaces``, ``body``, ``contact``,
-``flow``, ``counterface``, ``audit``, ``reports``) and the contact studies as
+``flow``, ``conductance``, ``counterface``, ``audit``, ``reports``) and the contact studies as
 configured (:meth:`Study.section`: one :class:`StudySection`, its inheritance
 from the accuracy preset and the ``body``, ``surfaces`` and ``contact``
 sections applied). Everything after the edge takes the study, or the part of
@@ -38,7 +38,9 @@ from roughcontact.study.config import (
     report_section,
 )
 from roughcontact.study.contact_records import Accuracy
+from roughcontact.study.conductance_settings import ConductanceSettings, conductance_settings
 from roughcontact.study.flow_settings import FlowSettings, flow_settings
+from roughcontact.study.probes import study_probes
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.provenance import config_hash
 from roughcontact.study.records import GeneratedCell, Generator, Geometry
@@ -229,6 +231,7 @@ class Study:
     cap: object
     cap_meshes: object
     flow: FlowSettings
+    conductance: ConductanceSettings
     accuracy: Accuracy
     preset: Mapping | None
     audit: AuditSettings
@@ -243,8 +246,10 @@ class Study:
         (:func:`~roughcontact.study.config.validated`: every default filled in)."""
         preset = config.get("accuracy")  # optional: no preset unless named
         preset = None if preset is None else MappingProxyType(dict(ACCURACY_PRESETS[preset]))
+        conductance = conductance_settings(config["conductance"])
         contact = dataclasses.replace(ContactSettings.from_section(config["contact"]),
-                                      flow=flow_settings(config["flow"]).probe)
+                                      flow=flow_settings(config["flow"]).probe,
+                                      conductance=conductance.materials)
         if preset is not None:
             contact = dataclasses.replace(contact, method=str(preset["method"]),
                                           tol=float(preset["tol"]),
@@ -260,12 +265,18 @@ class Study:
                 float(config["counterface"]["rigid_share"])),
             contact=contact, cap=thawed(config["contact"]["cap"]),
             cap_meshes=thawed(config["contact"]["cap_meshes"]),
-            flow=flow_settings(config["flow"]),
+            flow=flow_settings(config["flow"]), conductance=conductance,
             accuracy=_accuracy(config.get("accuracy"), preset), preset=preset,
             audit=_audit(config["audit"], config["study_seed"]),
             reports=_reports(config["reports"]),
             figures=_frozen(config["figures"]), sweeps=_frozen(config["sweeps"]),
             config_hash=config_hash(config))
+
+    @property
+    def probes(self) -> tuple:
+        """The study-side records of the probes it turns on, in the order the contact
+        jobs record them (:func:`~roughcontact.study.probes.study_probes`)."""
+        return study_probes(self.flow, self.conductance)
 
     @property
     def max_memory_bytes(self) -> float | None:

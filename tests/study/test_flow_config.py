@@ -36,15 +36,19 @@ def test_off_by_default_and_off_changes_no_job_parameter(path):
     shipped = load_config(path)
     assert shipped["flow"]["enabled"] is False
     assert flow_settings(shipped["flow"]) is FLOW_OFF and FLOW_OFF.params() == {}
-    settings = Study.from_config(shipped).contact
-    assert settings.flow is NO_FLOW and settings.probes == () and study_probes(FLOW_OFF) == ()
+    study = Study.from_config(shipped)
+    settings = study.contact
+    geometry = study_plan(study).jobs[next(iter(study_plan(study).jobs))].geometry
+    assert settings.flow is NO_FLOW and settings.probes(geometry) == ()
+    assert study_probes(FLOW_OFF) == () and study.probes == ()
     # the contact jobs' solver parameters as before the flow section existed
     assert set(settings.params()) == {"method", "tol", "precision", "steps", "pressure_levels"}
 
 
 def test_on_every_contact_job_gets_the_probe_and_its_parameters_change():
-    settings = Study.from_config(config(flow={**ON, "directions": ["y"], "sides": "sealed",
-                                              "face_rule": "arithmetic"})).contact
+    study = Study.from_config(config(flow={**ON, "directions": ["y"], "sides": "sealed",
+                                           "face_rule": "arithmetic"}))
+    settings = study.contact
     assert settings.flow == FlowProbe(directions=("y",), sides="sealed", face_rule=ARITHMETIC)
     params = settings.params()
     assert params["flow"] == {"directions": ["y"], "sides": "sealed",
@@ -54,7 +58,8 @@ def test_on_every_contact_job_gets_the_probe_and_its_parameters_change():
     assert ContactSettings.from_section(params) == settings
     assert probe_from_params(params["flow"]) == settings.flow
     # the jobs record exactly that probe; a contact file's attribute makes it again
-    assert settings.probes == (settings.flow,)
+    geometry = next(iter(study_plan(study).jobs.values())).geometry
+    assert settings.probes(geometry) == (settings.flow,) and study.probes == (study.flow,)
     assert PROBE_KINDS["flow"] is probe_from_params
     assert probes_from_attrs({"flow": '{"directions": ["y"], "sides": "sealed", '
                                       '"face_rule": "arithmetic", "closed_below": 1e-7}'}

@@ -130,9 +130,10 @@ def _shown(probes) -> str:
     return str({probe.kind: probe.params() for probe in probes}) if probes else "no probe"
 
 
-def _check_probes(path, stored: tuple, probes: tuple) -> None:
-    """The contact file must have recorded the probes the configuration asks for."""
-    wanted = tuple(record.probe for record in probes)
+def _check_probes(path, stored: tuple, probes: tuple, geometry) -> None:
+    """The contact file of a job on ``geometry`` must have recorded the probes the
+    configuration asks for."""
+    wanted = tuple(record.job_probe(geometry) for record in probes)
     if stored != wanted:
         raise StoredFileError(
             f"{path}: solved with {_shown(stored)}, but the configuration asks for "
@@ -147,7 +148,7 @@ def _aggregate_cell(index: int, cell: StudyCell, columns: dict, path, levels: in
     with what the study-side records of its ``probes`` add: the flow's leak rate and
     percolation thresholds, where the flow is on)."""
     nd, attrs = read_contact(path, job=cell.job.params())  # solved for this cell's job
-    _check_probes(path, nd.probe_columns.probes, probes)
+    _check_probes(path, nd.probe_columns.probes, probes, cell.job.geometry)
     key, label = cell.contact_key, cell.label
     axis = aggregate.pressure_axis(*cell.pressure_range, levels)
     physical, frame = cell_module.aggregate_sweep(nd, cell.height_scale, cell.E, axis,

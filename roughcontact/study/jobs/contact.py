@@ -134,7 +134,7 @@ def contact_problem(job: ContactJob, heights, unit,
     (Eq 17-18; :func:`roughcontact.contact.counterface.pair`): the equivalent heights,
     the pair's operator, the interface grid with the counter body's deflection weights
     and the ``probes`` to record at every step (:mod:`roughcontact.contact.probes`;
-    :attr:`~roughcontact.study.config.ContactSettings.probes`), and the bulk factor
+    :meth:`~roughcontact.study.config.ContactSettings.probes`), and the bulk factor
     raised by its compliance; against the rigid smooth flat the job's own problem."""
     paired = counterface.pair(heights, unit, counter)
     grid = paired.model.interface(
@@ -201,7 +201,8 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
     m = heights.shape[0]
     name = f"{job.surface.key}__{job.geometry.key}"
     counter, counter_hashes = read_counter(job, inputs, study_seed)
-    problem = contact_problem(job, heights, unit, counter, settings.probes)
+    probes = settings.probes(job.geometry)
+    problem = contact_problem(job, heights, unit, counter, probes)
     hardness = job.nondim_hardness
     log.info("contact %s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
              "method %s, tol %.1e, precision %s, influence %s, %s", name, m, settings.steps,
@@ -209,7 +210,7 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
              geometry_attrs["operator"],
              "elastic" if hardness is None else f"pressure capped at H L / (E sigma) = "
              f"{hardness:.6g}")
-    for probe in settings.probes:
+    for probe in probes:
         log.info("probe %s recorded at every step: %s", probe.kind, probe.params())
     options = cell_module.SWEEP_OPTIONS.with_(method=settings.method, tol=settings.tol,
                                               precision=settings.precision,

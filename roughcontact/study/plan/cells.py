@@ -18,7 +18,8 @@ from collections.abc import Mapping
 from roughcontact.study import layout
 from roughcontact.study.config import BuildSettings, ContactSettings
 from roughcontact.study.contact_records import ContactJob, StudyCell
-from roughcontact.study.counter_records import PairGeometry
+from roughcontact.study.conductance_settings import check_conductance
+from roughcontact.study.counter_records import NO_COMPLIANCE, PairGeometry
 from roughcontact.study.flow_settings import check_flow
 from roughcontact.study.plan.block_checks import check_blocks
 from roughcontact.study.plan.body_checks import check_plausible
@@ -152,6 +153,10 @@ def study_plan(study: Study) -> StudyPlan:
         {k: tuple(s / n for s, n in zip(g.size, g.grid, strict=True))
          for k, g in grids.items()}))
     _raise("Studies whose every level the fluid would open", check_open_faces(study, studies))
+    _raise("Conductance settings that cannot be used", check_conductance(
+        study.conductance, study.plausibility_check, grids,
+        {cell.counterface.name for name in studies for cell in cells[name]
+         if cell.counterface.compliance != NO_COMPLIANCE}))
     figure_cells = {name: tuple(FIGURES[name].surfaces(study, name, cells)) for name in figures}
     generated = [name for name in figures if FIGURES[name].generated]
     surfaces = {cell.key: cell for name in generated for cell in figure_cells[name]}

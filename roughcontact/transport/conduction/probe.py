@@ -76,8 +76,9 @@ from roughcontact.transport.conduction.halfspace import (
 from roughcontact.transport.conduction.spot import full_contact_resistance
 
 __all__ = ["BULK_SHARE", "CONDUCTANCE", "CONDUCTANCE_PER_AREA", "CONVERGED",
-           "ELECTRICAL_RESISTANCE", "BlockBody", "ConductanceProbe", "HalfSpaceBody",
-           "body_from_params", "conductance_probe_from_params"]
+           "ELECTRICAL_RESISTANCE", "NO_CONDUCTION", "BlockBody", "ConductanceProbe",
+           "ConductionMaterials", "HalfSpaceBody", "body_from_params",
+           "conductance_probe_from_params", "materials_from_params"]
 
 logger = logging.getLogger("roughcontact.transport")
 
@@ -353,3 +354,49 @@ def conductance_probe_from_params(params: dict) -> ConductanceProbe:
     return ConductanceProbe(body_from_params(params["body"]),
                             conductivity=params.get("conductivity"),
                             resistivity=params.get("resistivity"), tol=float(params["tol"]))
+
+
+@dataclass(frozen=True)
+class ConductionMaterials:
+    """What a conductance probe needs besides its body: the body's ``conductivity``
+    [W/(m K)] and/or ``resistivity`` [Ohm m] and the CG's ``tol``
+    (:class:`ConductanceProbe`); with neither, no conductance is recorded
+    (:data:`NO_CONDUCTION`). A study's contact jobs share it and each gives it its own
+    body (:meth:`probe`)."""
+
+    conductivity: float | None = None
+    resistivity: float | None = None
+    tol: float = 1e-10
+
+    def __post_init__(self):
+        if self.enabled:  # refused with the probe's messages
+            ConductanceProbe(HalfSpaceBody(), self.conductivity, self.resistivity, self.tol)
+
+    @property
+    def enabled(self) -> bool:
+        """A conductivity or a resistivity is given: the probe records something."""
+        return self.conductivity is not None or self.resistivity is not None
+
+    def probe(self, body: HalfSpaceBody | BlockBody) -> ConductanceProbe:
+        """The probe of these materials through ``body``."""
+        return ConductanceProbe(body, self.conductivity, self.resistivity, self.tol)
+
+    def params(self) -> dict:
+        """Its settings as plain values (empty: none)."""
+        if not self.enabled:
+            return {}
+        return {"conductivity": self.conductivity, "resistivity": self.resistivity,
+                "tol": self.tol}
+
+
+#: No conductance recorded.
+NO_CONDUCTION = ConductionMaterials()
+
+
+def materials_from_params(params: dict) -> ConductionMaterials:
+    """The materials of stored settings (:meth:`ConductionMaterials.params`; empty:
+    :data:`NO_CONDUCTION`)."""
+    if not params:
+        return NO_CONDUCTION
+    return ConductionMaterials(params.get("conductivity"), params.get("resistivity"),
+                               float(params["tol"]))

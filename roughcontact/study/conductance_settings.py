@@ -1,0 +1,206 @@
+"""The study's conductance across the spots: its settings, checks and table columns.
+
+The configuration's ``conductance`` section (off by default) gives every contact job
+a :class:`~roughcontact.transport.conduction.probe.ConductanceProbe` through its
+geometry's body (:meth:`~roughcontact.study.records.Geometry.thermal_body`: the
+block, isothermal base and insulated sides; a free half-space where the body is
+modelled as one), with the body's thermal conductivity and/or electrical
+resistivity: the job's sweep records the spots' thermal conductance ``C`` [W/K],
+``h_c = C / A_n`` [W/(m^2 K)], the bulk's share of the resistance and the
+electrical contact resistance [Ohm] at every step. The counter body is a perfect
+conductor (an isothermal face): on two like half-spaces, give the series
+conductivity ``k1 k2 / (k1 + k2)``. The aggregation averages the columns per cell
+like every other probe column (95 % bands) and adds, from :class:`ConductanceSettings`
+(the conductance's study-side record,
+:class:`~roughcontact.study.probes.StudyProbe`), the constriction's share
+``1 - R_bulk C`` beside the bulk's.
+
+The counter body's material, the gas in the gap (``h_gap = k_gas / (g + M)``) and a
+matrix-free thermal block beyond 64 x 64 are not modelled: a configuration that
+needs them is refused or warned about when the plan is made.
+
+Off, the section changes nothing: the jobs' parameters, files and tables are those
+of a configuration without it.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import ClassVar
+
+from roughcontact.study.config import unit_slips
+from roughcontact.transport.conduction.probe import (
+    BULK_SHARE,
+    BlockBody,
+    NO_CONDUCTION,
+    ConductanceProbe,
+    ConductionMaterials,
+    materials_from_params,
+)
+
+__all__ = ["CONDUCTANCE_OFF", "CONSTRICTION_SHARE", "THERMAL_DENSE_LIMIT",
+           "ConductanceSettings", "check_conductance", "conductance_settings"]
+
+log = logging.getLogger(__name__)
+
+#: The table column (with a conductivity) of the constriction's share of the resistance.
+CONSTRICTION_SHARE = "conduction_constriction_share"
+#: Elements of the largest contact grid whose block gets its (dense) thermal influence:
+#: 64 x 64, the elastic model's dense limit; beyond it the study refuses the conductance.
+THERMAL_DENSE_LIMIT = 64 * 64
+#: ``10^-8`` Ohm m per micro-ohm centimetre (the configuration's resistivity unit).
+UOHM_CM = 1e-8
+
+#: Plausible ranges of the materials' values (outside: almost surely a unit slip), the
+#: narrower range of the values a contact's body has, and the units each is likely
+#: typed in by mistake with their factors to the key's unit.
+PLAUSIBLE = {
+    # polymers 0.1-0.5, steels 15-60, copper 400, diamond 2000
+    "conductivity_W_mK": ((0.1, 3000.0), (1.0, 500.0),
+                          (("W/(mm K)", 1e3), ("W/(cm K)", 1e2))),
+    # silver 1.6, copper 1.7, steels 10-70, nichrome 110, graphite ~1000, carbon brushes
+    # up to 1e5
+    "resistivity_uohm_cm": ((1.5, 1e7), (1.5, 1e5),
+                            (("Ohm m", 1e8), ("Ohm cm", 1e6), ("Ohm mm", 1e5))),
+}
+
+
+@dataclass(frozen=True)
+class ConductanceSettings:
+    """The ``conductance`` section as the study uses it: the contact jobs' ``materials``
+    (each job's probe through its own body, :meth:`job_probe`). Where it is on, the
+    conductance's study-side probe record
+    (:class:`~roughcontact.study.probes.StudyProbe`, of ``kind`` "conductance"): the
+    constriction's share in each cell's table; nothing in the sidecar but its
+    settings."""
+
+    kind: ClassVar[str] = ConductanceProbe.kind
+
+    materials: ConductionMaterials
+
+    @property
+    def enabled(self) -> bool:
+        return self.materials.enabled
+
+    def job_probe(self, geometry) -> ConductanceProbe:
+        """The probe a contact job on ``geometry`` records
+        (:class:`~roughcontact.study.records.Geometry`)."""
+        return self.materials.probe(geometry.thermal_body())
+
+    def written(self) -> dict:
+        """The materials' values in the configuration's units, by key (none off, and
+        none for a material not given)."""
+        materials = self.materials
+        out = {}
+        if materials.conductivity is not None:
+            out["conductivity_W_mK"] = materials.conductivity
+        if materials.resistivity is not None:
+            out["resistivity_uohm_cm"] = materials.resistivity / UOHM_CM
+        return out
+
+    def material_text(self) -> str:
+        """The materials in words (a caption's)."""
+        w = self.written()
+        parts = ([f"thermal conductivity {w['conductivity_W_mK']:g} W/(m K)"]
+                 if "conductivity_W_mK" in w else [])
+        parts += ([f"electrical resistivity {w['resistivity_uohm_cm']:g} uOhm cm"]
+                  if "resistivity_uohm_cm" in w else [])
+        return " and ".join(parts)
+
+    def table_columns(self, rows) -> tuple[dict, dict]:
+        """The constriction's share of a cell's aggregated ``rows`` (a table with the
+        bulk share's ``_mean``, ``_half_width`` and ``_count``): ``1 - R_bulk C``, its
+        band the bulk share's; none without a conductivity."""
+        if self.materials.conductivity is None:
+            return {}, {}
+        columns = {f"{CONSTRICTION_SHARE}_mean": 1.0 - rows[f"{BULK_SHARE}_mean"],
+                   f"{CONSTRICTION_SHARE}_half_width": rows[f"{BULK_SHARE}_half_width"],
+                   f"{CONSTRICTION_SHARE}_count": rows[f"{BULK_SHARE}_count"]}
+        return columns, {f"{CONSTRICTION_SHARE}_mean": "1",
+                         f"{CONSTRICTION_SHARE}_half_width": "1",
+                         f"{CONSTRICTION_SHARE}_count": "1"}
+
+    def cell_rows(self, sweep, labels: dict) -> list[dict]:
+        """No rows of the sidecar per cell."""
+        return []
+
+    def sidecar(self, rows: list[dict]) -> dict:
+        """The sidecar's entry: the materials in SI units, the counter body's model."""
+        return {**self.params(), "counter_body": "perfect conductor (isothermal face)"}
+
+    @classmethod
+    def from_params(cls, params: dict) -> ConductanceSettings:
+        """The settings of their :meth:`params` (the aggregate rule's; empty: off)."""
+        return cls(materials_from_params(params))
+
+    def params(self) -> dict:
+        """The materials in SI units (the aggregate rule's params; empty off)."""
+        return self.materials.params()
+
+
+#: The conductance off: nothing recorded.
+CONDUCTANCE_OFF = ConductanceSettings(NO_CONDUCTION)
+
+
+def conductance_settings(section) -> ConductanceSettings:
+    """The :class:`ConductanceSettings` of a validated configuration's ``conductance``
+    section."""
+    if not section["enabled"]:
+        return CONDUCTANCE_OFF
+    conductivity = section.get("conductivity_W_mK")  # optional: no thermal columns
+    resistivity = section.get("resistivity_uohm_cm")  # optional: no electrical column
+    if conductivity is None and resistivity is None:
+        raise ValueError(
+            "conductance: enabled without conductivity_W_mK or resistivity_uohm_cm; give "
+            "the body's thermal conductivity [W/(m K)] (steel 50), its electrical "
+            "resistivity [uOhm cm] (steel 15), or both, or set conductance.enabled: false")
+    return ConductanceSettings(ConductionMaterials(
+        conductivity=conductivity,
+        resistivity=None if resistivity is None else resistivity * UOHM_CM,
+        tol=float(section["tol"])))
+
+
+def _slip(key: str, value: float) -> str | None:
+    """The message for a value of ``conductance.<key>`` outside its plausible range, or
+    None."""
+    (low, high), (usual_low, usual_high), slips = PLAUSIBLE[key]
+    if low <= value <= high:
+        return None
+    guesses = unit_slips(f"conductance.{key}", value, slips,
+                         lambda v: usual_low <= v <= usual_high)
+    unit = "W/(m K)" if key == "conductivity_W_mK" else "uOhm cm"
+    return (f"conductance.{key}: {value:g} is outside the plausible {low:g}-{high:g} {unit}"
+            + (f" ({'; '.join(guesses)})" if guesses else "")
+            + " (plausibility_check: false accepts it)")
+
+
+def check_conductance(conductance: ConductanceSettings, plausibility_check: bool,
+                      geometries: dict, compliant_counters=()) -> list[str]:
+    """The problems of the ``conductance`` settings: values that are almost surely a
+    unit slip (with ``plausibility_check``), and blocks (``geometries``: a contact
+    geometry's place in words -> its :class:`~roughcontact.study.records.Geometry`)
+    whose contact grid exceeds :data:`THERMAL_DENSE_LIMIT` elements (the thermal
+    influence of a block is dense). The ``compliant_counters`` (their names) are warned
+    about: their material is not modelled, each is a perfect conductor."""
+    if not conductance.enabled:
+        return []
+    for name in sorted(compliant_counters):
+        log.warning("conductance: the counter body %s is taken as a perfect conductor "
+                    "(isothermal face): its own constriction and bulk resistance are not "
+                    "counted, so h_c is that of the first body alone (on two like "
+                    "half-spaces give conductivity_W_mK = k1 k2 / (k1 + k2))", name)
+    problems = []
+    if plausibility_check:
+        problems += [message for key, value in conductance.written().items()
+                     if (message := _slip(key, float(value))) is not None]
+    for where, geometry in geometries.items():
+        nx, ny = geometry.grid
+        if nx * ny > THERMAL_DENSE_LIMIT and isinstance(geometry.thermal_body(), BlockBody):
+            problems.append(
+                f"{where}: the conductance through a block of {nx} x {ny} elements needs "
+                f"its thermal influence as a dense matrix ({(nx * ny) ** 2 * 8 / 1e9:.2g} "
+                "GB, no matrix-free form yet); give the block at most 64 x 64 contact "
+                "elements, model the body as a half-space (body.operator: halfspace), or "
+                "set conductance.enabled: false")
+    return problems
