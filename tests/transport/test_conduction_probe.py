@@ -69,8 +69,8 @@ def test_the_half_space_conductance_is_barbers_stiffness(solved):
     probe, result = solved
     columns = result.probe_columns
     assert list(columns) == ["thermal_conductance", "thermal_conductance_per_area",
-                             "conduction_bulk_share", "electrical_resistance",
-                             "conduction_converged"]
+                             "conduction_bulk_share", "constriction_conductance_per_area",
+                             "electrical_resistance", "conduction_converged"]
     stiffness = result.contact_stiffness
     assert np.all(stiffness > 0) and columns["conduction_converged"].all()
     np.testing.assert_allclose(columns["thermal_conductance"], _barber(stiffness), rtol=1e-8)
@@ -80,6 +80,9 @@ def test_the_half_space_conductance_is_barbers_stiffness(solved):
     np.testing.assert_allclose(columns["electrical_resistance"], RHO * K / _barber(stiffness),
                                rtol=1e-8)
     np.testing.assert_array_equal(columns["conduction_bulk_share"], 0.0)
+    # a half-space has no bulk: all of it is the spots' constriction
+    np.testing.assert_allclose(columns["constriction_conductance_per_area"],
+                               columns["thermal_conductance_per_area"], rtol=1e-12)
     # the conductance grows with the load
     assert np.all(np.diff(columns["thermal_conductance"], axis=1) > 0)
     # the default (zero-padded FFT) form of the free half-space gives the same numbers
@@ -122,6 +125,11 @@ def test_full_contact_of_a_block_is_k_a_over_l():
     part = probe.measure(SolvedFields(spot, spot, np.zeros(1), spacing, False))
     assert 0 < part["thermal_conductance"][0] < measured["thermal_conductance"][0]
     assert 0 < part["conduction_bulk_share"][0] < 1
+    # the constriction alone: the spot's resistance less full contact's (the bulk's)
+    constriction = 1.0 / (area * (1.0 / part["thermal_conductance"][0]
+                                  - 1.0 / measured["thermal_conductance"][0]))
+    assert part["constriction_conductance_per_area"][0] == pytest.approx(constriction,
+                                                                          rel=1e-8)
 
 
 def test_a_block_of_another_grid_is_refused_and_the_advice_works():

@@ -51,14 +51,16 @@ def thickest_block(geometry: Geometry, build: BuildSettings) -> float | None:
 
 
 def _remedies(where: str, geometry: Geometry, build: BuildSettings,
-              measured: bool, body: str) -> list[str]:
+              measured: bool, body: str, own_thickness: bool = False) -> list[str]:
     """The changes, as config text, that give ``geometry`` a usable block (each tested);
     ``where`` the study's config path (``sweeps.<name>``), ``body`` the path of the
-    block's keys (``body``, or a counter body's ``counterface.body``)."""
+    block's keys (``body``, or a counter body's ``counterface.body``); ``own_thickness``:
+    the study names its block's thickness (``thickness_mm``)."""
     passes = [] if not measured else [(f"{where}.thickness_mm: {PATCH_THICKNESS}",
                                        max(geometry.size), geometry.mesh)]
     thickest = thickest_block(geometry, build)
-    thickness_key = f"{where}.thickness_mm" if measured else f"{body}.thickness_mm"
+    thickness_key = (f"{where}.thickness_mm" if measured or own_thickness
+                     else f"{body}.thickness_mm")
     if thickest is not None:
         passes.append((f"{thickness_key}: {in_unit(thickest, MM):g}", thickest, geometry.mesh))
     if geometry.mesh != "refined":
@@ -72,13 +74,13 @@ def _remedies(where: str, geometry: Geometry, build: BuildSettings,
 
 
 def block_message(where: str, geometry: Geometry, build: BuildSettings, problems: list[str],
-                  measured: bool, body: str = "body") -> str:
+                  measured: bool, body: str = "body", own_thickness: bool = False) -> str:
     """Why the block of the study at config path ``where`` is refused, and the changes
     that work; ``body`` the path of the block's keys (the ``body`` section's, or a
     counter body's: ``sweeps.pad.counterface[1].body``, then named in its place)."""
     (lx, ly), (nx, ny) = (in_unit(v, MM) for v in geometry.size), geometry.grid
     what = "the measured patch" if measured else "the surfaces"
-    remedies = _remedies(where, geometry, build, measured, body)
+    remedies = _remedies(where, geometry, build, measured, body, own_thickness)
     if measured:
         remedies.append(f"or measure (or crop, {where}.surface.crop_mm) a larger patch")
     where = where if body == "body" else f"{body} (a counter block)"
@@ -88,9 +90,11 @@ def block_message(where: str, geometry: Geometry, build: BuildSettings, problems
             + ("; ".join(remedies) if remedies else "the block's thickness or the grid"))
 
 
-def check_blocks(cells: dict[str, tuple[StudyCell, ...]], build: BuildSettings) -> list[str]:
+def check_blocks(cells: dict[str, tuple[StudyCell, ...]], build: BuildSettings,
+                 own_thickness=frozenset()) -> list[str]:
     """Messages for the studies whose block fails :func:`block_problems` (once per study
-    and geometry); ``cells`` by the study's config path (``sweeps.<name>``)."""
+    and geometry); ``cells`` by the study's config path (``sweeps.<name>``),
+    ``own_thickness`` the paths of those that name their block's ``thickness_mm``."""
     problems = []
     for where, study_cells in cells.items():
         measured = any(isinstance(c.surface, MeasuredCell) for c in study_cells)
@@ -98,7 +102,8 @@ def check_blocks(cells: dict[str, tuple[StudyCell, ...]], build: BuildSettings) 
         for geometry in geometries.values():
             found = block_problems(geometry, build)
             if found:
-                problems.append(block_message(where, geometry, build, found, measured))
+                problems.append(block_message(where, geometry, build, found, measured,
+                                              own_thickness=where in own_thickness))
     return problems
 
 

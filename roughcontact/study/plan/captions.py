@@ -340,3 +340,33 @@ def leakage(plan, name):
             f"the cell has (its band is not to be read as a tight one). "
             f"{_surfaces(rows)}, {contact.steps} steps each, {contact.pressure_levels} "
             f"pressure levels. {BANDS}")
+
+
+def conductance(plan, name):
+    studies = plan.study.entry(name)["studies"]
+    parts = []
+    for study in studies:
+        rows = _columns(plan.cells[study])
+        caps = sorted({row["cap"] / 1e6 for row in rows if row["cap"] is not None})
+        capped = f", the pressure capped at {numbers(caps, 'MPa')}" if caps else ""
+        parts.append(f"{study} (sigma {_values(rows, 'sigma_um', 'um')}, b "
+                     f"{_values(rows, 'b_mm', 'mm')}, E {_values(rows, 'E_MPa', 'MPa')}, nu "
+                     f"{_values(rows, 'nu')}, a {_values(rows, 'thickness_mm', 'mm')} block "
+                     f"on {_mesh_names(rows)}{capped}; (Sk, Ku) = {_pairs(rows)})")
+    rows = [row for study in studies for row in _columns(plan.cells[study])]
+    contact = plan.study.contact
+    return (f"Beyond the paper: how much heat crosses the interface? The thermal contact "
+            f"conductance of a body of {plan.study.conductance.material_text()} pressed on "
+            f"a smooth, perfectly conducting flat (isothermal spots, no flux elsewhere; "
+            f"the block's base isothermal, its sides insulated): {'; '.join(parts)}. "
+            f"Left: h_c = C / A_n (solid) and the spots' constriction alone, h_s = 1 / "
+            f"(A_n (1/C - R_bulk)) (dotted), against nominal pressure for each cell of "
+            f"{studies[0]}, with Mikic's (1974) elastic correlation h = 1.54 k_s (m / "
+            f"sigma) (sqrt(2) P / (E* m))^0.94 (dashed, k_s = 2 k against a perfect "
+            f"conductor, E* = E / (1 - nu^2), m the cell's rms profile slope at the grid's "
+            f"spacing, sigma its rms height). Middle: h_s over the correlation of each cell "
+            f"of every study (Cooper, Mikic and Yovanovich's (1969) plastic h = 1.25 k_s "
+            f"(m / sigma) (P / H)^0.95 for capped cells, H the cap). Right: the bulk's share "
+            f"of the resistance, R_bulk C, against nominal pressure (R_bulk = L / (k A_n)). "
+            f"{_surfaces(rows)}, {contact.steps} steps each, {contact.pressure_levels} "
+            f"pressure levels. {BANDS}")

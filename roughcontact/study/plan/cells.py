@@ -101,6 +101,11 @@ class StudyPlan:
         return sorted(files)
 
 
+#: What a figure of each study probe draws (a refusal's words).
+NEEDS = {"flow": "its leak rate, flow factors and percolation thresholds",
+         "conductance": "its thermal contact conductance and bulk share"}
+
+
 def _raise(title: str, problems: list[str]) -> None:
     if problems:
         raise ConfigProblems(title, problems)
@@ -117,11 +122,12 @@ def _figures_and_studies(study: Study) -> tuple[tuple[str, ...], tuple[str, ...]
         f"figures.{name}.studies: {listed!r} is no sweep or contact figure of the config "
         f"(sweeps: {', '.join(study.sweeps) or 'none'})"
         for name in listing for listed in study.entry(name)["studies"] if listed not in studies])
-    _raise("Figures of the flow through the gap with the flow off", [
-        f"figures.{name}.studies: {listed!r} is solved without the flow, so its aggregates "
-        f"have no leak rate, flow factor or percolation threshold to draw; set "
-        f"flow.enabled: true (config section flow) or remove the figure {name}"
-        for name in listing if FIGURES[name].needs_flow and not study.flow.enabled
+    on = {record.kind for record in study.probes}
+    _raise("Figures of a probe that is off", [
+        f"figures.{name}.studies: {listed!r} is solved without the {kind} ({NEEDS[kind]}), "
+        f"so its aggregates have nothing to draw; set {kind}.enabled: true (config section "
+        f"{kind}) or remove the figure {name}"
+        for name in listing for kind in FIGURES[name].needs if kind not in on
         for listed in study.entry(name)["studies"]])
     return figures, studies
 
@@ -145,7 +151,9 @@ def study_plan(study: Study) -> StudyPlan:
                check_plausible(study, cells))
     build = study.body.build
     _raise("Blocks that do not fit their surfaces",
-           check_blocks({study.path(name): c for name, c in by_source.items()}, build))
+           check_blocks({study.path(name): c for name, c in by_source.items()}, build,
+                        frozenset(study.path(name) for name in by_source
+                                  if study.section(name).thickness_mm is not None)))
     jobs = contact_jobs(cell for name in studies for cell in cells[name])
     grids = {f"the contact grid of {job.geometry.key}": job.geometry for job in jobs.values()}
     _raise("Flow settings that cannot be used", check_flow(

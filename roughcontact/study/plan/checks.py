@@ -302,11 +302,8 @@ def check_measured(study: Study, name: str, entry) -> list[str]:
     """Messages for a study whose measured surface cannot be used as configured
     (``entry``: the study as configured)."""
     if entry.get("surface") is None:
-        return [f"{name}: {key} needs a measured surface ('surface:'){why}"
-                for key, why in (("compare_synthetic", ""),
-                                 ("thickness_mm", "; the block under generated surfaces is "
-                                                  "body.thickness_mm"))
-                if entry.get(key)]
+        return ([f"{name}: compare_synthetic needs a measured surface ('surface:')"]
+                if entry.get("compare_synthetic") else [])
     if entry.get("spectrum") is not None and not entry["compare_synthetic"]:
         return [f"{name}: 'spectrum' applies to the generated twin of a measured surface; "
                 "add compare_synthetic: true or remove spectrum"]

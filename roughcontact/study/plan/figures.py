@@ -65,6 +65,13 @@ def _study_surfaces(study, name: str, cells) -> list:
     return [cell.surface for cell in cells[name]]
 
 
+def _listed_study_surfaces(study, name: str, cells) -> list:
+    """The conductance figure: the surfaces of the cells of the studies it lists, once
+    each (their slopes, for the correlations)."""
+    return list({cell.surface.key: cell.surface for listed in study.entry(name)["studies"]
+                 for cell in cells[listed]}.values())
+
+
 def _unique_study_surfaces(study, name: str, cells) -> list:
     """The measured figure: the measured surface and its twin, once each."""
     return list({cell.surface.key: cell.surface for cell in cells[name]}.values())
@@ -79,7 +86,8 @@ class Figure:
     the study cells by study name); ``generated``: those surfaces are its own to
     generate (a study's are its jobs'); ``drawn_with`` the other figures whose settings
     it draws with (notebook parameters: Fig 5 draws Fig 4's heights in Fig 4's sigma);
-    ``needs_flow``: drawn from the flow columns of its studies' aggregates.
+    ``needs``: the study probes (kinds, :data:`~roughcontact.study.probes.STUDY_PROBE_KINDS`)
+    whose columns of its studies' aggregates it draws.
     """
 
     kind: Kind
@@ -87,7 +95,7 @@ class Figure:
     surfaces: Callable = _no_surfaces
     generated: bool = False
     drawn_with: tuple[str, ...] = ()
-    needs_flow: bool = False
+    needs: tuple[str, ...] = ()
 
 
 def _contact(caption: Callable, surfaces: Callable = _no_surfaces) -> Figure:
@@ -99,7 +107,7 @@ def _contact(caption: Callable, surfaces: Callable = _no_surfaces) -> Figure:
 #: ACF, config/fig11_resolved.yaml; "gaps": the mean gap and the spots of a study's
 #: cells, usually ``from:`` fig07; "two_bodies": each counter body of the listed studies
 #: beside the rigid flat; "leakage": the flow through the contact gap of the listed
-#: studies).
+#: studies; "conductance": the thermal contact conductance of the listed studies).
 FIGURES = MappingProxyType({
     "fig01": Figure(Kind.SURFACES, captions.fig01),
     "fig02": Figure(Kind.SURFACES, captions.fig02),
@@ -120,5 +128,7 @@ FIGURES = MappingProxyType({
     "fig11_resolved": _contact(captions.fig11_resolved),
     "gaps": _contact(captions.gaps),
     "two_bodies": Figure(Kind.STUDIES, captions.two_bodies),
-    "leakage": Figure(Kind.STUDIES, captions.leakage, needs_flow=True),
+    "leakage": Figure(Kind.STUDIES, captions.leakage, needs=("flow",)),
+    "conductance": Figure(Kind.STUDIES, captions.conductance, _listed_study_surfaces,
+                          needs=("conductance",)),
 })

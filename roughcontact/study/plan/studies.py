@@ -78,7 +78,8 @@ def with_counterfaces(study: Study, name: str, cells: list[StudyCell]) -> list[S
 
 def _generated_cells(study: Study, section: StudySection, body: Geometry,
                      common: dict) -> list[StudyCell]:
-    """The product of a study's axes, in the order meshes, nu, size, b, moments, sigma, E."""
+    """The product of a study's axes, in the order meshes, nu, size, b, moments, sigma, E,
+    on the body's block (its thickness the study's ``thickness_mm`` where it names one)."""
     surfaces = study.surfaces
     spectrum = spectrum_from_entry(section.spectrum)
     size_mm = surfaces.size_mm
@@ -95,7 +96,9 @@ def _generated_cells(study: Study, section: StudySection, body: Geometry,
         surface = surfaces.cell(spectrum, skew=skew, kurt=kurt,
                                 corr_length=from_unit(as_pair(b)), count=section.count,
                                 **planform)
-        geometry = dataclasses.replace(body, nu=float(nu), mesh=str(mesh), **planform)
+        geometry = dataclasses.replace(
+            body, nu=float(nu), mesh=str(mesh), **planform,
+            thickness=patch_thickness(section.thickness_mm, planform["size"], body.thickness))
         cells.append(StudyCell(surface, geometry, sigma=float(sigma) * UM, E=float(E) * MPA,
                                **common))
     return cells

@@ -40,6 +40,10 @@ resistivity):
 :data:`BULK_SHARE`
     ``R_bulk C`` [-], the bulk's share of the resistance (0 on half-spaces and
     without contact; 1 at full contact of a block);
+:data:`CONSTRICTION_PER_AREA`
+    ``h_s = 1 / (A_n (1/C - R_bulk))`` [W/(m^2 K)], the spots' constriction alone per
+    nominal area (what the half-space correlations give; ``h_c`` on a half-space; 0
+    without contact, inf at full contact);
 :data:`ELECTRICAL_RESISTANCE`
     ``1 / C_e`` [Ohm]: inf without contact (recorded only at zero load, which the
     aggregation never reads), 0 at full contact of a periodic half-space;
@@ -75,7 +79,8 @@ from roughcontact.transport.conduction.halfspace import (
 )
 from roughcontact.transport.conduction.spot import full_contact_resistance
 
-__all__ = ["BULK_SHARE", "CONDUCTANCE", "CONDUCTANCE_PER_AREA", "CONVERGED",
+__all__ = ["BULK_SHARE", "CONDUCTANCE", "CONDUCTANCE_PER_AREA", "CONSTRICTION_PER_AREA",
+           "CONVERGED",
            "ELECTRICAL_RESISTANCE", "NO_CONDUCTION", "BlockBody", "ConductanceProbe",
            "ConductionMaterials", "HalfSpaceBody", "body_from_params",
            "conductance_probe_from_params", "materials_from_params"]
@@ -86,6 +91,7 @@ logger = logging.getLogger("roughcontact.transport")
 CONDUCTANCE, CONDUCTANCE_PER_AREA, BULK_SHARE, ELECTRICAL_RESISTANCE, CONVERGED = (
     "thermal_conductance", "thermal_conductance_per_area", "conduction_bulk_share",
     "electrical_resistance", "conduction_converged")
+CONSTRICTION_PER_AREA = "constriction_conductance_per_area"
 #: Relative agreement of a block's grid spacing with the sweep's.
 SPACING_RTOL = 1e-9
 
@@ -275,6 +281,9 @@ class ConductanceProbe:
             Column(BULK_SHARE, "1",
                    "R_bulk C, the bulk's share of the resistance (0 on half-spaces and "
                    "without contact, 1 at full contact of a block)"),
+            Column(CONSTRICTION_PER_AREA, "W/(m^2 K)",
+                   "h_s = 1 / (A_n (1/C - R_bulk)), the spots' constriction conductance "
+                   "alone per nominal area (h_c on a half-space; 0 without contact)"),
         ) if self.conductivity is not None else ()
         electrical = (
             Column(ELECTRICAL_RESISTANCE, "Ohm",
@@ -336,6 +345,10 @@ class ConductanceProbe:
                                          ).reshape(lead)
             out[BULK_SHARE] = (unit_bulk * unit if unit_bulk > 0.0 else np.where(
                 np.isnan(unit), np.nan, 0.0)).reshape(lead)
+            with np.errstate(divide="ignore"):
+                constriction = np.where(unit > 0.0, 1.0 / (1.0 / unit - unit_bulk), unit)
+            out[CONSTRICTION_PER_AREA] = (self.conductivity * constriction
+                                          / (operator.element_area * nx * ny)).reshape(lead)
         if self.resistivity is not None:
             with np.errstate(divide="ignore"):
                 out[ELECTRICAL_RESISTANCE] = (self.resistivity / unit).reshape(lead)
@@ -369,8 +382,11 @@ class ConductionMaterials:
     tol: float = 1e-10
 
     def __post_init__(self):
-        if self.enabled:  # refused with the probe's messages
-            ConductanceProbe(HalfSpaceBody(), self.conductivity, self.resistivity, self.tol)
+        if self.enabled:  # refused with the probe's messages, numbers as the probe's
+            checked = ConductanceProbe(HalfSpaceBody(), self.conductivity, self.resistivity,
+                                       self.tol)
+            for key in ("conductivity", "resistivity", "tol"):
+                object.__setattr__(self, key, getattr(checked, key))
 
     @property
     def enabled(self) -> bool:
