@@ -3,9 +3,9 @@
 The configuration's ``conductance`` section (off by default) gives every contact job
 a :class:`~roughcontact.transport.conduction.probe.ConductanceProbe` through its
 geometry's body (:meth:`~roughcontact.study.records.Geometry.thermal_body`: the
-block, isothermal base and insulated sides; a free half-space where the body is
-modelled as one), with the body's thermal conductivity and/or electrical
-resistivity: the job's sweep records the spots' thermal conductance ``C`` [W/K],
+block, isothermal base and insulated sides, whatever its elastic model; or, with
+``body: halfspace``, a free half-space), with the body's thermal conductivity and/or
+electrical resistivity: the job's sweep records the spots' thermal conductance ``C`` [W/K],
 ``h_c = C / A_n`` [W/(m^2 K)], the bulk's share of the resistance and the
 electrical contact resistance [Ohm] at every step. The counter body is a perfect
 conductor (an isothermal face): on two like half-spaces, give the series
@@ -32,8 +32,8 @@ from typing import ClassVar
 from roughcontact.study.config import unit_slips
 from roughcontact.transport.conduction.probe import (
     BULK_SHARE,
-    BlockBody,
     NO_CONDUCTION,
+    BlockBody,
     ConductanceProbe,
     ConductionMaterials,
     materials_from_params,
@@ -86,7 +86,7 @@ class ConductanceSettings:
     def job_probe(self, geometry) -> ConductanceProbe:
         """The probe a contact job on ``geometry`` records
         (:class:`~roughcontact.study.records.Geometry`)."""
-        return self.materials.probe(geometry.thermal_body())
+        return self.materials.probe(geometry.thermal_body(self.materials.body))
 
     def written(self) -> dict:
         """The materials' values in the configuration's units, by key (none off, and
@@ -158,7 +158,7 @@ def conductance_settings(section) -> ConductanceSettings:
     return ConductanceSettings(ConductionMaterials(
         conductivity=conductivity,
         resistivity=None if resistivity is None else resistivity * UOHM_CM,
-        tol=float(section["tol"])))
+        tol=float(section["tol"]), body=str(section["body"])))
 
 
 def _slip(key: str, value: float) -> str | None:
@@ -196,11 +196,13 @@ def check_conductance(conductance: ConductanceSettings, plausibility_check: bool
                      if (message := _slip(key, float(value))) is not None]
     for where, geometry in geometries.items():
         nx, ny = geometry.grid
-        if nx * ny > THERMAL_DENSE_LIMIT and isinstance(geometry.thermal_body(), BlockBody):
+        body = geometry.thermal_body(conductance.materials.body)
+        if nx * ny > THERMAL_DENSE_LIMIT and isinstance(body, BlockBody):
             problems.append(
                 f"{where}: the conductance through a block of {nx} x {ny} elements needs "
                 f"its thermal influence as a dense matrix ({(nx * ny) ** 2 * 8 / 1e9:.2g} "
                 "GB, no matrix-free form yet); give the block at most 64 x 64 contact "
-                "elements, model the body as a half-space (body.operator: halfspace), or "
-                "set conductance.enabled: false")
+                "elements, let the heat cross a half-space (the spots' constriction "
+                "alone, no bulk), conductance.body: halfspace, or set "
+                "conductance.enabled: false")
     return problems

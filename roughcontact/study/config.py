@@ -351,10 +351,11 @@ class ContactSettings(Record):
         (:mod:`roughcontact.contact.probes`): the flow probe where the flow is on, the
         conductance through the geometry's body
         (:meth:`~roughcontact.study.records.Geometry.thermal_body`) where the
-        ``conductance`` section is; none where both are off."""
+        ``conductance`` section is on; none where both are off."""
         flow = (self.flow,) if self.flow.directions else ()
-        conduction = ((self.conductance.probe(geometry.thermal_body()),)
-                      if self.conductance.enabled else ())
+        materials = self.conductance
+        conduction = ((materials.probe(geometry.thermal_body(materials.body)),)
+                      if materials.enabled else ())
         return flow + conduction
 
 

@@ -297,14 +297,15 @@ class Geometry(Record):
         return BlockGeometry(size=self.size, thickness=self.thickness, grid=self.grid, E=E,
                              nu=self.nu, base=self.base, mesh=self.mesh)
 
-    def thermal_body(self):
-        """The body heat and current enter (the conductance probe's,
-        :mod:`roughcontact.transport.conduction.probe`): a free half-space where the
-        configuration models the body as one (``operator: halfspace``), else the block
-        itself, isothermal base and insulated sides, on its mesh (also where the elastic
-        build picks the half-space's operator: its bulk resistance ``L / (k A)`` is the
-        block's whatever its stiffness)."""
-        if self.operator is InfluenceModel.HALFSPACE:
+    def thermal_body(self, kind: str = "block"):
+        """The body heat and current cross (the conductance probe's,
+        :mod:`roughcontact.transport.conduction.probe`), of ``kind`` (the
+        ``conductance.body`` key, one of
+        :data:`~roughcontact.transport.conduction.probe.BODY_KINDS`): the block itself,
+        isothermal base and insulated sides, on its mesh, whatever model its elastic
+        influence has (its bulk resistance ``L / (k A)`` is the block's); or a free
+        half-space (the spots' constriction alone)."""
+        if kind == "halfspace":
             return HalfSpaceBody(periodic=False)
         return BlockBody(BlockGeometry(size=self.size, thickness=self.thickness,
                                        grid=self.grid, mesh=self.mesh))

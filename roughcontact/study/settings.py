@@ -28,6 +28,7 @@ from types import MappingProxyType
 
 from roughcontact.study import codec
 from roughcontact.study.codec import Record, in_unit, in_units
+from roughcontact.study.conductance_settings import ConductanceSettings, conductance_settings
 from roughcontact.study.config import (
     BuildSettings,
     ContactSettings,
@@ -38,10 +39,9 @@ from roughcontact.study.config import (
     report_section,
 )
 from roughcontact.study.contact_records import Accuracy
-from roughcontact.study.conductance_settings import ConductanceSettings, conductance_settings
 from roughcontact.study.flow_settings import FlowSettings, flow_settings
-from roughcontact.study.probes import study_probes
 from roughcontact.study.presets import ACCURACY_PRESETS
+from roughcontact.study.probes import study_probes
 from roughcontact.study.provenance import config_hash
 from roughcontact.study.records import GeneratedCell, Generator, Geometry
 from roughcontact.units import GB, MM, MPA

@@ -7,6 +7,7 @@ followed here and plans. The check uses the finite-element model a build
 solves (a matrix-free operator's coarse model too).
 """
 
+import copy
 import re
 
 import numpy as np
@@ -138,9 +139,22 @@ def test_generated_surfaces_too_small_for_the_body_are_refused_with_body_keys():
                                            remedy)))).jobs
 
 
-def test_thickness_mm_needs_a_measured_surface():
-    config = validated({"study_seed": 0, "figures": {},
-                        "sweeps": {"g": {"sigma_um": 1.0, "pressure_MPa": [0.1, 1.0],
-                                         "thickness_mm": 2.0}}})
-    with pytest.raises(ConfigProblems, match="g: thickness_mm needs a measured surface"):
-        study_plan(Study.from_config(config))
+def test_a_generated_study_may_name_its_blocks_thickness_and_the_advice_names_it():
+    config = {"study_seed": 0, "figures": {},
+              "surfaces": {"grid": 16, "size_mm": 0.5, "count": 2},
+              "sweeps": {"g": {"sigma_um": 0.1, "b_mm": 0.1, "pressure_MPa": [0.1, 1.0],
+                               "thickness_mm": 10.0}}}  # 20 times the patch's side
+    message = refusal(copy.deepcopy(config))
+    offered = remedies(message)
+    assert any(r.startswith("sweeps.g.thickness_mm: ") for r in offered)
+    for remedy in offered:  # each followed: planned, on the study's own block
+        plan = study_plan(Study.from_config(validated(follow(copy.deepcopy(config),
+                                                             remedy))))
+        thickness = {c.geometry.thickness for c in plan.cells["g"]}
+        if remedy.startswith("sweeps.g.thickness_mm: "):
+            assert thickness == {float(remedy.split(": ")[1]) * 1e-3}
+    with pytest.raises(ConfigProblems, match="g: compare_synthetic needs a measured surface"):
+        study_plan(Study.from_config(validated(
+            {"study_seed": 0, "figures": {},
+             "sweeps": {"g": {"sigma_um": 1.0, "pressure_MPa": [0.1, 1.0],
+                              "compare_synthetic": True}}})))

@@ -73,7 +73,7 @@ def follow(raw: dict, advice: str) -> dict:
 @pytest.mark.parametrize("path", ["config/config.yaml", "config/quick.yaml"])
 def test_off_by_default_and_off_changes_no_job_parameter(path):
     shipped = load_config(path)
-    assert shipped["conductance"] == {"enabled": False, "tol": 1e-10}
+    assert shipped["conductance"] == {"enabled": False, "tol": 1e-10, "body": "block"}
     assert conductance_settings(shipped["conductance"]) is CONDUCTANCE_OFF
     study = Study.from_config(shipped)
     assert study.conductance is CONDUCTANCE_OFF and CONDUCTANCE_OFF.params() == {}
@@ -100,15 +100,21 @@ def test_on_every_contact_job_records_the_probe_through_its_own_block():
     # the job reads its settings back from its parameters
     params = study.contact.params()
     assert params["conductance"] == {"conductivity": 50.0, "resistivity": pytest.approx(15e-8),
-                                     "tol": 1e-10}
+                                     "tol": 1e-10, "body": "block"}
     assert ContactSettings.from_section(params) == study.contact
     # and the aggregate rule its study-side record
     assert study_probes_from_params(study_probe_params(study.probes)) == (study.conductance,)
 
 
-def test_a_body_modelled_as_a_half_space_conducts_as_one():
+def test_the_heat_crosses_the_block_whatever_its_elastic_model_or_a_half_space():
+    # the block's elastic influence a half-space: the heat still crosses the block
     study = Study.from_config(validated(config(conductance=ON,
                                                body={"operator": "halfspace"})))
+    for job in study_plan(study).jobs.values():
+        body = study.contact.probes(job.geometry)[0].body
+        assert isinstance(body, BlockBody) and body.geometry.thickness == 2e-3
+    # asked for: a free half-space, whatever the elastic model
+    study = Study.from_config(validated(config(conductance={**ON, "body": "halfspace"})))
     for job in study_plan(study).jobs.values():
         assert study.contact.probes(job.geometry)[0].body == HalfSpaceBody(periodic=False)
 
@@ -148,8 +154,8 @@ def test_a_block_beyond_the_dense_thermal_limit_is_refused_and_the_advice_plans(
                  body={"thickness_mm": 10.0, "operator": "hybrid", "mesh": "refined"})
     message = refusal(raw)
     assert "72 x 72 elements needs its thermal influence as a dense matrix" in message
-    assert "body.operator: halfspace" in message
-    assert plan(follow(raw, "body.operator: halfspace")).jobs
+    assert "conductance.body: halfspace" in message
+    assert plan(follow(raw, "conductance.body: halfspace")).jobs
     assert plan(raw | {"conductance": {"enabled": False}}).jobs
 
 
@@ -179,7 +185,7 @@ def test_a_generated_study_names_its_blocks_thickness():
 
 def test_the_table_gets_the_constriction_share_beside_the_bulks():
     settings = ConductanceSettings.from_params({"conductivity": 50.0, "resistivity": None,
-                                                "tol": 1e-10})
+                                                "tol": 1e-10, "body": "block"})
     rows = pd.DataFrame({"conduction_bulk_share_mean": [0.25, 0.5],
                          "conduction_bulk_share_half_width": [0.01, 0.02],
                          "conduction_bulk_share_count": [4, 4]})
@@ -189,5 +195,5 @@ def test_the_table_gets_the_constriction_share_beside_the_bulks():
                                   [0.01, 0.02])
     assert set(units) == set(columns)
     electrical = ConductanceSettings.from_params({"conductivity": None, "resistivity": 1e-7,
-                                                  "tol": 1e-10})
+                                                  "tol": 1e-10, "body": "block"})
     assert electrical.table_columns(rows) == ({}, {})

@@ -16,9 +16,9 @@ import dataclasses
 from collections.abc import Mapping
 
 from roughcontact.study import layout
+from roughcontact.study.conductance_settings import check_conductance
 from roughcontact.study.config import BuildSettings, ContactSettings
 from roughcontact.study.contact_records import ContactJob, StudyCell
-from roughcontact.study.conductance_settings import check_conductance
 from roughcontact.study.counter_records import NO_COMPLIANCE, PairGeometry
 from roughcontact.study.flow_settings import check_flow
 from roughcontact.study.plan.block_checks import check_blocks

@@ -27,13 +27,10 @@ import sys
 from pathlib import Path
 from types import MappingProxyType
 
-import yaml
-
 from roughcontact.contact.halfspace_criterion import CALIBRATION
 from roughcontact.elasticity.operators import COARSE_MAX, coarsened_side
 from roughcontact.study.config import (
     PILOT_FRACTIONS,
-    SCHEMA,
     BuildSettings,
     ContactSettings,
     ConvergenceSettings,
@@ -42,71 +39,20 @@ from roughcontact.study.config import (
 )
 from roughcontact.study.contact_records import ContactJob
 from roughcontact.study.plan.cells import study_plan
+from roughcontact.study.plan.cost_model import (  # noqa: F401 (the model's file and loader)
+    COST_MODEL_FILE,
+    DOUBLE_BYTES,
+    MB,
+    SCHEMA_FILE,
+    load_cost_model,
+)
 from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
 from roughcontact.study.settings import load_study
 from roughcontact.surfaces.spectra import autocorrelation
+from roughcontact.transport.conduction.probe import BlockBody
 from roughcontact.units import GB
 
-#: The stored cost model of the source tree.
-COST_MODEL_FILE = SCHEMA.parent / "cost_model.yaml"
-#: The configuration schema (its ``default:`` entries complete a config).
-SCHEMA_FILE = SCHEMA
-#: Bytes of one double-precision value.
-DOUBLE_BYTES = 8
-#: One megabyte [bytes] (decimal, as schedulers count memory).
-MB = 1e6
-
-_REQUIRED = {
-    "runtime": ("margin", "start_min"),
-    "contact": ("reference_elements", "dense_solve_seconds", "dense_exponent",
-                "reference_tol_digits", "method_cost", "reference_reach",
-                "matrix_free_solve_seconds", "matrix_free_reference_elements",
-                "matrix_free_floor_seconds", "memory_base_mb", "dense_matrices",
-                "dense_batch_arrays", "matrix_free_batch_arrays", "flow_solve_seconds",
-                "flow_exponent", "flow_memory_mb", "flow_memory_reference_elements",
-                "flow_memory_exponent", "flow_memory_floor_elements", "flow_field_arrays",
-                "pivot_batch_surfaces", "pivot_transient_factors", "contact_fraction_slope"),
-    "influence": ("anchor_seconds", "anchor_peak_gb", "exponent", "memory_margin_mb"),
-    "surfaces": ("reference_elements", "exact_seconds", "filter_seconds", "exponent",
-                 "calibration_seconds",
-                 "memory_base_mb", "work_arrays"),
-    "summaries": ("seconds",),
-    "audit": ("base_seconds", "seconds_per_file", "memory_base_mb", "model_copies"),
-    "convergence": ("base_seconds", "solve_seconds", "memory_base_mb", "memory_floor_mb"),
-    "speed_vs_error": ("solver_seconds", "reference_surfaces", "grid_seconds",
-                       "grid_reference_seconds", "grid_reference_side", "count_seconds",
-                       "count_surfaces", "reference_elements", "memory_base_mb",
-                       "dense_matrices"),
-}
-
-
-def _frozen(value):
-    if isinstance(value, dict):
-        return MappingProxyType({k: _frozen(v) for k, v in value.items()})
-    return value
-
-
-def load_cost_model(path: str | os.PathLike = COST_MODEL_FILE) -> MappingProxyType:
-    """The cost-model file as read-only mappings, one per section of ``_REQUIRED``.
-
-    Raises ``FileNotFoundError`` or ``ValueError`` naming the file (and the
-    missing ``section.key``).
-    """
-    path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text()) or {}
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{path}: the cost model of the job resources is missing; "
-                                f"restore it (git checkout -- config/cost_model.yaml)") from None
-    missing = [f"{section}.{key}" for section, keys in _REQUIRED.items() for key in keys
-               if key not in (data.get(section) or {})]
-    if missing:
-        raise ValueError(f"{path}: the cost model lacks {', '.join(missing)}")
-    return _frozen(data)
-
-
 _MODEL = load_cost_model()
-
 
 
 # ---------------------------------------------------------------------------
@@ -221,9 +167,43 @@ def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSett
     pair = job.counter.time_factor(_MODEL)
     grid = job.geometry.grid
     if not dense:
-        return (solves * matrix_free_solve_seconds(grid) * tolerance_factor(settings)
-                * method_factor(settings) * reach * pair + flow)
-    return solves * dense_solve_seconds(grid, settings) * reach * pair + flow
+        solving = (solves * matrix_free_solve_seconds(grid) * tolerance_factor(settings)
+                   * method_factor(settings) * reach * pair)
+    else:
+        solving = solves * dense_solve_seconds(grid, settings) * reach * pair
+    return solving + flow + conductance_seconds(job, settings, build, solving)
+
+
+def conductance_seconds(job: ContactJob, settings: ContactSettings, build: BuildSettings,
+                        solving: float) -> float:
+    """Wall time [s] the conductance adds to a contact job whose solves take ``solving``
+    [s] (none with the ``conductance`` section off): its CG at every step, a share of
+    the solves (it is the tangent stiffness's CG on the same sets), and on a block the
+    thermal influence built once in the job, a share of the elastic build
+    (``config/cost_model.yaml``, ``conductance``)."""
+    if not settings.conductance.enabled:
+        return 0.0
+    fit = _MODEL["conductance"]
+    block = isinstance(job.geometry.thermal_body(settings.conductance.body), BlockBody)
+    building = fit["build_share"] * influence_seconds(job.geometry, build) if block else 0.0
+    return fit["solve_share"] * solving + building
+
+
+def conductance_bytes(job: ContactJob, settings: ContactSettings, build: BuildSettings,
+                      ) -> float:
+    """Peak memory [bytes] the conductance adds to a contact job (none off): on a block
+    the larger of its dense thermal influence with the CG's copies (``dense_arrays``
+    n^2 doubles) and its build (``build_memory_share`` of the elastic build's peak); on
+    a half-space the FFT arrays of the batch."""
+    if not settings.conductance.enabled:
+        return 0.0
+    fit = _MODEL["conductance"]
+    nx, ny = job.geometry.grid
+    n = nx * ny
+    if not isinstance(job.geometry.thermal_body(settings.conductance.body), BlockBody):
+        return fit["fft_batch_arrays"] * DOUBLE_BYTES * job.surface.count * n
+    return max(fit["dense_arrays"] * DOUBLE_BYTES * n**2,
+               fit["build_memory_share"] * job.geometry.influence_cost(build).peak_bytes)
 
 
 def contact_runtime(job: ContactJob, settings: ContactSettings, build: BuildSettings,
@@ -433,7 +413,8 @@ def contact_mem_mb(job: ContactJob, settings: ContactSettings, build: BuildSetti
     count = job.surface.count
     dense = _dense(job.geometry, build)
     extra = (job.counter.bytes(count, n, dense) + pivot_factor_bytes(job, settings, dense)
-             + flow_memory_bytes((nx, ny), count, settings.flow.directions))
+             + flow_memory_bytes((nx, ny), count, settings.flow.directions)
+             + conductance_bytes(job, settings, build))
     if not dense:
         return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2 + extra
                    + fit["matrix_free_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)

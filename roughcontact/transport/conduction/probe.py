@@ -79,8 +79,8 @@ from roughcontact.transport.conduction.halfspace import (
 )
 from roughcontact.transport.conduction.spot import full_contact_resistance
 
-__all__ = ["BULK_SHARE", "CONDUCTANCE", "CONDUCTANCE_PER_AREA", "CONSTRICTION_PER_AREA",
-           "CONVERGED",
+__all__ = ["BODY_KINDS", "BULK_SHARE", "CONDUCTANCE", "CONDUCTANCE_PER_AREA",
+           "CONSTRICTION_PER_AREA", "CONVERGED",
            "ELECTRICAL_RESISTANCE", "NO_CONDUCTION", "BlockBody", "ConductanceProbe",
            "ConductionMaterials", "HalfSpaceBody", "body_from_params",
            "conductance_probe_from_params", "materials_from_params"]
@@ -369,19 +369,27 @@ def conductance_probe_from_params(params: dict) -> ConductanceProbe:
                             resistivity=params.get("resistivity"), tol=float(params["tol"]))
 
 
+#: The bodies a study's conductance may cross (:attr:`ConductionMaterials.body`).
+BODY_KINDS = ("block", "halfspace")
+
+
 @dataclass(frozen=True)
 class ConductionMaterials:
-    """What a conductance probe needs besides its body: the body's ``conductivity``
-    [W/(m K)] and/or ``resistivity`` [Ohm m] and the CG's ``tol``
-    (:class:`ConductanceProbe`); with neither, no conductance is recorded
-    (:data:`NO_CONDUCTION`). A study's contact jobs share it and each gives it its own
-    body (:meth:`probe`)."""
+    """What a conductance probe needs besides its body's geometry: the body's
+    ``conductivity`` [W/(m K)] and/or ``resistivity`` [Ohm m], the CG's ``tol``
+    (:class:`ConductanceProbe`) and which ``body`` the heat crosses (one of
+    :data:`BODY_KINDS`: the job's block, or a half-space); with neither material, no
+    conductance is recorded (:data:`NO_CONDUCTION`). A study's contact jobs share it
+    and each gives it its own body (:meth:`probe`)."""
 
     conductivity: float | None = None
     resistivity: float | None = None
     tol: float = 1e-10
+    body: str = "block"
 
     def __post_init__(self):
+        if self.body not in BODY_KINDS:
+            raise ValueError(f"body must be one of {BODY_KINDS}, got {self.body!r}")
         if self.enabled:  # refused with the probe's messages, numbers as the probe's
             checked = ConductanceProbe(HalfSpaceBody(), self.conductivity, self.resistivity,
                                        self.tol)
@@ -402,7 +410,7 @@ class ConductionMaterials:
         if not self.enabled:
             return {}
         return {"conductivity": self.conductivity, "resistivity": self.resistivity,
-                "tol": self.tol}
+                "tol": self.tol, "body": self.body}
 
 
 #: No conductance recorded.
@@ -415,4 +423,4 @@ def materials_from_params(params: dict) -> ConductionMaterials:
     if not params:
         return NO_CONDUCTION
     return ConductionMaterials(params.get("conductivity"), params.get("resistivity"),
-                               float(params["tol"]))
+                               float(params["tol"]), str(params["body"]))
