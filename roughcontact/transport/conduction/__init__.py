@@ -18,15 +18,18 @@ constriction resistances, bodies in series). A walk::
 ``probe`` is what a contact sweep records of it at every step
 (:class:`ConductanceProbe`, a :class:`~roughcontact.contact.probes.Probe`: the
 conductance of each solution's contact set ``p > 0``; its columns' names and units
-live there only). Nothing else here knows about surfaces or the workflow; the
-study's settings come later.
+live there only); ``correlations`` the industry's correlations it is compared with
+(Mikic 1974, Cooper, Mikic & Yovanovich 1969). Nothing here knows about the
+workflow: the study's settings are :mod:`roughcontact.study.conductance_settings`.
 """
 
-from roughcontact.transport.conduction import block, halfspace, probe, spot
+from roughcontact.transport.conduction import block, correlations, halfspace, probe, spot
 from roughcontact.transport.conduction.block import *  # noqa: F403 (block.__all__)
+from roughcontact.transport.conduction.correlations import *  # noqa: F403 (correlations.__all__)
 from roughcontact.transport.conduction.halfspace import *  # noqa: F403 (halfspace.__all__)
 from roughcontact.transport.conduction.probe import *  # noqa: F403 (probe.__all__)
 from roughcontact.transport.conduction.spot import *  # noqa: F403 (spot.__all__)
 
 #: The public names of the room's modules.
-__all__ = [*block.__all__, *halfspace.__all__, *probe.__all__, *spot.__all__]
+__all__ = [*block.__all__, *correlations.__all__, *halfspace.__all__, *probe.__all__,
+           *spot.__all__]

@@ -10,7 +10,7 @@ gives
 
     R_AA q_A = 1,     C = dA 1^T q_A = dA 1^T (R_AA)^-1 1     [W/K],
 
-the interface's conductance (Holm 1967, Ch 1: the constriction resistance of
+the interface's conductance (Holm 1967, Sec 4: the constriction resistance of
 isothermal spots; the same equation Greenwood 1966 solves for clusters of
 spots). ``R_AA`` is symmetric positive definite, so the solve is the tangent
 stiffness's (:func:`roughcontact.contact.stiffness.free_set_cg`: conjugate
