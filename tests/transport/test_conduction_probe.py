@@ -233,3 +233,27 @@ def test_bad_bodies_are_refused_naming_the_field():
     with pytest.raises(ValueError, match=r"body.body must be one of \('halfspace', 'block'\)"):
         conductance_probe_from_params({"body": {"body": "sphere"}, "conductivity": K,
                                        "tol": 1e-10})
+
+
+def test_the_direct_solve_on_a_dense_block_agrees_with_cg_and_hands_over_what_it_cannot():
+    from roughcontact.contact.checks import as_operator
+    from roughcontact.contact.products import Products
+    from roughcontact.contact.stiffness import free_set_cg
+    from roughcontact.transport.conduction import direct_totals
+    from roughcontact.transport.conduction.block import unit_conductivity_influence
+
+    geometry = BlockGeometry(size=(1.2e-3, 1.0e-3), thickness=0.6e-3, grid=(12, 10),
+                             mesh="paper")
+    matrix = unit_conductivity_influence(geometry)
+    rng = np.random.default_rng(4)
+    sets = rng.random((5, 120)) < np.array([0.02, 0.1, 0.3, 0.6, 0.95])[:, None]
+    totals, settled = direct_totals(matrix, sets, 1e-12)
+    assert settled.all()
+    cg = free_set_cg(Products(as_operator(matrix, 1e-8)), sets, np.zeros(sets.shape), 1e-12,
+                     2000)
+    assert cg.converged.all()
+    np.testing.assert_allclose(totals, cg.total, rtol=1e-9)
+    # a matrix that is not positive definite on a set: not settled, left to CG
+    indefinite = np.array([[1.0, 2.0], [2.0, 1.0]])
+    totals, settled = direct_totals(indefinite, np.array([[True, True], [True, False]]), 1e-10)
+    assert settled.tolist() == [False, True] and totals[1] == pytest.approx(1.0)

@@ -66,10 +66,10 @@ from typing import ClassVar
 import numpy as np
 
 from roughcontact.contact.cg import default_max_iter
-from roughcontact.contact.checks import as_operator
+from roughcontact.contact.checks import as_operator, given_matrix
 from roughcontact.contact.probes import Column, SolvedFields
 from roughcontact.contact.products import Products
-from roughcontact.contact.stiffness import free_set_cg
+from roughcontact.contact.stiffness import DIAGONAL_SAFETY, free_set_cg
 from roughcontact.elasticity.influence import BlockGeometry, MeshSpec
 from roughcontact.transport.conduction.block import unit_conductivity_influence
 from roughcontact.transport.conduction.halfspace import (
@@ -83,7 +83,7 @@ __all__ = ["BODY_KINDS", "BULK_SHARE", "CONDUCTANCE", "CONDUCTANCE_PER_AREA",
            "CONSTRICTION_PER_AREA", "CONVERGED",
            "ELECTRICAL_RESISTANCE", "NO_CONDUCTION", "BlockBody", "ConductanceProbe",
            "ConductionMaterials", "HalfSpaceBody", "body_from_params",
-           "conductance_probe_from_params", "materials_from_params"]
+           "conductance_probe_from_params", "direct_totals", "materials_from_params"]
 
 logger = logging.getLogger("roughcontact.transport")
 
@@ -312,14 +312,21 @@ class ConductanceProbe:
 
     def _unit_conductance(self, operator, contact):
         """``(C_1, converged)`` (m,) of the contact sets ``contact`` (m, n): ``dA 1^T
-        (k R_AA)^-1 1`` [m] by CG on every set together (0 for an empty set, inf for a
-        full one where the body has no resistance there)."""
+        (k R_AA)^-1 1`` [m] (0 for an empty set, inf for a full one where the body has no
+        resistance there). On a dense influence each set's ``k R_AA`` is factored
+        (Cholesky, float64; :func:`direct_totals`), the sets it does not settle to
+        ``tol`` go to CG; otherwise CG on every set together."""
         m, n = contact.shape
         unit = np.zeros(m)
         converged = np.ones(m, dtype=bool)
         full = contact.all(axis=1) & self.body.unbounded_at_full_contact
         unit[full] = np.inf
         rows = np.flatnonzero(contact.any(axis=1) & ~full)
+        matrix = given_matrix(operator)
+        if rows.size and matrix is not None:
+            totals, settled = direct_totals(matrix, contact[rows], self.tol)
+            unit[rows[settled]] = operator.element_area * totals[settled]
+            rows = rows[~settled]
         if rows.size:
             solution = free_set_cg(Products(operator), contact[rows], np.zeros((rows.size, n)),
                                    self.tol, default_max_iter(n))
@@ -360,6 +367,34 @@ class ConductanceProbe:
                 "their conductance recorded as NaN, flagged in %s", self.tol, where.size,
                 converged.size, where[:10].tolist(), CONVERGED)
         return out
+
+
+def direct_totals(matrix: np.ndarray, sets: np.ndarray, tol: float) -> tuple:
+    """``1^T x`` of ``R_AA x = 1`` on each set ``A`` of ``sets`` (m, n) of a dense
+    symmetric positive definite ``matrix`` (n, n), by Cholesky in float64, and whether
+    each met ``tol``: by the CG's own test
+    (:func:`~roughcontact.contact.stiffness.free_set_cg`: the estimated relative error of
+    the total, ``32 (r / diag) . r <= tol (1^T x + x^T r)``, ``r`` the float64 residual).
+    A set whose factorization fails, or that misses the test, is not settled (its total
+    0): the caller solves it by CG."""
+    from scipy.linalg import LinAlgError, cho_factor, cho_solve
+
+    totals = np.zeros(sets.shape[0])
+    settled = np.zeros(sets.shape[0], dtype=bool)
+    for j, row in enumerate(sets):
+        flat = np.flatnonzero(row)
+        block = matrix[np.ix_(flat, flat)]
+        try:
+            x = cho_solve(cho_factor(block, check_finite=False), np.ones(flat.size),
+                          check_finite=False)
+        except LinAlgError:
+            continue
+        residual = 1.0 - block @ x
+        total = float(x.sum() + x @ residual)
+        estimate = DIAGONAL_SAFETY * float((residual / np.diagonal(block)) @ residual)
+        if np.isfinite(total) and total > 0.0 and estimate <= tol * total:
+            totals[j], settled[j] = total, True
+    return totals, settled
 
 
 def conductance_probe_from_params(params: dict) -> ConductanceProbe:
