@@ -46,6 +46,7 @@ wildcard_constraints:
     fig="|".join(PLAN.figures) or "__none__",
     geometry="|".join(re.escape(k) for k in PLAN.geometries) or "__none__",
     pair="|".join(re.escape(k) for k in PLAN.pairs) or "__none__",
+    thermal="|".join(re.escape(k) for k in PLAN.thermal) or "__none__",
     job="|".join(re.escape(k) for k in PLAN.jobs) or "__none__",
     study="|".join(PLAN.aggregates) or "__none__",
 
@@ -94,6 +95,7 @@ RECORDS = {
     "influence": lambda wildcards: PLAN.geometries[wildcards.geometry],
     "choice": lambda wildcards: PLAN.choices[wildcards.auto],
     "pair": lambda wildcards: PLAN.pairs[wildcards.pair],
+    "thermal": lambda wildcards: PLAN.thermal[wildcards.thermal],
     "surfaces": lambda wildcards: PLAN.surfaces[wildcards.cell],
 }
 

@@ -74,3 +74,25 @@ rule pair_influence:
         pair=get_params("pair"),
     script:
         "../scripts/build_pair.py"
+
+
+# The thermal influence k R of a block whose conductance the contact jobs record
+# (conductance.body: block): built once per block (size, thickness, grid, mesh; E, nu
+# and the base do not enter), read by every contact job on it.
+rule thermal_influence:
+    output:
+        "results/influence/thermal/{thermal}.h5",
+    log:
+        "results/logs/influence/thermal/{thermal}.log",
+    benchmark:
+        "results/benchmarks/rules/thermal_influence/{thermal}.tsv"
+    priority: EARLY_PRIORITY
+    threads: 1
+    resources:
+        mem_mb=get_mem_mb("thermal"),
+        runtime=get_runtime("thermal"),
+    params:
+        thermal=get_params("thermal"),
+        solver=config["body"]["solver"],
+    script:
+        "../scripts/build_thermal.py"

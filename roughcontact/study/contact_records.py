@@ -34,6 +34,7 @@ from roughcontact.study.records import (
     SurfaceCell,
     surface_cell_from_params,
 )
+from roughcontact.study.thermal_records import NO_THERMAL, ThermalBlock, thermal_from_params
 from roughcontact.units import MM, MPA, UM
 
 
@@ -81,6 +82,9 @@ class ContactJob(Record):
                                      flatten=True, default=Accuracy())
     nondim_hardness: float | None = codec.field(key="hardness", omit=DEFAULT, default=None)
     counter: JobCounter = codec.record(JobCounter, omit=DEFAULT, default=NO_COUNTER_BODY)
+    # the block's thermal influence where the conductance crosses it (none: no key)
+    thermal: ThermalBlock = codec.record(thermal_from_params, omit=DEFAULT,
+                                         default=NO_THERMAL)
 
     def pairs(self) -> dict[str, PairGeometry]:
         """The pair of influence models summed once for this job, by key: of a compliant
@@ -90,14 +94,15 @@ class ContactJob(Record):
 
     def files(self, study_seed=None) -> dict[str, JobFile]:
         """The files the job reads, by input name, each with what it must have been made
-        for: its surfaces and influence model and its counter body's (the pair's file on
-        a dense first body). The one place that decides them: the rules, the plan, the
+        for: its surfaces and influence model, its counter body's (the pair's file on
+        a dense first body) and its block's thermal influence (``thermal``, where its
+        conductance crosses the block). The one place that decides them: the rules, the plan, the
         audit, the resources and the job take them from here."""
         return {"surfaces": JobFile(layout.surfaces(self.surface.key),
                                     {"cell": self.surface.params(), "study_seed": study_seed}),
                 "influence": JobFile(layout.influence(self.geometry.key),
                                      {"geometry": self.geometry.params()}),
-                **self.counter.files(self.geometry, study_seed)}
+                **self.counter.files(self.geometry, study_seed), **self.thermal.files()}
 
     def paths(self) -> dict[str, str]:
         """The paths of :meth:`files`, by input name (a rule's inputs)."""

@@ -6,9 +6,10 @@ name is its record's key (:mod:`roughcontact.study.records`), so a changed
 parameter is a new file. Under :data:`ROOT`:
 
 - ``surfaces/<cell key>.h5``: a surface cell's heights (units of sigma);
-- ``influence/<geometry key>.h5``, ``influence/pairs/<pair key>.h5`` and
-  ``influence/choices/<geometry key>.json``: influence models, pairs of them summed
-  once, and the choices of ``operator: auto``;
+- ``influence/<geometry key>.h5``, ``influence/pairs/<pair key>.h5``,
+  ``influence/choices/<geometry key>.json`` and ``influence/thermal/<block key>.h5``:
+  influence models, pairs of them summed once, the choices of ``operator: auto`` and
+  the blocks' thermal influences (the conductance's);
 - ``contact/<job key>.h5``: a contact job's non-dimensional sweep;
 - ``aggregates/<study>.<ext>`` for each of :data:`AGGREGATE_EXTENSIONS`: a study's
   tables and their sidecar;
@@ -22,7 +23,7 @@ from dataclasses import dataclass
 
 __all__ = ["AGGREGATE_EXTENSIONS", "ROOT", "Files", "aggregate", "aggregates", "choice",
            "contact", "figure", "grid_contact", "grid_surfaces", "influence", "pair", "report",
-           "surfaces"]
+           "surfaces", "thermal"]
 
 #: The folder of every output, relative to the working directory.
 ROOT = "results"
@@ -48,6 +49,8 @@ class Files:
 surfaces = Files("surfaces")
 #: A geometry's influence file.
 influence = Files("influence")
+#: A block's thermal influence (the conductance's).
+thermal = Files("influence/thermal")
 #: A pair of influence models summed once.
 pair = Files("influence/pairs")
 #: The choice of an ``operator: auto`` geometry.

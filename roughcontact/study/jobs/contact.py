@@ -201,7 +201,8 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
     m = heights.shape[0]
     name = f"{job.surface.key}__{job.geometry.key}"
     counter, counter_hashes = read_counter(job, inputs, study_seed)
-    probes = settings.probes(job.geometry)
+    # the block's thermal influence from its file where the conductance crosses it
+    probes = job.thermal.seeded(settings.probes(job.geometry), inputs)
     problem = contact_problem(job, heights, unit, counter, probes)
     hardness = job.nondim_hardness
     log.info("contact %s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "

@@ -42,6 +42,7 @@ from roughcontact.study.records import (
     SurfaceCell,
 )
 from roughcontact.study.settings import Study
+from roughcontact.study.thermal_records import ThermalBlock, with_thermal
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,7 +72,8 @@ class StudyPlan:
     :func:`surfaces_from`); a cell not listed generates or imports its own.
 
     ``pairs``: the pairs of influence models summed once for the jobs with a
-    compliant counter body on a dense first body, by key.
+    compliant counter body on a dense first body, by key; ``thermal``: the blocks whose
+    thermal influence the jobs' conductance reads, by key.
     """
 
     figures: tuple[str, ...]
@@ -90,6 +92,7 @@ class StudyPlan:
     alternatives: frozenset[str] = frozenset()
     surfaces_from: Mapping[str, str] = dataclasses.field(default_factory=dict)
     pairs: Mapping[str, PairGeometry] = dataclasses.field(default_factory=dict)
+    thermal: Mapping[str, ThermalBlock] = dataclasses.field(default_factory=dict)
 
     def audit_files(self, jobs: Mapping[str, ContactJob]) -> list[str]:
         """The files the audit reads for contact ``jobs`` (by key): their contact files,
@@ -185,7 +188,8 @@ def study_plan(study: Study) -> StudyPlan:
     planned = {g.candidates(build.max_bytes)[0].key for g in asked.values()}
     _raise("Influence models that do not fit body.max_memory_gb",
            check_memory(asked, build))
-    candidates = candidate_jobs(jobs, build)
+    candidates = {key: with_thermal(job, study.conductance)
+                  for key, job in candidate_jobs(jobs, build).items()}
     return StudyPlan(figures=figures, studies=studies,
                      aggregates=tuple(sorted(set(sources.values()))), cells=cells,
                      jobs=candidates, surfaces=surfaces,
@@ -196,7 +200,9 @@ def study_plan(study: Study) -> StudyPlan:
                      alternatives=frozenset(geometries) - planned,
                      surfaces_from=surfaces_from(surfaces),
                      pairs={key: pair for job in candidates.values()
-                            for key, pair in job.pairs().items()})
+                            for key, pair in job.pairs().items()},
+                     thermal={job.thermal.key: job.thermal for job in candidates.values()
+                              if isinstance(job.thermal, ThermalBlock)})
 
 
 def surfaces_from(surfaces: Mapping[str, SurfaceCell]) -> dict[str, str]:

@@ -177,24 +177,42 @@ def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSett
 def conductance_seconds(job: ContactJob, settings: ContactSettings, build: BuildSettings,
                         solving: float) -> float:
     """Wall time [s] the conductance adds to a contact job whose solves take ``solving``
-    [s] (none with the ``conductance`` section off): its CG at every step, a share of
-    the solves (it is the tangent stiffness's CG on the same sets), and on a block the
-    thermal influence built once in the job, a share of the elastic build
-    (``config/cost_model.yaml``, ``conductance``)."""
+    [s] (none with the ``conductance`` section off): its solve at every step, a share of
+    the contact solves (``config/cost_model.yaml``, ``conductance``; the block's thermal
+    influence is its own job's, :func:`thermal_seconds`)."""
     if not settings.conductance.enabled:
         return 0.0
+    return _MODEL["conductance"]["solve_share"] * solving
+
+
+def thermal_seconds(thermal, build: BuildSettings) -> float:
+    """Wall time [s] of a block's thermal influence build
+    (:class:`~roughcontact.study.thermal_records.ThermalBlock`): a share of the elastic
+    build of its block (:func:`influence_seconds` of the dense model)."""
+    return _MODEL["conductance"]["build_share"] * influence_seconds(_elastic(thermal), build)
+
+
+def thermal_mem_mb(thermal, build: BuildSettings) -> int:
+    """Peak memory [MB] of a thermal influence build: the larger of its dense matrix
+    with the condensation's copies (``dense_arrays`` n^2 doubles) and a share of the
+    elastic build's peak, plus the interpreter's."""
     fit = _MODEL["conductance"]
-    block = isinstance(job.geometry.thermal_body(settings.conductance.body), BlockBody)
-    building = fit["build_share"] * influence_seconds(job.geometry, build) if block else 0.0
-    return fit["solve_share"] * solving + building
+    n = thermal.grid[0] * thermal.grid[1]
+    peak = max(fit["dense_arrays"] * DOUBLE_BYTES * n**2,
+               fit["build_memory_share"] * _elastic(thermal).influence_cost(build).peak_bytes)
+    return int(_MODEL["contact"]["memory_base_mb"] + peak / MB)
 
 
-def conductance_bytes(job: ContactJob, settings: ContactSettings, build: BuildSettings,
-                      ) -> float:
+def _elastic(thermal) -> Geometry:
+    """The dense elastic geometry of a thermal block (its cost's reference)."""
+    return Geometry(nu=0.0, size=thermal.size, thickness=thermal.thickness,
+                    grid=thermal.grid, base="clamped", mesh=thermal.mesh)
+
+
+def conductance_bytes(job: ContactJob, settings: ContactSettings) -> float:
     """Peak memory [bytes] the conductance adds to a contact job (none off): on a block
-    the larger of its dense thermal influence with the CG's copies (``dense_arrays``
-    n^2 doubles) and its build (``build_memory_share`` of the elastic build's peak); on
-    a half-space the FFT arrays of the batch."""
+    its dense thermal influence with the solve's copies (``dense_arrays`` n^2 doubles);
+    on a half-space the FFT arrays of the batch."""
     if not settings.conductance.enabled:
         return 0.0
     fit = _MODEL["conductance"]
@@ -202,8 +220,7 @@ def conductance_bytes(job: ContactJob, settings: ContactSettings, build: BuildSe
     n = nx * ny
     if not isinstance(job.geometry.thermal_body(settings.conductance.body), BlockBody):
         return fit["fft_batch_arrays"] * DOUBLE_BYTES * job.surface.count * n
-    return max(fit["dense_arrays"] * DOUBLE_BYTES * n**2,
-               fit["build_memory_share"] * job.geometry.influence_cost(build).peak_bytes)
+    return fit["dense_arrays"] * DOUBLE_BYTES * n**2
 
 
 def contact_runtime(job: ContactJob, settings: ContactSettings, build: BuildSettings,
@@ -414,7 +431,7 @@ def contact_mem_mb(job: ContactJob, settings: ContactSettings, build: BuildSetti
     dense = _dense(job.geometry, build)
     extra = (job.counter.bytes(count, n, dense) + pivot_factor_bytes(job, settings, dense)
              + flow_memory_bytes((nx, ny), count, settings.flow.directions)
-             + conductance_bytes(job, settings, build))
+             + conductance_bytes(job, settings))
     if not dense:
         return int(fit["memory_base_mb"] + (DOUBLE_BYTES * (COARSE_MAX**2) ** 2 + extra
                    + fit["matrix_free_batch_arrays"] * DOUBLE_BYTES * count * n) / MB)
@@ -563,6 +580,10 @@ JOB_COSTS = MappingProxyType({
     "influence": JobCost(
         lambda plan, w: influence_mem_mb(plan.geometries[w["geometry"]], plan.build),
         lambda plan, w, a: influence_runtime(plan.geometries[w["geometry"]], plan.build, a)),
+    "thermal": JobCost(
+        lambda plan, w: thermal_mem_mb(plan.thermal[w["thermal"]], plan.build),
+        lambda plan, w, a: runtime_minutes(thermal_seconds(plan.thermal[w["thermal"]],
+                                                           plan.build), a)),
     "pair": JobCost(lambda plan, w: pair_mem_mb(plan.pairs[w["pair"]]),
                     lambda plan, w, a: pair_runtime(plan.pairs[w["pair"]], a)),
     "choice": JobCost(

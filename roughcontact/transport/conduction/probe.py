@@ -96,6 +96,15 @@ CONSTRICTION_PER_AREA = "constriction_conductance_per_area"
 SPACING_RTOL = 1e-9
 
 
+def _given(built, grid):
+    """A dense ``k R`` given for ``grid`` ``(nx, ny)``, checked to fit it."""
+    n = int(grid[0]) * int(grid[1])
+    if np.shape(built) != (n, n):
+        raise ValueError(f"the given influence has shape {np.shape(built)}, the sweep's "
+                         f"grid {tuple(grid)} needs ({n}, {n})")
+    return built
+
+
 @dataclass(frozen=True)
 class HalfSpaceBody:
     """A half-space's face (module docstring).
@@ -124,8 +133,11 @@ class HalfSpaceBody:
             raise ValueError("body.dense is for a free half-space: set periodic or dense "
                              "false")
 
-    def unit_influence(self, grid, spacing):
-        """``k R`` [m] on ``grid`` ``(nx, ny)`` of element sides ``spacing`` [m]."""
+    def unit_influence(self, grid, spacing, built=None):
+        """``k R`` [m] on ``grid`` ``(nx, ny)`` of element sides ``spacing`` [m] (``built``:
+        a dense one given, of that grid)."""
+        if built is not None:
+            return _given(built, grid)
         size = (grid[0] * spacing[0], grid[1] * spacing[1])
         if self.periodic:
             return periodic_thermal_halfspace(grid, size, 1.0)
@@ -169,8 +181,9 @@ class BlockBody:
             raise ValueError(f"body.geometry must be a BlockGeometry, got "
                              f"{type(self.geometry).__name__}")
 
-    def unit_influence(self, grid, spacing):
-        """``k R`` [m] of the block; ``grid`` and ``spacing`` must be its own."""
+    def unit_influence(self, grid, spacing, built=None):
+        """``k R`` [m] of the block (``built``: given, e.g. read from its file); ``grid``
+        and ``spacing`` must be its own."""
         geom = self.geometry
         own = (geom.size[0] / geom.grid[0], geom.size[1] / geom.grid[1])
         if tuple(grid) != tuple(geom.grid) or not np.allclose(spacing, own,
@@ -179,6 +192,8 @@ class BlockBody:
                 f"body.geometry has grid {geom.grid} of elements {own} m, the sweep's "
                 f"fields grid {tuple(grid)} of elements {tuple(spacing)} m: give the "
                 f"block the sweep's grid and size")
+        if built is not None:
+            return _given(built, grid)
         return unit_conductivity_influence(geom, solver=self.solver)
 
     def unit_bulk_resistance(self, operator, tol: float) -> float:
@@ -300,12 +315,22 @@ class ConductanceProbe:
         return {"body": self.body.params(), "conductivity": self.conductivity,
                 "resistivity": self.resistivity, "tol": self.tol}
 
+    def with_unit_influence(self, unit) -> ConductanceProbe:
+        """The same probe given its body's ``k R`` [m] built elsewhere (a stored file,
+        :meth:`BlockBody.unit_influence`'s result): used on the grid it fits, checked
+        there as the body would check its own."""
+        probe = dataclasses.replace(self)
+        probe._influences["given"] = unit
+        return probe
+
     def influence(self, grid, spacing):
         """The body's ``k R`` [m] on ``grid`` ``(nx, ny)`` of sides ``spacing`` [m] and its
-        bulk resistance times ``k`` [1/m], built once and kept."""
+        bulk resistance times ``k`` [1/m], built once (or given,
+        :meth:`with_unit_influence`) and kept."""
         key = (tuple(int(g) for g in grid), tuple(float(s) for s in spacing))
         if key not in self._influences:
-            operator = as_operator(self.body.unit_influence(*key), key[1][0] * key[1][1])
+            unit = self.body.unit_influence(*key, built=self._influences.get("given"))
+            operator = as_operator(unit, key[1][0] * key[1][1])
             self._influences[key] = (operator,
                                      self.body.unit_bulk_resistance(operator, self.tol))
         return self._influences[key]
