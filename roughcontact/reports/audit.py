@@ -461,7 +461,7 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
                                    files["influence"], record.geometry)
         counter, _ = read_counter(record, files, study_seed)
         problem = contact_problem(record, surfaces["heights"], unit, counter,
-                                  stored.probe_columns.probes)
+                                  record.thermal.seeded(stored.probe_columns.probes, files))
         start = time.perf_counter()
         options = SWEEP_OPTIONS.with_(method=stored.method, tol=stored.tol,
                                       precision=stored.precision, max_iter=stored.max_iter)

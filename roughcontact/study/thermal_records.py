@@ -61,7 +61,7 @@ class ThermalBlock(Record):
 
     def files(self) -> dict[str, JobFile]:
         """The file a contact job reads, under its input name ``thermal``."""
-        return {"thermal": JobFile(layout.thermal(self.key), {"params": self.params()})}
+        return {"thermal": JobFile(layout.thermal(self.key), {"geometry": self.params()})}
 
     def seeded(self, probes: tuple, paths: dict) -> tuple:
         """``probes`` with the conductance probe given the stored influence of

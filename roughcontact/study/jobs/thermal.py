@@ -52,7 +52,7 @@ def build_thermal(params: dict, out_path, solver: str = "auto", config=None) -> 
     unit = unit_conductivity_influence(block.block(), solver=solver)
     seconds = time.perf_counter() - start
     rows = unit.sum(axis=1)
-    log.info("built in %.1f s; row sums %.6g-%.6g m (the thickness %.6g m: full contact "
+    log.info("built in %.1f s; row sums %.10g-%.10g m (the thickness %.10g m: full contact "
              "gives k A / L)", seconds, rows.min(), rows.max(), block.thickness)
     datasets = {DATASET: unit}
     attrs = {"params": block.params(), "wall_seconds": seconds,
