@@ -37,10 +37,12 @@ MPA, UM = 1e6, 1e-6
 
 
 def load_conductivities(paths, names) -> dict:
-    """The body's thermal conductivity [W/(m K)] of several studies by name (the
-    sidecar's ``conductance.conductivity`` of each study's aggregate files ``paths``,
-    checked as by :func:`~roughcontact.reports.plotting.load_aggregates`); a study
-    solved without a conductivity is refused, naming it."""
+    """The body's and the counter body's thermal conductivities [W/(m K)] of several
+    studies by name (the sidecar's ``conductance.conductivity`` and
+    ``counter_conductivity``, inf for a perfectly conducting counter face, of each
+    study's aggregate files ``paths``, checked as by
+    :func:`~roughcontact.reports.plotting.load_aggregates`); a study solved without a
+    conductivity is refused, naming it."""
     from roughcontact.reports.plotting import load_aggregates
     from roughcontact.reports.study_figures import AGGREGATE_FILES
 
@@ -53,7 +55,8 @@ def load_conductivities(paths, names) -> dict:
             raise ValueError(f"study {name} was solved without a thermal conductivity "
                              "(its sidecar has no conductance.conductivity): set "
                              "conductance.enabled: true and conductance.conductivity_W_mK")
-        found[name] = float(conductivity)
+        counter = meta["conductance"].get("counter_conductivity")
+        found[name] = (float(conductivity), math.inf if counter is None else float(counter))
     return found
 
 
@@ -73,13 +76,15 @@ def load_slopes(surface_files, cells) -> dict:
     return slopes
 
 
-def with_correlations(table: pd.DataFrame, slopes: dict, conductivity: float) -> pd.DataFrame:
+def with_correlations(table: pd.DataFrame, slopes: dict, conductivity: float,
+                      counter_conductivity: float = math.inf) -> pd.DataFrame:
     """A study's aggregate ``table`` with each cell's slope ``m`` [-] (its surfaces'
     :func:`load_slopes` times its sigma), the correlation's ``h`` [W/(m^2 K)] at each
     level (``correlation``: Mikic's elastic one, CMY's plastic one for a capped cell)
-    and ``h_s`` over it (``h_s_ratio``); ``conductivity`` the body's [W/(m K)]."""
+    and ``h_s`` over it (``h_s_ratio``); ``conductivity`` the body's and
+    ``counter_conductivity`` the counter face's [W/(m K)] (inf: a perfect conductor)."""
     rows = []
-    k_s = harmonic_conductivity(conductivity)  # the flat: a perfect conductor
+    k_s = harmonic_conductivity(conductivity, counter_conductivity)
     for _, cell in table.groupby("cell", sort=False):
         first = cell.iloc[0]
         sigma = first["sigma_um"] * UM

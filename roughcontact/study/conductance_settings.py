@@ -93,20 +93,31 @@ class ConductanceSettings:
         none for a material not given)."""
         materials = self.materials
         out = {}
-        if materials.conductivity is not None:
-            out["conductivity_W_mK"] = materials.conductivity
-        if materials.resistivity is not None:
-            out["resistivity_uohm_cm"] = materials.resistivity / UOHM_CM
+        for prefix in ("", "counter_"):
+            conductivity = getattr(materials, f"{prefix}conductivity")
+            resistivity = getattr(materials, f"{prefix}resistivity")
+            if conductivity is not None:
+                out[f"{prefix}conductivity_W_mK"] = conductivity
+            if resistivity is not None:
+                out[f"{prefix}resistivity_uohm_cm"] = resistivity / UOHM_CM
         return out
 
-    def material_text(self) -> str:
-        """The materials in words (a caption's)."""
+    def material_text(self, prefix: str = "") -> str:
+        """The body's materials in words (a caption's; ``prefix`` "counter_": the
+        counter body's, empty where it is a perfect conductor)."""
         w = self.written()
-        parts = ([f"thermal conductivity {w['conductivity_W_mK']:g} W/(m K)"]
-                 if "conductivity_W_mK" in w else [])
-        parts += ([f"electrical resistivity {w['resistivity_uohm_cm']:g} uOhm cm"]
-                  if "resistivity_uohm_cm" in w else [])
+        parts = ([f"thermal conductivity {w[prefix + 'conductivity_W_mK']:g} W/(m K)"]
+                 if prefix + "conductivity_W_mK" in w else [])
+        parts += ([f"electrical resistivity {w[prefix + 'resistivity_uohm_cm']:g} uOhm cm"]
+                  if prefix + "resistivity_uohm_cm" in w else [])
         return " and ".join(parts)
+
+    def counter_text(self) -> str:
+        """The counter face in words: a perfect conductor, or a half-space of its
+        materials (the sidecar's, a caption's)."""
+        counter = self.material_text("counter_")
+        return (f"a half-space of {counter} in series" if counter
+                else "a perfect conductor (isothermal face)")
 
     def table_columns(self, rows) -> tuple[dict, dict]:
         """The constriction's share of a cell's aggregated ``rows`` (a table with the
@@ -127,7 +138,7 @@ class ConductanceSettings:
 
     def sidecar(self, rows: list[dict]) -> dict:
         """The sidecar's entry: the materials in SI units, the counter body's model."""
-        return {**self.params(), "counter_body": "perfect conductor (isothermal face)"}
+        return {**self.params(), "counter_body": self.counter_text()}
 
     @classmethod
     def from_params(cls, params: dict) -> ConductanceSettings:
@@ -155,21 +166,25 @@ def conductance_settings(section) -> ConductanceSettings:
             "conductance: enabled without conductivity_W_mK or resistivity_uohm_cm; give "
             "the body's thermal conductivity [W/(m K)] (steel 50), its electrical "
             "resistivity [uOhm cm] (steel 15), or both, or set conductance.enabled: false")
+    counter_resistivity = section.get("counter_resistivity_uohm_cm")  # optional: perfect
     return ConductanceSettings(ConductionMaterials(
         conductivity=conductivity,
         resistivity=None if resistivity is None else resistivity * UOHM_CM,
-        tol=float(section["tol"]), body=str(section["body"])))
+        tol=float(section["tol"]), body=str(section["body"]),
+        counter_conductivity=section.get("counter_conductivity_W_mK"),  # optional: perfect
+        counter_resistivity=None if counter_resistivity is None
+        else counter_resistivity * UOHM_CM))
 
 
 def _slip(key: str, value: float) -> str | None:
     """The message for a value of ``conductance.<key>`` outside its plausible range, or
-    None."""
-    (low, high), (usual_low, usual_high), slips = PLAUSIBLE[key]
+    None (a counter body's material as the body's)."""
+    (low, high), (usual_low, usual_high), slips = PLAUSIBLE[key.removeprefix("counter_")]
     if low <= value <= high:
         return None
     guesses = unit_slips(f"conductance.{key}", value, slips,
                          lambda v: usual_low <= v <= usual_high)
-    unit = "W/(m K)" if key == "conductivity_W_mK" else "uOhm cm"
+    unit = "W/(m K)" if key.endswith("conductivity_W_mK") else "uOhm cm"
     return (f"conductance.{key}: {value:g} is outside the plausible {low:g}-{high:g} {unit}"
             + (f" ({'; '.join(guesses)})" if guesses else "")
             + " (plausibility_check: false accepts it)")
@@ -185,11 +200,18 @@ def check_conductance(conductance: ConductanceSettings, plausibility_check: bool
     about: their material is not modelled, each is a perfect conductor."""
     if not conductance.enabled:
         return []
+    counter = conductance.material_text("counter_")
     for name in sorted(compliant_counters):
-        log.warning("conductance: the counter body %s is taken as a perfect conductor "
-                    "(isothermal face): its own constriction and bulk resistance are not "
-                    "counted, so h_c is that of the first body alone (on two like "
-                    "half-spaces give conductivity_W_mK = k1 k2 / (k1 + k2))", name)
+        if counter:
+            log.warning("conductance: the counter body %s conducts as a half-space of "
+                        "%s: a counter block's own bulk resistance is not counted", name,
+                        counter)
+        else:
+            log.warning("conductance: the counter body %s is taken as a perfect conductor "
+                        "(isothermal face): its own resistance is not counted, so h_c is "
+                        "that of the first body alone; give its material "
+                        "(conductance.counter_conductivity_W_mK, "
+                        "counter_resistivity_uohm_cm)", name)
     problems = []
     if plausibility_check:
         problems += [message for key, value in conductance.written().items()

@@ -197,3 +197,31 @@ def test_the_table_gets_the_constriction_share_beside_the_bulks():
     electrical = ConductanceSettings.from_params({"conductivity": None, "resistivity": 1e-7,
                                                   "tol": 1e-10, "body": "block"})
     assert electrical.table_columns(rows) == ({}, {})
+
+
+def test_the_counter_bodys_material_puts_a_half_space_in_series():
+    from roughcontact.transport.conduction import SeriesBody
+
+    study = Study.from_config(validated(config(conductance={
+        **ON, "counter_conductivity_W_mK": 16.0, "resistivity_uohm_cm": 15.0,
+        "counter_resistivity_uohm_cm": 1.7})))
+    job = next(iter(study_plan(study).jobs.values()))
+    (probe,) = study.contact.probes(job.geometry)
+    thermal, electrical = probe.thermal_body, probe.electrical_body
+    assert isinstance(thermal, SeriesBody) and isinstance(thermal.first, BlockBody)
+    assert thermal.counter == HalfSpaceBody(dense=True)  # one matrix with the block's
+    assert thermal.ratio == pytest.approx(50.0 / 16.0)
+    assert electrical.ratio == pytest.approx(1.7 / 15.0)
+    assert study.conductance.sidecar([])["counter_body"] == (
+        "a half-space of thermal conductivity 16 W/(m K) and electrical resistivity "
+        "1.7 uOhm cm in series")
+    # the counter's material needs the body's own: refused by the schema, naming both
+    with pytest.raises(ConfigError, match="'conductivity_W_mK' is a dependency of "
+                                          "'counter_conductivity_W_mK'"):
+        validated(config(conductance={"enabled": True, "resistivity_uohm_cm": 15.0,
+                                      "counter_conductivity_W_mK": 16.0}))
+    # and its unit slips are refused as the body's are
+    raw = config(conductance={**ON, "counter_conductivity_W_mK": 0.016})
+    message = refusal(raw)
+    assert "conductance.counter_conductivity_W_mK: 0.016 is outside" in message
+    assert plan(follow(raw, "conductance.counter_conductivity_W_mK: 16")).jobs

@@ -230,7 +230,8 @@ def test_bad_bodies_are_refused_naming_the_field():
         HalfSpaceBody(periodic=True, dense=True)
     with pytest.raises(ValueError, match="body must be a HalfSpaceBody or a BlockBody"):
         ConductanceProbe("halfspace", conductivity=K)
-    with pytest.raises(ValueError, match=r"body.body must be one of \('halfspace', 'block'\)"):
+    with pytest.raises(ValueError,
+                       match=r"body.body must be one of \('halfspace', 'block', 'series'\)"):
         conductance_probe_from_params({"body": {"body": "sphere"}, "conductivity": K,
                                        "tol": 1e-10})
 

@@ -15,7 +15,8 @@ constriction resistances, bodies in series). A walk::
     >>> bool(abs(spot.conductance / (4 * 50.0 * 4.0 * 1e-3 / 16) - 1) < 0.06)  # Holm, 4 k a
     True
 
-``probe`` is what a contact sweep records of it at every step
+``bodies`` are the bodies heat and current cross (a half-space, the block, two in
+series); ``probe`` is what a contact sweep records of it at every step
 (:class:`ConductanceProbe`, a :class:`~roughcontact.contact.probes.Probe`: the
 conductance of each solution's contact set ``p > 0``; its columns' names and units
 live there only); ``correlations`` the industry's correlations it is compared with
@@ -23,13 +24,21 @@ live there only); ``correlations`` the industry's correlations it is compared wi
 workflow: the study's settings are :mod:`roughcontact.study.conductance_settings`.
 """
 
-from roughcontact.transport.conduction import block, correlations, halfspace, probe, spot
+from roughcontact.transport.conduction import (
+    block,
+    bodies,
+    correlations,
+    halfspace,
+    probe,
+    spot,
+)
 from roughcontact.transport.conduction.block import *  # noqa: F403 (block.__all__)
+from roughcontact.transport.conduction.bodies import *  # noqa: F403 (bodies.__all__)
 from roughcontact.transport.conduction.correlations import *  # noqa: F403 (correlations.__all__)
 from roughcontact.transport.conduction.halfspace import *  # noqa: F403 (halfspace.__all__)
 from roughcontact.transport.conduction.probe import *  # noqa: F403 (probe.__all__)
 from roughcontact.transport.conduction.spot import *  # noqa: F403 (spot.__all__)
 
 #: The public names of the room's modules.
-__all__ = [*block.__all__, *correlations.__all__, *halfspace.__all__, *probe.__all__,
-           *spot.__all__]
+__all__ = list(dict.fromkeys([*block.__all__, *bodies.__all__, *correlations.__all__,
+                             *halfspace.__all__, *probe.__all__, *spot.__all__]))

@@ -70,20 +70,18 @@ from roughcontact.contact.checks import as_operator, given_matrix
 from roughcontact.contact.probes import Column, SolvedFields
 from roughcontact.contact.products import Products
 from roughcontact.contact.stiffness import DIAGONAL_SAFETY, free_set_cg
-from roughcontact.elasticity.influence import BlockGeometry, MeshSpec
-from roughcontact.transport.conduction.block import unit_conductivity_influence
-from roughcontact.transport.conduction.halfspace import (
-    free_thermal_halfspace,
-    halfspace_thermal_influence,
-    periodic_thermal_halfspace,
+from roughcontact.transport.conduction.bodies import (
+    BlockBody,
+    HalfSpaceBody,
+    SeriesBody,
+    body_from_params,
 )
-from roughcontact.transport.conduction.spot import full_contact_resistance
 
 __all__ = ["BODY_KINDS", "BULK_SHARE", "CONDUCTANCE", "CONDUCTANCE_PER_AREA",
-           "CONSTRICTION_PER_AREA", "CONVERGED",
-           "ELECTRICAL_RESISTANCE", "NO_CONDUCTION", "BlockBody", "ConductanceProbe",
-           "ConductionMaterials", "HalfSpaceBody", "body_from_params",
-           "conductance_probe_from_params", "direct_totals", "materials_from_params"]
+           "CONSTRICTION_PER_AREA", "CONVERGED", "ELECTRICAL_RESISTANCE", "NO_CONDUCTION",
+           "BlockBody", "ConductanceProbe", "ConductionMaterials", "HalfSpaceBody",
+           "SeriesBody", "body_from_params", "conductance_probe_from_params",
+           "direct_totals", "materials_from_params"]
 
 logger = logging.getLogger("roughcontact.transport")
 
@@ -92,137 +90,6 @@ CONDUCTANCE, CONDUCTANCE_PER_AREA, BULK_SHARE, ELECTRICAL_RESISTANCE, CONVERGED 
     "thermal_conductance", "thermal_conductance_per_area", "conduction_bulk_share",
     "electrical_resistance", "conduction_converged")
 CONSTRICTION_PER_AREA = "constriction_conductance_per_area"
-#: Relative agreement of a block's grid spacing with the sweep's.
-SPACING_RTOL = 1e-9
-
-
-def _given(built, grid):
-    """A dense ``k R`` given for ``grid`` ``(nx, ny)``, checked to fit it."""
-    n = int(grid[0]) * int(grid[1])
-    if np.shape(built) != (n, n):
-        raise ValueError(f"the given influence has shape {np.shape(built)}, the sweep's "
-                         f"grid {tuple(grid)} needs ({n}, {n})")
-    return built
-
-
-@dataclass(frozen=True)
-class HalfSpaceBody:
-    """A half-space's face (module docstring).
-
-    Parameters
-    ----------
-    periodic : bool
-        Periodic (FFT, mean temperature the reference) or free.
-    dense : bool
-        Free only: the dense element integral
-        (:func:`~roughcontact.transport.conduction.halfspace.halfspace_thermal_influence`,
-        ``n^2`` numbers) instead of the zero-padded FFT (the default).
-    """
-
-    name: ClassVar[str] = "halfspace"
-
-    periodic: bool = False
-    dense: bool = False
-
-    def __post_init__(self):
-        for key in ("periodic", "dense"):
-            if not isinstance(getattr(self, key), bool | np.bool_):
-                raise ValueError(f"body.{key} must be true or false, got "
-                                 f"{getattr(self, key)!r}")
-        if self.periodic and self.dense:
-            raise ValueError("body.dense is for a free half-space: set periodic or dense "
-                             "false")
-
-    def unit_influence(self, grid, spacing, built=None):
-        """``k R`` [m] on ``grid`` ``(nx, ny)`` of element sides ``spacing`` [m] (``built``:
-        a dense one given, of that grid)."""
-        if built is not None:
-            return _given(built, grid)
-        size = (grid[0] * spacing[0], grid[1] * spacing[1])
-        if self.periodic:
-            return periodic_thermal_halfspace(grid, size, 1.0)
-        if self.dense:
-            return halfspace_thermal_influence(grid, size, 1.0)
-        return free_thermal_halfspace(grid, size, 1.0)
-
-    def unit_bulk_resistance(self, operator, tol: float) -> float:
-        """The bulk resistance times ``k`` [1/m]: 0, a half-space has none."""
-        return 0.0
-
-    @property
-    def unbounded_at_full_contact(self) -> bool:
-        """A periodic half-space's full contact has no resistance at all."""
-        return self.periodic
-
-    def params(self) -> dict:
-        return {"body": self.name, "periodic": bool(self.periodic), "dense": bool(self.dense)}
-
-
-@dataclass(frozen=True)
-class BlockBody:
-    """The finite block of the elastic model (module docstring).
-
-    Parameters
-    ----------
-    geometry : BlockGeometry
-        Plan size, thickness, contact grid and mesh (``E``, ``nu``, ``base`` unused).
-    solver : {"auto", "pardiso", "superlu"}
-        Sparse solver of the condensation.
-    """
-
-    name: ClassVar[str] = "block"
-    unbounded_at_full_contact: ClassVar[bool] = False
-
-    geometry: BlockGeometry
-    solver: str = "auto"
-
-    def __post_init__(self):
-        if not isinstance(self.geometry, BlockGeometry):
-            raise ValueError(f"body.geometry must be a BlockGeometry, got "
-                             f"{type(self.geometry).__name__}")
-
-    def unit_influence(self, grid, spacing, built=None):
-        """``k R`` [m] of the block (``built``: given, e.g. read from its file); ``grid``
-        and ``spacing`` must be its own."""
-        geom = self.geometry
-        own = (geom.size[0] / geom.grid[0], geom.size[1] / geom.grid[1])
-        if tuple(grid) != tuple(geom.grid) or not np.allclose(spacing, own,
-                                                              rtol=SPACING_RTOL, atol=0.0):
-            raise ValueError(
-                f"body.geometry has grid {geom.grid} of elements {own} m, the sweep's "
-                f"fields grid {tuple(grid)} of elements {tuple(spacing)} m: give the "
-                f"block the sweep's grid and size")
-        if built is not None:
-            return _given(built, grid)
-        return unit_conductivity_influence(geom, solver=self.solver)
-
-    def unit_bulk_resistance(self, operator, tol: float) -> float:
-        """The bulk resistance times ``k`` [1/m]: full contact's, ``L / A_n``."""
-        return full_contact_resistance(operator, tol=tol)
-
-    def params(self) -> dict:
-        geom = self.geometry
-        mesh = geom.mesh if isinstance(geom.mesh, str) else dataclasses.asdict(geom.mesh)
-        return {"body": self.name, "size": list(geom.size), "thickness": geom.thickness,
-                "grid": list(geom.grid), "mesh": mesh, "solver": self.solver}
-
-
-def body_from_params(params: dict) -> HalfSpaceBody | BlockBody:
-    """The body of stored settings (``params()`` of :class:`HalfSpaceBody` or
-    :class:`BlockBody`)."""
-    name = params.get("body")
-    if name == HalfSpaceBody.name:
-        return HalfSpaceBody(periodic=bool(params["periodic"]), dense=bool(params["dense"]))
-    if name == BlockBody.name:
-        mesh = params["mesh"]
-        geometry = BlockGeometry(size=tuple(params["size"]), thickness=params["thickness"],
-                                 grid=tuple(params["grid"]),
-                                 mesh=mesh if isinstance(mesh, str) else MeshSpec(**mesh))
-        return BlockBody(geometry, solver=str(params["solver"]))
-    raise ValueError(f"body.body must be one of ('{HalfSpaceBody.name}', "
-                     f"'{BlockBody.name}'), got {name!r}")
-
-
 def _check_material(key: str, value, unit: str):
     """``value`` as a finite positive float, or None when not given."""
     if value is None:
@@ -252,6 +119,10 @@ class ConductanceProbe:
         At least one of the two.
     tol : float
         Estimated relative error of ``C`` at which the CG stops.
+    counter_conductivity, counter_resistivity : float, optional
+        The counter body's [W/(m K)], [Ohm m]: it is then a free half-space of that
+        material in series (:class:`SeriesBody`; dense where the body is), else a perfect
+        conductor (its isothermal face). Each needs the body's own.
     """
 
     #: The name its settings are stored under (:class:`~roughcontact.contact.probes.Probe`).
@@ -261,6 +132,8 @@ class ConductanceProbe:
     conductivity: float | None = None
     resistivity: float | None = None
     tol: float = 1e-10
+    counter_conductivity: float | None = None
+    counter_resistivity: float | None = None
     _influences: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -269,6 +142,15 @@ class ConductanceProbe:
                              f"{type(self.body).__name__}")
         conductivity = _check_material("conductivity", self.conductivity, "W/(m K)")
         resistivity = _check_material("resistivity", self.resistivity, "Ohm m")
+        for key, own in (("counter_conductivity", conductivity),
+                         ("counter_resistivity", resistivity)):
+            value = _check_material(key, getattr(self, key), "W/(m K)" if "cond" in key
+                                    else "Ohm m")
+            if value is not None and own is None:
+                raise ValueError(f"{key} needs the body's own "
+                                 f"{key.removeprefix('counter_')}: give both, or neither "
+                                 "(the counter body a perfect conductor)")
+            object.__setattr__(self, key, value)
         if conductivity is None and resistivity is None:
             raise ValueError("conductivity or resistivity must be given (a thermal "
                              "conductivity [W/(m K)], an electrical resistivity [Ohm m], "
@@ -311,9 +193,36 @@ class ConductanceProbe:
                        "tolerance", dtype=bool))
 
     def params(self) -> dict:
-        """Its settings as plain values (a stored file's record of what was solved)."""
+        """Its settings as plain values (a stored file's record of what was solved; the
+        counter's materials only where given)."""
+        counter = {key: getattr(self, key) for key in ("counter_conductivity",
+                                                       "counter_resistivity")
+                   if getattr(self, key) is not None}
         return {"body": self.body.params(), "conductivity": self.conductivity,
-                "resistivity": self.resistivity, "tol": self.tol}
+                "resistivity": self.resistivity, "tol": self.tol, **counter}
+
+    def _counter_body(self) -> HalfSpaceBody:
+        """The counter body where its material is given: a free half-space, dense where
+        the body's influence is (the series one matrix)."""
+        dense = isinstance(self.body, BlockBody) or self.body.dense
+        return HalfSpaceBody(periodic=not dense and self.body.periodic, dense=dense)
+
+    @property
+    def thermal_body(self) -> HalfSpaceBody | BlockBody | SeriesBody:
+        """The body the heat crosses: ``body``, and the counter body in series where its
+        conductivity is given (``ratio = k1 / k2``)."""
+        if self.counter_conductivity is None:
+            return self.body
+        return SeriesBody(self.body, self._counter_body(),
+                          self.conductivity / self.counter_conductivity)
+
+    @property
+    def electrical_body(self) -> HalfSpaceBody | BlockBody | SeriesBody:
+        """The body the current crosses (``ratio = rho2 / rho1``)."""
+        if self.counter_resistivity is None:
+            return self.body
+        return SeriesBody(self.body, self._counter_body(),
+                          self.counter_resistivity / self.resistivity)
 
     def with_unit_influence(self, unit) -> ConductanceProbe:
         """The same probe given its body's ``k R`` [m] built elsewhere (a stored file,
@@ -323,19 +232,19 @@ class ConductanceProbe:
         probe._influences["given"] = unit
         return probe
 
-    def influence(self, grid, spacing):
-        """The body's ``k R`` [m] on ``grid`` ``(nx, ny)`` of sides ``spacing`` [m] and its
-        bulk resistance times ``k`` [1/m], built once (or given,
-        :meth:`with_unit_influence`) and kept."""
-        key = (tuple(int(g) for g in grid), tuple(float(s) for s in spacing))
+    def influence(self, grid, spacing, body=None):
+        """``k R`` [m] of ``body`` (default the probe's own) on ``grid`` ``(nx, ny)`` of
+        sides ``spacing`` [m] and its bulk resistance times ``k`` [1/m], built once (the
+        probe's body's given, :meth:`with_unit_influence`) and kept."""
+        body = self.body if body is None else body
+        key = (body, tuple(int(g) for g in grid), tuple(float(s) for s in spacing))
         if key not in self._influences:
-            unit = self.body.unit_influence(*key, built=self._influences.get("given"))
-            operator = as_operator(unit, key[1][0] * key[1][1])
-            self._influences[key] = (operator,
-                                     self.body.unit_bulk_resistance(operator, self.tol))
+            unit = body.unit_influence(*key[1:], built=self._influences.get("given"))
+            self._influences[key] = (as_operator(unit, key[2][0] * key[2][1]),
+                                     body.unit_bulk_resistance())
         return self._influences[key]
 
-    def _unit_conductance(self, operator, contact):
+    def _unit_conductance(self, operator, contact, body):
         """``(C_1, converged)`` (m,) of the contact sets ``contact`` (m, n): ``dA 1^T
         (k R_AA)^-1 1`` [m] (0 for an empty set, inf for a full one where the body has no
         resistance there). On a dense influence each set's ``k R_AA`` is factored
@@ -344,7 +253,7 @@ class ConductanceProbe:
         m, n = contact.shape
         unit = np.zeros(m)
         converged = np.ones(m, dtype=bool)
-        full = contact.all(axis=1) & self.body.unbounded_at_full_contact
+        full = contact.all(axis=1) & body.unbounded_at_full_contact
         unit[full] = np.inf
         rows = np.flatnonzero(contact.any(axis=1) & ~full)
         matrix = given_matrix(operator)
@@ -365,25 +274,34 @@ class ConductanceProbe:
         [m]; name -> array of the leading shape."""
         pressure = np.asarray(fields.pressure)
         lead, (ny, nx) = pressure.shape[:-2], pressure.shape[-2:]
-        operator, unit_bulk = self.influence((nx, ny), fields.spacing)
         contact = (pressure > 0.0).reshape(-1, nx * ny)
-        unit, converged = self._unit_conductance(operator, contact)
-        unit = np.where(converged, unit, np.nan)
+        solved = {}  # body -> (C_1 [m] (NaN where not converged), converged, bulk)
+
+        def solve(body):
+            if body not in solved:
+                operator, unit_bulk = self.influence((nx, ny), fields.spacing, body)
+                unit, ok = self._unit_conductance(operator, contact, body)
+                solved[body] = (np.where(ok, unit, np.nan), ok, unit_bulk)
+            return solved[body]
+
+        area = fields.spacing[0] * fields.spacing[1] * nx * ny
         out = {}
         if self.conductivity is not None:
+            unit, _, unit_bulk = solve(self.thermal_body)
             conductance = self.conductivity * unit
             out[CONDUCTANCE] = conductance.reshape(lead)
-            out[CONDUCTANCE_PER_AREA] = (conductance / (operator.element_area * nx * ny)
-                                         ).reshape(lead)
+            out[CONDUCTANCE_PER_AREA] = (conductance / area).reshape(lead)
             out[BULK_SHARE] = (unit_bulk * unit if unit_bulk > 0.0 else np.where(
                 np.isnan(unit), np.nan, 0.0)).reshape(lead)
             with np.errstate(divide="ignore"):
                 constriction = np.where(unit > 0.0, 1.0 / (1.0 / unit - unit_bulk), unit)
-            out[CONSTRICTION_PER_AREA] = (self.conductivity * constriction
-                                          / (operator.element_area * nx * ny)).reshape(lead)
+            out[CONSTRICTION_PER_AREA] = (self.conductivity * constriction / area
+                                          ).reshape(lead)
         if self.resistivity is not None:
+            unit = solve(self.electrical_body)[0]
             with np.errstate(divide="ignore"):
                 out[ELECTRICAL_RESISTANCE] = (self.resistivity / unit).reshape(lead)
+        converged = np.logical_and.reduce([ok for _, ok, _ in solved.values()])
         out[CONVERGED] = converged.reshape(lead)
         if not converged.all():
             where = np.flatnonzero(~converged)
@@ -426,7 +344,9 @@ def conductance_probe_from_params(params: dict) -> ConductanceProbe:
     """The probe of stored settings (:meth:`ConductanceProbe.params`)."""
     return ConductanceProbe(body_from_params(params["body"]),
                             conductivity=params.get("conductivity"),
-                            resistivity=params.get("resistivity"), tol=float(params["tol"]))
+                            resistivity=params.get("resistivity"), tol=float(params["tol"]),
+                            counter_conductivity=params.get("counter_conductivity"),
+                            counter_resistivity=params.get("counter_resistivity"))
 
 
 #: The bodies a study's conductance may cross (:attr:`ConductionMaterials.body`).
@@ -437,23 +357,27 @@ BODY_KINDS = ("block", "halfspace")
 class ConductionMaterials:
     """What a conductance probe needs besides its body's geometry: the body's
     ``conductivity`` [W/(m K)] and/or ``resistivity`` [Ohm m], the CG's ``tol``
-    (:class:`ConductanceProbe`) and which ``body`` the heat crosses (one of
-    :data:`BODY_KINDS`: the job's block, or a half-space); with neither material, no
-    conductance is recorded (:data:`NO_CONDUCTION`). A study's contact jobs share it
-    and each gives it its own body (:meth:`probe`)."""
+    (:class:`ConductanceProbe`), which ``body`` the heat crosses (one of
+    :data:`BODY_KINDS`: the job's block, or a half-space) and the counter body's
+    ``counter_conductivity`` and ``counter_resistivity`` (None: a perfect conductor);
+    with neither of the body's materials, no conductance is recorded
+    (:data:`NO_CONDUCTION`). A study's contact jobs share it and each gives it its own
+    body (:meth:`probe`)."""
 
     conductivity: float | None = None
     resistivity: float | None = None
     tol: float = 1e-10
     body: str = "block"
+    counter_conductivity: float | None = None
+    counter_resistivity: float | None = None
 
     def __post_init__(self):
         if self.body not in BODY_KINDS:
             raise ValueError(f"body must be one of {BODY_KINDS}, got {self.body!r}")
         if self.enabled:  # refused with the probe's messages, numbers as the probe's
-            checked = ConductanceProbe(HalfSpaceBody(), self.conductivity, self.resistivity,
-                                       self.tol)
-            for key in ("conductivity", "resistivity", "tol"):
+            checked = self.probe(HalfSpaceBody())
+            for key in ("conductivity", "resistivity", "tol", "counter_conductivity",
+                        "counter_resistivity"):
                 object.__setattr__(self, key, getattr(checked, key))
 
     @property
@@ -463,14 +387,18 @@ class ConductionMaterials:
 
     def probe(self, body: HalfSpaceBody | BlockBody) -> ConductanceProbe:
         """The probe of these materials through ``body``."""
-        return ConductanceProbe(body, self.conductivity, self.resistivity, self.tol)
+        return ConductanceProbe(body, self.conductivity, self.resistivity, self.tol,
+                                self.counter_conductivity, self.counter_resistivity)
 
     def params(self) -> dict:
-        """Its settings as plain values (empty: none)."""
+        """Its settings as plain values (empty: none; the counter's only where given)."""
         if not self.enabled:
             return {}
+        counter = {key: getattr(self, key) for key in ("counter_conductivity",
+                                                       "counter_resistivity")
+                   if getattr(self, key) is not None}
         return {"conductivity": self.conductivity, "resistivity": self.resistivity,
-                "tol": self.tol, "body": self.body}
+                "tol": self.tol, "body": self.body, **counter}
 
 
 #: No conductance recorded.
@@ -483,4 +411,6 @@ def materials_from_params(params: dict) -> ConductionMaterials:
     if not params:
         return NO_CONDUCTION
     return ConductionMaterials(params.get("conductivity"), params.get("resistivity"),
-                               float(params["tol"]), str(params["body"]))
+                               float(params["tol"]), str(params["body"]),
+                               params.get("counter_conductivity"),
+                               params.get("counter_resistivity"))
