@@ -23,13 +23,21 @@ live there only); ``correlations`` the industry's correlations it is compared wi
 workflow: the study's settings are :mod:`roughcontact.study.conductance_settings`.
 """
 
-from roughcontact.transport.conduction import block, correlations, halfspace, probe, spot
+from roughcontact.transport.conduction import (
+    block,
+    correlations,
+    halfspace,
+    hybrid,
+    probe,
+    spot,
+)
 from roughcontact.transport.conduction.block import *  # noqa: F403 (block.__all__)
 from roughcontact.transport.conduction.correlations import *  # noqa: F403 (correlations.__all__)
 from roughcontact.transport.conduction.halfspace import *  # noqa: F403 (halfspace.__all__)
+from roughcontact.transport.conduction.hybrid import *  # noqa: F403 (hybrid.__all__)
 from roughcontact.transport.conduction.probe import *  # noqa: F403 (probe.__all__)
 from roughcontact.transport.conduction.spot import *  # noqa: F403 (spot.__all__)
 
 #: The public names of the room's modules.
-__all__ = [*block.__all__, *correlations.__all__, *halfspace.__all__, *probe.__all__,
-           *spot.__all__]
+__all__ = [*block.__all__, *correlations.__all__, *halfspace.__all__, *hybrid.__all__,
+           *probe.__all__, *spot.__all__]
