@@ -20,7 +20,10 @@ series); ``probe`` is what a contact sweep records of it at every step
 (:class:`ConductanceProbe`, a :class:`~roughcontact.contact.probes.Probe`: the
 conductance of each solution's contact set ``p > 0``; its columns' names and units
 live there only); ``correlations`` the industry's correlations it is compared with
-(Mikic 1974, Cooper, Mikic & Yovanovich 1969). Nothing here knows about the
+(Mikic 1974, Cooper, Mikic & Yovanovich 1969); ``hybrid`` the block's thermal
+influence matrix-free beyond 64 x 64 (Love's half-space and a coarse block's correction;
+not used by the study yet: its near field differs from the dense block's, see its
+docstring). Nothing here knows about the
 workflow: the study's settings are :mod:`roughcontact.study.conductance_settings`.
 """
 
@@ -29,6 +32,7 @@ from roughcontact.transport.conduction import (
     bodies,
     correlations,
     halfspace,
+    hybrid,
     probe,
     spot,
 )
@@ -36,9 +40,11 @@ from roughcontact.transport.conduction.block import *  # noqa: F403 (block.__all
 from roughcontact.transport.conduction.bodies import *  # noqa: F403 (bodies.__all__)
 from roughcontact.transport.conduction.correlations import *  # noqa: F403 (correlations.__all__)
 from roughcontact.transport.conduction.halfspace import *  # noqa: F403 (halfspace.__all__)
+from roughcontact.transport.conduction.hybrid import *  # noqa: F403 (hybrid.__all__)
 from roughcontact.transport.conduction.probe import *  # noqa: F403 (probe.__all__)
 from roughcontact.transport.conduction.spot import *  # noqa: F403 (spot.__all__)
 
 #: The public names of the room's modules.
 __all__ = list(dict.fromkeys([*block.__all__, *bodies.__all__, *correlations.__all__,
-                             *halfspace.__all__, *probe.__all__, *spot.__all__]))
+                             *halfspace.__all__, *hybrid.__all__, *probe.__all__,
+                             *spot.__all__]))
