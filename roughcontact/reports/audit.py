@@ -44,6 +44,7 @@ from roughcontact.study.jobs.storage import (
     read_influence,
     read_surfaces,
 )
+from roughcontact.study.jobs.thermal import read_thermal
 from roughcontact.study.provenance import atomic_path, git_commit
 from roughcontact.units import MPA
 
@@ -461,7 +462,8 @@ def verify_sample(jobs: dict[str, dict], sample: int, seed: int, settings: dict,
                                    files["influence"], record.geometry)
         counter, _ = read_counter(record, files, study_seed)
         problem = contact_problem(record, surfaces["heights"], unit, counter,
-                                  record.thermal.seeded(stored.probe_columns.probes, files))
+                                  record.thermal.seeded(stored.probe_columns.probes, files,
+                                                        read_thermal))
         start = time.perf_counter()
         options = SWEEP_OPTIONS.with_(method=stored.method, tol=stored.tol,
                                       precision=stored.precision, max_iter=stored.max_iter)

@@ -10,8 +10,8 @@ per block by its own job (``rules/influence.smk``, ``thermal_influence``;
 that block, checked to have been made for it: a :class:`ThermalBlock` on the contact
 job (:attr:`~roughcontact.study.contact_records.ContactJob.thermal`) names the file
 (:meth:`ThermalBlock.files`) and gives the job's conductance probe the stored influence
-(:meth:`ThermalBlock.seeded`). A job without it holds :data:`NO_THERMAL`, which names no
-file and leaves the probes as they are.
+the job reads (:meth:`ThermalBlock.seeded`). A job without it holds :data:`NO_THERMAL`,
+which names no file and leaves the probes as they are.
 """
 
 from __future__ import annotations
@@ -63,13 +63,12 @@ class ThermalBlock(Record):
         """The file a contact job reads, under its input name ``thermal``."""
         return {"thermal": JobFile(layout.thermal(self.key), {"geometry": self.params()})}
 
-    def seeded(self, probes: tuple, paths: dict) -> tuple:
+    def seeded(self, probes: tuple, paths: dict, read) -> tuple:
         """``probes`` with the conductance probe given the stored influence of
-        ``paths["thermal"]`` (read, checked to have been made for this block, its
-        content hash verified)."""
-        from roughcontact.study.jobs.thermal import read_thermal
-
-        unit = read_thermal(paths["thermal"], self)
+        ``paths["thermal"]``, read by the job's ``read(path, block)``
+        (:func:`roughcontact.study.jobs.thermal.read_thermal`: checked to have been made
+        for this block, its content hash verified)."""
+        unit = read(paths["thermal"], self)
         return tuple(probe.with_unit_influence(unit) if isinstance(probe, ConductanceProbe)
                      else probe for probe in probes)
 
@@ -83,7 +82,7 @@ class _NoThermal:
     def files(self) -> dict:
         return {}
 
-    def seeded(self, probes: tuple, paths: dict) -> tuple:
+    def seeded(self, probes: tuple, paths: dict, read) -> tuple:
         return probes
 
     def params(self) -> None:

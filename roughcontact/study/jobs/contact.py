@@ -30,6 +30,7 @@ from roughcontact.study.jobs.influence import (
     read_pair_model,
 )
 from roughcontact.study.jobs.storage import read_influence, read_surfaces, write_contact
+from roughcontact.study.jobs.thermal import read_thermal
 from roughcontact.study.provenance import RunInfo, canonical_json, provenance
 
 log = logging.getLogger(__name__)
@@ -202,7 +203,7 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
     name = f"{job.surface.key}__{job.geometry.key}"
     counter, counter_hashes = read_counter(job, inputs, study_seed)
     # the block's thermal influence from its file where the conductance crosses it
-    probes = job.thermal.seeded(settings.probes(job.geometry), inputs)
+    probes = job.thermal.seeded(settings.probes(job.geometry), inputs, read_thermal)
     problem = contact_problem(job, heights, unit, counter, probes)
     hardness = job.nondim_hardness
     log.info("contact %s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
