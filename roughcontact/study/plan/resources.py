@@ -10,10 +10,9 @@ the profile). ``rules/common.smk`` passes the plan's typed records here
 (:class:`~roughcontact.study.config.ContactSettings`) and of the influence
 builds (:class:`~roughcontact.study.config.BuildSettings`).
 
-Check the model against a run's benchmarks::
-
-    python -m roughcontact.study.plan.resources --compare <results>/benchmarks/rules \\
-        --configfile config/quick.yaml
+Check the model against a run's benchmarks with
+:mod:`roughcontact.study.plan.cost_drift` (``python -m roughcontact.study.plan.resources
+--compare <results>/benchmarks/rules --configfile <config>``).
 """
 
 from __future__ import annotations
