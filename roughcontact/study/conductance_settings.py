@@ -104,7 +104,7 @@ class ConductanceSettings:
         return out
 
     def material_text(self, prefix: str = "") -> str:
-        """The body's materials in words (a caption's; ``prefix`` "counter_": the
+        """The body's materials in words (a caption's; with ``prefix="counter_"`` the
         counter body's, empty where it is a perfect conductor)."""
         w = self.written()
         parts = ([f"thermal conductivity {w[prefix + 'conductivity_W_mK']:g} W/(m K)"]

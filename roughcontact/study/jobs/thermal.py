@@ -28,7 +28,7 @@ from roughcontact.study.jobs.storage import (
     verify,
     write_h5,
 )
-from roughcontact.study.provenance import RunInfo, provenance
+from roughcontact.study.provenance import NO_RUN, RunInfo, provenance
 from roughcontact.study.thermal_records import ThermalBlock
 from roughcontact.transport.conduction.block import unit_conductivity_influence
 from roughcontact.transport.conduction.bodies import DENSE_LIMIT
@@ -48,11 +48,12 @@ log = logging.getLogger(__name__)
 DATASET, COARSE_DATASET = "unit_conductivity_influence", "coarse_unit_conductivity_influence"
 
 
-def build_thermal(params: dict, out_path, solver: str = "auto", config=None) -> dict:
+def build_thermal(params: dict, out_path, solver: str = "auto", run: RunInfo = NO_RUN) -> dict:
     """Build the thermal influence ``k R`` [m] of the block of ``params``
     (:meth:`~roughcontact.study.thermal_records.ThermalBlock.params`) with the sparse
-    ``solver`` and write it to ``out_path``; returns the attributes written."""
-    run = RunInfo.of(config)  # the job's edge: the run it belongs to
+    ``solver`` and write it to ``out_path`` with the provenance of ``run`` (the
+    script's :meth:`~roughcontact.study.provenance.RunInfo.of` its configuration);
+    returns the attributes written."""
     block = ThermalBlock.from_params(params)
     start = time.perf_counter()
     log.info("thermal influence of block %s: %d x %d elements, %s mesh", block.key,
