@@ -4,6 +4,7 @@ import os
 
 from roughcontact.study.jobs.thermal import build_thermal
 from roughcontact.study.logs import route_logging
+from roughcontact.study.provenance import RunInfo
 
 route_logging(snakemake.log[0])
 # the sparse factorization is the one multithreaded step of the build
@@ -12,5 +13,5 @@ build_thermal(
     snakemake.params.thermal,
     snakemake.output[0],
     solver=snakemake.params.solver,
-    config=snakemake.config,
+    run=RunInfo.of(snakemake.config),
 )

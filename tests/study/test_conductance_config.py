@@ -148,15 +148,18 @@ def test_on_without_a_material_is_refused_naming_both_keys():
         validated(config(conductance={"enabled": True}))
 
 
-def test_a_block_beyond_the_dense_thermal_limit_is_refused_and_the_advice_plans():
+def test_a_block_beyond_the_dense_limit_gets_the_matrix_free_thermal_block(caplog):
     raw = config(conductance=ON, surfaces={"grid": [72, 72], "size_mm": [10.8, 10.8],
                                            "count": 2},
                  body={"thickness_mm": 10.0, "operator": "hybrid", "mesh": "refined"})
-    message = refusal(raw)
-    assert "72 x 72 elements needs its thermal influence as a dense matrix" in message
-    assert "conductance.body: halfspace" in message
-    assert plan(follow(raw, "conductance.body: halfspace")).jobs
-    assert plan(raw | {"conductance": {"enabled": False}}).jobs
+    with caplog.at_level(logging.INFO):
+        planned = plan(raw)
+    assert "gets the matrix-free thermal block" in caplog.text
+    (thermal,) = planned.thermal.values()
+    assert thermal.grid == (72, 72)
+    # its job builds the coarse block's (36 x 36), not a 72^2 x 72^2 matrix
+    from roughcontact.study.plan import resources
+    assert resources.job_memory_mb(planned, "thermal", {"thermal": thermal.key}) < 1000
 
 
 def test_a_figure_of_the_conductance_with_it_off_is_refused():

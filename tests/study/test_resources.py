@@ -15,7 +15,7 @@ from roughcontact.study.config import (
     validated,
 )
 from roughcontact.study.contact_records import ContactJob
-from roughcontact.study.plan import machine, resources
+from roughcontact.study.plan import cost_drift, machine, resources
 from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
@@ -218,7 +218,7 @@ def test_jobs_planned_beyond_the_machine_are_named_with_the_keys_to_change():
     assert {"contact", "influence", "surfaces", "influence_convergence", "audit"} <= set(planned)
     largest = max(mem for jobs in planned.values() for mem in jobs.values())
     assert machine.machine_problems(plan, total_mb=largest) == []
-    contact = max(resources.predictions(plan)["contact"].values())[1]
+    contact = max(cost_drift.predictions(plan)["contact"].values())[1]
     problems = machine.machine_problems(plan, total_mb=contact - 1)
     by_kind = {p.split(" job ")[0]: p for p in problems}
     assert "contact" in by_kind and "body.operator: auto" in by_kind["contact"]

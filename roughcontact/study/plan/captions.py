@@ -302,6 +302,15 @@ def _levels(levels_MPa) -> str:
     return f"{join(f'{p:.3g}' for p in levels_MPa)} MPa"
 
 
+def _listed_study(study: str, rows, extra: str = "") -> str:
+    """A study a figure of studies lists, in words: its sigma, b, E, nu, block and mesh,
+    ``extra`` and its (Sk, Ku) pairs."""
+    return (f"{study} (sigma {_values(rows, 'sigma_um', 'um')}, b "
+            f"{_values(rows, 'b_mm', 'mm')}, E {_values(rows, 'E_MPa', 'MPa')}, nu "
+            f"{_values(rows, 'nu')}, a {_values(rows, 'thickness_mm', 'mm')} block on "
+            f"{_mesh_names(rows)}{extra}; (Sk, Ku) = {_pairs(rows)})")
+
+
 def leakage(plan, name):
     flow = plan.study.flow
     ordered = [d for d in ("x", "y") if d in flow.directions]  # as the figure draws them
@@ -312,13 +321,7 @@ def leakage(plan, name):
     parts = []
     studies = plan.study.entry(name)["studies"]
     for study in studies:
-        rows = _columns(plan.cells[study])
-        parts.append(f"{study} (sigma {_values(rows, 'sigma_um', 'um')}, b "
-                     f"{_values(rows, 'b_mm', 'mm')}, E "
-                     f"{_values(rows, 'E_MPa', 'MPa')}, nu "
-                     f"{_values(rows, 'nu')}, a "
-                     f"{_values(rows, 'thickness_mm', 'mm')} block on "
-                     f"{_mesh_names(rows)}; (Sk, Ku) = {_pairs(rows)})")
+        parts.append(_listed_study(study, _columns(plan.cells[study])))
     rows = [row for study in studies for row in _columns(plan.cells[study])]
     contact = plan.study.contact
     return (f"Beyond the paper: will the seal leak? The flow of {seal}, one row per study: "
@@ -348,11 +351,8 @@ def conductance(plan, name):
     for study in studies:
         rows = _columns(plan.cells[study])
         caps = sorted({row["cap"] / 1e6 for row in rows if row["cap"] is not None})
-        capped = f", the pressure capped at {numbers(caps, 'MPa')}" if caps else ""
-        parts.append(f"{study} (sigma {_values(rows, 'sigma_um', 'um')}, b "
-                     f"{_values(rows, 'b_mm', 'mm')}, E {_values(rows, 'E_MPa', 'MPa')}, nu "
-                     f"{_values(rows, 'nu')}, a {_values(rows, 'thickness_mm', 'mm')} block "
-                     f"on {_mesh_names(rows)}{capped}; (Sk, Ku) = {_pairs(rows)})")
+        parts.append(_listed_study(study, rows, f", the pressure capped at "
+                                   f"{numbers(caps, 'MPa')}" if caps else ""))
     rows = [row for study in studies for row in _columns(plan.cells[study])]
     contact = plan.study.contact
     return (f"Beyond the paper: how much heat crosses the interface? The thermal contact "

@@ -16,6 +16,7 @@ import os
 from types import MappingProxyType
 
 from roughcontact.study.plan.checks import ConfigProblems
+from roughcontact.study.plan.cost_drift import predictions
 from roughcontact.study.plan.resources import (
     MB,
     audit_mem_mb,
@@ -23,7 +24,6 @@ from roughcontact.study.plan.resources import (
     choice_mem_mb,
     convergence_mem_mb,
     grid_mem_mb,
-    predictions,
     speed_vs_error_mem_mb,
 )
 from roughcontact.study.records import InfluenceModel
@@ -50,6 +50,8 @@ MEMORY_KEYS = MappingProxyType({
                  "coarser body.mesh or a smaller grid (surfaces.grid)",
     "surfaces": "Use fewer surfaces per cell (surfaces.count or the study's count) or a "
                 "smaller grid (surfaces.grid)",
+    "thermal_influence": "Use a coarser body.mesh or a smaller grid (surfaces.grid), or let "
+                         "the heat cross a half-space (conductance.body: halfspace)",
     "influence_convergence": "Remove reports.influence_convergence (it compares dense "
                              "matrices of the body's grid, whatever body.operator), or give "
                              "it fewer presets, or use a smaller grid (surfaces.grid)",
@@ -196,6 +198,8 @@ TIME_KEYS = MappingProxyType({
                  "coarser body.mesh or a smaller grid (surfaces.grid)",
     "surfaces": "Use fewer surfaces per cell (surfaces.count or the study's count), a "
                 "smaller grid (surfaces.grid) or surfaces.method: filter",
+    "thermal_influence": "Use a coarser body.mesh or a smaller grid (surfaces.grid), or let "
+                         "the heat cross a half-space (conductance.body: halfspace)",
 })
 
 
@@ -206,9 +210,10 @@ def _duration(seconds: float) -> str:
 
 
 def long_jobs(plan, limit_seconds: float = LONG_JOB_SECONDS) -> list[str]:
-    """One message for each contact, influence and surfaces job of a study's ``plan``
-    whose estimated wall time (:func:`predictions`, before the margin; measured on the
-    reference machine's 2 cores, one BLAS thread a job: ``blas_threads``) exceeds
+    """One message for each contact, influence, surfaces and thermal influence job of a
+    study's ``plan`` whose estimated wall time
+    (:func:`~roughcontact.study.plan.cost_drift.predictions`, before the margin; measured
+    on the reference machine's 2 cores, one BLAS thread a job: ``blas_threads``) exceeds
     ``limit_seconds``: the job, its estimate and the keys that shorten it
     (:data:`TIME_KEYS`), the longest first."""
     threads = plan.study.blas_threads

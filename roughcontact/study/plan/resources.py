@@ -10,25 +10,26 @@ the profile). ``rules/common.smk`` passes the plan's typed records here
 (:class:`~roughcontact.study.config.ContactSettings`) and of the influence
 builds (:class:`~roughcontact.study.config.BuildSettings`).
 
-Check the model against a run's benchmarks::
-
-    python -m roughcontact.study.plan.resources --compare <results>/benchmarks/rules \\
-        --configfile config/quick.yaml
+Check the model against a run's benchmarks with
+:mod:`roughcontact.study.plan.cost_drift` (``python -m roughcontact.study.plan.resources
+--compare <results>/benchmarks/rules --configfile <config>``).
 """
 
 from __future__ import annotations
 
-import argparse
-import csv
 import dataclasses
 import math
-import os
 import sys
-from pathlib import Path
 from types import MappingProxyType
 
 from roughcontact.contact.halfspace_criterion import CALIBRATION
-from roughcontact.elasticity.operators import COARSE_MAX, coarsened_side
+from roughcontact.elasticity.operators import (
+    COARSE_MAX,
+    HYBRID_MESHES,
+    coarsened_side,
+    default_coarse_grid,
+)
+from roughcontact.study.conductance_settings import THERMAL_DENSE_LIMIT
 from roughcontact.study.config import (
     PILOT_FRACTIONS,
     BuildSettings,
@@ -38,7 +39,6 @@ from roughcontact.study.config import (
     SpeedReportSettings,
 )
 from roughcontact.study.contact_records import ContactJob
-from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.plan.cost_model import (  # noqa: F401 (the model's file and loader)
     COST_MODEL_FILE,
     DOUBLE_BYTES,
@@ -47,7 +47,6 @@ from roughcontact.study.plan.cost_model import (  # noqa: F401 (the model's file
     load_cost_model,
 )
 from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
-from roughcontact.study.settings import load_study
 from roughcontact.surfaces.spectra import autocorrelation
 from roughcontact.transport.conduction.probe import BlockBody
 from roughcontact.units import GB
@@ -194,32 +193,45 @@ def thermal_seconds(thermal, build: BuildSettings) -> float:
 
 def thermal_mem_mb(thermal, build: BuildSettings) -> int:
     """Peak memory [MB] of a thermal influence build: the larger of its dense matrix
-    with the condensation's copies (``dense_arrays`` n^2 doubles) and a share of the
-    elastic build's peak, plus the interpreter's."""
+    (the block's, or beyond the dense limit its coarse model's) with the condensation's
+    copies (``dense_arrays`` n^2 doubles) and a share of the elastic build's peak, plus
+    the interpreter's."""
     fit = _MODEL["conductance"]
-    n = thermal.grid[0] * thermal.grid[1]
+    built = _elastic(thermal)
+    n = built.grid[0] * built.grid[1]
     peak = max(fit["dense_arrays"] * DOUBLE_BYTES * n**2,
                fit["build_memory_share"] * _elastic(thermal).influence_cost(build).peak_bytes)
     return int(_MODEL["contact"]["memory_base_mb"] + peak / MB)
 
 
 def _elastic(thermal) -> Geometry:
-    """The dense elastic geometry of a thermal block (its cost's reference)."""
-    return Geometry(nu=0.0, size=thermal.size, thickness=thermal.thickness,
-                    grid=thermal.grid, base="clamped", mesh=thermal.mesh)
+    """The elastic geometry of what a thermal block's build solves (its cost's
+    reference): the block, or beyond the dense limit its coarse model (the matrix-free
+    thermal block's correction, :mod:`roughcontact.transport.conduction.hybrid`)."""
+    grid, mesh = tuple(thermal.grid), thermal.mesh
+    if grid[0] * grid[1] > THERMAL_DENSE_LIMIT:
+        grid = default_coarse_grid(grid)
+        mesh = mesh if mesh in HYBRID_MESHES else "refined"
+    return Geometry(nu=0.0, size=thermal.size, thickness=thermal.thickness, grid=grid,
+                    base="clamped", mesh=mesh)
 
 
 def conductance_bytes(job: ContactJob, settings: ContactSettings) -> float:
     """Peak memory [bytes] the conductance adds to a contact job (none off): on a block
-    its dense thermal influence with the solve's copies (``dense_arrays`` n^2 doubles);
-    on a half-space the FFT arrays of the batch."""
+    its dense thermal influence with the solve's copies (``dense_arrays`` n^2 doubles),
+    beyond the dense limit the matrix-free one's coarse correction (twice) and FFT
+    arrays; on a half-space the FFT arrays of the batch."""
     if not settings.conductance.enabled:
         return 0.0
     fit = _MODEL["conductance"]
     nx, ny = job.geometry.grid
     n = nx * ny
+    fft = fit["fft_batch_arrays"] * DOUBLE_BYTES * job.surface.count * n
     if not isinstance(job.geometry.thermal_body(settings.conductance.body), BlockBody):
-        return fit["fft_batch_arrays"] * DOUBLE_BYTES * job.surface.count * n
+        return fft
+    if n > THERMAL_DENSE_LIMIT:  # matrix-free: the coarse correction, twice, and the FFTs
+        nc = math.prod(default_coarse_grid(job.geometry.grid))
+        return 2 * DOUBLE_BYTES * nc**2 + fft
     return fit["dense_arrays"] * DOUBLE_BYTES * n**2
 
 
@@ -628,68 +640,7 @@ def job_runtime(plan, kind: str, wildcards, attempt: int = 1) -> int:
     return JOB_COSTS[kind].runtime(plan, wildcards, attempt)
 
 
-# ---------------------------------------------------------------------------
-# Drift: the model against a run's benchmarks
+if __name__ == "__main__":  # the drift table (roughcontact.study.plan.cost_drift)
+    from roughcontact.study.plan.cost_drift import main
 
-
-def predictions(plan) -> dict[str, dict[str, tuple[float, int]]]:
-    """Rule -> wildcard -> (runtime [s] before the margin, memory [MB]) of the
-    contact, influence and surfaces jobs of a study's
-    :func:`~roughcontact.study.plan.cells.study_plan`."""
-    settings, build = plan.contact, plan.build
-    return {
-        "contact": {key: (contact_seconds(job, settings, build),
-                            contact_mem_mb(job, settings, build))
-                    for key, job in plan.jobs.items()},
-        "influence": {k: (influence_seconds(g, build), influence_mem_mb(g, build))
-                      for k, g in plan.geometries.items()},
-        "surfaces": {k: (surfaces_seconds(c), surfaces_mem_mb(c))
-                     for k, c in plan.surfaces.items()},
-    }
-
-
-def _number(text: str) -> float:
-    """A benchmark column's value ("NA" or "-" when Snakemake could not measure it: nan)."""
-    try:
-        return float(text)
-    except ValueError:
-        return math.nan
-
-
-def _ratio(predicted: float, measured: float) -> float:
-    """Predicted over measured (nan when nothing was measured)."""
-    return predicted / measured if measured > 0 else math.nan
-
-
-def compare(benchmarks: str | os.PathLike, plan) -> list[str]:
-    """Lines of a table of predicted against measured time [s] and memory [MB]
-    of every job benchmarked under ``benchmarks`` (``<rule>/<wildcard>.tsv``
-    as Snakemake writes them) that a study's ``plan`` asks for."""
-    lines = [f"{'rule':10} {'s pred':>9} {'s meas':>9} {'ratio':>6} "
-             f"{'MB pred':>8} {'MB meas':>8} {'ratio':>6}  job"]
-    for rule, predicted in predictions(plan).items():
-        for path in sorted((Path(benchmarks) / rule).glob("*.tsv")):
-            if path.stem not in predicted:
-                continue
-            with path.open() as table:
-                measured = next(csv.DictReader(table, delimiter="\t"))
-            seconds, mem_mb = predicted[path.stem]
-            s, rss = _number(measured["s"]), _number(measured["max_rss"])
-            lines.append(f"{rule:10} {seconds:9.2f} {s:9.2f} {_ratio(seconds, s):6.2f} "
-                         f"{mem_mb:8d} {rss:8.1f} {_ratio(mem_mb, rss):6.2f}  {path.stem}")
-    return lines
-
-
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--compare", required=True,
-                        help="the benchmarks/rules folder of a run's results")
-    parser.add_argument("--configfile", default="config/config.yaml")
-    args = parser.parse_args(argv)
-    study = load_study(args.configfile)  # fills the schema's defaults, as Snakemake does
-    print("\n".join(compare(args.compare, study_plan(study))))
-    return 0
-
-
-if __name__ == "__main__":
     sys.exit(main())

@@ -21,10 +21,10 @@ series); ``probe`` is what a contact sweep records of it at every step
 conductance of each solution's contact set ``p > 0``; its columns' names and units
 live there only); ``correlations`` the industry's correlations it is compared with
 (Mikic 1974, Cooper, Mikic & Yovanovich 1969); ``hybrid`` the block's thermal
-influence matrix-free beyond 64 x 64 (Love's half-space and a coarse block's correction;
-not used by the study yet: its near field differs from the dense block's, see its
-docstring). Nothing here knows about the
-workflow: the study's settings are :mod:`roughcontact.study.conductance_settings`.
+influence matrix-free beyond 64 x 64 (Love's half-space and a coarse block's
+correction; its near field differs from the dense block's, see its docstring).
+Nothing here knows about the workflow: the study's settings are
+:mod:`roughcontact.study.conductance_settings`.
 """
 
 from roughcontact.transport.conduction import (

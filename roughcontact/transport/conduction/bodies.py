@@ -4,7 +4,8 @@ Each is a frozen value with the same interface, read by the conductance probe
 (:class:`~roughcontact.transport.conduction.probe.ConductanceProbe`):
 ``unit_influence(grid, spacing, built=None)``, its influence ``k R`` [m] for unit
 conductivity on the sweep's grid (``built``: one given, e.g. read from a file);
-``unit_bulk_resistance()``, its bulk resistance times ``k`` [1/m];
+``unit_bulk_resistance(operator, tol)``, its bulk resistance times ``k`` [1/m] (of its
+influence ``operator``); ``parts()``, the bodies in series with their ratios;
 ``unbounded_at_full_contact``; ``params()`` (and :func:`body_from_params` back).
 
 :class:`HalfSpaceBody`
@@ -15,14 +16,17 @@ conductivity on the sweep's grid (``built``: one given, e.g. read from a file);
     the finite block of the elastic model
     (:class:`~roughcontact.elasticity.influence.BlockGeometry`), isothermal base,
     insulated sides (:func:`~roughcontact.transport.conduction.block.unit_conductivity_influence`);
-    its bulk ``L / A_n`` (full contact: 1-D conduction through the thickness, which the
-    condensed influence's rows hold exactly: they sum to ``L``);
+    dense up to 64 x 64 contact elements, matrix-free beyond (Love's half-space and the
+    correction of a coarse block,
+    :func:`~roughcontact.transport.conduction.hybrid.hybrid_thermal_influence`); its
+    bulk full contact's resistance, ``L / A_n`` of the dense influence (whose rows sum
+    to ``L``), the matrix-free one's own;
 :class:`SeriesBody`
     a body and the counter body the heat crosses after it, ``R = R1 / k1 + R2 / k2``
     on the same elements (:func:`~roughcontact.transport.conduction.spot.in_series`):
     in the first body's units, ``k1 R = k1 R1 + (k1 / k2) k2 R2``, ``ratio = k1 / k2``
     (for the current ``rho2 / rho1``); its bulk the first's plus ``ratio`` times the
-    counter's.
+    counter's (:meth:`SeriesBody.parts`).
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from roughcontact.contact.checks import given_matrix
 from roughcontact.contact.counterface import scaled
 from roughcontact.elasticity.influence import BlockGeometry, MeshSpec
 from roughcontact.transport.conduction.block import unit_conductivity_influence
@@ -42,9 +47,14 @@ from roughcontact.transport.conduction.halfspace import (
     halfspace_thermal_influence,
     periodic_thermal_halfspace,
 )
-from roughcontact.transport.conduction.spot import in_series
+from roughcontact.transport.conduction.hybrid import hybrid_thermal_influence
+from roughcontact.transport.conduction.spot import full_contact_resistance, in_series
 
-__all__ = ["BlockBody", "HalfSpaceBody", "SeriesBody", "body_from_params"]
+__all__ = ["DENSE_LIMIT", "BlockBody", "HalfSpaceBody", "SeriesBody", "body_from_params"]
+
+#: Contact elements of the largest block whose thermal influence is dense (64 x 64, the
+#: elastic model's dense limit); beyond it the matrix-free hybrid.
+DENSE_LIMIT = 64 * 64
 
 #: Relative agreement of a block's grid spacing with the sweep's.
 SPACING_RTOL = 1e-9
@@ -99,9 +109,13 @@ class HalfSpaceBody:
             return halfspace_thermal_influence(grid, size, 1.0)
         return free_thermal_halfspace(grid, size, 1.0)
 
-    def unit_bulk_resistance(self) -> float:
+    def unit_bulk_resistance(self, operator=None, tol: float = 1e-10) -> float:
         """The bulk resistance times ``k`` [1/m]: 0, a half-space has none."""
         return 0.0
+
+    def parts(self) -> tuple:
+        """The bodies in series and their ratios: itself alone."""
+        return ((self, 1.0),)
 
     @property
     def unbounded_at_full_contact(self) -> bool:
@@ -136,8 +150,10 @@ class BlockBody:
                              f"{type(self.geometry).__name__}")
 
     def unit_influence(self, grid, spacing, built=None):
-        """``k R`` [m] of the block (``built``: given, e.g. read from its file); ``grid``
-        and ``spacing`` must be its own."""
+        """``k R`` [m] of the block (``built``: given, e.g. read from its file): dense up
+        to :data:`DENSE_LIMIT` contact elements, matrix-free beyond
+        (:func:`~roughcontact.transport.conduction.hybrid.hybrid_thermal_influence`);
+        ``grid`` and ``spacing`` must be its own."""
         geom = self.geometry
         own = (geom.size[0] / geom.grid[0], geom.size[1] / geom.grid[1])
         if tuple(grid) != tuple(geom.grid) or not np.allclose(spacing, own,
@@ -148,14 +164,26 @@ class BlockBody:
                 f"block the sweep's grid and size")
         if built is not None:
             return _given(built, grid)
+        if geom.grid[0] * geom.grid[1] > DENSE_LIMIT:
+            return hybrid_thermal_influence(geom, solver=self.solver)
         return unit_conductivity_influence(geom, solver=self.solver)
 
-    def unit_bulk_resistance(self) -> float:
-        """The bulk resistance times ``k`` [1/m]: full contact's, ``L / A_n`` (1-D
-        conduction through the thickness; the condensed influence's rows sum to ``L``,
-        so its full-contact solve gives the same to rounding)."""
-        geom = self.geometry
-        return geom.thickness / (geom.size[0] * geom.size[1])
+    def unit_bulk_resistance(self, operator=None, tol: float = 1e-10) -> float:
+        """The bulk resistance times ``k`` [1/m], full contact's: of the dense influence
+        (``operator`` None or a matrix) ``L / A_n`` (1-D conduction through the
+        thickness; the condensed influence's rows sum to ``L``, so its full-contact solve
+        gives the same to rounding); of the matrix-free one (beyond
+        :data:`DENSE_LIMIT`) its own full-contact solve (its rows sum to ``L`` only to
+        its interpolation's accuracy, and the bulk must be its own for the constriction
+        ``1/C - R_bulk`` to be)."""
+        if operator is None or given_matrix(operator) is not None:
+            geom = self.geometry
+            return geom.thickness / (geom.size[0] * geom.size[1])
+        return full_contact_resistance(operator, tol=tol)
+
+    def parts(self) -> tuple:
+        """The bodies in series and their ratios: itself alone."""
+        return ((self, 1.0),)
 
     def params(self) -> dict:
         geom = self.geometry
@@ -210,10 +238,10 @@ class SeriesBody:
                          element_area=area)
         return in_series(first, counter, element_area=area)
 
-    def unit_bulk_resistance(self) -> float:
-        """The first body's bulk plus ``ratio`` times the counter's [1/m]."""
-        return (self.first.unit_bulk_resistance()
-                + self.ratio * self.counter.unit_bulk_resistance())
+    def parts(self) -> tuple:
+        """The bodies in series and their ratios: the first (1) and the counter
+        (``ratio``); the series' bulk is theirs so weighted, each of its own influence."""
+        return ((self.first, 1.0), (self.counter, self.ratio))
 
     def params(self) -> dict:
         return {"body": self.name, "first": self.first.params(),

@@ -240,8 +240,12 @@ class ConductanceProbe:
         key = (body, tuple(int(g) for g in grid), tuple(float(s) for s in spacing))
         if key not in self._influences:
             unit = body.unit_influence(*key[1:], built=self._influences.get("given"))
-            self._influences[key] = (as_operator(unit, key[2][0] * key[2][1]),
-                                     body.unit_bulk_resistance())
+            operator = as_operator(unit, key[2][0] * key[2][1])
+            parts = body.parts()
+            bulk = (body.unit_bulk_resistance(operator, self.tol) if len(parts) == 1 else
+                    sum(ratio * self.influence(grid, spacing, part)[1]
+                        for part, ratio in parts))
+            self._influences[key] = (operator, bulk)
         return self._influences[key]
 
     def _unit_conductance(self, operator, contact, body):
