@@ -197,7 +197,7 @@ def test_compare_prints_predictions_against_benchmarks(tmp_path, capsys):
     folder.mkdir()
     (folder / f"{key}.tsv").write_text(HEADER + "2.00\t0:00:02\t100.0\t1\t1\t1\t0\t0\t50\t1\n")
     (folder / "not_a_job.tsv").write_text(HEADER + "1\t0\t1\t1\t1\t1\t0\t0\t1\t1\n")
-    code = resources.main(["--compare", str(tmp_path), "--configfile", str(quick)])
+    code = cost_drift.main(["--compare", str(tmp_path), "--configfile", str(quick)])
     assert code == 0
     lines = [line for line in capsys.readouterr().out.splitlines() if key in line]
     assert len(lines) == 1

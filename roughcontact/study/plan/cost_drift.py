@@ -2,7 +2,7 @@
 
 Check the model (:mod:`roughcontact.study.plan.resources`) against a run::
 
-    python -m roughcontact.study.plan.resources --compare <results>/benchmarks/rules \\
+    python -m roughcontact.study.plan.cost_drift --compare <results>/benchmarks/rules \\
         --configfile config/quick.yaml
 """
 

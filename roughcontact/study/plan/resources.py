@@ -11,7 +11,7 @@ the profile). ``rules/common.smk`` passes the plan's typed records here
 builds (:class:`~roughcontact.study.config.BuildSettings`).
 
 Check the model against a run's benchmarks with
-:mod:`roughcontact.study.plan.cost_drift` (``python -m roughcontact.study.plan.resources
+:mod:`roughcontact.study.plan.cost_drift` (``python -m roughcontact.study.plan.cost_drift
 --compare <results>/benchmarks/rules --configfile <config>``).
 """
 
@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 from types import MappingProxyType
 
 from roughcontact.contact.halfspace_criterion import CALIBRATION
@@ -638,9 +637,3 @@ def job_memory_mb(plan, kind: str, wildcards) -> int:
 def job_runtime(plan, kind: str, wildcards, attempt: int = 1) -> int:
     """Wall time [min] a job of ``kind`` (:data:`JOB_COSTS`) asks for at its ``attempt``."""
     return JOB_COSTS[kind].runtime(plan, wildcards, attempt)
-
-
-if __name__ == "__main__":  # the drift table (roughcontact.study.plan.cost_drift)
-    from roughcontact.study.plan.cost_drift import main
-
-    sys.exit(main())
