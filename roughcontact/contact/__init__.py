@@ -23,7 +23,8 @@ spots, perimeter, perimeter-corrected real area and gaps; ``probes`` says what
 a probe is (what a sweep measures beyond pressure and load, e.g. the flow of
 :mod:`roughcontact.transport`: columns the sweep stores without naming them);
 ``counterface`` makes the equivalent problem of two rough, elastic bodies (Eq
-17-18).
+17-18); ``cycles`` sweeps a loading path that may rise and fall, keeping the pressure
+cap's permanent set (loading, unloading, reloading).
 
 The solver's public names are importable from here: ``from roughcontact
 import contact; contact.solve(...)``, with the options as one record:
@@ -31,6 +32,7 @@ import contact; contact.solve(...)``, with the options as one record:
 options=contact.SolverOptions(method="pivot", tol=1e-10))``.
 """
 
+from roughcontact.contact.cycles import CycleResult, LoadingPath, cycle_sweep, loop_work
 from roughcontact.contact.kkt import kkt_residual
 from roughcontact.contact.methods import (
     METHODS,
@@ -49,10 +51,14 @@ __all__ = [
     "METHODS",
     "PRECISIONS",
     "ContactResult",
+    "CycleResult",
+    "LoadingPath",
     "Problem",
     "SolverOptions",
     "SweepResult",
+    "cycle_sweep",
     "kkt_residual",
+    "loop_work",
     "resolve_method",
     "solve",
     "solve_many",
