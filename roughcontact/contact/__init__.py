@@ -32,7 +32,13 @@ import contact; contact.solve(...)``, with the options as one record:
 options=contact.SolverOptions(method="pivot", tol=1e-10))``.
 """
 
-from roughcontact.contact.cycles import CycleResult, LoadingPath, cycle_sweep, loop_work
+from roughcontact.contact.cycles import (
+    CycleResult,
+    LoadingPath,
+    cycle_summary,
+    cycle_sweep,
+    loop_work,
+)
 from roughcontact.contact.kkt import kkt_residual
 from roughcontact.contact.methods import (
     METHODS,
@@ -56,6 +62,7 @@ __all__ = [
     "Problem",
     "SolverOptions",
     "SweepResult",
+    "cycle_summary",
     "cycle_sweep",
     "kkt_residual",
     "loop_work",

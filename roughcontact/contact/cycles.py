@@ -53,15 +53,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from roughcontact.contact import probes as probe_columns
 from roughcontact.contact.cg import default_max_iter
 from roughcontact.contact.checks import as_operator
+from roughcontact.contact.interface import InterfaceGrid
 from roughcontact.contact.kkt import free_set
 from roughcontact.contact.methods import solve_many
 from roughcontact.contact.problem import DEFAULT_OPTIONS, SolverOptions
 from roughcontact.contact.products import Products
 from roughcontact.contact.stiffness import free_set_cg
 
-__all__ = ["CONTROLS", "CycleResult", "LoadingPath", "cycle_sweep", "loop_work"]
+__all__ = ["CONTROLS", "CycleResult", "LoadingPath", "cycle_summary", "cycle_sweep",
+           "loop_work"]
 
 logger = logging.getLogger("roughcontact.contact")
 
@@ -153,6 +156,10 @@ class CycleResult:
     hardness : float
         ``H`` [Pa].
     element_area : float
+    probe_columns : ProbeColumns
+        The columns of the interface grid's probes at every step
+        (:mod:`roughcontact.contact.probes`: e.g. the flow through the gap on unloading),
+        measured on the flattened surface's gap; empty without an interface grid.
     """
 
     path: LoadingPath
@@ -171,6 +178,8 @@ class CycleResult:
     pressure: np.ndarray | None
     hardness: float
     element_area: float
+    probe_columns: probe_columns.ProbeColumns = dataclasses.field(
+        default_factory=probe_columns.ProbeColumns)
 
 
 _COLUMNS = ("approach", "load", "nominal_pressure", "real_area_fraction",
@@ -201,16 +210,41 @@ def _tangent(products, pressure, hardness, options):
     return products.operator.element_area * solution.total, solution.converged
 
 
-def _yield(plastic, pressure, gap, hardness, ok):
+def _yield(plastic, pressure, gap, hardness, ok) -> np.ndarray:
     """``plastic`` grown by the interpenetration of the saturated elements of the
-    converged surfaces ``ok`` (in place)."""
+    converged surfaces ``ok`` (in place); the growth."""
     saturated = (pressure >= hardness) & ok[:, None]
-    plastic += np.where(saturated, np.maximum(-gap, 0.0), 0.0)
+    growth = np.where(saturated, np.maximum(-gap, 0.0), 0.0)
+    plastic += growth
+    return growth
+
+
+def _grid_shape(op, n: int) -> tuple[int, int]:
+    """``(ny, nx)`` of the operator's contact grid (a square one of ``n`` elements where
+    the operator names none)."""
+    if op.grid is not None:
+        nx, ny = op.grid
+        return int(ny), int(nx)
+    side = int(round(math.sqrt(n)))
+    if side * side != n:
+        raise ValueError(f"the operator names no grid and {n} elements are no square: give "
+                         "an operator with its grid (e.g. a DenseInfluence) to record probes")
+    return side, side
+
+
+def _measured(interface: InterfaceGrid, shape, pressure, gap, separation) -> dict:
+    """The probe columns of one step's fields ``(m, n)`` on ``interface``, the grid
+    ``shape`` ``(ny, nx)``."""
+    m = pressure.shape[0]
+    fields = probe_columns.SolvedFields(pressure.reshape(m, *shape), gap.reshape(m, *shape),
+                                        separation, interface.spacing, interface.periodic)
+    return probe_columns.measure(interface.probes, fields)
 
 
 def cycle_sweep(operator, gaps, path: LoadingPath, hardness: float, *,
                 element_area: float | None = None,
-                options: SolverOptions = DEFAULT_OPTIONS) -> CycleResult:
+                options: SolverOptions = DEFAULT_OPTIONS,
+                interface: InterfaceGrid | None = None) -> CycleResult:
     """Solve every surface of ``gaps`` along ``path`` with the permanent set of the cap
     ``hardness`` [Pa] (module docstring).
 
@@ -218,7 +252,9 @@ def cycle_sweep(operator, gaps, path: LoadingPath, hardness: float, *,
     ``stiffness`` computes the tangent at every step; ``return_fields`` keeps the
     pressures); ``gaps`` ``(m, n)`` or ``(m, ny, nx)`` [m] the original separations
     ``f``, each with its first touch at ``min(f)``. Every step starts from the last
-    converged one's pressure.
+    converged one's pressure. ``interface``: its probes
+    (:class:`~roughcontact.contact.interface.InterfaceGrid`) are measured at every step
+    on the gap of the flattened surface.
     """
     op, gaps, hardness = _check(operator, gaps, hardness, element_area)
     m, n = gaps.shape
@@ -229,6 +265,8 @@ def cycle_sweep(operator, gaps, path: LoadingPath, hardness: float, *,
     fields = np.full((m, k, n), np.nan) if options.return_fields else None
     plastic, alive = np.zeros((m, n)), np.ones(m, dtype=bool)
     pressure, products, lowest = np.zeros((m, n)), Products(op), gaps.min(axis=1)
+    probes = () if interface is None else tuple(interface.probes)
+    recorded = probe_columns.ProbeColumns.allocated(probes, (m, k))
     for step, value in enumerate(path.values):
         results = solve_many(op, gaps + plastic, p0=pressure, hardness=hardness,
                              options=dataclasses.replace(options, return_fields=False),
@@ -236,7 +274,7 @@ def cycle_sweep(operator, gaps, path: LoadingPath, hardness: float, *,
         ok = alive & np.array([r.converged for r in results])
         solved = np.stack([r.pressure for r in results])
         gap = np.stack([r.gap for r in results])
-        _yield(plastic, solved, gap, hardness, ok)
+        gap += _yield(plastic, solved, gap, hardness, ok)  # the saturated gaps closed
         pressure = np.where(ok[:, None], solved, pressure)
         rows = np.flatnonzero(ok)
         columns["approach"][rows, step] = [results[j].approach for j in rows]
@@ -254,6 +292,11 @@ def cycle_sweep(operator, gaps, path: LoadingPath, hardness: float, *,
             stiffness_ok[rows, step] = tangent_ok
         if fields is not None:
             fields[rows, step] = solved[rows]
+        if probes and rows.size:
+            separation = (gaps + plastic)[rows].mean(axis=1) - columns["approach"][rows, step]
+            for name, values in _measured(interface, _grid_shape(op, n), solved[rows],
+                                          gap[rows], separation).items():
+                recorded[name][rows, step] = values
         failed = alive & ~ok
         if failed.any():
             logger.warning("cycle sweep: step %d (%s %.6g) did not converge for surfaces %s; "
@@ -263,7 +306,8 @@ def cycle_sweep(operator, gaps, path: LoadingPath, hardness: float, *,
         alive &= ok
     return CycleResult(path=path, **columns, converged=converged,
                        stiffness_converged=stiffness_ok, plastic=plastic, pressure=fields,
-                       hardness=hardness, element_area=op.element_area)
+                       hardness=hardness, element_area=op.element_area,
+                       probe_columns=recorded)
 
 
 def loop_work(result: CycleResult, start: int = 0, stop: int | None = None) -> np.ndarray:
@@ -275,3 +319,64 @@ def loop_work(result: CycleResult, start: int = 0, stop: int | None = None) -> n
     load = result.load[:, start:stop]
     approach = result.approach[:, start:stop]
     return 0.5 * ((load[:, 1:] + load[:, :-1]) * np.diff(approach, axis=1)).sum(axis=1)
+
+
+def _cycles(path: LoadingPath) -> list[tuple[int, int, int]]:
+    """``(start, peak, end)`` step indices of each cycle of ``path``: a rise from
+    ``start`` to its highest step ``peak``, then the fall to ``end`` (the last step
+    before the next rise, or the path's end)."""
+    values = np.asarray(path.values)
+    turns = np.flatnonzero(np.diff(np.sign(np.diff(values))) != 0) + 1
+    ends = [0, *turns.tolist(), len(values) - 1]
+    cycles = []
+    for i in range(0, len(ends) - 2, 2):
+        start, peak, end = ends[i], ends[i + 1], ends[i + 2]
+        if values[peak] > values[start]:
+            cycles.append((start, peak, end))
+    return cycles
+
+
+def _at_half_load(load, stiffness, peak: int, rows) -> np.ndarray:
+    """The tangent stiffness at half the peak load of each surface, interpolated in the
+    load along ``rows`` (the steps of one leg, any order)."""
+    out = np.full(load.shape[0], np.nan)
+    for j in range(load.shape[0]):
+        loads, tangent = load[j, rows], stiffness[j, rows]
+        order = np.argsort(loads)
+        if np.all(np.isfinite(loads)) and np.all(np.isfinite(tangent)):
+            out[j] = np.interp(load[j, peak] / 2, loads[order], tangent[order])
+    return out
+
+
+def cycle_summary(result: CycleResult) -> dict[str, np.ndarray]:
+    """What each cycle of a :func:`cycle_sweep` did, ``(m, cycles)`` arrays by name:
+
+    ``peak_load`` [N]; ``dissipated`` [J], the loop's work (:func:`loop_work`) from
+    the cycle's start to its end; ``plastic_work`` [J], ``H`` times the plastic volume
+    the cycle added; ``permanent_set`` [m] at its end (the residual approach where it
+    unloads to zero load); ``unloading_stiffness_ratio``, the unloading leg's tangent
+    over the loading leg's at half the peak load (interpolated in the load; above 1:
+    the spots stay larger); ``shaken_down``, the cycle added no plastic volume beyond
+    1e-9 of the total (elastic from then on)."""
+    cycles = _cycles(result.path)
+    m = result.load.shape[0]
+    out = {name: np.full((m, len(cycles)), np.nan) for name in (
+        "peak_load", "dissipated", "plastic_work", "permanent_set",
+        "unloading_stiffness_ratio")}
+    out["shaken_down"] = np.zeros((m, len(cycles)), dtype=bool)
+    total = result.plastic_volume[:, -1]
+    for c, (start, peak, end) in enumerate(cycles):
+        before = result.plastic_volume[:, start] if start > 0 else np.zeros(m)
+        added = result.plastic_volume[:, end] - before
+        out["peak_load"][:, c] = result.load[:, peak]
+        out["dissipated"][:, c] = loop_work(result, start, end + 1)
+        out["plastic_work"][:, c] = result.hardness * added
+        out["permanent_set"][:, c] = result.permanent_set[:, end]
+        loading = _at_half_load(result.load, result.contact_stiffness, peak,
+                                np.arange(start, peak + 1))
+        unloading = _at_half_load(result.load, result.contact_stiffness, peak,
+                                  np.arange(peak, end + 1))
+        out["unloading_stiffness_ratio"][:, c] = unloading / loading
+        out["shaken_down"][:, c] = added <= 1e-9 * total
+    return out
+

@@ -151,3 +151,25 @@ def test_bad_paths_are_refused_and_an_unconverged_surface_is_flagged_onwards(per
     assert not result.converged[0, first:].any()
     assert np.isnan(result.load[0, first:]).all()
     assert "did not converge for surfaces [0]" in caplog.text
+
+
+def test_the_summary_of_each_cycle(periodic):
+    from roughcontact.contact.cycles import cycle_summary
+
+    f = _separations(2)
+    result = cycle_sweep(periodic, f, LoadingPath.cycles(1.5e-6, 20, cycles=2), hardness=2e9)
+    summary = cycle_summary(result)
+    assert summary["peak_load"].shape == (2, 2)
+    first, second = (slice(None), 0), (slice(None), 1)
+    # the first cycle dissipates its plastic work (trapezoids, 20 steps a leg: < 1 %),
+    # the second neither yields nor dissipates: shaken down, unloading retraces loading
+    np.testing.assert_allclose(summary["dissipated"][first], summary["plastic_work"][first],
+                               rtol=0.01)
+    assert np.all(summary["plastic_work"][second] == 0.0)
+    assert np.all(np.abs(summary["dissipated"][second]) < 1e-6 * summary["dissipated"][first])
+    assert summary["shaken_down"].tolist() == [[False, True], [False, True]]
+    assert np.all(summary["unloading_stiffness_ratio"][first] > 1.0)
+    np.testing.assert_allclose(summary["unloading_stiffness_ratio"][second], 1.0, rtol=1e-3)
+    # the residual approach of the unloaded surface: the flattened surface's first touch
+    np.testing.assert_allclose(summary["permanent_set"][first],
+                               (f.reshape(2, -1) + result.plastic).min(axis=1), rtol=1e-12)
