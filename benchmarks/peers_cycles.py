@@ -3,8 +3,9 @@
 The same periodic problem in both codes: a Gaussian surface of rms gradient 0.08 on a
 ``--grid``^2 periodic cell of unit period (the setting of ContactMechanics issue #68,
 whose users saw its plastic solves stop converging above P = 0.07 E*), E* = 1, the
-spectral kernel ``2 / (E* |q|)`` (ours: :class:`~roughcontact.elasticity.halfspace.SpectralHalfSpace`,
-theirs: ``PeriodicFFTElasticHalfSpace``), penetration hardness H = 0.1 E*. Both are
+spectral kernel ``2 / (E* |q|)`` (ours:
+:class:`~roughcontact.elasticity.halfspace.SpectralHalfSpace`, theirs:
+``PeriodicFFTElasticHalfSpace``), penetration hardness H = 0.1 E*. Both are
 driven along one path under load control (their ``external_force``; ours
 ``LoadingPath(..., control="mean_pressure")``): up to ``--peak`` E* in ``--steps`` steps,
 down to a tenth of it, up again and down. Theirs: ``make_plastic_system`` with a
