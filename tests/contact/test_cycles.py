@@ -38,9 +38,11 @@ def test_below_the_first_saturation_unloading_retraces_loading(periodic):
     assert np.all(elastic.plastic_volume == 0.0) and np.all(elastic.permanent_set == 0.0)
     up, down = elastic.load[:, :9], elastic.load[:, 8:][:, ::-1]  # the same approaches
     np.testing.assert_allclose(down, up, rtol=1e-7, atol=1e-12 * up.max())
-    # and on the way down the tangent stiffness is the loading one's
-    np.testing.assert_allclose(elastic.contact_stiffness[:, 8:][:, ::-1],
-                               elastic.contact_stiffness[:, :9], rtol=1e-4)
+    # and on the way down the tangent stiffness is the loading one's (but at d = 0, the
+    # first touch itself, where whether the highest point carries a pressure of round-off
+    # size decides whether there is a stiffness at all)
+    np.testing.assert_allclose(elastic.contact_stiffness[:, 8:-1][:, ::-1],
+                               elastic.contact_stiffness[:, 1:9], rtol=1e-4)
 
 
 def test_reloading_to_the_peak_gives_back_its_pressures_and_no_new_yield(periodic):
@@ -165,7 +167,7 @@ def test_the_summary_of_each_cycle(periodic):
     # the second neither yields nor dissipates: shaken down, unloading retraces loading
     np.testing.assert_allclose(summary["dissipated"][first], summary["plastic_work"][first],
                                rtol=0.01)
-    assert np.all(summary["plastic_work"][second] == 0.0)
+    assert np.all(summary["plastic_work"][second] <= 1e-9 * summary["plastic_work"][first])
     assert np.all(np.abs(summary["dissipated"][second]) < 1e-6 * summary["dissipated"][first])
     assert summary["shaken_down"].tolist() == [[False, True], [False, True]]
     assert np.all(summary["unloading_stiffness_ratio"][first] > 1.0)
