@@ -302,6 +302,15 @@ def _levels(levels_MPa) -> str:
     return f"{join(f'{p:.3g}' for p in levels_MPa)} MPa"
 
 
+def _studies_tail(plan, studies) -> str:
+    """The end of a caption of the studies a figure lists: surfaces, steps, levels,
+    bands."""
+    rows = [row for study in studies for row in _columns(plan.cells[study])]
+    contact = plan.study.contact
+    return (f"{_surfaces(rows)}, {contact.steps} steps each, {contact.pressure_levels} "
+            f"pressure levels. {BANDS}")
+
+
 def _listed_study(study: str, rows, extra: str = "") -> str:
     """A study a figure of studies lists, in words: its sigma, b, E, nu, block and mesh,
     ``extra`` and its (Sk, Ku) pairs."""
@@ -322,8 +331,6 @@ def leakage(plan, name):
     studies = plan.study.entry(name)["studies"]
     for study in studies:
         parts.append(_listed_study(study, _columns(plan.cells[study])))
-    rows = [row for study in studies for row in _columns(plan.cells[study])]
-    contact = plan.study.contact
     return (f"Beyond the paper: will the seal leak? The flow of {seal}, one row per study: "
             f"{'; '.join(parts)}. Columns: the leak rate Q against nominal pressure (log "
             f"axes: the levels where Q > 0 only; Q is 0 once every surface has sealed), the "
@@ -341,8 +348,7 @@ def leakage(plan, name):
             f"labelled by its study and (Sk, Ku) and, where a study's cells share them, "
             f"what tells them apart. Hollow markers: a level resting on fewer surfaces than "
             f"the cell has (its band is not to be read as a tight one). "
-            f"{_surfaces(rows)}, {contact.steps} steps each, {contact.pressure_levels} "
-            f"pressure levels. {BANDS}")
+            f"{_studies_tail(plan, studies)}")
 
 
 def conductance(plan, name):
@@ -353,8 +359,6 @@ def conductance(plan, name):
         caps = sorted({row["cap"] / 1e6 for row in rows if row["cap"] is not None})
         parts.append(_listed_study(study, rows, f", the pressure capped at "
                                    f"{numbers(caps, 'MPa')}" if caps else ""))
-    rows = [row for study in studies for row in _columns(plan.cells[study])]
-    contact = plan.study.contact
     return (f"Beyond the paper: how much heat crosses the interface? The thermal contact "
             f"conductance of a body of {plan.study.conductance.material_text()} pressed on "
             f"a smooth flat, {plan.study.conductance.counter_text()} (isothermal spots, no "
@@ -370,5 +374,4 @@ def conductance(plan, name):
             f"(1969) plastic h = 1.25 k_s (m / sigma) (P / H)^0.95 for capped cells, H the "
             f"cap). Right: the bulk's share of the resistance, R_bulk C, against nominal "
             f"pressure (R_bulk = L / (k A_n)). "
-            f"{_surfaces(rows)}, {contact.steps} steps each, {contact.pressure_levels} "
-            f"pressure levels. {BANDS}")
+            f"{_studies_tail(plan, studies)}")
