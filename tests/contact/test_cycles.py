@@ -175,3 +175,42 @@ def test_the_summary_of_each_cycle(periodic):
     # the residual approach of the unloaded surface: the flattened surface's first touch
     np.testing.assert_allclose(summary["permanent_set"][first],
                                (f.reshape(2, -1) + result.plastic).min(axis=1), rtol=1e-12)
+
+
+def _operators():
+    """The bodies a cycle runs on: a dense and an FFT half-space, the finite block (its
+    dense finite-element matrix) and a pair of bodies (C1 + C2)."""
+    from roughcontact.contact.counterface import equivalent_operator, scaled
+    from roughcontact.elasticity.influence import BlockGeometry, unit_modulus_influence
+    from roughcontact.elasticity.operators import halfspace_operator
+
+    n, size = 12, 1e-3
+    area = (size / n) ** 2
+    dense = halfspace_influence((n, n), (size, size), E, NU)
+    block = BlockGeometry(size=(size, size), thickness=1e-3, grid=(n, n), mesh="paper",
+                          E=E, nu=NU)
+    return area, {
+        "dense half-space": dense,
+        "FFT half-space": scaled(halfspace_operator((n, n), (size, size), NU), 1 / E,
+                                 element_area=area),
+        "block": unit_modulus_influence(block) / E,
+        "pair": equivalent_operator(dense, 0.5 * dense, element_area=area),
+    }
+
+
+@pytest.mark.parametrize("body", ["dense half-space", "FFT half-space", "block", "pair"])
+def test_every_solver_path_gives_the_same_cycle_on_every_body(body):
+    area, operators = _operators()
+    f = _separations(2, n=12, seed=2)
+    path = LoadingPath.cycles(1.0e-6, 6, cycles=2)
+    runs = {method: cycle_sweep(operators[body], f, path, 5e8, element_area=area,
+                                options=SolverOptions(method=method, tol=1e-11))
+            for method in ("steepest", "cg", "exact", "pivot")}
+    reference = runs["pivot"]
+    assert reference.converged.all() and np.all(reference.plastic_volume[:, -1] > 0)
+    for method, run in runs.items():
+        assert run.converged.all(), method
+        np.testing.assert_allclose(run.plastic_volume, reference.plastic_volume, rtol=1e-6,
+                                   atol=1e-9 * reference.plastic_volume.max(), err_msg=method)
+        np.testing.assert_allclose(run.load, reference.load, rtol=1e-6,
+                                   atol=1e-9 * reference.load.max(), err_msg=method)
