@@ -37,6 +37,7 @@ from roughcontact.contact.cycles import (
     LoadingPath,
     cycle_summary,
     cycle_sweep,
+    cycle_to_physical,
     loop_work,
 )
 from roughcontact.contact.kkt import kkt_residual
@@ -64,6 +65,7 @@ __all__ = [
     "SweepResult",
     "cycle_summary",
     "cycle_sweep",
+    "cycle_to_physical",
     "kkt_residual",
     "loop_work",
     "resolve_method",

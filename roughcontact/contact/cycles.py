@@ -64,7 +64,7 @@ from roughcontact.contact.products import Products
 from roughcontact.contact.stiffness import free_set_cg
 
 __all__ = ["CONTROLS", "CycleResult", "LoadingPath", "cycle_summary", "cycle_sweep",
-           "loop_work"]
+           "cycle_to_physical", "loop_work"]
 
 logger = logging.getLogger("roughcontact.contact")
 
@@ -308,6 +308,34 @@ def cycle_sweep(operator, gaps, path: LoadingPath, hardness: float, *,
                        stiffness_converged=stiffness_ok, plastic=plastic, pressure=fields,
                        hardness=hardness, element_area=op.element_area,
                        probe_columns=recorded)
+
+
+def cycle_to_physical(result: CycleResult, sigma: float, E: float, thickness: float,
+                      area: float) -> CycleResult:
+    """A dimensionless cycle (:func:`cycle_sweep` on the operator ``K = E C / L`` of
+    :func:`~roughcontact.contact.nondim.dimensionless_operator`, element area ``1/n``,
+    separations in units of sigma, the cap ``H L / (E sigma)``, a path of ``d / sigma``
+    or ``P L / (E sigma)``) in SI units for one ``sigma`` [m], ``E`` [Pa], block
+    ``thickness`` L [m] and nominal ``area`` A_n [m^2] (Eq 28-32 of Kumar et al. 2006,
+    :mod:`roughcontact.contact.nondim`): lengths times sigma, pressures times
+    ``E sigma / L``, the load ``P A_n``, the stiffness ``dF/dd = E (dPhat/ddhat) A_n / L``,
+    the plastic volume ``mean(w) A_n``. Its probe columns are left as they are (in
+    units of sigma to their ``length_power``)."""
+    pressure_scale = E * sigma / thickness
+    path = LoadingPath(tuple(np.asarray(result.path.values)
+                             * (sigma if result.path.control == "approach" else pressure_scale)),
+                       result.path.control)
+    n = result.plastic.shape[1]
+    return dataclasses.replace(
+        result, path=path, approach=result.approach * sigma,
+        load=result.load * pressure_scale * area,
+        nominal_pressure=result.nominal_pressure * pressure_scale,
+        plastic_volume=result.plastic_volume * n * (area / n) * sigma,
+        permanent_set=result.permanent_set * sigma,
+        contact_stiffness=result.contact_stiffness * E * area / thickness,
+        plastic=result.plastic * sigma,
+        pressure=None if result.pressure is None else result.pressure * pressure_scale,
+        hardness=result.hardness * pressure_scale, element_area=area / n)
 
 
 def loop_work(result: CycleResult, start: int = 0, stop: int | None = None) -> np.ndarray:

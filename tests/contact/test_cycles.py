@@ -214,3 +214,37 @@ def test_every_solver_path_gives_the_same_cycle_on_every_body(body):
                                    atol=1e-9 * reference.plastic_volume.max(), err_msg=method)
         np.testing.assert_allclose(run.load, reference.load, rtol=1e-6,
                                    atol=1e-9 * reference.load.max(), err_msg=method)
+
+
+def test_a_dimensionless_cycle_is_the_si_cycle_of_every_sigma_and_E():
+    from roughcontact.contact import cycle_to_physical
+    from roughcontact.contact.nondim import dimensionless_operator, initial_separation
+
+    n, size, thickness = 12, 1e-3, 2e-3
+    unit = halfspace_influence((n, n), (size, size), 1.0, NU)  # E C [m]
+    heights = _separations(2, n=12, seed=6) / 1e-6  # unit rms: heights in sigma
+    heights = heights.max(axis=(1, 2), keepdims=True) - heights
+    gaps = initial_separation(heights)
+    path = LoadingPath.cycles(2.0, 6, unload_to=0.5, cycles=2)  # d / sigma
+    nondim_cap = 0.02  # H L / (E sigma)
+    nd = cycle_sweep(dimensionless_operator(unit, thickness), gaps, path, nondim_cap,
+                     element_area=1.0 / n**2, options=SolverOptions(tol=1e-12))
+    for sigma, modulus in ((1e-6, 2e11), (5e-6, 5e8)):
+        si = cycle_to_physical(nd, sigma, modulus, thickness, size * size)
+        # the same problem in SI units, solved on its own
+        direct = cycle_sweep(unit / modulus, sigma * gaps,
+                             LoadingPath(tuple(sigma * np.asarray(path.values))),
+                             nondim_cap * modulus * sigma / thickness,
+                             element_area=(size / n) ** 2, options=SolverOptions(tol=1e-12))
+        for name in ("approach", "load", "nominal_pressure", "plastic_volume",
+                     "permanent_set"):
+            expected = getattr(direct, name)
+            np.testing.assert_allclose(getattr(si, name), expected, rtol=1e-8,
+                                       atol=1e-10 * np.nanmax(np.abs(expected)), err_msg=name)
+        # the tangent on the free set (0 < p < H): where an element sits at the cap to
+        # rounding, which side it falls on is the rounding's, so compare the typical step
+        stiff = direct.contact_stiffness > 0
+        ratio = si.contact_stiffness[stiff] / direct.contact_stiffness[stiff]
+        assert np.median(np.abs(ratio - 1)) < 1e-6
+        assert si.hardness == pytest.approx(direct.hardness, rel=1e-12)
+        assert np.all(si.plastic_volume[:, -1] > 0)
