@@ -68,6 +68,7 @@ __all__ = [
     "BlockOperator",
     "block_operator",
     "choose_operator",
+    "coarse_geometry",
     "coarsened_side",
     "default_coarse_grid",
     "halfspace_operator",
@@ -366,6 +367,17 @@ def block_operator(geom, *, coarse_grid=None, solver: str = "auto",
     coarse = dataclasses.replace(geom, grid=tuple(int(g) for g in coarse_grid))
     return hybrid_operator(geom, unit_modulus_influence(coarse, solver=solver,
                                                         max_bytes=max_bytes), coarse)
+
+
+def coarse_geometry(geom, coarse_grid=None):
+    """The coarse finite-element model of a hybrid operator, elastic or thermal: the
+    block of ``geom`` on ``coarse_grid`` (default :func:`default_coarse_grid`) with its
+    mesh where it is one of ``HYBRID_MESHES``, else "refined" (the inaccurate near
+    fields of the paper and graded presets would be interpolated into the fine grid)."""
+    grid = default_coarse_grid(geom.grid) if coarse_grid is None else \
+        tuple(int(g) for g in coarse_grid)
+    mesh = geom.mesh if isinstance(geom.mesh, str) and geom.mesh in HYBRID_MESHES else "refined"
+    return dataclasses.replace(geom, grid=grid, mesh=mesh)
 
 
 def hybrid_operator(geom, coarse_unit: np.ndarray, coarse) -> BlockOperator:

@@ -40,16 +40,13 @@ from roughcontact.transport.conduction.probe import (
     materials_from_params,
 )
 
-__all__ = ["CONDUCTANCE_OFF", "CONSTRICTION_SHARE", "THERMAL_DENSE_LIMIT",
+__all__ = ["CONDUCTANCE_OFF", "CONSTRICTION_SHARE",
            "ConductanceSettings", "check_conductance", "conductance_settings"]
 
 log = logging.getLogger(__name__)
 
 #: The table column (with a conductivity) of the constriction's share of the resistance.
 CONSTRICTION_SHARE = "conduction_constriction_share"
-#: Elements of the largest contact grid whose block gets its dense thermal influence
-#: (64 x 64, the elastic model's dense limit); beyond it the matrix-free hybrid.
-THERMAL_DENSE_LIMIT = DENSE_LIMIT
 #: ``10^-8`` Ohm m per micro-ohm centimetre (the configuration's resistivity unit).
 UOHM_CM = 1e-8
 
@@ -196,15 +193,16 @@ def check_conductance(conductance: ConductanceSettings, plausibility_check: bool
     """The problems of the ``conductance`` settings: values that are almost surely a
     unit slip (with ``plausibility_check``). Blocks (``geometries``: a contact
     geometry's place in words -> its :class:`~roughcontact.study.records.Geometry`)
-    beyond :data:`THERMAL_DENSE_LIMIT` elements are logged: their thermal influence is
-    the matrix-free hybrid. The ``compliant_counters`` (their names) are warned about:
-    a block's own bulk is not counted, or the counter is a perfect conductor."""
+    beyond :data:`~roughcontact.transport.conduction.bodies.DENSE_LIMIT` elements are
+    logged: their thermal influence is the matrix-free hybrid. The
+    ``compliant_counters`` (their names) are warned about: a block's own bulk is not
+    counted, or the counter is a perfect conductor."""
     if not conductance.enabled:
         return []
     for where, geometry in geometries.items():
         nx, ny = geometry.grid
         body = geometry.thermal_body(conductance.materials.body)
-        if nx * ny > THERMAL_DENSE_LIMIT and isinstance(body, BlockBody):
+        if nx * ny > DENSE_LIMIT and isinstance(body, BlockBody):
             log.info("conductance: %s (%d x %d elements) gets the matrix-free thermal "
                      "block (Love's half-space and a coarse block's correction): h_c "
                      "within 0.2-1.6 %% of the dense block's on clustered spots, up to 7 %% "

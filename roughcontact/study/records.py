@@ -38,7 +38,7 @@ from typing import ClassVar
 
 from roughcontact.contact import counterface
 from roughcontact.elasticity.influence import BlockGeometry, CostEstimate, estimate_cost
-from roughcontact.elasticity.operators import HYBRID_MESHES, choose_operator, default_coarse_grid
+from roughcontact.elasticity.operators import choose_operator, coarse_geometry
 from roughcontact.study import codec, sources
 from roughcontact.study.codec import DEFAULT, Record, from_unit, grid_pair, in_unit, in_units
 from roughcontact.study.config import BuildSettings
@@ -354,7 +354,3 @@ class Geometry(Record):
         return estimate_cost(self.finite_element_model(build.max_bytes), build.solver)
 
 
-def coarse_geometry(geom: BlockGeometry) -> BlockGeometry:
-    """The coarse finite-element model of a hybrid operator (``refined`` for inaccurate meshes)."""
-    mesh = geom.mesh if geom.mesh in HYBRID_MESHES else "refined"
-    return dataclasses.replace(geom, grid=default_coarse_grid(geom.grid), mesh=mesh)

@@ -20,9 +20,11 @@ import dataclasses
 from dataclasses import dataclass
 
 from roughcontact.elasticity.influence import BlockGeometry
+from roughcontact.elasticity.operators import coarse_geometry
 from roughcontact.study import codec, layout
 from roughcontact.study.codec import Record, in_unit, in_units
 from roughcontact.study.counter_records import JobFile
+from roughcontact.transport.conduction.bodies import DENSE_LIMIT
 from roughcontact.transport.conduction.probe import BlockBody, ConductanceProbe
 from roughcontact.units import MM
 
@@ -58,6 +60,14 @@ class ThermalBlock(Record):
         """The block (E, nu and the base do not enter the thermal problem)."""
         return BlockGeometry(size=self.size, thickness=self.thickness, grid=self.grid,
                              mesh=self.mesh)
+
+    def coarse_model(self) -> BlockGeometry | None:
+        """The coarse block whose dense ``k R`` its job builds and stores beyond
+        :data:`~roughcontact.transport.conduction.bodies.DENSE_LIMIT` elements (the
+        matrix-free thermal block's correction); None: its own dense ``k R``."""
+        if self.grid[0] * self.grid[1] <= DENSE_LIMIT:
+            return None
+        return coarse_geometry(self.block())
 
     def files(self) -> dict[str, JobFile]:
         """The file a contact job reads, under its input name ``thermal``."""

@@ -32,11 +32,7 @@ from roughcontact.study.provenance import NO_RUN, RunInfo, provenance
 from roughcontact.study.thermal_records import ThermalBlock
 from roughcontact.transport.conduction.block import unit_conductivity_influence
 from roughcontact.transport.conduction.bodies import DENSE_LIMIT
-from roughcontact.transport.conduction.hybrid import (
-    hybrid_coarse_geometry,
-    hybrid_thermal_from_coarse,
-    thermal_correction,
-)
+from roughcontact.transport.conduction.hybrid import hybrid_thermal_from_coarse, thermal_correction
 
 __all__ = ["build_thermal", "read_thermal"]
 
@@ -58,10 +54,9 @@ def build_thermal(params: dict, out_path, solver: str = "auto", run: RunInfo = N
     start = time.perf_counter()
     log.info("thermal influence of block %s: %d x %d elements, %s mesh", block.key,
              *block.grid, block.mesh)
-    geometry = block.block()
-    coarse = hybrid_coarse_geometry(geometry) if geometry.n_elements > DENSE_LIMIT else None
+    coarse = block.coarse_model()
     if coarse is None:
-        unit = unit_conductivity_influence(geometry, solver=solver)
+        unit = unit_conductivity_influence(block.block(), solver=solver)
         datasets, extra = {DATASET: unit}, {}
     else:  # matrix-free: the coarse block's dense k R, from which the job rebuilds it
         log.info("beyond %d elements: matrix-free, its finite-block correction from the "
@@ -86,8 +81,7 @@ def read_thermal(path: str | os.PathLike, block: ThermalBlock):
     model's), else :class:`~roughcontact.errors.StoredFileError` naming the file and what
     differs: the dense matrix, or beyond :data:`DENSE_LIMIT` elements the matrix-free
     operator rebuilt from the stored coarse block's (no finite-element solve)."""
-    geometry = block.block()
-    coarse = hybrid_coarse_geometry(geometry) if geometry.n_elements > DENSE_LIMIT else None
+    geometry, coarse = block.block(), block.coarse_model()
     name = DATASET if coarse is None else COARSE_DATASET
     with open_h5(path) as f:
         attrs = upgraded(path, _decoded(f.attrs), "thermal")

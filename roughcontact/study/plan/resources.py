@@ -24,11 +24,8 @@ from types import MappingProxyType
 from roughcontact.contact.halfspace_criterion import CALIBRATION
 from roughcontact.elasticity.operators import (
     COARSE_MAX,
-    HYBRID_MESHES,
     coarsened_side,
-    default_coarse_grid,
 )
-from roughcontact.study.conductance_settings import THERMAL_DENSE_LIMIT
 from roughcontact.study.config import (
     PILOT_FRACTIONS,
     BuildSettings,
@@ -46,6 +43,7 @@ from roughcontact.study.plan.cost_model import (  # noqa: F401 (the model's file
     load_cost_model,
 )
 from roughcontact.study.records import GeneratedCell, Generator, Geometry, InfluenceModel
+from roughcontact.study.thermal_records import ThermalBlock
 from roughcontact.surfaces.spectra import autocorrelation
 from roughcontact.transport.conduction.probe import BlockBody
 from roughcontact.units import GB
@@ -169,11 +167,10 @@ def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSett
                    * method_factor(settings) * reach * pair)
     else:
         solving = solves * dense_solve_seconds(grid, settings) * reach * pair
-    return solving + flow + conductance_seconds(job, settings, build, solving)
+    return solving + flow + conductance_seconds(settings, solving)
 
 
-def conductance_seconds(job: ContactJob, settings: ContactSettings, build: BuildSettings,
-                        solving: float) -> float:
+def conductance_seconds(settings: ContactSettings, solving: float) -> float:
     """Wall time [s] the conductance adds to a contact job whose solves take ``solving``
     [s] (none with the ``conductance`` section off): its solve at every step, a share of
     the contact solves (``config/cost_model.yaml``, ``conductance``; the block's thermal
@@ -199,7 +196,7 @@ def thermal_mem_mb(thermal, build: BuildSettings) -> int:
     built = _elastic(thermal)
     n = built.grid[0] * built.grid[1]
     peak = max(fit["dense_arrays"] * DOUBLE_BYTES * n**2,
-               fit["build_memory_share"] * _elastic(thermal).influence_cost(build).peak_bytes)
+               fit["build_memory_share"] * built.influence_cost(build).peak_bytes)
     return int(_MODEL["contact"]["memory_base_mb"] + peak / MB)
 
 
@@ -207,12 +204,9 @@ def _elastic(thermal) -> Geometry:
     """The elastic geometry of what a thermal block's build solves (its cost's
     reference): the block, or beyond the dense limit its coarse model (the matrix-free
     thermal block's correction, :mod:`roughcontact.transport.conduction.hybrid`)."""
-    grid, mesh = tuple(thermal.grid), thermal.mesh
-    if grid[0] * grid[1] > THERMAL_DENSE_LIMIT:
-        grid = default_coarse_grid(grid)
-        mesh = mesh if mesh in HYBRID_MESHES else "refined"
-    return Geometry(nu=0.0, size=thermal.size, thickness=thermal.thickness, grid=grid,
-                    base="clamped", mesh=mesh)
+    built = thermal.coarse_model() or thermal.block()
+    return Geometry(nu=0.0, size=thermal.size, thickness=thermal.thickness,
+                    grid=tuple(built.grid), base="clamped", mesh=built.mesh)
 
 
 def conductance_bytes(job: ContactJob, settings: ContactSettings) -> float:
@@ -228,9 +222,9 @@ def conductance_bytes(job: ContactJob, settings: ContactSettings) -> float:
     fft = fit["fft_batch_arrays"] * DOUBLE_BYTES * job.surface.count * n
     if not isinstance(job.geometry.thermal_body(settings.conductance.body), BlockBody):
         return fft
-    if n > THERMAL_DENSE_LIMIT:  # matrix-free: the coarse correction, twice, and the FFTs
-        nc = math.prod(default_coarse_grid(job.geometry.grid))
-        return 2 * DOUBLE_BYTES * nc**2 + fft
+    coarse = ThermalBlock.of(job.geometry).coarse_model()
+    if coarse is not None:  # matrix-free: the coarse correction, twice, and the FFTs
+        return 2 * DOUBLE_BYTES * coarse.n_elements**2 + fft
     return fit["dense_arrays"] * DOUBLE_BYTES * n**2
 
 

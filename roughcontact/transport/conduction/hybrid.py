@@ -63,7 +63,7 @@ import numpy as np
 from roughcontact.contact.counterface import scaled
 from roughcontact.elasticity.hybrid import finite_body_correction
 from roughcontact.elasticity.influence import BlockGeometry
-from roughcontact.elasticity.operators import HYBRID_MESHES, BlockOperator, default_coarse_grid
+from roughcontact.elasticity.operators import HYBRID_MESHES, BlockOperator, coarse_geometry
 from roughcontact.transport.conduction.block import unit_conductivity_influence
 
 __all__ = ["hybrid_coarse_geometry", "hybrid_thermal_from_coarse", "hybrid_thermal_influence",
@@ -71,15 +71,13 @@ __all__ = ["hybrid_coarse_geometry", "hybrid_thermal_from_coarse", "hybrid_therm
 
 
 def hybrid_coarse_geometry(geom: BlockGeometry, coarse_grid=None) -> BlockGeometry:
-    """The coarse model of ``geom``'s hybrid thermal influence: the same block on
+    """The coarse model of ``geom``'s hybrid thermal influence: the elastic hybrid's
+    (:func:`~roughcontact.elasticity.operators.coarse_geometry`), the same block on
     ``coarse_grid`` (default :func:`~roughcontact.elasticity.operators.default_coarse_grid`)
     with ``geom``'s mesh when it is one of ``HYBRID_MESHES``, else "refined"."""
     if not isinstance(geom, BlockGeometry):
         raise ValueError(f"geom must be a BlockGeometry, got {type(geom).__name__}")
-    grid = default_coarse_grid(geom.grid) if coarse_grid is None else \
-        tuple(int(g) for g in coarse_grid)
-    mesh = geom.mesh if isinstance(geom.mesh, str) and geom.mesh in HYBRID_MESHES else "refined"
-    return dataclasses.replace(geom, grid=grid, mesh=mesh)
+    return coarse_geometry(geom, coarse_grid)
 
 
 def _check_coarse(geom: BlockGeometry, coarse: BlockGeometry) -> None:

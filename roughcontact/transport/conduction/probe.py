@@ -135,6 +135,7 @@ class ConductanceProbe:
     counter_conductivity: float | None = None
     counter_resistivity: float | None = None
     _influences: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _given: object = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self):
         if not isinstance(self.body, HalfSpaceBody | BlockBody):
@@ -142,10 +143,9 @@ class ConductanceProbe:
                              f"{type(self.body).__name__}")
         conductivity = _check_material("conductivity", self.conductivity, "W/(m K)")
         resistivity = _check_material("resistivity", self.resistivity, "Ohm m")
-        for key, own in (("counter_conductivity", conductivity),
-                         ("counter_resistivity", resistivity)):
-            value = _check_material(key, getattr(self, key), "W/(m K)" if "cond" in key
-                                    else "Ohm m")
+        for key, own, unit in (("counter_conductivity", conductivity, "W/(m K)"),
+                               ("counter_resistivity", resistivity, "Ohm m")):
+            value = _check_material(key, getattr(self, key), unit)
             if value is not None and own is None:
                 raise ValueError(f"{key} needs the body's own "
                                  f"{key.removeprefix('counter_')}: give both, or neither "
@@ -229,7 +229,7 @@ class ConductanceProbe:
         :meth:`BlockBody.unit_influence`'s result): used on the grid it fits, checked
         there as the body would check its own."""
         probe = dataclasses.replace(self)
-        probe._influences["given"] = unit
+        object.__setattr__(probe, "_given", unit)
         return probe
 
     def influence(self, grid, spacing, body=None):
@@ -239,7 +239,9 @@ class ConductanceProbe:
         body = self.body if body is None else body
         key = (body, tuple(int(g) for g in grid), tuple(float(s) for s in spacing))
         if key not in self._influences:
-            unit = body.unit_influence(*key[1:], built=self._influences.get("given"))
+            # the given k R is the probe's own body's (a series' first); no other's
+            own = body == self.body or getattr(body, "first", None) == self.body
+            unit = body.unit_influence(*key[1:], built=self._given if own else None)
             operator = as_operator(unit, key[2][0] * key[2][1])
             parts = body.parts()
             bulk = (body.unit_bulk_resistance(operator, self.tol) if len(parts) == 1 else
