@@ -48,6 +48,7 @@ wildcard_constraints:
     pair="|".join(re.escape(k) for k in PLAN.pairs) or "__none__",
     thermal="|".join(re.escape(k) for k in PLAN.thermal) or "__none__",
     job="|".join(re.escape(k) for k in PLAN.jobs) or "__none__",
+    cycle="|".join(re.escape(k) for k in PLAN.cycles) or "__none__",
     study="|".join(PLAN.aggregates) or "__none__",
 
 
@@ -69,6 +70,9 @@ def get_final_outputs():
         layout.influence(key) for key in PLAN.geometries if key not in PLAN.alternatives
     ] + [layout.choice(key) for key in PLAN.choices]
     aggregates = [path for name in PLAN.aggregates for path in layout.aggregates(name)]
+    aggregates += [
+        path for name in PLAN.cycle_studies for path in layout.cycle_aggregates(name)
+    ]
     audit = (
         ["results/audit/audit.csv", "results/audit/audit.md"] if PLAN.studies else []
     )
@@ -92,6 +96,7 @@ def get_final_outputs():
 
 RECORDS = {
     "contact": lambda wildcards: PLAN.jobs[wildcards.job],
+    "cycle": lambda wildcards: PLAN.cycles[wildcards.cycle],
     "influence": lambda wildcards: PLAN.geometries[wildcards.geometry],
     "choice": lambda wildcards: PLAN.choices[wildcards.auto],
     "pair": lambda wildcards: PLAN.pairs[wildcards.pair],
@@ -187,6 +192,11 @@ def get_contact_inputs(wildcards):
     return PLAN.jobs[wildcards.job].paths()
 
 
+def get_cycle_inputs(wildcards):
+    # a cycle job reads its contact job's files (CycleJob.files)
+    return PLAN.cycles[wildcards.cycle].paths()
+
+
 def get_surface_inputs(wildcards):
     """``files``: the measured file of a measured surface cell, the spectrum's file (a
     PSD table or a measurement) of a generated cell with one; ``source``: the file of
@@ -212,6 +222,19 @@ def get_aggregate_cells(wildcards):
 def get_aggregate_inputs(wildcards):
     cells = resolved_cells(wildcards.study)
     return sorted({layout.contact(cell.contact_key) for cell in cells})
+
+
+def cycle_cells(study):
+    """The cells of ``study`` swept along the loading path, on their resolved geometries."""
+    return [cell for cell in resolved_cells(study) if STUDY.loading.applies(cell)]
+
+
+def get_cycle_cells(wildcards):
+    return settled(lambda: [cell.params() for cell in cycle_cells(wildcards.study)])
+
+
+def get_cycle_aggregate_inputs(wildcards):
+    return sorted({PLAN.cycle_of(cell).output for cell in cycle_cells(wildcards.study)})
 
 
 def get_audit_studies(wildcards):

@@ -55,3 +55,51 @@ rule aggregate:
         layout=3,
     script:
         "../scripts/aggregate.py"
+
+
+# The loading section: each capped cell along its loading path (load, unload, reload)
+# with the cap's permanent set, on its contact job's files; aggregated per step and per
+# cycle (roughcontact.study.cycle_records).
+rule cycle:
+    input:
+        unpack(get_cycle_inputs),
+    output:
+        "results/cycles/{cycle}.h5",
+    log:
+        "results/logs/cycles/{cycle}.log",
+    benchmark:
+        "results/benchmarks/rules/cycles/{cycle}.tsv"
+    priority: CONTACT_PRIORITY
+    threads: 1
+    resources:
+        mem_mb=get_mem_mb("cycle"),
+        runtime=get_runtime("cycle"),
+    params:
+        job=get_params("cycle"),
+        solver=canonical(PLAN.contact.params()),
+    script:
+        "../scripts/solve_cycle.py"
+
+
+rule aggregate_cycles:
+    input:
+        get_cycle_aggregate_inputs,
+    output:
+        table="results/aggregates/{study}.cycles.csv",
+        summary="results/aggregates/{study}.cycles_summary.csv",
+        meta="results/aggregates/{study}.cycles.json",
+    log:
+        "results/logs/aggregates/{study}.cycles.log",
+    priority: CONTACT_PRIORITY
+    group:
+        "summaries"
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=get_runtime("summary"),
+    params:
+        cells=get_cycle_cells,
+        loading=STUDY.loading.params(),
+        probes=canonical(study_probe_params(STUDY.probes)),
+    script:
+        "../scripts/aggregate_cycles.py"

@@ -25,7 +25,9 @@ import numpy as np
 
 from roughcontact.contact import aggregate, nondim, validity
 from roughcontact.contact.curves import NondimSweep, PhysicalSweep
+from roughcontact.contact.cycles import cycle_sweep
 from roughcontact.contact.interface import InterfaceGrid
+from roughcontact.contact.methods import resolve_method
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -37,6 +39,7 @@ __all__ = [
     "aggregate_sweep",
     "approach_grid",
     "block_interface",
+    "cycle_cell",
     "nondim_pressure",
     "sweep_and_aggregate",
     "sweep_cell",
@@ -144,6 +147,32 @@ def sweep_cell(unit_influence, heights: np.ndarray, geometry, pressure_end: floa
                              options=dataclasses.replace(
                                  options, interface=_interface_grid(options.interface,
                                                                     geometry)))
+
+
+def cycle_cell(unit_influence, heights: np.ndarray, geometry, path, *,
+               nondim_hardness: float, solver=nondim.CELL_SOLVER,
+               interface: object = None):
+    """Every surface of a cell along a loading ``path`` in the dimensionless variables of
+    :func:`sweep_cell` (:func:`roughcontact.contact.cycles.cycle_sweep`: the cap's
+    permanent set kept from step to step).
+
+    ``unit_influence``, ``heights`` (units of sigma) and ``geometry`` as in
+    :func:`sweep_cell`; ``path`` a :class:`~roughcontact.contact.cycles.LoadingPath` of
+    ``P L / (E sigma)`` (or ``d / sigma``); ``nondim_hardness`` the cap ``H L / (E
+    sigma)``; ``solver`` the :class:`~roughcontact.contact.problem.SolverOptions` of
+    every step (``"auto"`` resolved for the operator); ``interface`` as the option of
+    :func:`sweep_cell` (True: the block's grid), its probes measured at every step.
+    Returns the dimensionless :class:`~roughcontact.contact.cycles.CycleResult`
+    (:func:`~roughcontact.contact.cycles.cycle_to_physical` takes it to SI units).
+    """
+    gaps = nondim.initial_separation(heights)
+    m, n = gaps.shape
+    operator = nondim.cell_operator(unit_influence, geometry.thickness, geometry.element_area,
+                                    n)
+    solver = solver.with_(method=resolve_method(solver.method, operator, nondim_hardness))
+    return cycle_sweep(operator, gaps.reshape(np.shape(heights)), path, nondim_hardness,
+                       element_area=1.0 / n, options=solver,
+                       interface=_interface_grid(interface, geometry))
 
 
 def _interface_grid(interface, geometry) -> InterfaceGrid | None:

@@ -94,6 +94,7 @@ __all__ = [
     "SI_SCALES",
     "CellOptions",
     "SweepProgress",
+    "cell_operator",
     "dimensionless_operator",
     "initial_separation",
     "solve_cell",
@@ -316,6 +317,15 @@ def _certified(unit_influence, element_area: float):
     return checked if checked.matrix is not None else unit_influence
 
 
+def cell_operator(unit_influence, thickness: float, element_area: float, n: int):
+    """The operator of a cell's dimensionless problem, ``K = E C / L`` (certified once,
+    :func:`dimensionless_operator`) viewed with element area ``1/n`` (the nominal area
+    1), as :func:`solve_cell` and the cycles of
+    :func:`roughcontact.contact.cell.cycle_cell` solve with it."""
+    return as_operator(dimensionless_operator(_certified(unit_influence, element_area),
+                                              thickness), 1.0 / n)
+
+
 def _check_steps(approaches, m: int) -> np.ndarray:
     steps = approach_steps(approaches, m, "units of sigma")
     if (np.diff(steps, axis=1) <= 0.0).any():
@@ -426,8 +436,7 @@ def solve_cell(unit_influence, heights, *, thickness: float, element_area: float
     gaps = initial_separation(heights)
     m, n = gaps.shape
     steps = _check_steps(approaches, m)
-    operator = as_operator(dimensionless_operator(_certified(unit_influence, element_area),
-                                                  thickness), 1.0 / n)
+    operator = cell_operator(unit_influence, thickness, element_area, n)
     hardness = (None if options.nondim_hardness is None else
                 check_positive(options.nondim_hardness, "nondim_hardness (H L / (E sigma))"))
     solver = options.solver.with_(method=resolve_method(options.solver.method, operator,

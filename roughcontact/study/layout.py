@@ -11,8 +11,11 @@ parameter is a new file. Under :data:`ROOT`:
   influence models, pairs of them summed once, the choices of ``operator: auto`` and
   the blocks' thermal influences (the conductance's);
 - ``contact/<job key>.h5``: a contact job's non-dimensional sweep;
+- ``cycles/<cycle job key>.h5``: a cycle job's non-dimensional loading path (the
+  ``loading`` section's);
 - ``aggregates/<study>.<ext>`` for each of :data:`AGGREGATE_EXTENSIONS`: a study's
-  tables and their sidecar;
+  tables and their sidecar; ``aggregates/<study>.<ext>`` for each of
+  :data:`CYCLE_EXTENSIONS`: its cycles' tables and sidecar;
 - ``figures/<figure>.<ext>``, ``audit/``, ``reports/``, ``grid_convergence/``,
   ``logs/`` (mirroring the outputs) and ``benchmarks/``.
 """
@@ -21,15 +24,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["AGGREGATE_EXTENSIONS", "ROOT", "Files", "aggregate", "aggregates", "choice",
-           "contact", "figure", "grid_contact", "grid_surfaces", "influence", "pair", "report",
-           "surfaces", "thermal"]
+__all__ = ["AGGREGATE_EXTENSIONS", "CYCLE_EXTENSIONS", "ROOT", "Files", "aggregate",
+           "aggregates", "choice", "contact", "cycle", "cycle_aggregates", "figure",
+           "grid_contact", "grid_surfaces", "influence", "pair", "report", "surfaces",
+           "thermal"]
 
 #: The folder of every output, relative to the working directory.
 ROOT = "results"
 #: The files of a study's aggregates: the table, the mean-plane moduli, the JSON sidecar
 #: and the validity table, in this order.
 AGGREGATE_EXTENSIONS = ("csv", "moduli.csv", "json", "validity.csv")
+#: The files of a study's cycles (the ``loading`` section's): the table per step, the
+#: table per cycle and the JSON sidecar, in this order.
+CYCLE_EXTENSIONS = ("cycles.csv", "cycles_summary.csv", "cycles.json")
 
 
 @dataclass(frozen=True)
@@ -57,6 +64,8 @@ pair = Files("influence/pairs")
 choice = Files("influence/choices", ".json")
 #: A contact job's file.
 contact = Files("contact")
+#: A cycle job's file.
+cycle = Files("cycles")
 #: A report's file, by its name with its extension (``speed_vs_error.md``, ...).
 report = Files("reports", "")
 
@@ -69,6 +78,11 @@ def aggregate(study: str, extension: str) -> str:
 def aggregates(study: str) -> list[str]:
     """A study's aggregate files, in the order of :data:`AGGREGATE_EXTENSIONS`."""
     return [aggregate(study, extension) for extension in AGGREGATE_EXTENSIONS]
+
+
+def cycle_aggregates(study: str) -> list[str]:
+    """A study's cycle files, in the order of :data:`CYCLE_EXTENSIONS`."""
+    return [aggregate(study, extension) for extension in CYCLE_EXTENSIONS]
 
 
 def figure(name: str, extension: str) -> str:

@@ -4,8 +4,8 @@ The configuration's edge: :func:`~roughcontact.study.config.validated` checks a
 configuration against ``config/schema.yaml`` and fills every default, and
 :meth:`Study.from_config` turns it into a :class:`Study` once, the settings
 records of each section in SI units (``surfaces``, ``body``, ``contact``,
-``flow``, ``conductance``, ``counterface``, ``audit``, ``reports``) and the contact studies as
-configured (:meth:`Study.section`: one :class:`StudySection`, its inheritance
+``flow``, ``conductance``, ``loading``, ``counterface``, ``audit``, ``reports``) and
+the contact studies as configured (:meth:`Study.section`: one :class:`StudySection`, its inheritance
 from the accuracy preset and the ``body``, ``surfaces`` and ``contact``
 sections applied). Everything after the edge takes the study, or the part of
 it it needs, never the configuration's dict::
@@ -39,6 +39,7 @@ from roughcontact.study.config import (
     report_section,
 )
 from roughcontact.study.contact_records import Accuracy
+from roughcontact.study.cycle_records import LoadingSettings, loading_settings
 from roughcontact.study.flow_settings import FlowSettings, flow_settings
 from roughcontact.study.presets import ACCURACY_PRESETS
 from roughcontact.study.probes import study_probes
@@ -232,6 +233,7 @@ class Study:
     cap_meshes: object
     flow: FlowSettings
     conductance: ConductanceSettings
+    loading: LoadingSettings
     accuracy: Accuracy
     preset: Mapping | None
     audit: AuditSettings
@@ -266,6 +268,7 @@ class Study:
             contact=contact, cap=thawed(config["contact"]["cap"]),
             cap_meshes=thawed(config["contact"]["cap_meshes"]),
             flow=flow_settings(config["flow"]), conductance=conductance,
+            loading=loading_settings(config["loading"]),
             accuracy=_accuracy(config.get("accuracy"), preset), preset=preset,
             audit=_audit(config["audit"], config["study_seed"]),
             reports=_reports(config["reports"]),

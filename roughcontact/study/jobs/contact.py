@@ -161,6 +161,26 @@ def _read_first_body(job: ContactJob, inputs: dict, study_seed) -> tuple:
     return surfaces, unit, attrs
 
 
+def read_problem(job: ContactJob, inputs: dict, settings: ContactSettings,
+                 study_seed) -> tuple[ContactProblem, dict, str]:
+    """A job's problem (:func:`contact_problem`) from its files ``inputs`` (input name ->
+    path, :meth:`~roughcontact.study.contact_records.ContactJob.files`), each checked to
+    have been made for it, with the probes of ``settings`` (the conductance's reading the
+    block's thermal influence); the attributes a file made of it records (the content
+    hashes of what it read, the seeds, the pair's attributes) and the influence's
+    operator. The contact job's and the cycle job's
+    (:mod:`roughcontact.study.jobs.cycles`) first step."""
+    surfaces, unit, geometry_attrs = _read_first_body(job, inputs, study_seed)
+    counter, counter_hashes = read_counter(job, inputs, study_seed)
+    # the block's thermal influence from its file where the conductance crosses it
+    probes = job.thermal.seeded(settings.probes(job.geometry), inputs, read_thermal)
+    problem = contact_problem(job, surfaces["heights"], unit, counter, probes)
+    read = {"surfaces_content_sha256": surfaces["content_sha256"],
+            "influence_content_sha256": geometry_attrs["content_sha256"],
+            "seeds": surfaces["seeds"].tolist(), **counter_hashes, **problem.attrs}
+    return problem, read, geometry_attrs["operator"]
+
+
 def sweep_problem(job: ContactJob, problem: ContactProblem, steps: int, options,
                   rows: slice | None = None):
     """Sweep a job's ``problem`` over ``steps`` approaches to its end
@@ -196,20 +216,15 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
     run = RunInfo.of(config)  # the job's edge: the run it belongs to
     job, settings = ContactJob.from_params(params), ContactSettings.from_section(settings)
     start = time.perf_counter()
-    study_seed = run.study_seed
-    surfaces, unit, geometry_attrs = _read_first_body(job, inputs, study_seed)
-    heights = surfaces["heights"]
-    m = heights.shape[0]
+    problem, read, operator = read_problem(job, inputs, settings, run.study_seed)
+    probes = problem.interface.probes
+    m = problem.heights.shape[0]
     name = f"{job.surface.key}__{job.geometry.key}"
-    counter, counter_hashes = read_counter(job, inputs, study_seed)
-    # the block's thermal influence from its file where the conductance crosses it
-    probes = job.thermal.seeded(settings.probes(job.geometry), inputs, read_thermal)
-    problem = contact_problem(job, heights, unit, counter, probes)
     hardness = job.nondim_hardness
     log.info("contact %s: %d surfaces x %d steps, sweep to P L / (E sigma) = %g; "
              "method %s, tol %.1e, precision %s, influence %s, %s", name, m, settings.steps,
              job.pressure_end, settings.method, settings.tol, settings.precision,
-             geometry_attrs["operator"],
+             operator,
              "elastic" if hardness is None else f"pressure capped at H L / (E sigma) = "
              f"{hardness:.6g}")
     for probe in probes:
@@ -231,11 +246,7 @@ def solve_contact_job(params: dict, inputs: dict, out_path, settings: dict,
         "batch_size": min(m, BATCH_SIZE),
         "job": canonical_json(job.params()),
         **stats,
-        "surfaces_content_sha256": surfaces["content_sha256"],
-        "influence_content_sha256": geometry_attrs["content_sha256"],
-        "seeds": surfaces["seeds"].tolist(),
-        **counter_hashes,
-        **problem.attrs,
+        **read,
         **provenance(run),
     }
     return write_contact(out_path, result, attrs)
@@ -246,6 +257,7 @@ __all__ = [
     "ContactProblem",
     "contact_problem",
     "read_counter",
+    "read_problem",
     "solve_contact_job",
     "sweep_problem",
 ]

@@ -20,6 +20,7 @@ from roughcontact.study.conductance_settings import check_conductance
 from roughcontact.study.config import BuildSettings, ContactSettings
 from roughcontact.study.contact_records import ContactJob, StudyCell
 from roughcontact.study.counter_records import NO_COMPLIANCE, PairGeometry
+from roughcontact.study.cycle_records import CycleJob, LoadingSettings
 from roughcontact.study.flow_settings import check_flow
 from roughcontact.study.plan.block_checks import check_blocks
 from roughcontact.study.plan.body_checks import check_plausible
@@ -34,6 +35,7 @@ from roughcontact.study.plan.checks import (
 from roughcontact.study.plan.counter_checks import check_counterfaces
 from roughcontact.study.plan.figures import FIGURES, Kind
 from roughcontact.study.plan.flow_checks import check_open_faces
+from roughcontact.study.plan.loading_checks import check_loading, cycle_studies
 from roughcontact.study.plan.studies import contact_cells
 from roughcontact.study.records import (
     SEEDED_PER_SURFACE,
@@ -74,6 +76,11 @@ class StudyPlan:
     ``pairs``: the pairs of influence models summed once for the jobs with a
     compliant counter body on a dense first body, by key; ``thermal``: the blocks whose
     thermal influence the jobs' conductance reads, by key.
+
+    ``cycles``: the cycle jobs of the capped cells with the ``loading`` section on
+    (:mod:`roughcontact.study.cycle_records`; each candidate of an ``operator: auto``
+    geometry, as ``jobs``), by key; ``cycle_studies`` the aggregated studies with a cell
+    swept along the loading path (their cycle tables).
     """
 
     figures: tuple[str, ...]
@@ -93,6 +100,13 @@ class StudyPlan:
     surfaces_from: Mapping[str, str] = dataclasses.field(default_factory=dict)
     pairs: Mapping[str, PairGeometry] = dataclasses.field(default_factory=dict)
     thermal: Mapping[str, ThermalBlock] = dataclasses.field(default_factory=dict)
+    cycles: Mapping[str, CycleJob] = dataclasses.field(default_factory=dict)
+    cycle_studies: tuple[str, ...] = ()
+
+    def cycle_of(self, cell: StudyCell) -> CycleJob:
+        """The cycle job of a study cell swept along the loading path (on its resolved
+        geometry: the plan's record of its contact job, with the files it reads)."""
+        return self.study.loading.job(cell, self.jobs[cell.job.key])
 
     def audit_files(self, jobs: Mapping[str, ContactJob]) -> list[str]:
         """The files the audit reads for contact ``jobs`` (by key): their contact files,
@@ -106,7 +120,8 @@ class StudyPlan:
 
 #: What a figure of each study probe draws (a refusal's words).
 NEEDS = {"flow": "its leak rate, flow factors and percolation thresholds",
-         "conductance": "its thermal contact conductance and bulk share"}
+         "conductance": "its thermal contact conductance and bulk share",
+         "loading": "its loops of loading and unloading"}
 
 
 def _raise(title: str, problems: list[str]) -> None:
@@ -125,7 +140,8 @@ def _figures_and_studies(study: Study) -> tuple[tuple[str, ...], tuple[str, ...]
         f"figures.{name}.studies: {listed!r} is no sweep or contact figure of the config "
         f"(sweeps: {', '.join(study.sweeps) or 'none'})"
         for name in listing for listed in study.entry(name)["studies"] if listed not in studies])
-    on = {record.kind for record in study.probes}
+    on = {record.kind for record in study.probes} | ({"loading"} if study.loading.enabled
+                                                      else set())
     _raise("Figures of a probe that is off", [
         f"figures.{name}.studies: {listed!r} is solved without the {kind} ({NEEDS[kind]}), "
         f"so its aggregates have nothing to draw; set {kind}.enabled: true (config section "
@@ -190,8 +206,12 @@ def study_plan(study: Study) -> StudyPlan:
            check_memory(asked, build))
     candidates = {key: with_thermal(job, study.conductance)
                   for key, job in candidate_jobs(jobs, build).items()}
+    _raise("A loading path that cannot be used", check_loading(study, cells, {
+        name: study.entry(name)["studies"] for name in figures
+        if "loading" in FIGURES[name].needs}))
+    aggregates = tuple(sorted(set(sources.values())))
     return StudyPlan(figures=figures, studies=studies,
-                     aggregates=tuple(sorted(set(sources.values()))), cells=cells,
+                     aggregates=aggregates, cells=cells,
                      jobs=candidates, surfaces=surfaces,
                      geometries=geometries, figure_surfaces=figure_cells, study=study,
                      body=study.body.geometry, contact=study.contact, build=build,
@@ -202,7 +222,12 @@ def study_plan(study: Study) -> StudyPlan:
                      pairs={key: pair for job in candidates.values()
                             for key, pair in job.pairs().items()},
                      thermal={job.thermal.key: job.thermal for job in candidates.values()
-                              if isinstance(job.thermal, ThermalBlock)})
+                              if isinstance(job.thermal, ThermalBlock)},
+                     cycles=cycle_jobs(study.loading, (cell for name in studies
+                                                       for cell in cells[name]),
+                                       candidates, build),
+                     cycle_studies=cycle_studies(study, {name: cells[name]
+                                                         for name in aggregates}))
 
 
 def surfaces_from(surfaces: Mapping[str, SurfaceCell]) -> dict[str, str]:
@@ -245,6 +270,21 @@ def candidate_jobs(jobs: Mapping[str, ContactJob], build: BuildSettings) -> dict
         for geometry in job.geometry.candidates(build.max_bytes):
             candidate = dataclasses.replace(job, geometry=geometry)
             out.setdefault(candidate.key, candidate)
+    return out
+
+
+def cycle_jobs(loading: LoadingSettings, cells, jobs: Mapping[str, ContactJob],
+               build: BuildSettings) -> dict[str, CycleJob]:
+    """The cycle jobs of the study cells ``cells`` that ``loading`` sweeps, by file key:
+    one per candidate of each cell's geometry (as :func:`candidate_jobs`), on the
+    plan's record of its contact job ``jobs`` (with the files it reads)."""
+    out = {}
+    for cell in cells:
+        if loading.applies(cell):
+            for geometry in cell.geometry.candidates(build.max_bytes):
+                placed = dataclasses.replace(cell, geometry=geometry)
+                cycle = loading.job(placed, jobs[placed.job.key])
+                out.setdefault(cycle.key, cycle)
     return out
 
 

@@ -19,6 +19,7 @@ from roughcontact.study.plan.cells import study_plan
 from roughcontact.study.plan.resources import (
     contact_mem_mb,
     contact_seconds,
+    cycle_seconds,
     influence_mem_mb,
     influence_seconds,
     surfaces_mem_mb,
@@ -33,7 +34,7 @@ __all__ = ["compare", "main", "predictions"]
 
 def predictions(plan) -> dict[str, dict[str, tuple[float, int]]]:
     """Rule -> wildcard -> (runtime [s] before the margin, memory [MB]) of the
-    contact, influence, surfaces and thermal influence jobs of a study's
+    contact, influence, surfaces, thermal influence and cycle jobs of a study's
     :func:`~roughcontact.study.plan.cells.study_plan`."""
     settings, build = plan.contact, plan.build
     return {
@@ -46,6 +47,9 @@ def predictions(plan) -> dict[str, dict[str, tuple[float, int]]]:
                      for k, c in plan.surfaces.items()},
         "thermal_influence": {k: (thermal_seconds(t, build), thermal_mem_mb(t, build))
                               for k, t in plan.thermal.items()},
+        "cycles": {key: (cycle_seconds(cycle, settings, build),
+                         contact_mem_mb(cycle.contact, settings, build))
+                   for key, cycle in plan.cycles.items()},
     }
 
 

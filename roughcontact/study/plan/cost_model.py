@@ -39,6 +39,7 @@ _REQUIRED = {
     "influence": ("anchor_seconds", "anchor_peak_gb", "exponent", "memory_margin_mb"),
     "conductance": ("solve_share", "build_share", "dense_arrays", "build_memory_share",
                     "fft_batch_arrays"),
+    "cycles": ("step_share",),
     "surfaces": ("reference_elements", "exact_seconds", "filter_seconds", "exponent",
                  "calibration_seconds",
                  "memory_base_mb", "work_arrays"),

@@ -50,6 +50,9 @@ MEMORY_KEYS = MappingProxyType({
                  "coarser body.mesh or a smaller grid (surfaces.grid)",
     "surfaces": "Use fewer surfaces per cell (surfaces.count or the study's count) or a "
                 "smaller grid (surfaces.grid)",
+    "cycles": "Set body.operator: auto (matrix-free above 64 x 64 elements), or use a "
+              "smaller grid (surfaces.grid) or fewer surfaces per cell (surfaces.count or "
+              "the study's count)",
     "thermal_influence": "Use a coarser body.mesh or a smaller grid (surfaces.grid), or let "
                          "the heat cross a half-space (conductance.body: halfspace)",
     "influence_convergence": "Remove reports.influence_convergence (it compares dense "
@@ -71,6 +74,8 @@ MEMORY_KEYS = MappingProxyType({
 _MATRIX_FREE_KEYS = MappingProxyType({
     "contact": "Use a smaller grid (surfaces.grid) or fewer surfaces per cell "
                "(surfaces.count or the study's count)",
+    "cycles": "Use a smaller grid (surfaces.grid) or fewer surfaces per cell "
+              "(surfaces.count or the study's count)",
     "influence": "Use a coarser body.mesh or a smaller grid (surfaces.grid)",
     "audit": "Use a smaller grid (surfaces.grid)",
     "audit_verify": "Set audit.verify: false, or use a smaller grid (surfaces.grid)",

@@ -170,6 +170,14 @@ def contact_seconds(job: ContactJob, settings: ContactSettings, build: BuildSett
     return solving + flow + conductance_seconds(settings, solving)
 
 
+def cycle_seconds(cycle, settings: ContactSettings, build: BuildSettings) -> float:
+    """Wall time [s] of a cycle job (:class:`~roughcontact.study.cycle_records.CycleJob`):
+    its path's steps at a share of a step of its contact job (``config/cost_model.yaml``,
+    ``cycles``)."""
+    per_step = contact_seconds(cycle.contact, settings, build) / settings.steps
+    return _MODEL["cycles"]["step_share"] * per_step * len(cycle.path().values)
+
+
 def conductance_seconds(settings: ContactSettings, solving: float) -> float:
     """Wall time [s] the conductance adds to a contact job whose solves take ``solving``
     [s] (none with the ``conductance`` section off): its solve at every step, a share of
@@ -577,11 +585,17 @@ class JobCost:
 
 
 #: The request of each kind of job (the workflow's rules), from the plan's record that
-#: its wildcards name (``job``, ``geometry``, ``pair``, ``auto``, ``cell``, ``gcgrid``).
+#: its wildcards name (``job``, ``cycle``, ``geometry``, ``pair``, ``auto``, ``cell``,
+#: ``gcgrid``).
 JOB_COSTS = MappingProxyType({
     "contact": JobCost(
         lambda plan, w: contact_mem_mb(plan.jobs[w["job"]], plan.contact, plan.build),
         lambda plan, w, a: contact_runtime(plan.jobs[w["job"]], plan.contact, plan.build, a)),
+    "cycle": JobCost(
+        lambda plan, w: contact_mem_mb(plan.cycles[w["cycle"]].contact, plan.contact,
+                                       plan.build),
+        lambda plan, w, a: runtime_minutes(cycle_seconds(plan.cycles[w["cycle"]], plan.contact,
+                                                         plan.build), a)),
     "influence": JobCost(
         lambda plan, w: influence_mem_mb(plan.geometries[w["geometry"]], plan.build),
         lambda plan, w, a: influence_runtime(plan.geometries[w["geometry"]], plan.build, a)),
