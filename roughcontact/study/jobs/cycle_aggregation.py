@@ -176,20 +176,16 @@ def cell_tables(cell: StudyCell, loading: LoadingSettings, path, probes: tuple =
     return steps, _summary(physical, per_step, probes, columns, area), stats
 
 
-def aggregate_cycles(cells: list[StudyCell], loading: LoadingSettings, inputs: list,
+def aggregate_cycles(cells: list[StudyCell], loading: LoadingSettings, cycle_paths: dict,
                      outputs, run: RunInfo = NO_RUN,
                      probes: tuple[StudyProbe, ...] = ()) -> pd.DataFrame:
     """Aggregate a study's capped ``cells`` along ``loading``'s path into the tables and
     sidecar ``outputs`` (``table``, ``summary``, ``meta``; module docstring) from their
-    cycle files (``inputs``: each cell's must be among them). Returns the table per
-    step."""
+    cycle files (``cycle_paths``: cycle job key -> path). Returns the table per step."""
     tables, summaries, stats = [], [], []
     for index, (cell, columns) in enumerate(zip(cells, study_columns(cells), strict=True)):
-        path = loading.job(cell).output
-        if path not in inputs:
-            raise RuntimeError(f"cycle file {path} of cell {cell.label} is not among the "
-                               f"rule's inputs {inputs}")
-        step, summary, stat = cell_tables(cell, loading, path, probes,
+        step, summary, stat = cell_tables(cell, loading,
+                                          cycle_paths[loading.job(cell).key], probes,
                                           {"cell": index, "label": cell.label, **columns})
         tables.append(step)
         summaries.append(summary)
