@@ -124,6 +124,47 @@ def _bracket(curve: _Curve, target: float, first_touch: float, ceiling: float | 
     return d_lo, p_lo, d_lo, p_lo
 
 
+def _start_approach(products, gap: np.ndarray, start: np.ndarray, hardness) -> float | None:
+    """The approach [m] at which the starting pressure ``start`` [Pa] would be a solution
+    (the mean of ``(C p)_i + f_i`` over its elements in contact below the cap, where the
+    gap closes), or None where it has none (a cold start)."""
+    free = (start > 0.0) if hardness is None else (start > 0.0) & (start < hardness)
+    if not free.any():
+        return None
+    displacement = np.asarray(products.operator.matvec(start), dtype=float)
+    return float(np.mean((displacement + gap)[free]))
+
+
+def _warm_bracket(curve: _Curve, target: float, first_touch: float, start: float,
+                  ceiling: float | None):
+    """``(d_lo, P_lo, d_hi, P_hi)`` with ``P_lo < target <= P_hi`` from the approach of a
+    warm start (:func:`_start_approach`): a solve there, then below it down to first
+    touch (``P = 0``), or above it by the secant's step from first touch (at most the
+    step needed on a load that stiffens with the approach), doubled until the target is
+    passed. None where it cannot bracket (a failed solve, a ceiling in the way): the
+    cold bracket then."""
+    if not start > first_touch or (ceiling is not None and not start < ceiling):
+        return None
+    p_start = curve(start)
+    if curve.failed or not p_start > 0.0:
+        return None
+    if p_start >= target:
+        return first_touch, 0.0, start, p_start
+    step = (target - p_start) * (start - first_touch) / p_start
+    d_lo, p_lo = start, p_start
+    while curve.solves < MAX_OUTER // 2:
+        d_hi = d_lo + step
+        if ceiling is not None and not d_hi < ceiling:
+            return None
+        p_hi = curve(d_hi)
+        if curve.failed:
+            return None
+        if p_hi >= target:
+            return d_lo, p_lo, d_hi, p_hi
+        d_lo, p_lo, step = d_hi, p_hi, 2.0 * step
+    return None
+
+
 def _illinois(curve: _Curve, target: float, bracket, load_tol: float) -> float:
     """The approach [m] with ``|P(d) - target| <= load_tol target`` inside ``bracket``.
 
@@ -244,7 +285,11 @@ def _outer_solves(method, products, gaps, mean_pressures, pressure, tol, max_ite
             ceiling = float(gaps[j].mean()) if bounded else None
             # a single element carrying the whole load deflects n P C_ii: an upper scale
             scale = target * float(diagonal.mean()) * np.sqrt(n)
-            bracket = _bracket(curve, target, first_touch, ceiling, scale)
+            start = _start_approach(products, gaps[j], pressure[j], hardness)
+            bracket = None if start is None else _warm_bracket(curve, target, first_touch,
+                                                               start, ceiling)
+            if bracket is None:
+                bracket = _bracket(curve, target, first_touch, ceiling, scale)
             if bracket[2] == ceiling and bracket[3] < target and not curve.failed:
                 _at_ceiling(curve, target, diagonal)
             else:  # (ends at once after a failed solve)
