@@ -118,9 +118,17 @@ def _draw_against_pressure(ax, rows, quantity: str, scale: float, color, style: 
                  else (mean[ok] - half[ok], mean[ok] + half[ok]))
     ax.plot(pressure, mean[ok], color=color, **style)
     ax.fill_between(pressure, low, high, color=color, alpha=0.15, lw=0)
-    if log and FACES_OPEN in rows:
-        opened = rows[FACES_OPEN].to_numpy(dtype=bool)[ok]
-        ax.plot(pressure[opened], mean[ok][opened], "x", color="grey", ms=6, zorder=3)
+
+
+def _mark_open(ax, rows, quantity: str) -> None:
+    """Panel (c) with the flow: a grey cross on each step of a cell at which the faces
+    would open (the table's ``faces_open``), once per step."""
+    if FACES_OPEN not in rows:
+        return
+    mean, _, ok = _stat(rows, quantity)
+    opened = ok & (mean > 0) & rows[FACES_OPEN].to_numpy(dtype=bool)
+    ax.plot(rows["nominal_pressure"].to_numpy(dtype=float)[opened] / MPA, mean[opened], "x",
+            color="grey", ms=6, zorder=3)
 
 
 def _draw_set(ax, rows, color, style: dict) -> None:
@@ -144,6 +152,8 @@ def _draw_cell(row_axes, rows, color, label, direction) -> None:
         else:
             _draw_against_pressure(row_axes[2], segment, column_name(LEAK_RATE, direction),
                                    1.0, color, style)
+    if direction is not None:
+        _mark_open(row_axes[2], rows, column_name(LEAK_RATE, direction))
 
 
 def _finish_row(row_axes, name: str, table, direction) -> None:
