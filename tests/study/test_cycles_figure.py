@@ -24,6 +24,7 @@ from roughcontact.reports.cycles_figure import (  # noqa: E402
     load_cycles,
     plot_cycles,
 )
+from roughcontact.reports.plotting import overlapping_labels, tidy_log_ticks  # noqa: E402
 from roughcontact.study.config import load_config, validated  # noqa: E402
 from roughcontact.study.plan.cells import figure_caption, figure_files, study_plan  # noqa: E402
 from roughcontact.study.plan.checks import ConfigProblems  # noqa: E402
@@ -255,6 +256,8 @@ def test_the_figure_draws_the_table_with_its_leg_styles(tmp_path):
                and len(line.get_xdata())]
     opened = table.query("faces_open")
     assert sum(len(line.get_xdata()) for line in crosses) == len(opened)
+    tidy_log_ticks(fig)  # as save_figure does
+    assert overlapping_labels(fig) == []
     plt.close(fig)
 
 
