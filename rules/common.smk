@@ -12,8 +12,8 @@ from snakemake.exceptions import IncompleteCheckpointException, WorkflowError
 from roughcontact.study import layout
 from roughcontact.study.plan import machine, resources
 from roughcontact.study.plan.cells import (
-    figure_aggregates,
     figure_caption,
+    figure_files,
     figure_parameters,
     study_plan,
 )
@@ -274,12 +274,10 @@ def get_figure_surfaces(wildcards):
 
 
 def get_figure_aggregates(wildcards):
-    """The aggregate files of the studies a figure draws, four per study in its order."""
-    return [
-        path
-        for name in figure_aggregates(PLAN, wildcards.fig)
-        for path in layout.aggregates(name)
-    ]
+    """The files of the studies a figure draws, in their order: each study's aggregates
+    (four), or its cycles' tables (three) for a figure of the loops (its registry entry's
+    ``files``)."""
+    return figure_files(PLAN, wildcards.fig)
 
 
 def get_figure_caption(wildcards):

@@ -375,3 +375,76 @@ def conductance(plan, name):
             f"cap). Right: the bulk's share of the resistance, R_bulk C, against nominal "
             f"pressure (R_bulk = L / (k A_n)). "
             f"{_studies_tail(plan, studies)}")
+
+
+def _unloading(loading) -> str:
+    """Where each cycle of the ``loading`` section unloads to, in words."""
+    if not loading.unload_to:
+        return "back to no load"
+    return f"down to {loading.unload_to:g} of it"
+
+
+def _cycles_right_panel(plan) -> str:
+    """The third panel of the cycles figure: the leak rate with the flow on, else the
+    permanent set."""
+    flow = plan.study.flow
+    if not flow.enabled:
+        return ("Right: the permanent set (the approach at which the flattened surface "
+                "first touches: the residual approach once unloaded, from the virgin "
+                "surface's first touch) against load step, in the same line styles, the "
+                "end of each cycle marked by a grey vertical line.")
+    ordered = [d for d in ("x", "y") if d in flow.directions]
+    drop = flow.written()["pressure_drop_MPa"]
+    return (f"Right: the leak rate Q of a fluid of {flow.seal_text()} (steady Reynolds "
+            f"equation, local cubic law) along {ordered[0]}, on a log axis, against "
+            f"nominal pressure in the same line styles, so that the loading curve and the "
+            f"unloading curve beside it give the leak rate at the same load pressed once "
+            f"and pressed before; its band is drawn in log space. Grey crosses: the levels "
+            f"at which the pressure drop of {drop:g} MPa exceeds the nominal contact "
+            f"pressure (the tables' faces_open), where the fluid would lift the faces "
+            f"apart: the model does not load the faces with the fluid's pressure, so its "
+            f"leak rate there is that of faces held shut.")
+
+
+def cycles(plan, name):
+    loading = plan.study.loading
+    studies = plan.study.entry(name)["studies"]
+    parts, rows = [], []
+    for study in studies:
+        capped = [cell for cell in plan.cells[study] if loading.applies(cell)]
+        study_rows = _columns(capped)
+        rows += study_rows
+        peaks = sorted({cell.pressure_range[1] / MPA for cell in capped})
+        caps = sorted({row["cap"] / MPA for row in study_rows})
+        parts.append(_listed_study(study, study_rows, f", capped at {numbers(caps, 'MPa')}, "
+                                   f"its peak {numbers(peaks, 'MPa')}"))
+    cycle_words = {1: "once", 2: "twice"}.get(loading.cycles, f"{loading.cycles} times")
+    flow = plan.study.flow
+    leak = (f", the leak rate along {[d for d in ('x', 'y') if d in flow.directions][0]} "
+            f"at half the peak on loading and on unloading (and their ratio)"
+            if flow.enabled else "")
+    shaken = (" and the share of its surfaces shaken down (no plastic volume added) in the "
+              "second cycle" if loading.cycles > 1 else "")
+    return (f"Beyond the paper: loading, unloading and reloading. Each capped cell is "
+            f"pressed under load control (every surface at the same nominal pressure at "
+            f"each step) from no load up to its highest pressure level and "
+            f"{_unloading(loading)}, {cycle_words}, in {loading.steps} equal load steps per "
+            f"leg, the pressure capped at the hardness and the cap's permanent set (the "
+            f"surface flattened where it sat at the cap) kept from step to step; one row "
+            f"of panels per study: {'; '.join(parts)}. Each cell in its own colour, "
+            f"labelled by its study and (Sk, Ku) (and what tells a study's cells apart); "
+            f"in every panel the first loading is solid, each unloading dashed and each "
+            f"reloading dotted (drawn wider, so that where it retraces the unloading, an "
+            f"elastic cycle, its dots show on the dashes), each leg from the last step of "
+            f"the one before. "
+            f"Left: nominal pressure against the approach d (from the virgin surface's "
+            f"first touch; the loop's area is the energy the cycle dissipated), the band "
+            f"the 95 % confidence interval of the mean approach at each step's pressure "
+            f"(shaded across the approach). Middle: the stiffness per nominal area k_P = "
+            f"(dF/dd) / A_n (the tangent on the elements in contact below the cap) against "
+            f"nominal pressure, with its band, its legs not joined (a tangent jumps where "
+            f"the load turns): unloading is stiffer than loading once the spots have "
+            f"yielded. {_cycles_right_panel(plan)} After this caption, each "
+            f"cell's residual approach after the first cycle, its unloading-to-loading "
+            f"stiffness ratio at half the peak, the energy each cycle dissipated beside the "
+            f"plastic work{shaken}{leak}, with their bands. {_surfaces(rows)}. {BANDS}")

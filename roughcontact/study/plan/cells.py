@@ -316,6 +316,13 @@ def figure_aggregates(plan: StudyPlan, name: str) -> tuple[str, ...]:
     return (study.source_name(name),) if kind is Kind.CONTACT else ()
 
 
+def figure_files(plan: StudyPlan, name: str) -> list[str]:
+    """The files a figure reads, its notebook's ``aggregate_files``: those of each study
+    of :func:`figure_aggregates` its registry entry names (``Figure.files``: the
+    aggregates, or the cycles' tables), in the studies' order."""
+    return [path for study in figure_aggregates(plan, name) for path in FIGURES[name].files(study)]
+
+
 def drawn_with(plan: StudyPlan, name: str) -> dict:
     """The settings of the other figures a figure draws with, by figure name
     (``{"fig04": ...}`` for Fig 5; none for the others): notebook parameters."""

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from enum import Enum
 from types import MappingProxyType
 
+from roughcontact.study import layout
 from roughcontact.study.codec import as_pair, from_unit
 from roughcontact.study.plan import captions
 from roughcontact.study.sources import spectrum_from_entry
@@ -87,7 +88,11 @@ class Figure:
     generate (a study's are its jobs'); ``drawn_with`` the other figures whose settings
     it draws with (notebook parameters: Fig 5 draws Fig 4's heights in Fig 4's sigma);
     ``needs``: the study probes (kinds, :data:`~roughcontact.study.probes.STUDY_PROBE_KINDS`)
-    whose columns of its studies' aggregates it draws.
+    whose columns of its studies' aggregates it draws, or ``"loading"`` for the loops of
+    the ``loading`` section; ``files(study)`` the files it reads of each study it draws
+    (its notebook's ``aggregate_files``, in the study's order): the rising sweep's
+    aggregates (:func:`~roughcontact.study.layout.aggregates`) or the cycles' tables
+    (:func:`~roughcontact.study.layout.cycle_aggregates`).
     """
 
     kind: Kind
@@ -96,6 +101,7 @@ class Figure:
     generated: bool = False
     drawn_with: tuple[str, ...] = ()
     needs: tuple[str, ...] = ()
+    files: Callable[[str], list[str]] = layout.aggregates
 
 
 def _contact(caption: Callable, surfaces: Callable = _no_surfaces) -> Figure:
@@ -107,7 +113,9 @@ def _contact(caption: Callable, surfaces: Callable = _no_surfaces) -> Figure:
 #: ACF, config/fig11_resolved.yaml; "gaps": the mean gap and the spots of a study's
 #: cells, usually ``from:`` fig07; "two_bodies": each counter body of the listed studies
 #: beside the rigid flat; "leakage": the flow through the contact gap of the listed
-#: studies; "conductance": the thermal contact conductance of the listed studies).
+#: studies; "conductance": the thermal contact conductance of the listed studies;
+#: "cycles": the loops of loading, unloading and reloading of the listed studies' capped
+#: cells, from their cycles' tables).
 FIGURES = MappingProxyType({
     "fig01": Figure(Kind.SURFACES, captions.fig01),
     "fig02": Figure(Kind.SURFACES, captions.fig02),
@@ -131,4 +139,6 @@ FIGURES = MappingProxyType({
     "leakage": Figure(Kind.STUDIES, captions.leakage, needs=("flow",)),
     "conductance": Figure(Kind.STUDIES, captions.conductance, _listed_study_surfaces,
                           needs=("conductance",)),
+    "cycles": Figure(Kind.STUDIES, captions.cycles, needs=("loading",),
+                     files=layout.cycle_aggregates),
 })
