@@ -104,11 +104,6 @@ def test_another_path_is_another_file():
     assert one.contact.key == other.contact.key == more.contact.key
 
 
-def test_the_figure_of_the_loops_needs_the_loading_path():
-    with pytest.raises(ConfigProblems, match=r"loading\.enabled: true"):
-        plan(loading={"enabled": False}, figures={"cycles": {"studies": ["gasket"]}})
-
-
 @pytest.fixture(scope="module")
 def solved(tmp_path_factory):
     """The cycle job of the capped cell, solved and aggregated in a results tree of its
