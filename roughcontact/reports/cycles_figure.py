@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from roughcontact.reports.plotting import _check_sha256, positive_band
+from roughcontact.reports.plotting import check_sha256, positive_band
 from roughcontact.reports.study_figures import cell_labels, flow_directions
 from roughcontact.study.flow_settings import FACES_OPEN
 from roughcontact.study.layout import CYCLE_EXTENSIONS
@@ -65,8 +65,8 @@ def load_cycles(paths, names) -> dict:
     for k, name in enumerate(names):
         table_path, summary_path, meta_path = paths[CYCLE_FILES * k:CYCLE_FILES * (k + 1)]
         meta = json.loads(Path(meta_path).read_text())
-        _check_sha256(table_path, meta, "table_sha256", meta_path)
-        _check_sha256(summary_path, meta, "summary_sha256", meta_path)
+        check_sha256(table_path, meta, "table_sha256", meta_path)
+        check_sha256(summary_path, meta, "summary_sha256", meta_path)
         found[name] = (pd.read_csv(table_path), pd.read_csv(summary_path))
     return found
 

@@ -219,7 +219,7 @@ def draw_surfaces(files, sigma_um: float, titles, *, columns: int = 3, cells=Non
     return fig
 
 
-def _check_sha256(path, meta: dict, key: str, meta_path) -> None:
+def check_sha256(path, meta: dict, key: str, meta_path) -> None:
     """Raise :class:`~roughcontact.errors.StoredFileError` unless ``path`` has the SHA-256
     that the sidecar ``meta`` (read from ``meta_path``) records under ``key``."""
     if meta.get(key) != file_sha256(path):
@@ -242,7 +242,7 @@ def load_aggregates(paths) -> tuple:
     table_path, moduli_path, meta_path = paths[:3]
     meta = json.loads(Path(meta_path).read_text())
     for path, key in ((table_path, "table_sha256"), (moduli_path, "moduli_sha256")):
-        _check_sha256(path, meta, key, meta_path)
+        check_sha256(path, meta, key, meta_path)
     return pd.read_csv(table_path), pd.read_csv(moduli_path), meta
 
 
@@ -256,7 +256,7 @@ def load_validity(paths):
     if len(paths) < 4:
         return pd.DataFrame()
     meta_path, path = paths[2], paths[3]
-    _check_sha256(path, json.loads(Path(meta_path).read_text()), "validity_sha256", meta_path)
+    check_sha256(path, json.loads(Path(meta_path).read_text()), "validity_sha256", meta_path)
     return pd.read_csv(path)
 
 

@@ -114,7 +114,7 @@ def _with_pressure_in_mpa(frame: pd.DataFrame) -> pd.DataFrame:
     return frame
 
 
-def _with_probe_columns(frame: pd.DataFrame, probes: tuple) -> pd.DataFrame:
+def with_probe_columns(frame: pd.DataFrame, probes: tuple) -> pd.DataFrame:
     """The table with the columns each study-side probe record adds (the flow's leak
     rate; none without probes)."""
     for record in probes:
@@ -130,7 +130,7 @@ def _shown(probes) -> str:
     return str({probe.kind: probe.params() for probe in probes}) if probes else "no probe"
 
 
-def _check_probes(path, stored: tuple, probes: tuple, geometry) -> None:
+def check_probes(path, stored: tuple, probes: tuple, geometry) -> None:
     """The contact file of a job on ``geometry`` must have recorded the probes the
     configuration asks for."""
     wanted = tuple(record.job_probe(geometry) for record in probes)
@@ -148,13 +148,13 @@ def _aggregate_cell(index: int, cell: StudyCell, columns: dict, path, levels: in
     with what the study-side records of its ``probes`` add: the flow's leak rate and
     percolation thresholds, where the flow is on)."""
     nd, attrs = read_contact(path, job=cell.job.params())  # solved for this cell's job
-    _check_probes(path, nd.probe_columns.probes, probes, cell.job.geometry)
+    check_probes(path, nd.probe_columns.probes, probes, cell.job.geometry)
     key, label = cell.contact_key, cell.label
     axis = aggregate.pressure_axis(*cell.pressure_range, levels)
     physical, frame = cell_module.aggregate_sweep(nd, cell.height_scale, cell.E, axis,
                                                   hardness=cell.hardness)
     frame, implausible = _plausibility(cell, frame)
-    frame = _with_probe_columns(_with_pressure_in_mpa(frame), probes)
+    frame = with_probe_columns(_with_pressure_in_mpa(frame), probes)
     labels = {"cell": index, "label": label, "contact_key": key, **columns}
     probed = {record.kind: record.cell_rows(physical, {"cell": index, "label": label,
                                                        "contact_key": key})
@@ -242,7 +242,7 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
     }
     for record in probes:
         meta[record.kind] = record.sidecar([
-            {name: _json_value(value) for name, value in row.items()}
+            {name: json_value(value) for name, value in row.items()}
             for part in parts for row in part.probed[record.kind]])
     if validity_path is not None:
         meta |= _write_validity([frame for part in parts for frame in part.validity],
@@ -253,7 +253,7 @@ def aggregate_study(cells: list[StudyCell], contact_paths: dict, levels: int, ta
     return table
 
 
-def _json_value(value):
+def json_value(value):
     """A value of the strict-JSON sidecar: None for NaN."""
     return None if isinstance(value, float) and not math.isfinite(value) else value
 

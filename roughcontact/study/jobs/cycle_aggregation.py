@@ -40,7 +40,7 @@ from roughcontact.contact.cycles import cycle_summary, cycle_to_physical, legs
 from roughcontact.hashes import file_sha256
 from roughcontact.study.contact_records import StudyCell, study_columns
 from roughcontact.study.cycle_records import LoadingSettings
-from roughcontact.study.jobs.aggregation import _check_probes, _json_value, _with_probe_columns
+from roughcontact.study.jobs.aggregation import check_probes, json_value, with_probe_columns
 from roughcontact.study.jobs.cycle_storage import read_cycle
 from roughcontact.study.probes import StudyProbe
 from roughcontact.study.provenance import NO_RUN, RunInfo, atomic_path, provenance
@@ -99,7 +99,7 @@ def _table(values: dict, pressure, probes: tuple, columns: dict) -> pd.DataFrame
                           **{k: v for name, samples in values.items()
                              for k, v in _stats(name, samples).items()}})
     frame.attrs["units"] = {}
-    frame = _with_probe_columns(frame, probes)
+    frame = with_probe_columns(frame, probes)
     return frame.assign(**columns)
 
 
@@ -154,7 +154,7 @@ def cell_tables(cell: StudyCell, loading: LoadingSettings, path, probes: tuple =
     study ``probes``, labelled with ``columns``; and its solver statistics."""
     job = loading.job(cell)
     nd, attrs = read_cycle(path, job=job.params())
-    _check_probes(path, nd.probe_columns.probes, probes, cell.job.geometry)
+    check_probes(path, nd.probe_columns.probes, probes, cell.job.geometry)
     lx, ly = cell.geometry.size
     area = lx * ly
     physical = cycle_to_physical(nd, cell.height_scale, cell.E, cell.geometry.thickness, area)
@@ -205,7 +205,7 @@ def aggregate_cycles(cells: list[StudyCell], loading: LoadingSettings, cycle_pat
             "meanings": {name: meaning for name, (_, meaning) in
                          {**STEP_QUANTITIES, **SUMMARY_QUANTITIES}.items()},
             "loading": loading.params(), "cells": [cell.params() for cell in cells],
-            "solver": [{k: _json_value(v) for k, v in s.items()} for s in stats],
+            "solver": [{k: json_value(v) for k, v in s.items()} for s in stats],
             **provenance(run),
             "table_sha256": file_sha256(outputs.table),
             "summary_sha256": file_sha256(outputs.summary)}

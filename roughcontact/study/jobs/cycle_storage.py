@@ -25,10 +25,10 @@ from roughcontact.errors import StoredFileError
 from roughcontact.hashes import arrays_sha256
 from roughcontact.study.jobs.storage import (
     CONTACT_DEFINING,
-    _all_datasets,
-    _decoded,
-    _differences,
-    _json,
+    all_datasets,
+    decoded,
+    field_differences,
+    json_attr,
     open_h5,
     parameters_error,
     rebuild,
@@ -70,12 +70,12 @@ def write_cycle(path: str | os.PathLike, result: CycleResult, attrs: dict) -> di
 
 def _check_job(path, attrs: dict, job: dict) -> None:
     """The file must have been made for the cycle job ``job`` (its params)."""
-    found = _json(attrs.get("job")) or {}
+    found = json_attr(attrs.get("job")) or {}
     want = {**{k: job[k] for k in CYCLE_DEFINING},
             "contact": {k: job["contact"].get(k) for k in CONTACT_DEFINING}}
     got = {**{k: found.get(k) for k in CYCLE_DEFINING},
            "contact": {k: (found.get("contact") or {}).get(k) for k in CONTACT_DEFINING}}
-    differences = _differences(want, got, "job")
+    differences = field_differences(want, got, "job")
     if differences:
         raise parameters_error(path, differences)
 
@@ -89,10 +89,10 @@ def read_cycle(path: str | os.PathLike, *, job: dict | None = None
     from roughcontact.study.probes import probes_from_attrs
 
     with open_h5(path) as f:
-        attrs = _decoded(f.attrs)
+        attrs = decoded(f.attrs)
         if job is not None:
             _check_job(path, attrs, job)
-        arrays = _all_datasets(f)
+        arrays = all_datasets(f)
     missing = [name for name in (*CYCLE_ARRAYS, "plastic", "path") if name not in arrays]
     if missing:
         raise StoredFileError(f"{path}: no {', '.join(missing)}; {rebuild(path)}", path)

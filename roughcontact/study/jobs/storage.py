@@ -156,7 +156,7 @@ def _attr_value(value):
     return value
 
 
-def _decoded(attrs) -> dict:
+def decoded(attrs) -> dict:
     """HDF5 attributes as a dict, byte strings decoded (JSON text left as text)."""
     return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in attrs.items()}
 
@@ -189,7 +189,7 @@ def datasets_sha256(datasets: dict) -> str:
                           for name, item in datasets.items()})
 
 
-def _all_datasets(f) -> dict:
+def all_datasets(f) -> dict:
     arrays = {}
     f.visititems(lambda name, obj: arrays.__setitem__(name, obj[()])
                  if isinstance(obj, h5py.Dataset) else None)
@@ -220,7 +220,7 @@ def rebuild(path) -> str:
 CONTACT_DEFINING = ("surface", "geometry", "pressure_end", "hardness")
 
 
-def _json(value):
+def json_attr(value):
     """An attribute stored as JSON text, parsed (None when absent or not JSON)."""
     if not isinstance(value, str) or not value:
         return value if isinstance(value, dict) else None
@@ -242,18 +242,18 @@ def _same(expected, found) -> bool:
     return expected == found
 
 
-def _differences(expected, found, where: str = "") -> list[tuple[str, object, object]]:
+def field_differences(expected, found, where: str = "") -> list[tuple[str, object, object]]:
     """``(field, expected, found)`` of every field where ``found`` differs (nested dicts
     field by field, dotted paths)."""
     if isinstance(expected, dict) and isinstance(found, dict):
         out = []
         for key in sorted(set(expected) | set(found), key=str):
-            out += _differences(expected.get(key), found.get(key),
+            out += field_differences(expected.get(key), found.get(key),
                                 f"{where}.{key}" if where else str(key))
         return out
     if isinstance(expected, list | tuple) and isinstance(found, list | tuple) \
             and len(expected) == len(found):
-        if all(_same(a, b) if not isinstance(a, dict | list) else not _differences(a, b)
+        if all(_same(a, b) if not isinstance(a, dict | list) else not field_differences(a, b)
                for a, b in zip(expected, found, strict=True)):
             return []
         return [(where, expected, found)]
@@ -303,14 +303,14 @@ def check_attributes(path, attrs: dict, expected: dict) -> None:
     for name, want in expected.items():
         found = attrs.get(name)
         if name == "job":
-            found = _json(found)
+            found = json_attr(found)
             found = None if found is None else {k: found.get(k) for k in CONTACT_DEFINING}
         elif isinstance(want, dict):
-            found = _json(found)
+            found = json_attr(found)
         elif isinstance(found, np.generic):
             found = found.item()
         if isinstance(want, dict) and isinstance(found, dict):
-            differences += _differences(want, found)
+            differences += field_differences(want, found)
         elif not _same(want, found):
             differences.append((name, want, found))
     if differences:
@@ -341,7 +341,7 @@ def check_parameters(path: str | os.PathLike, *, cell: dict | None = None,
     command that rebuilds it. Returns the attributes.
     """
     with open_h5(path) as f:
-        attrs = _decoded(f.attrs)
+        attrs = decoded(f.attrs)
     check_attributes(path, attrs, _expected(cell, geometry, job, study_seed))
     return attrs
 
@@ -392,10 +392,10 @@ def read_surfaces(path: str | os.PathLike, count: int | None = None, *,
     """
     sl = slice(None) if count is None else slice(0, count)
     with open_h5(path) as f:
-        attrs = upgraded(path, _decoded(f.attrs), "surfaces")
+        attrs = upgraded(path, decoded(f.attrs), "surfaces")
         check_attributes(path, attrs, _expected(cell=cell, study_seed=study_seed))
-        arrays = _all_datasets(f)
-        dataset_attrs = {name: _decoded(f[name].attrs) for name in arrays}
+        arrays = all_datasets(f)
+        dataset_attrs = {name: decoded(f[name].attrs) for name in arrays}
     verify(path, attrs, arrays_sha256(arrays))
     if cell is not None and "heights" in arrays:
         nx, ny = cell["grid"]
@@ -484,7 +484,7 @@ def read_influence(path: str | os.PathLike, *, geometry: dict | None = None):
     geometry's grid.
     """
     with open_h5(path) as f:
-        attrs = upgraded(path, _decoded(f.attrs), "influence")
+        attrs = upgraded(path, decoded(f.attrs), "influence")
         check_attributes(path, attrs, _expected(geometry=geometry))
         if "unit_influence" in f:
             unit = f["unit_influence"][...]
@@ -550,9 +550,9 @@ def read_pair(path: str | os.PathLike, *, pair: dict | None = None) -> tuple:
     file must have been made for it (:func:`check_parameters`); its datasets are
     checked against their hash."""
     with open_h5(path) as f:
-        attrs = upgraded(path, _decoded(f.attrs), "pair")
+        attrs = upgraded(path, decoded(f.attrs), "pair")
         check_attributes(path, attrs, _expected(geometry=pair))
-        arrays = _all_datasets(f)
+        arrays = all_datasets(f)
     verify(path, attrs, arrays_sha256(arrays))
     return arrays.get("unit_influence"), arrays.get("counter_weights"), attrs
 
@@ -642,13 +642,13 @@ def read_contact(path: str | os.PathLike, *,
     their names.
     """
     with open_h5(path) as f:
-        attrs = upgraded(path, _decoded(f.attrs), "contact")
+        attrs = upgraded(path, decoded(f.attrs), "contact")
         check_attributes(path, attrs, _expected(job=job))
         missing = [name for name in CONTACT_ARRAYS if name not in f]
         if missing:
             raise StoredFileError(f"{path}: no {', '.join(missing)} (written by an older "
                                   f"version of roughcontact); {rebuild(path)}", path)
-        arrays = _all_datasets(f)
+        arrays = all_datasets(f)
     verify(path, attrs, arrays_sha256(arrays))
     probed = _probe_columns(path, attrs, arrays)
     if job is not None:

@@ -19,9 +19,9 @@ import os
 import time
 
 from roughcontact.study.jobs.storage import (
-    _decoded,
     check_attributes,
     datasets_sha256,
+    decoded,
     open_h5,
     parameters_error,
     upgraded,
@@ -84,7 +84,7 @@ def read_thermal(path: str | os.PathLike, block: ThermalBlock):
     geometry, coarse = block.block(), block.coarse_model()
     name = DATASET if coarse is None else COARSE_DATASET
     with open_h5(path) as f:
-        attrs = upgraded(path, _decoded(f.attrs), "thermal")
+        attrs = upgraded(path, decoded(f.attrs), "thermal")
         expected = {"params": block.params()}
         if coarse is not None:
             expected["coarse"] = {"grid": list(coarse.grid), "mesh": coarse.mesh}
