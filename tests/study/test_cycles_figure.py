@@ -116,29 +116,25 @@ def test_the_caption_names_the_seal_where_the_flow_is_on():
 
 # ---- refused with the loading off ------------------------------------------------------
 
-def test_the_figure_is_refused_with_the_loading_off_and_the_advice_plans():
-    raw = config(loading={"enabled": False})
+@pytest.mark.parametrize("changed, words, advice", [
+    ({"loading": {"enabled": False}},
+     ("figures.cycles.studies: 'gasket' is solved without the loading",
+      "set loading.enabled: true"), ("loading", "enabled", True)),
+    ({"contact": {"cap": False}},
+     ("loading.enabled: true, but no cell of the config is capped", "contact.cap: true",
+      "body.hardness_MPa"), ("contact", "cap", True)),
+], ids=["loading off", "no capped cell"])
+def test_the_figure_is_refused_without_loops_and_the_advice_plans(changed, words, advice):
+    raw = config(**changed)
     with pytest.raises(ConfigProblems) as caught:
         plan(raw)
-    message = str(caught.value)
-    assert "figures.cycles.studies: 'gasket' is solved without the loading" in message
-    assert "set loading.enabled: true" in message
+    for part in words:
+        assert part in str(caught.value)
     followed = copy.deepcopy(raw)
-    followed["loading"]["enabled"] = True  # the advice
+    section, key, value = advice
+    followed[section][key] = value  # the advice (body.hardness_MPa is set)
     planned = plan(followed)
     assert "cycles" in planned.figures and planned.cycle_studies == ("gasket",)
-
-
-def test_the_figure_of_a_study_without_capped_cells_is_refused_and_the_advice_plans():
-    raw = config(contact={"cap": False})
-    with pytest.raises(ConfigProblems) as caught:
-        plan(raw)
-    message = str(caught.value)
-    assert "loading.enabled: true, but no cell of the config is capped" in message
-    assert "contact.cap: true" in message
-    followed = copy.deepcopy(raw)
-    followed["contact"]["cap"] = True  # the advice (body.hardness_MPa is set)
-    assert "cycles" in plan(followed).figures
 
 
 # ---- the figure's code on a table made here --------------------------------------------

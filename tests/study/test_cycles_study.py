@@ -30,7 +30,6 @@ from roughcontact.study.jobs.storage import read_influence, read_surfaces
 from roughcontact.study.jobs.surfaces import build_surface_cell
 from roughcontact.study.plan import resources
 from roughcontact.study.plan.cells import study_plan
-from roughcontact.study.plan.checks import ConfigProblems
 from roughcontact.study.settings import Study
 from roughcontact.units import MPA, UM
 
@@ -64,18 +63,6 @@ def test_off_by_default_nothing_is_planned():
     assert study.loading == NO_LOADING and not study.loading.enabled
     planned = study_plan(study)
     assert planned.cycles == {} and planned.cycle_studies == ()
-
-
-def test_without_a_capped_cell_it_is_refused_and_the_advice_plans():
-    raw = config(contact={"cap": False})
-    with pytest.raises(ConfigProblems) as refused:
-        study_plan(Study.from_config(raw))
-    message = str(refused.value)
-    assert "loading.enabled" in message and "contact.cap: true" in message
-    assert "body.hardness_MPa" in message
-    # the advice followed: cap the cells
-    followed = plan(contact={"cap": True})
-    assert len(followed.cycles) == 1
 
 
 def test_with_cap_both_only_the_capped_cells_are_swept():
