@@ -165,7 +165,9 @@ class StudyCell(Record):
         independent surfaces (the equivalent surface of Eq 17-18)."""
         return self.counterface.height_scale(self.sigma)
 
-    def _nondim(self, pressure: float) -> float:
+    def nondim(self, pressure: float) -> float:
+        """``pressure`` [Pa] as this cell's job sweeps it: ``P L / (E sigma)``, sigma its
+        height scale."""
         return nondim_pressure(pressure, thickness=self.geometry.thickness, E=self.E,
                                sigma=self.height_scale)
 
@@ -173,12 +175,12 @@ class StudyCell(Record):
     def sweep_end(self) -> float:
         """P_max L / (E sigma) rounded up to 2^k: a small change of sigma, E or the
         pressure range does not re-solve a job that already reaches far enough."""
-        return float(2.0 ** np.ceil(np.log2(self._nondim(self.pressure_range[1]))))
+        return float(2.0 ** np.ceil(np.log2(self.nondim(self.pressure_range[1]))))
 
     @property
     def nondim_hardness(self) -> float | None:
         """The cap H L / (E sigma) of a capped cell (None: elastic)."""
-        return None if self.hardness is None else self._nondim(self.hardness)
+        return None if self.hardness is None else self.nondim(self.hardness)
 
     @property
     def job(self) -> ContactJob:

@@ -22,7 +22,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from roughcontact.contact.cell import nondim_pressure
 from roughcontact.contact.cycles import LoadingPath
 from roughcontact.study import codec, layout
 from roughcontact.study.codec import Record
@@ -95,11 +94,9 @@ class LoadingSettings(Record):
     def job(self, cell: StudyCell, contact: ContactJob | None = None) -> CycleJob:
         """The cycle job of a capped ``cell`` (on ``contact``, the plan's record of its
         contact job, with the files it reads; by default the cell's own)."""
-        peak = nondim_pressure(cell.pressure_range[1], thickness=cell.geometry.thickness,
-                               E=cell.E, sigma=cell.height_scale)
         return CycleJob(contact=cell.job if contact is None else contact,
-                        peak=float(f"{peak:.7g}"), cycles=self.cycles, steps=self.steps,
-                        unload_to=self.unload_to)
+                        peak=float(f"{cell.nondim(cell.pressure_range[1]):.7g}"),
+                        cycles=self.cycles, steps=self.steps, unload_to=self.unload_to)
 
 
 #: The section off: no cycle job.
