@@ -10,6 +10,7 @@ import re
 import numpy as np
 import pandas as pd
 import pytest
+from study_sections import planned, with_sections
 
 from roughcontact.study.conductance_settings import (
     CONDUCTANCE_OFF,
@@ -42,14 +43,10 @@ ON = {"enabled": True, "conductivity_W_mK": 50.0}
 
 
 def config(**sections) -> dict:
-    raw = copy.deepcopy(BASE)
-    for section, values in sections.items():
-        raw.setdefault(section, {}).update(values)
-    return raw
+    return with_sections(BASE, **sections)
 
 
-def plan(raw: dict):
-    return study_plan(Study.from_config(validated(copy.deepcopy(raw))))
+plan = planned
 
 
 def refusal(raw: dict) -> str:

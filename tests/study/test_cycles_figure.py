@@ -15,6 +15,7 @@ import pytest
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from study_sections import planned, with_sections
 
 from roughcontact.errors import StoredFileError  # noqa: E402
 from roughcontact.hashes import file_sha256  # noqa: E402
@@ -25,7 +26,7 @@ from roughcontact.reports.cycles_figure import (  # noqa: E402
     plot_cycles,
 )
 from roughcontact.reports.plotting import overlapping_labels, tidy_log_ticks  # noqa: E402
-from roughcontact.study.config import load_config, validated  # noqa: E402
+from roughcontact.study.config import load_config  # noqa: E402
 from roughcontact.study.plan.cells import figure_caption, figure_files, study_plan  # noqa: E402
 from roughcontact.study.plan.checks import ConfigProblems  # noqa: E402
 from roughcontact.study.plan.figures import FIGURES, Kind  # noqa: E402
@@ -44,14 +45,10 @@ BASE = {"study_seed": 0,
 
 
 def config(**sections) -> dict:
-    raw = copy.deepcopy(BASE)
-    for section, values in sections.items():
-        raw.setdefault(section, {}).update(values)
-    return raw
+    return with_sections(BASE, **sections)
 
 
-def plan(raw: dict):
-    return study_plan(Study.from_config(validated(copy.deepcopy(raw))))
+plan = planned
 
 
 # ---- the registry and the plan ----------------------------------------------------------

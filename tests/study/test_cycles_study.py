@@ -7,7 +7,6 @@ surfaces' cycle solved again here in SI units (the heights times sigma, the comp
 E C / E, the cap and the loads in Pa: none of the job's scaling); the bands by
 scipy.stats.t; the energy identity of the cap model (the loop's area is the plastic work)."""
 
-import copy
 import types
 
 import h5py
@@ -15,6 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import scipy.stats
+from study_sections import planned, with_sections
 
 from roughcontact.contact import SolverOptions
 from roughcontact.contact.cycles import LoadingPath, cycle_sweep
@@ -45,17 +45,11 @@ BASE = {"study_seed": 3,
 
 
 def config(**sections):
-    raw = copy.deepcopy(BASE)
-    for section, values in sections.items():
-        if values is None:
-            raw.pop(section, None)
-        else:
-            raw.setdefault(section, {}).update(values)
-    return validated(raw)
+    return validated(with_sections(BASE, **sections))
 
 
 def plan(**sections):
-    return study_plan(Study.from_config(config(**sections)))
+    return planned(with_sections(BASE, **sections))
 
 
 def test_off_by_default_nothing_is_planned():

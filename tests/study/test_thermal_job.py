@@ -2,22 +2,19 @@
 each checked to have been made for the block; the plan names the file only where the
 conductance crosses a block."""
 
-import copy
 
 import h5py
 import numpy as np
 import pytest
+from study_sections import planned, with_sections
 
 from roughcontact.contact.probes import SolvedFields
 from roughcontact.errors import StoredFileError
 from roughcontact.study import layout
-from roughcontact.study.config import validated
 from roughcontact.study.contact_records import ContactJob
 from roughcontact.study.jobs.storage import check_parameters
 from roughcontact.study.jobs.thermal import build_thermal, read_thermal
 from roughcontact.study.plan import resources
-from roughcontact.study.plan.cells import study_plan
-from roughcontact.study.settings import Study
 from roughcontact.study.thermal_records import NO_THERMAL, ThermalBlock
 from roughcontact.transport.conduction import ConductanceProbe
 from roughcontact.transport.conduction.probe import BlockBody
@@ -31,10 +28,7 @@ BASE = {"study_seed": 0,
 
 
 def plan(**sections):
-    raw = copy.deepcopy(BASE)
-    for section, values in sections.items():
-        raw.setdefault(section, {}).update(values)
-    return study_plan(Study.from_config(validated(raw)))
+    return planned(with_sections(BASE, **sections))
 
 
 @pytest.fixture(scope="module")
