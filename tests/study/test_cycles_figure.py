@@ -76,9 +76,11 @@ def test_the_shipped_config_draws_the_cycles_figure_from_its_cycles_tables():
     assert "cycles" in shipped.figures
     assert figure_files(shipped, "cycles")[0] == "results/aggregates/gasket.cycles.csv"
     caption = figure_caption(shipped, "cycles")
-    for words in ("back to no load, twice", f"{raw['loading']['steps']} equal load steps per leg",
+    for words in ("back to no load, twice",
+                  f"{raw['loading']['steps']} equal load steps per leg",
                   "capped at 450 MPa", "its peak 100 MPa", "1 MPa across it",
-                  "(Sk, Ku) = (0, 3), (-0.8, 4), (0.8, 4), (0, 4.5) and (1, 4.5)", "20 surfaces per curve"):
+                  "(Sk, Ku) = (0, 3), (-0.8, 4), (0.8, 4), (0, 4.5) and (1, 4.5)",
+                  "20 surfaces per curve"):
         assert words in caption, words
 
 
