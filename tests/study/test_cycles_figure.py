@@ -98,6 +98,10 @@ def test_the_caption_names_the_loading_path_the_cap_and_the_cells():
     # no flow: the third panel is the permanent set, no leak rate is named
     assert "permanent set (the approach at which the flattened surface" in caption
     assert "leak rate" not in caption
+    # unloading to a quarter: the first cycle's work is no closed loop
+    assert "first cycle ends above no load" in caption
+    closed = figure_caption(plan(config(loading={"unload_to": 0.0})), "cycles")
+    assert "first cycle ends above no load" not in closed
 
 
 def test_the_caption_names_the_seal_where_the_flow_is_on():

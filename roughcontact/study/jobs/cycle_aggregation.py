@@ -64,8 +64,12 @@ STEP_QUANTITIES = {
 #: The quantities of the table per cycle: name -> (unit, meaning).
 SUMMARY_QUANTITIES = {
     "residual_approach": ("m", "permanent set at the cycle's end"),
-    "dissipated_energy": ("J/m^2", "the loop's area per nominal area, sum 1/2 (P_i + "
-                                   "P_i+1) (d_i+1 - d_i) over the cycle"),
+    "dissipated_energy": ("J/m^2", "the work of the load over the cycle per nominal area, "
+                                   "sum 1/2 (P_i + P_i+1) (d_i+1 - d_i): the loop's area, "
+                                   "dissipated, where the cycle ends at the load it began "
+                                   "at (every cycle unloading to no load; from the second "
+                                   "on with unload_to > 0, where the first also holds the "
+                                   "elastic energy stored at its end)"),
     "plastic_work": ("J/m^2", "H times the plastic volume the cycle added, per nominal "
                               "area"),
     "unloading_stiffness_ratio": ("1", "unloading over loading tangent at half the peak"),

@@ -423,6 +423,8 @@ def cycles(plan, name):
     leak = (f", the leak rate along {[d for d in ('x', 'y') if d in flow.directions][0]} "
             f"at half the peak on loading and on unloading (and their ratio)"
             if flow.enabled else "")
+    unclosed = (" (the first cycle ends above no load, so its work also holds the elastic "
+                "energy stored at its end)" if loading.unload_to > 0 else "")
     shaken = (" and the share of its surfaces shaken down (no plastic volume added) in the "
               "second cycle" if loading.cycles > 1 else "")
     return (f"Beyond the paper: loading, unloading and reloading. Each capped cell is "
@@ -447,4 +449,5 @@ def cycles(plan, name):
             f"yielded. {_cycles_right_panel(plan)} After this caption, each "
             f"cell's residual approach after the first cycle, its unloading-to-loading "
             f"stiffness ratio at half the peak, the energy each cycle dissipated beside the "
-            f"plastic work{shaken}{leak}, with their bands. {_surfaces(rows)}. {BANDS}")
+            f"plastic work{unclosed}{shaken}{leak}, with their bands. {_surfaces(rows)}. "
+            f"{BANDS}")
