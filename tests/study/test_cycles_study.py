@@ -25,7 +25,7 @@ from roughcontact.study.cycle_records import NO_LOADING, CycleJob
 from roughcontact.study.jobs.cycle_aggregation import aggregate_cycles
 from roughcontact.study.jobs.cycle_storage import read_cycle
 from roughcontact.study.jobs.cycles import solve_cycle_job
-from roughcontact.study.jobs.influence import build_influence
+from roughcontact.study.jobs.influence import build_influence, build_pair
 from roughcontact.study.jobs.storage import read_influence, read_surfaces
 from roughcontact.study.jobs.surfaces import build_surface_cell
 from roughcontact.study.plan import resources
@@ -85,30 +85,44 @@ def test_another_path_is_another_file():
     assert one.contact.key == other.contact.key == more.contact.key
 
 
+def solve_study(raw: dict, root) -> types.SimpleNamespace:
+    """Every file the cycle jobs of the configuration ``raw`` read, built by their jobs in
+    a results tree ``root`` of its own; the cycle jobs solved and aggregated."""
+    study = Study.from_config(raw)
+    planned = study_plan(study)
+    seed = raw["study_seed"]
+    for key, cell in planned.surfaces.items():
+        build_surface_cell(cell.params(), seed, root / layout.surfaces(key))
+    for key, geometry in planned.geometries.items():
+        build_influence(geometry.params(), root / layout.influence(key),
+                        solver=raw["body"]["solver"], max_memory_gb=raw["body"]["max_memory_gb"])
+    for key, pair in planned.pairs.items():
+        build_pair(pair.params(), root / layout.influence(pair.first.key),
+                   root / layout.influence(pair.second.key), root / layout.pair(key))
+    outs = {}
+    for cycle in planned.cycles.values():
+        outs[cycle.key] = root / cycle.output
+        solve_cycle_job(cycle.params(), {k: str(root / v) for k, v in cycle.paths().items()},
+                        outs[cycle.key], planned.contact.params())
+    cells = [cell for cell in planned.cells["gasket"] if study.loading.applies(cell)]
+    outputs = types.SimpleNamespace(**{name: root / path for name, path in zip(
+        ("table", "summary", "meta"), layout.cycle_aggregates("gasket"), strict=True)})
+    aggregate_cycles(cells, study.loading, outs, outputs)
+    return types.SimpleNamespace(cycles=list(planned.cycles.values()), cells=cells, outs=outs,
+                                 table=pd.read_csv(outputs.table),
+                                 summary=pd.read_csv(outputs.summary), study=study)
+
+
 @pytest.fixture(scope="module")
 def solved(tmp_path_factory):
     """The cycle job of the capped cell, solved and aggregated in a results tree of its
     own."""
     root = tmp_path_factory.mktemp("cycles")
-    raw = config()
-    study = Study.from_config(raw)
-    planned = study_plan(study)
-    (cycle,) = planned.cycles.values()
-    job = cycle.contact
-    paths = {name: root / path for name, path in cycle.paths().items()}
-    build_surface_cell(job.surface.params(), raw["study_seed"], paths["surfaces"])
-    build_influence(job.geometry.params(), paths["influence"], solver=raw["body"]["solver"],
-                    max_memory_gb=raw["body"]["max_memory_gb"])
-    out = root / cycle.output
-    solve_cycle_job(cycle.params(), {k: str(v) for k, v in paths.items()}, out,
-                    planned.contact.params())
-    (cell,) = planned.cells["gasket"]
-    outputs = types.SimpleNamespace(**{name: root / path for name, path in zip(
-        ("table", "summary", "meta"), layout.cycle_aggregates("gasket"), strict=True)})
-    aggregate_cycles([cell], study.loading, {cycle.key: out}, outputs)
-    return types.SimpleNamespace(cycle=cycle, cell=cell, paths=paths, out=out,
-                                 table=pd.read_csv(outputs.table),
-                                 summary=pd.read_csv(outputs.summary), study=study)
+    out = solve_study(config(), root)
+    (out.cycle,) = out.cycles
+    out.out = out.outs[out.cycle.key]
+    out.paths = {name: root / path for name, path in out.cycle.paths().items()}
+    return out
 
 
 def test_the_table_follows_the_configured_path_in_mpa(solved):
@@ -179,3 +193,23 @@ def test_a_file_of_another_path_or_damaged_is_refused(solved, tmp_path):
         f["approach"][0, 3] *= 1.001
     with pytest.raises(StoredFileError, match="no longer match the hash"):
         read_cycle(damaged, job=solved.cycle.params())
+
+
+@pytest.mark.parametrize("changed", [
+    {"body": {"operator": "halfspace"}},
+    {"body": {"operator": "hybrid", "mesh": "refined"}},
+    {"sweeps": {"gasket": {**STUDY, "counterface": {
+        "surface": {"sigma_um": 0.5, "b_mm": 0.5},
+        "body": {"kind": "halfspace", "E_MPa": 110000.0, "nu": 0.26}}}}},
+], ids=["half-space", "matrix-free block", "rough elastic counter body"])
+def test_every_body_the_study_models_cycles_alike(changed, tmp_path):
+    """The study's other bodies: the cycle job on each, the cap model's marks kept (a
+    permanent set; the loop's area near the plastic work; the second cycle elastic)."""
+    out = solve_study(config(loading={"cycles": 2, "steps": 4}, **changed), tmp_path)
+    first, second = out.summary.iloc[0], out.summary.iloc[1]
+    assert first["residual_approach_mean"] > 0
+    assert first["dissipated_energy_mean"] == pytest.approx(first["plastic_work_mean"],
+                                                            rel=0.2)
+    assert first["unloading_stiffness_ratio_mean"] > 1.0
+    assert abs(second["dissipated_energy_mean"]) < 1e-3 * first["dissipated_energy_mean"]
+    assert (out.table["approach_count"] == 3).all()
