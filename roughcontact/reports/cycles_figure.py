@@ -35,6 +35,7 @@ from roughcontact.reports.study_figures import cell_labels, flow_directions
 from roughcontact.study.flow_settings import FACES_OPEN
 from roughcontact.study.layout import CYCLE_EXTENSIONS
 from roughcontact.transport.probe import LEAK_RATE, column_name
+from roughcontact.units import MPA, UM
 
 __all__ = ["CYCLE_FILES", "LEG_STYLES", "cycle_numbers", "cycles_answers", "leg_segments",
            "load_cycles", "plot_cycles"]
@@ -47,7 +48,6 @@ LEG_STYLES = {"loading": "-", "unloading": "--", "reloading": ":"}
 #: Line widths by leg: a reloading that retraces the unloading (an elastic cycle) is drawn
 #: wider, on top, so that its dots show on the dashes.
 LEG_WIDTHS = {"loading": 1.5, "unloading": 1.5, "reloading": 2.5}
-MPA, UM = 1e6, 1e-6
 #: k_P [Pa/m] in MPa/um.
 MPA_PER_UM = MPA / UM
 

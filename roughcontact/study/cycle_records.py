@@ -68,7 +68,7 @@ class CycleJob(Record):
 
     def paths(self) -> dict[str, str]:
         """The paths of :meth:`files`, by input name (a rule's inputs)."""
-        return {name: file.path for name, file in self.files().items()}
+        return self.contact.paths()
 
     @property
     def output(self) -> str:

@@ -118,12 +118,12 @@ def _at_pressure(values: np.ndarray, pressure: np.ndarray, steps: np.ndarray,
     return (1 - weight) * values[:, order[upper - 1]] + weight * values[:, order[upper]]
 
 
-def _summary(physical, per_step: dict, probes: tuple, columns: dict, area: float
-             ) -> pd.DataFrame:
-    """The table per cycle of an SI cycle (module docstring)."""
+def _summary(physical, per_step: dict, probes: tuple, columns: dict, area: float,
+             cycle: np.ndarray, leg: np.ndarray) -> pd.DataFrame:
+    """The table per cycle of an SI cycle (module docstring), its steps' ``cycle`` and
+    ``leg`` (:func:`~roughcontact.contact.cycles.legs`)."""
     summary = cycle_summary(physical)
     pressure = np.asarray(physical.path.values)
-    cycle, leg = legs(physical.path)
     rows = []
     for c in range(summary["peak_load"].shape[1]):
         peak = float(np.max(pressure[cycle == c + 1]))
@@ -177,7 +177,7 @@ def cell_tables(cell: StudyCell, loading: LoadingSettings, path, probes: tuple =
     stats = {"label": cell.label, "cycle_key": job.key, "unconverged_steps": unconverged,
              "worst_residual": float(attrs["worst_residual"]),
              "wall_seconds": float(attrs["wall_seconds"])}
-    return steps, _summary(physical, per_step, probes, columns, area), stats
+    return steps, _summary(physical, per_step, probes, columns, area, cycle, leg), stats
 
 
 def aggregate_cycles(cells: list[StudyCell], loading: LoadingSettings, cycle_paths: dict,

@@ -31,6 +31,7 @@ from roughcontact.study.jobs.storage import (
     json_attr,
     open_h5,
     parameters_error,
+    probe_columns,
     rebuild,
     verify,
     write_h5,
@@ -85,9 +86,6 @@ def read_cycle(path: str | os.PathLike, *, job: dict | None = None
     """The dimensionless :class:`~roughcontact.contact.cycles.CycleResult` and attributes of
     a cycle file; with the cycle ``job`` (its ``params()``) the reader expects, the file
     must have been solved for it, one row per surface of its cell."""
-    from roughcontact.contact.probes import ProbeColumns
-    from roughcontact.study.probes import probes_from_attrs
-
     with open_h5(path) as f:
         attrs = decoded(f.attrs)
         if job is not None:
@@ -101,13 +99,7 @@ def read_cycle(path: str | os.PathLike, *, job: dict | None = None
     if count is not None and arrays["approach"].shape[0] != count:
         raise parameters_error(path, [("surfaces (rows of approach)", count,
                                        arrays["approach"].shape[0])])
-    probes = probes_from_attrs(attrs)
-    names = [column.name for probe in probes for column in probe.columns]
-    unknown = sorted(set(arrays) - {*CYCLE_ARRAYS, "plastic", "path", *names})
-    absent = [name for name in names if name not in arrays]
-    if unknown or absent:
-        raise StoredFileError(f"{path}: datasets {unknown} of no probe it names, or columns "
-                              f"{absent} of its probes missing; {rebuild(path)}", path)
+    probed = probe_columns(path, attrs, arrays, known=(*CYCLE_ARRAYS, "plastic", "path"))
     if isinstance(attrs.get("seeds"), str):
         attrs["seeds"] = json.loads(attrs["seeds"])
     result = CycleResult(
@@ -115,5 +107,5 @@ def read_cycle(path: str | os.PathLike, *, job: dict | None = None
         **{name: arrays.pop(name) for name in CYCLE_ARRAYS}, plastic=arrays.pop("plastic"),
         pressure=None, hardness=float(attrs["hardness"]),
         element_area=float(attrs["element_area"]),
-        probe_columns=ProbeColumns(probes, {name: arrays.pop(name) for name in names}))
+        probe_columns=probed)
     return result, attrs

@@ -650,7 +650,7 @@ def read_contact(path: str | os.PathLike, *,
                                   f"version of roughcontact); {rebuild(path)}", path)
         arrays = all_datasets(f)
     verify(path, attrs, arrays_sha256(arrays))
-    probed = _probe_columns(path, attrs, arrays)
+    probed = probe_columns(path, attrs, arrays)
     if job is not None:
         count = job["surface"]["count"]
         _check_shape(path, "approach", arrays["approach"].shape[:1], (count,), "surfaces")
@@ -672,19 +672,22 @@ def read_contact(path: str | os.PathLike, *,
                        probe_columns=probed), attrs
 
 
-def _probe_columns(path, attrs: dict, arrays: dict):
-    """The :class:`~roughcontact.contact.probes.ProbeColumns` of a contact file: its
-    probes made again from their stored settings
-    (:func:`roughcontact.study.probes.probes_from_attrs`), their columns taken out of
-    ``arrays`` (every dataset of the file); a column missing, or a dataset that is
-    neither a contact array nor a probe's column, raises :class:`StoredFileError`."""
+def probe_columns(path, attrs: dict, arrays: dict, known=None):
+    """The :class:`~roughcontact.contact.probes.ProbeColumns` of a contact file (or of a
+    file whose own datasets are ``known``, e.g. a cycle file): its probes made again
+    from their stored settings (:func:`roughcontact.study.probes.probes_from_attrs`),
+    their columns taken out of ``arrays`` (every dataset of the file); a column
+    missing, or a dataset that is neither the file's own nor a probe's column, raises
+    :class:`StoredFileError`."""
     from roughcontact.contact.probes import ProbeColumns
     from roughcontact.study.probes import probes_from_attrs
 
     probes = probes_from_attrs(attrs)
     names = [column.name for probe in probes for column in probe.columns]
     absent = [name for name in names if name not in arrays]
-    known = CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS + COUNTER_ARRAYS + METHOD_ARRAYS
+    if known is None:
+        known = (CONTACT_ARRAYS + PROFILE_ARRAYS + INTERFACE_ARRAYS + COUNTER_ARRAYS
+                 + METHOD_ARRAYS)
     unknown = sorted(set(arrays) - set(known) - set(names))
     if absent or unknown:
         raise StoredFileError(
